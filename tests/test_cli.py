@@ -1,0 +1,74 @@
+"""Command line: problems, simulate, errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tmaplan.cli import main
+
+
+def test_problems_json_stdout(capsys):
+    assert main(["problems", "--json", "-"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    names = {p["name"] for p in out}
+    assert {"default", "brehard2005-s2", "gordon1993-bot"} <= names
+    assert all(set(p) == {"name", "description"} for p in out)
+
+
+def test_simulate_writes_json_and_figure(tmp_path):
+    js = tmp_path / "out.json"
+    assert main(["simulate", "brehard2005-s2", "--seed", "1", "--json", str(js),
+                 "--out", str(tmp_path)]) == 0
+    d = json.loads(js.read_text())
+    assert (tmp_path / "brehard2005-s2_geometry.png").stat().st_size > 10_000
+    obs = np.array(d["observer"])
+    t = np.array(d["times"])
+    # the observer changes velocity at 1500 s and 4500 s (file 000 eq. 59)
+    v = obs[:, 2:]
+    changes = t[1:][np.any(np.abs(np.diff(v, axis=0)) > 1e-9, axis=1)]
+    assert changes.tolist() == [1506.0, 4506.0]  # mean velocity over (t_{k−1}, t_k]
+
+
+def test_same_seed_same_json(tmp_path):
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    for p in (a, b):
+        assert main(["simulate", "default", "--seed", "3", "--no-plot", "--json", str(p)]) == 0
+    assert a.read_text() == b.read_text()
+
+
+@pytest.mark.parametrize("arg", ["no-such-problem", "missing.toml"])
+def test_bad_problem_is_one_line_error(arg, tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "tmaplan.cli", "simulate", arg],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode != 0
+    err = proc.stderr.strip()
+    assert len(err.splitlines()) == 1, err
+    assert arg in err and "brehard2005-s1" in err and "Traceback" not in err
+
+
+def test_invalid_file_names_the_field(tmp_path):
+    from tmaplan.scenario import problems_dir
+
+    p = tmp_path / "bad.toml"
+    text = (problems_dir() / "default.toml").read_text()
+    p.write_text(text.replace('horizon = "45 min"', 'horizon = "44.9 min"', 1))
+    proc = subprocess.run([sys.executable, "-m", "tmaplan.cli", "simulate", str(p)],
+                          capture_output=True, text=True)
+    assert proc.returncode != 0
+    assert "time.horizon" in proc.stderr and "whole number" in proc.stderr
+
+
+def test_debug_shows_traceback(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "tmaplan.cli", "simulate", "nope", "--debug"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode != 0 and "Traceback" in proc.stderr
+
+
+def test_demo_placeholder_writes_report(tmp_path):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "report.html").read_text().count("data:image/png;base64,") >= 1

@@ -1,0 +1,5 @@
+"""tmaplan — sensor management and observer-trajectory planning for target motion analysis."""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"

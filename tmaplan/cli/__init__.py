@@ -1,0 +1,118 @@
+"""Command line interface ``tmaplan`` (DESIGN §4).
+
+Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
+``add_arguments(parser)`` and ``run(args) -> dict | None``; the returned dict is written as JSON
+to ``--json PATH`` (``-`` for stdout). Errors exit non-zero with one line on stderr (a traceback
+only with ``--debug``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["VERBS", "main", "write_json"]
+
+#: Verb name -> module name, in help order. Modules that do not exist yet are skipped.
+VERBS: dict[str, str] = {
+    "problems": "problems",
+    "simulate": "simulate",
+    "crlb": "crlb",
+    "bound": "bound",
+    "track": "track",
+    "plan": "plan",
+    "schedule": "schedule",
+    "compare": "compare",
+    "demo": "demo",
+}
+
+
+def _default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def write_json(payload: Any, path: str) -> None:
+    """Write ``payload`` as JSON to ``path`` (``-`` = stdout). NaN/inf become null."""
+
+    def clean(x: Any) -> Any:
+        if isinstance(x, float) and not np.isfinite(x):
+            return None
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        if isinstance(x, list | tuple):
+            return [clean(v) for v in x]
+        if isinstance(x, np.ndarray):
+            return clean(x.tolist())
+        if isinstance(x, np.generic):
+            return clean(x.item())
+        return x
+
+    text = json.dumps(clean(payload), default=_default, indent=1, allow_nan=False)
+    if path == "-":
+        sys.stdout.write(text + "\n")
+    else:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(text + "\n", encoding="utf-8")
+
+
+def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
+    parser = argparse.ArgumentParser(
+        prog="tmaplan",
+        description="Observer-trajectory planning and sensor management for TMA.",
+    )
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB")
+    modules: dict[str, Any] = {}
+    for verb, modname in VERBS.items():
+        try:
+            mod = importlib.import_module(f"tmaplan.cli.{modname}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"tmaplan.cli.{modname}":
+                continue
+            raise
+        p = sub.add_parser(verb, help=mod.HELP, description=mod.HELP)
+        p.add_argument("--json", metavar="PATH", default=None,
+                       help="write machine-readable output to PATH ('-' for stdout)")
+        p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+        mod.add_arguments(p)
+        modules[verb] = mod
+    return parser, modules
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``tmaplan`` command. Returns the exit status."""
+    parser, modules = _build_parser()
+    args = parser.parse_args(argv)
+    if not args.verb:
+        parser.print_help()
+        return 2
+    try:
+        payload = modules[args.verb].run(args)
+        if args.json is not None and payload is not None:
+            write_json(payload, args.json)
+    except KeyboardInterrupt:
+        print("tmaplan: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        if args.debug:
+            raise
+        print(f"tmaplan {args.verb}: error: {exc}".replace("\n", " "), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

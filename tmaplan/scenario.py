@@ -1,0 +1,689 @@
+"""Scenarios: frozen dataclasses, TOML load/dump, validation.
+
+A scenario holds the time grid, the target's motion model (and prior), the observer's initial
+state, constraints and scripted manoeuvres, the sensors and optional planning settings. Files are
+TOML; every dimensional value may be a plain SI number or a string with a unit (``"12 kn"``,
+``"3.5 km"``, ``"45 deg"``, ``"10 min"``), see :mod:`tmaplan.units`.
+
+Load -> dump -> load is the identity: values are stored in SI and dumped with ``repr`` floats.
+Every invalid value raises :class:`tmaplan.errors.ScenarioError` naming the field, the expected
+and the received value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+from collections.abc import Callable, Mapping
+from functools import cache
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+import tomli_w
+from pydantic import BeforeValidator, ConfigDict, Field, TypeAdapter, ValidationError
+from pydantic.dataclasses import dataclass as _pydantic_dataclass
+
+from tmaplan._scenario_checks import check
+from tmaplan.errors import ScenarioError
+from tmaplan.units import to_si
+
+__all__ = [
+    "BearingSensor",
+    "FrequencySensor",
+    "Observer",
+    "ObserverLeg",
+    "Planning",
+    "Prior",
+    "RangeSensor",
+    "Scenario",
+    "Sensor",
+    "Target",
+    "TargetLeg",
+    "TimeGrid",
+    "dump",
+    "from_dict",
+    "list_problems",
+    "load",
+    "load_problem",
+    "problems_dir",
+    "save",
+    "to_dict",
+]
+
+_CONFIG = ConfigDict(extra="forbid", arbitrary_types_allowed=False)
+
+
+def _frozen(cls: type) -> type:
+    return _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls)
+
+
+def _unit(dimension: str) -> Callable[[Any, Any], Any]:
+    def convert(value: Any, info: Any) -> Any:
+        if isinstance(value, str | int | float) and not isinstance(value, bool):
+            return to_si(value, dimension, info.field_name or "value")
+        return value
+
+    return convert
+
+
+def _q(dimension: str, **constraints: Any) -> Any:
+    return Annotated[float, BeforeValidator(_unit(dimension)), Field(allow_inf_nan=False,
+                                                                     **constraints)]
+
+
+Length = _q("length")
+PositiveLength = _q("length", gt=0)
+NonNegLength = _q("length", ge=0)
+Time = _q("time")
+PositiveTime = _q("time", gt=0)
+NonNegTime = _q("time", ge=0)
+Angle = _q("angle")
+PositiveAngle = _q("angle", gt=0)
+NonNegAngle = _q("angle", ge=0)
+Speed = _q("speed")
+NonNegSpeed = _q("speed", ge=0)
+PositiveSpeed = _q("speed", gt=0)
+AngularRate = _q("angular_rate")
+PositiveAngularRate = _q("angular_rate", gt=0)
+PositiveFrequency = _q("frequency", gt=0)
+NonNegProcessNoise = _q("process_noise", ge=0)
+NonNegInt = Annotated[int, Field(ge=0, strict=True)]
+PositiveInt = Annotated[int, Field(gt=0, strict=True)]
+Vec2Length = tuple[Length, Length]
+Vec2Speed = tuple[Speed, Speed]
+
+
+# --------------------------------------------------------------------------------------------
+# Dataclasses
+# --------------------------------------------------------------------------------------------
+
+
+@_frozen
+class TimeGrid:
+    """Uniform time grid ``t_k = t0 + k·dt``, ``k = 0..n_steps``.
+
+    Attributes
+    ----------
+    dt : float
+        Sampling period [s], > 0.
+    horizon : float
+        Duration [s]; must be a whole number of steps.
+    t0 : float
+        Time of step 0 [s].
+    """
+
+    dt: PositiveTime
+    horizon: PositiveTime
+    t0: Time = 0.0
+
+    @property
+    def n_steps(self) -> int:
+        """Number of transitions K (the grid has K + 1 instants)."""
+        return round(self.horizon / self.dt)
+
+    @property
+    def times(self) -> np.ndarray:
+        """Grid instants, shape (K + 1,) [s]."""
+        return self.t0 + self.dt * np.arange(self.n_steps + 1)
+
+
+@_frozen
+class TargetLeg:
+    """A velocity change of a multi-leg target at a known time.
+
+    Give either ``velocity`` or ``course`` and ``speed``.
+
+    Attributes
+    ----------
+    start : float
+        Time the leg starts [s] (absolute, on the scenario clock).
+    velocity : tuple of float, optional
+        (v_x, v_y) [m/s], x East, y North.
+    course : float, optional
+        Course [rad], clockwise from North.
+    speed : float, optional
+        Speed [m/s].
+    """
+
+    start: NonNegTime
+    velocity: Vec2Speed | None = None
+    course: Angle | None = None
+    speed: NonNegSpeed | None = None
+
+
+@_frozen
+class Target:
+    """Target motion model and its true initial state.
+
+    ``model = "ncv"``: nearly constant velocity with white acceleration of intensity ``q``
+    [m²/s³] (``q = 0`` is constant velocity). ``"multi-leg"``: piecewise constant velocity
+    changing at the known times of ``legs`` (plus optional process noise ``q``).
+    ``"constant-turn"``: file 002's circle ``P(t) = centre + radius·[sin(ωt+φ), cos(ωt+φ)]``
+    (file 002 eq. at L108; ω > 0 clockwise).
+
+    Attributes
+    ----------
+    model : {"ncv", "multi-leg", "constant-turn"}
+    position : tuple of float, optional
+        Initial position (x, y) [m] (ncv, multi-leg).
+    velocity : tuple of float, optional
+        Initial velocity (v_x, v_y) [m/s]; or give ``course`` [rad] and ``speed`` [m/s].
+    course, speed : float, optional
+    q : float
+        Process-noise intensity [m²/s³] (DESIGN §1; file 000's σ_max²).
+    legs : tuple of TargetLeg
+        Known velocity changes (multi-leg).
+    centre : tuple of float, optional
+        Circle centre (x_C, y_C) [m] (constant-turn).
+    radius : float, optional
+        ρ_C [m].
+    phase : float, optional
+        φ [rad]: angular position on the circle at t = 0, clockwise from North.
+    omega : float, optional
+        ω [rad/s], > 0 clockwise, ≠ 0.
+    """
+
+    model: Literal["ncv", "multi-leg", "constant-turn"] = "ncv"
+    position: Vec2Length | None = None
+    velocity: Vec2Speed | None = None
+    course: Angle | None = None
+    speed: NonNegSpeed | None = None
+    q: NonNegProcessNoise = 0.0
+    legs: tuple[TargetLeg, ...] = ()
+    centre: Vec2Length | None = None
+    radius: PositiveLength | None = None
+    phase: Angle | None = None
+    omega: AngularRate | None = None
+
+
+@_frozen
+class Prior:
+    """Prior on the target's initial state (used by bounds, filters and planners).
+
+    ``kind = "polar"``: bearing ~ N(bearing_mean, bearing_std²) from the observer's initial
+    position; range from ``range_distribution`` (``normal``: N(range_mean, range_std²)
+    truncated to [range_min, range_max]; ``uniform`` or ``log-uniform`` on
+    [range_min, range_max]); velocity either Cartesian normal (``velocity_mean``,
+    ``velocity_std`` per axis) or speed/course (``speed-course``). ``None`` means values are
+    taken from the true initial state (the papers' "prior centred on the truth").
+    ``kind = "gaussian"``: absolute Cartesian N(mean, diag(std²)) with mean/std in
+    [x, y, v_x, v_y] order.
+
+    Attributes
+    ----------
+    kind : {"polar", "gaussian"}
+    bearing_mean : float, optional
+        [rad]; None: the true initial bearing.
+    bearing_std : float
+        [rad].
+    range_distribution : {"normal", "uniform", "log-uniform"}
+    range_mean, range_std : float, optional
+        [m]; range_mean None: the true initial range.
+    range_min : float
+        Lower truncation / support bound [m] (keeps ln r and 1/r finite).
+    range_max : float, optional
+        Upper truncation / support bound [m].
+    velocity_distribution : {"normal", "speed-course"}
+    velocity_mean : tuple of float, optional
+        (v_x, v_y) [m/s]; None: true target velocity.
+    velocity_std : float
+        Per-axis std [m/s].
+    speed_distribution : {"normal", "uniform"}
+    speed_mean, speed_std, speed_min, speed_max : float
+        [m/s]; speed_mean None: true speed.
+    course_mode : {"true", "given", "reciprocal-bearing", "uniform"}
+        Course mean: the true course, ``course_mean``, the bearing + π (target heading at the
+        observer, Ristic et al. 2004), or uniform on the circle.
+    course_mean, course_std : float, optional
+        [rad].
+    mean, std : tuple of 4 floats, optional
+        Gaussian prior, [x, y, v_x, v_y] in [m, m, m/s, m/s].
+    samples : int
+        Number of prior samples used where a bound needs prior moments (file 000 eq. 56).
+    seed : int
+        Seed of those samples, so bounds are reproducible.
+    """
+
+    kind: Literal["polar", "gaussian"] = "polar"
+    bearing_mean: Angle | None = None
+    bearing_std: NonNegAngle = 0.0
+    range_distribution: Literal["normal", "uniform", "log-uniform"] = "normal"
+    range_mean: PositiveLength | None = None
+    range_std: NonNegLength | None = None
+    range_min: NonNegLength = 0.0
+    range_max: PositiveLength | None = None
+    velocity_distribution: Literal["normal", "speed-course"] = "normal"
+    velocity_mean: Vec2Speed | None = None
+    velocity_std: NonNegSpeed = 0.0
+    speed_distribution: Literal["normal", "uniform"] = "normal"
+    speed_mean: NonNegSpeed | None = None
+    speed_std: NonNegSpeed = 0.0
+    speed_min: NonNegSpeed = 0.0
+    speed_max: PositiveSpeed | None = None
+    course_mode: Literal["true", "given", "reciprocal-bearing", "uniform"] = "true"
+    course_mean: Angle | None = None
+    course_std: NonNegAngle = 0.0
+    mean: tuple[Length, Length, Speed, Speed] | None = None
+    std: tuple[NonNegLength, NonNegLength, NonNegSpeed, NonNegSpeed] | None = None
+    samples: PositiveInt = 100_000
+    seed: NonNegInt = 0
+
+
+@_frozen
+class ObserverLeg:
+    """A scripted observer leg starting at ``start``.
+
+    Give ``velocity`` or ``course`` (and optionally ``speed``; default: keep the speed).
+    ``turn_rate`` None means an instantaneous course change; otherwise the heading turns at
+    that rate [rad/s] in ``turn_direction`` until it reaches ``course``.
+
+    Attributes
+    ----------
+    start : float
+        [s].
+    velocity : tuple of float, optional
+        (v_x, v_y) [m/s].
+    course : float, optional
+        [rad], clockwise from North.
+    speed : float, optional
+        [m/s].
+    turn_rate : float, optional
+        [rad/s], > 0.
+    turn_direction : {"shortest", "starboard", "port"}
+        Starboard = clockwise.
+    """
+
+    start: NonNegTime
+    velocity: Vec2Speed | None = None
+    course: Angle | None = None
+    speed: NonNegSpeed | None = None
+    turn_rate: PositiveAngularRate | None = None
+    turn_direction: Literal["shortest", "starboard", "port"] = "shortest"
+
+
+@_frozen
+class Observer:
+    """Own ship: initial state, limits, and either scripted legs or a turn-rate sequence.
+
+    Attributes
+    ----------
+    position : tuple of float
+        Initial (x, y) [m].
+    velocity : tuple of float, optional
+        Initial (v_x, v_y) [m/s]; or give ``course`` [rad] and ``speed`` [m/s].
+    course, speed : float, optional
+    legs : tuple of ObserverLeg
+        Scripted manoeuvres.
+    turn_rates : tuple of float
+        Turn rate per step [rad/s] at constant speed (length n_steps), an alternative to legs.
+    speed_min, speed_max : float
+        Speed limits [m/s].
+    turn_rate_max : float, optional
+        Turn-rate limit [rad/s].
+    heading_min, heading_max : float, optional
+        Heading limits [rad] (clockwise from North), for planning.
+    """
+
+    position: Vec2Length = (0.0, 0.0)
+    velocity: Vec2Speed | None = None
+    course: Angle | None = None
+    speed: NonNegSpeed | None = None
+    legs: tuple[ObserverLeg, ...] = ()
+    turn_rates: tuple[AngularRate, ...] = ()
+    speed_min: NonNegSpeed = 0.0
+    speed_max: PositiveSpeed | None = None
+    turn_rate_max: PositiveAngularRate | None = None
+    heading_min: Angle | None = None
+    heading_max: Angle | None = None
+
+
+@_frozen
+class BearingSensor:
+    """Passive bearing sensor: ``z = atan2(Δx, Δy) + v``, v ~ N(0, σ²).
+
+    Measurement steps: ``steps`` if given, else ``first_step, first_step + every, ...``.
+
+    Attributes
+    ----------
+    kind : "bearing"
+    sigma : float
+        Bearing noise std [rad].
+    first_step : int
+        First measurement step (1 by default: no bearing at t0).
+    every : int
+        Steps between measurements.
+    steps : tuple of int, optional
+        Explicit measurement steps.
+    ambiguity : {"none", "pi"}
+        "pi": bearing known modulo π, in (−π/2, π/2] (linear array, file 000 eq. 4).
+    """
+
+    kind: Literal["bearing"] = "bearing"
+    sigma: PositiveAngle
+    first_step: NonNegInt = 1
+    every: PositiveInt = 1
+    steps: tuple[NonNegInt, ...] | None = None
+    ambiguity: Literal["none", "pi"] = "none"
+
+
+@_frozen
+class RangeSensor:
+    """Range sensor: active pings at chosen steps, or continuous range-only measurement.
+
+    ``z = ‖r‖ + v``, v ~ N(0, σ²). Steps: the union of ``steps``; for ``period`` the first
+    grid step at or after each multiple of the period (file 000 §6's "every 80 s" with
+    δ = 6 s gives k = 14, 27, 40, 54, ...); for ``every`` the steps ``first_step + i·every``.
+    No steps at all is allowed (a ping sensor left to the scheduler).
+
+    Attributes
+    ----------
+    kind : "range"
+    sigma : float
+        Range noise std [m].
+    steps : tuple of int
+        Explicit ping steps.
+    period : float, optional
+        Ping period [s].
+    every : int, optional
+        Continuous ranging every n steps (range-only tracking).
+    first_step : int
+        First step for ``every``.
+    active : bool
+        True for an active sonar ping (reveals own ship; counts against the budget).
+    """
+
+    kind: Literal["range"] = "range"
+    sigma: PositiveLength
+    steps: tuple[NonNegInt, ...] = ()
+    period: PositiveTime | None = None
+    every: PositiveInt | None = None
+    first_step: NonNegInt = 1
+    active: bool = True
+
+
+@_frozen
+class FrequencySensor:
+    """Narrow-band frequency lines: ``f_p(t) = f_p·(1 − Ṙ(t)/c) + v`` (file 002 eq. 3).
+
+    Attributes
+    ----------
+    kind : "frequency"
+    f0 : tuple of float
+        Emitted tones f_p [Hz] (unknown to estimators).
+    sigma : tuple of float
+        Noise std per line [Hz].
+    c : float
+        Sound speed [m/s].
+    first_step, every, steps
+        As for :class:`BearingSensor`.
+    """
+
+    kind: Literal["frequency"] = "frequency"
+    f0: tuple[PositiveFrequency, ...]
+    sigma: tuple[PositiveFrequency, ...]
+    c: PositiveSpeed = 1500.0
+    first_step: NonNegInt = 1
+    every: PositiveInt = 1
+    steps: tuple[NonNegInt, ...] | None = None
+
+
+Sensor = Annotated[BearingSensor | RangeSensor | FrequencySensor, Field(discriminator="kind")]
+
+
+@_frozen
+class Planning:
+    """Optional planning settings.
+
+    Attributes
+    ----------
+    horizon : float, optional
+        Planning horizon [s] (default: the scenario's).
+    objective : str
+        Default heading objective ("logdet", "range-bound", "position-bound").
+    ping_budget : int
+        Maximum number of active pings.
+    ping_sigma : float, optional
+        Std of a scheduled ping [m] (default: the scenario's range sensor).
+    ping_min_spacing : float
+        Minimum time between pings [s].
+    ping_forbidden : tuple of (float, float)
+        Time windows [s] in which pinging is forbidden (counter-detection).
+    keep_out_range : float
+        Minimum range to the target estimate [m].
+    control_interval : float, optional
+        Duration of a piecewise-constant turn-rate control [s] (default: dt).
+    replan_interval : float, optional
+        Receding-horizon re-planning interval [s].
+    """
+
+    horizon: PositiveTime | None = None
+    objective: Literal["logdet", "range-bound", "position-bound"] = "range-bound"
+    ping_budget: NonNegInt = 0
+    ping_sigma: PositiveLength | None = None
+    ping_min_spacing: NonNegTime = 0.0
+    ping_forbidden: tuple[tuple[NonNegTime, NonNegTime], ...] = ()
+    keep_out_range: NonNegLength = 0.0
+    control_interval: PositiveTime | None = None
+    replan_interval: PositiveTime | None = None
+
+
+@_frozen
+class Scenario:
+    """A complete TMA scenario.
+
+    Attributes
+    ----------
+    name : str
+    description : str
+    time : TimeGrid
+    target : Target
+    observer : Observer
+    sensors : tuple of BearingSensor | RangeSensor | FrequencySensor
+    prior : Prior, optional
+    planning : Planning, optional
+    """
+
+    name: str
+    description: str = ""
+    time: TimeGrid
+    target: Target
+    observer: Observer
+    sensors: tuple[Sensor, ...]
+    prior: Prior | None = None
+    planning: Planning | None = None
+
+    # -- convenience -------------------------------------------------------------------------
+    @property
+    def n_steps(self) -> int:
+        """Number of transitions K."""
+        return self.time.n_steps
+
+    @property
+    def times(self) -> np.ndarray:
+        """Grid instants, shape (K + 1,) [s]."""
+        return self.time.times
+
+    def sensors_of(self, kind: str) -> tuple[Any, ...]:
+        """Sensors of one kind ("bearing", "range", "frequency")."""
+        return tuple(s for s in self.sensors if s.kind == kind)
+
+    def replace(self, **changes: Any) -> Scenario:
+        """A validated copy with top-level fields replaced."""
+        from tmaplan._scenario_checks import check
+
+        new = dataclasses.replace(self, **changes)
+        check(new, source=self.name)
+        return new
+
+
+# --------------------------------------------------------------------------------------------
+# Measurement steps
+# --------------------------------------------------------------------------------------------
+
+
+def measurement_steps(sensor: Any, grid: TimeGrid) -> np.ndarray:
+    """Grid steps at which ``sensor`` measures, sorted, unique, shape (n,), dtype int.
+
+    Parameters
+    ----------
+    sensor : BearingSensor | RangeSensor | FrequencySensor
+    grid : TimeGrid
+    """
+    k_max = grid.n_steps
+    if isinstance(sensor, RangeSensor):
+        parts = [np.asarray(sensor.steps, dtype=int)]
+        if sensor.period is not None:
+            m = np.arange(1, int(np.floor(grid.horizon / sensor.period + 1e-9)) + 1)
+            k = np.ceil(m * sensor.period / grid.dt - 1e-9).astype(int)
+            parts.append(k[k <= k_max])
+        if sensor.every is not None:
+            parts.append(np.arange(sensor.first_step, k_max + 1, sensor.every))
+        return np.unique(np.concatenate(parts)).astype(int)
+    if sensor.steps is not None:
+        return np.unique(np.asarray(sensor.steps, dtype=int))
+    return np.arange(sensor.first_step, k_max + 1, sensor.every, dtype=int)
+
+
+# --------------------------------------------------------------------------------------------
+# Load / dump
+# --------------------------------------------------------------------------------------------
+
+
+@cache
+def _adapter() -> TypeAdapter[Scenario]:
+    return TypeAdapter(Scenario)
+
+
+def _loc(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif part in ("bearing", "range", "frequency"):  # discriminator tag in the path
+            continue
+        else:
+            out += ("." if out else "") + str(part)
+    return out or "<root>"
+
+
+def _convert_validation_error(exc: ValidationError, source: str | None) -> ScenarioError:
+    e = exc.errors()[0]
+    field = _loc(tuple(e["loc"]))
+    msg = str(e["msg"])
+    received = e.get("input")
+    kind = e["type"]
+    if kind in ("extra_forbidden", "unexpected_keyword_argument"):
+        expected = "no such key (check the spelling; see the Scenario docs for valid keys)"
+    elif kind == "missing":
+        expected = "a value (this key is required)"
+        received = None
+    elif kind == "union_tag_invalid":
+        expected = "kind = 'bearing', 'range' or 'frequency'"
+        field += ".kind"
+    else:
+        expected = msg.removeprefix("Value error, ").removeprefix("Input should be ")
+    if isinstance(received, dict):
+        received = "{" + ", ".join(received) + "}"
+    return ScenarioError(field, expected, received, source=source)
+
+
+def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario:
+    """Build and validate a scenario from a plain dict (as read from TOML).
+
+    Raises
+    ------
+    ScenarioError
+        Naming the field, the expected and the received value.
+    """
+    if not isinstance(data, Mapping):
+        raise ScenarioError("<root>", "a table of scenario fields", type(data).__name__,
+                            source=source)
+    try:
+        scenario = _adapter().validate_python(dict(data))
+    except ValidationError as exc:
+        raise _convert_validation_error(exc, source) from None
+    check(scenario, source)
+    return scenario
+
+
+def _strip_none(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _strip_none(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, list | tuple):
+        return [_strip_none(v) for v in obj]
+    return obj
+
+
+def to_dict(scenario: Scenario) -> dict[str, Any]:
+    """Plain-dict (TOML-ready) form of a scenario, SI values, ``None`` fields omitted."""
+    return _strip_none(dataclasses.asdict(scenario))
+
+
+def dump(scenario: Scenario) -> str:
+    """TOML text of a scenario. ``loads(dump(s)) == s`` exactly."""
+    return tomli_w.dumps(to_dict(scenario))
+
+
+def loads(text: str, *, source: str | None = None) -> Scenario:
+    """Parse TOML text into a validated :class:`Scenario`."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError("<file>", "valid TOML", str(exc), source=source) from None
+    return from_dict(data, source=source)
+
+
+def problems_dir() -> Path:
+    """Directory of the built-in problem files (``$TMAPLAN_PROBLEMS`` overrides)."""
+    env = os.environ.get("TMAPLAN_PROBLEMS")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parent.parent / "problems"
+
+
+def list_problems() -> list[dict[str, str]]:
+    """Built-in problems as ``[{name, description}]``, sorted by name."""
+    out = []
+    for path in sorted(problems_dir().glob("*.toml")):
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+        out.append({"name": path.stem, "description": str(data.get("description", ""))})
+    return out
+
+
+def load_problem(name: str) -> Scenario:
+    """Load a built-in problem by name.
+
+    Raises
+    ------
+    ScenarioError
+        If there is no such problem; the message lists the valid names.
+    """
+    path = problems_dir() / f"{name}.toml"
+    if not path.is_file():
+        names = ", ".join(p["name"] for p in list_problems())
+        raise ScenarioError("problem", f"one of: {names}", name)
+    return loads(path.read_text(encoding="utf-8"), source=name)
+
+
+def load(name_or_path: str | os.PathLike[str]) -> Scenario:
+    """Load a scenario from a TOML file path or a built-in problem name."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            names = ", ".join(p["name"] for p in list_problems())
+            raise ScenarioError("problem", f"an existing .toml file or one of: {names}",
+                                str(name_or_path))
+        return loads(path.read_text(encoding="utf-8"), source=str(path))
+    return load_problem(str(name_or_path))
+
+
+def save(scenario: Scenario, path: str | os.PathLike[str], *, overwrite: bool = False) -> Path:
+    """Write a scenario as TOML. Refuses to overwrite an existing file unless asked."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    path.write_text(dump(scenario), encoding="utf-8")
+    return path

@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 lint: $(STAMP)
-	$(BIN)/ruff check tmaplan tests benchmarks
+	$(BIN)/ruff check tmaplan tests $(wildcard benchmarks notebooks/*.py)
 
 typecheck: $(STAMP)
 	$(BIN)/mypy tmaplan

@@ -1,0 +1,611 @@
+"""Batch Fisher information and Cramér–Rao lower bound of a deterministic target track.
+
+The target track is a deterministic function of a parameter vector θ (constant velocity,
+multi-leg with known change times, or file 002's constant turn, see
+:mod:`tmaplan.bounds._batch_models`). Measurements are independent Gaussian:
+
+* bearings ``β_k = atan2(d_x, d_y) + ε``, σ_β [rad];
+* range pings ``R_k + ε``, σ_R [m];
+* P frequency lines ``f_p (1 − Ṙ_k/c) + ε`` with unknown emitted tones ``f_p`` (nuisance
+  parameters appended to θ), σ_fp [Hz] (file 002 eq. 3 and L503–L524).
+
+The FIM is ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (file 002 eq. 11, §3.1 of NOTES_002) with analytic rows.
+With frequency lines the full (dim + P) FIM is inverted; its trajectory block equals the
+Schur-complement form of file 002 eq. (16) (checked in the tests).
+
+Before inversion the FIM is scaled to unit diagonal; the condition number of the scaled FIM
+is reported and a (numerically) singular FIM raises :class:`ObservabilityError` naming the
+unobservable direction. Derived quantities use the delta method: the final position
+``p(t_N)`` and final range ``R_N`` (file 002 §3.1, J_{Z,Z_N}; ``∇R_N = [Δx/R, Δy/R]``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy import linalg
+
+from tmaplan.bounds._batch_models import (
+    TrackModel,
+    bearing_rows,
+    constant_turn_model,
+    cv_model,
+    multi_leg_model,
+    range_rate_rows,
+    range_rows,
+    relative_kinematics,
+)
+from tmaplan.errors import ObservabilityError, ScenarioError
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = [
+    "BearingData",
+    "CRLBResult",
+    "FrequencyData",
+    "IllConditionedWarning",
+    "RangeData",
+    "constant_turn_model",
+    "crlb",
+    "crlb_from_data",
+    "cv_model",
+    "fisher_information",
+    "multi_leg_model",
+    "scenario_data",
+]
+
+#: Relative eigenvalue threshold of the unit-diagonal FIM below which it is called singular.
+SINGULAR_RTOL = 1e-13
+#: Condition number of the unit-diagonal FIM above which a warning is issued.
+WARN_CONDITION = 1e10
+
+
+class IllConditionedWarning(RuntimeWarning):
+    """The FIM is invertible but badly conditioned; the bound is numerically fragile."""
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class BearingData:
+    """Bearing measurement times and geometry.
+
+    Attributes
+    ----------
+    times : ndarray, shape (n,)
+        [s].
+    observer_position : ndarray, shape (n, 2)
+        [m].
+    sigma : float or ndarray, shape (n,)
+        Bearing noise std [rad], > 0.
+    """
+
+    times: np.ndarray
+    observer_position: np.ndarray
+    sigma: float | np.ndarray
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class RangeData:
+    """Range (active ping) measurement times and geometry; ``sigma`` in [m]."""
+
+    times: np.ndarray
+    observer_position: np.ndarray
+    sigma: float | np.ndarray
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class FrequencyData:
+    """Frequency-line measurements (file 002 eq. 3, multi-line L503–L524).
+
+    Attributes
+    ----------
+    times : ndarray, shape (n,)
+        [s].
+    observer_position, observer_velocity : ndarray, shape (n, 2)
+        [m], instantaneous [m/s].
+    f0 : ndarray, shape (P,)
+        Emitted tones [Hz] (unknown nuisance parameters of the bound).
+    sigma : ndarray, shape (P,)
+        Noise std per line [Hz] (file 002 uses σ_fp = f_p/1000, L586).
+    c : float
+        Sound speed [m/s].
+    """
+
+    times: np.ndarray
+    observer_position: np.ndarray
+    observer_velocity: np.ndarray
+    f0: np.ndarray
+    sigma: np.ndarray
+    c: float = 1500.0
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CRLBResult:
+    """Batch CRLB of a deterministic track.
+
+    Attributes
+    ----------
+    model : str
+        "cv", "multi-leg" or "constant-turn".
+    parameters : tuple of str
+        Names of the estimated parameters (motion parameters, then tones ``f0[p]``).
+    units : tuple of str
+    values : ndarray, shape (d,)
+        True parameter values (SI).
+    fim : ndarray, shape (d, d)
+        Fisher information (SI units of ``values``).
+    covariance : ndarray, shape (d, d)
+        CRLB = FIM⁻¹ (SI).
+    std : ndarray, shape (d,)
+        √diag CRLB (SI).
+    condition_number : float
+        Condition number of the unit-diagonal (scaled) FIM.
+    final_time : float
+        t_N [s].
+    final_parameters : tuple of str
+        Names of the final-time parametrisation Z_N: the position parameters replaced by the
+        target position at t_N (file 002 §3.1, L281); the tones and other parameters kept.
+    final_values, final_std : ndarray, shape (d,)
+        Z_N and its CRLB std (SI).
+    final_covariance : ndarray, shape (d, d)
+    final_position : ndarray, shape (2,)
+        Target position at t_N [m].
+    final_range : float
+        Observer–target range at t_N [m].
+    final_range_std : float
+        CRLB std of the final range [m] (delta method).
+    final_range_rsd : float
+        σ_R / R (dimensionless; file 002's RSD, L298–L311).
+    n_measurements : dict
+        Scalar measurement counts per kind.
+    notes : tuple of str
+        Modelling caveats (e.g. process noise ignored).
+    """
+
+    model: str
+    parameters: tuple[str, ...]
+    units: tuple[str, ...]
+    values: np.ndarray
+    fim: np.ndarray
+    covariance: np.ndarray
+    std: np.ndarray
+    condition_number: float
+    final_time: float
+    final_parameters: tuple[str, ...]
+    final_values: np.ndarray
+    final_covariance: np.ndarray
+    final_std: np.ndarray
+    final_position: np.ndarray
+    final_range: float
+    final_range_std: float
+    final_range_rsd: float
+    n_measurements: dict[str, int]
+    notes: tuple[str, ...] = ()
+
+    def std_of(self, name: str, *, final: bool = True) -> float:
+        """CRLB std of one parameter by name (final-time parametrisation by default)."""
+        names = self.final_parameters if final else self.parameters
+        std = self.final_std if final else self.std
+        if name not in names:
+            raise KeyError(f"{name!r} not in {names}")
+        return float(std[names.index(name)])
+
+
+# --------------------------------------------------------------------------------------------
+# Input checks
+# --------------------------------------------------------------------------------------------
+
+
+def _sigma(sigma: float | np.ndarray, n: int, field: str) -> np.ndarray:
+    s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,))
+    bad = ~np.isfinite(s) | (s <= 0.0)
+    if np.any(bad):
+        raise ScenarioError(field, "finite noise std > 0 (zero noise gives infinite "
+                            "information)", float(s[np.argmax(bad)]))
+    return s
+
+
+def _times_positions(times: np.ndarray, pos: np.ndarray, field: str) -> tuple[np.ndarray,
+                                                                             np.ndarray]:
+    t = np.asarray(times, dtype=float).reshape(-1)
+    p = np.asarray(pos, dtype=float)
+    if p.shape != (t.shape[0], 2):
+        raise ScenarioError(f"{field}.observer_position", f"shape ({t.shape[0]}, 2)", p.shape)
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
+        raise ScenarioError(field, "finite times and observer positions", "nan/inf")
+    return t, p
+
+
+def _check_range(d: np.ndarray, t: np.ndarray, field: str) -> None:
+    r = np.hypot(d[:, 0], d[:, 1])
+    if r.size and np.min(r) <= 1e-9 * max(1.0, float(np.max(r))):
+        k = int(np.argmin(r))
+        raise ObservabilityError(
+            f"{field}: the observer is at the target at t = {t[k]:g} s (range {r[k]:.3g} m); "
+            "bearings and range rates are undefined there")
+
+
+# --------------------------------------------------------------------------------------------
+# FIM
+# --------------------------------------------------------------------------------------------
+
+
+def fisher_information(
+    model: TrackModel,
+    theta: np.ndarray,
+    *,
+    bearings: Sequence[BearingData] = (),
+    ranges: Sequence[RangeData] = (),
+    frequencies: FrequencyData | None = None,
+) -> tuple[np.ndarray, dict[str, int]]:
+    """Batch FIM of the parameters ``[θ, f_0, …, f_{P−1}]`` (tones last).
+
+    Parameters
+    ----------
+    model : TrackModel
+    theta : ndarray, shape (dim,)
+        True motion parameters (SI).
+    bearings, ranges : sequence of BearingData / RangeData
+    frequencies : FrequencyData, optional
+        P lines; adds P nuisance parameters.
+
+    Returns
+    -------
+    fim : ndarray, shape (dim + P, dim + P)
+    counts : dict
+        Number of scalar measurements per kind.
+
+    Notes
+    -----
+    Frequency gradient (file 002 §1.6 of the notes): ``∂f_p/∂f_p = 1 − Ṙ/c`` and
+    ``∇_θ f_p = −(f_p/c) ∇_θ Ṙ``; the block structure is file 002 eq. (12)–(15).
+    """
+    theta = np.asarray(theta, dtype=float)
+    if theta.shape != (model.dim,) or not np.all(np.isfinite(theta)):
+        raise ScenarioError("theta", f"{model.dim} finite parameters {model.names}", theta)
+    n_tones = 0 if frequencies is None else int(np.size(frequencies.f0))
+    dim = model.dim + n_tones
+    fim = np.zeros((dim, dim))
+    counts = {"bearing": 0, "range": 0, "frequency": 0}
+    for i, b in enumerate(bearings):
+        t, p = _times_positions(b.times, b.observer_position, f"bearings[{i}]")
+        s = _sigma(b.sigma, t.shape[0], f"bearings[{i}].sigma")
+        d, _, dpos, _ = relative_kinematics(model, theta, t, p)
+        _check_range(d, t, f"bearings[{i}]")
+        rows = bearing_rows(d, dpos) / s[:, None]
+        fim[: model.dim, : model.dim] += rows.T @ rows
+        counts["bearing"] += t.shape[0]
+    for i, r in enumerate(ranges):
+        t, p = _times_positions(r.times, r.observer_position, f"ranges[{i}]")
+        if t.size == 0:
+            continue
+        s = _sigma(r.sigma, t.shape[0], f"ranges[{i}].sigma")
+        d, _, dpos, _ = relative_kinematics(model, theta, t, p)
+        _check_range(d, t, f"ranges[{i}]")
+        rows = range_rows(d, dpos) / s[:, None]
+        fim[: model.dim, : model.dim] += rows.T @ rows
+        counts["range"] += t.shape[0]
+    if frequencies is not None and n_tones:
+        fd = frequencies
+        t, p = _times_positions(fd.times, fd.observer_position, "frequencies")
+        v = np.asarray(fd.observer_velocity, float)
+        if v.shape != p.shape or not np.all(np.isfinite(v)):
+            raise ScenarioError("frequencies.observer_velocity", f"finite, shape {p.shape}",
+                                v.shape)
+        f0 = np.asarray(fd.f0, float).reshape(-1)
+        sig = np.asarray(fd.sigma, float).reshape(-1)
+        if sig.shape != f0.shape:
+            raise ScenarioError("frequencies.sigma", f"one std per line ({f0.size})", sig.size)
+        if not (np.all(np.isfinite(f0)) and np.all(f0 > 0)):
+            raise ScenarioError("frequencies.f0", "finite tones > 0 [Hz]", f0)
+        if not (np.isfinite(fd.c) and fd.c > 0):
+            raise ScenarioError("frequencies.c", "sound speed > 0 [m/s]", fd.c)
+        _sigma(sig, sig.size, "frequencies.sigma")
+        d, w, dpos, dvel = relative_kinematics(model, theta, t, p, v)
+        _check_range(d, t, "frequencies")
+        rdot, grad_rdot = range_rate_rows(d, w, dpos, dvel)
+        n = t.shape[0]
+        for q in range(n_tones):  # loop over the (≤ 4) lines, vectorised over time
+            rows = np.zeros((n, dim))
+            rows[:, : model.dim] = -(f0[q] / fd.c) * grad_rdot
+            rows[:, model.dim + q] = 1.0 - rdot / fd.c
+            rows /= sig[q]
+            fim += rows.T @ rows
+        counts["frequency"] += n * n_tones
+    total = sum(counts.values())
+    if total < dim:
+        raise ObservabilityError(
+            f"too few measurements: {total} scalar measurements for {dim} unknown parameters "
+            f"({', '.join(model.names)}{', tones' if n_tones else ''}); need at least {dim}")
+    return fim, counts
+
+
+def _invert(fim: np.ndarray, names: Sequence[str],
+            physical: np.ndarray) -> tuple[np.ndarray, float]:
+    """Inverse of an SPD FIM after unit-diagonal scaling; raises when singular.
+
+    Singularity is judged on the FIM in *physical* parameter scales (``physical``: a typical
+    size of each parameter), because unit-diagonal scaling would inflate a parameter that
+    receives only rounding-level information into a unit column.
+    """
+    diag = np.diag(fim)
+    fp = fim * physical[:, None] * physical[None, :]
+    eig_p, vec_p = np.linalg.eigh(fp)
+    if np.any(diag <= 0.0) or not np.all(np.isfinite(fim)):
+        k = int(np.argmin(diag))
+        raise ObservabilityError(
+            f"parameter {names[k]!r} receives no information (FIM diagonal {diag[k]:.3g}); "
+            "it is not observable from these measurements")
+    scale = 1.0 / np.sqrt(diag)
+    fs = fim * scale[:, None] * scale[None, :]
+    eig, vec = np.linalg.eigh(fs)
+    cond = float(eig[-1] / eig[0]) if eig[0] > 0 else np.inf
+    singular_p = eig_p[0] <= SINGULAR_RTOL * eig_p[-1]
+    if singular_p:
+        cond = max(cond, float(eig_p[-1] / max(eig_p[0], 1e-300)))
+        vec, scale = vec_p, physical
+    if eig[0] <= SINGULAR_RTOL * eig[-1] or singular_p:
+        null = vec[:, 0] * scale
+        null = null / np.max(np.abs(null))
+        direction = ", ".join(f"{n}: {c:+.3g}" for n, c in zip(names, null) if abs(c) > 1e-3)
+        raise ObservabilityError(
+            f"the Fisher information is singular (scaled condition number "
+            f"{'> 1e16' if cond > 1e16 else format(cond, '.3g')}): the "
+            f"track is not observable along the direction [{direction}]")
+    if cond > WARN_CONDITION:
+        warnings.warn(f"ill-conditioned FIM (scaled condition number {cond:.3g}); the CRLB is "
+                      "numerically fragile", IllConditionedWarning, stacklevel=3)
+    inv_s = linalg.cho_solve(linalg.cho_factor(fs), np.eye(fs.shape[0]))
+    cov = inv_s * scale[:, None] * scale[None, :]
+    return 0.5 * (cov + cov.T), cond
+
+
+def _physical_scales(model: TrackModel, theta: np.ndarray, bearings: Sequence[BearingData],
+                     ranges: Sequence[RangeData],
+                     frequencies: FrequencyData | None) -> np.ndarray:
+    """Typical size of each parameter: mean range L for lengths, L/T for speeds, 1 rad,
+    1/T for rates (T = observation span), the line's σ for tones."""
+    ts, ps = [], []
+    for m in (*bearings, *ranges, *([frequencies] if frequencies is not None else [])):
+        t = np.asarray(m.times, float).reshape(-1)
+        if t.size:
+            ts.append(t)
+            ps.append(np.asarray(m.observer_position, float))
+    t = np.concatenate(ts)
+    pos, _ = model.track(theta, t)
+    L = max(float(np.mean(np.linalg.norm(pos - np.concatenate(ps), axis=-1))), 1e-9)
+    T = max(float(np.ptp(t)), 1e-9)
+    per_unit = {"m": L, "m/s": L / T, "rad": 1.0, "rad/s": 1.0 / T}
+    out = [per_unit[u] for u in model.units]
+    if frequencies is not None:
+        out += list(np.asarray(frequencies.sigma, float).reshape(-1))
+    return np.asarray(out)
+
+
+def crlb_from_data(
+    model: TrackModel,
+    theta: np.ndarray,
+    *,
+    bearings: Sequence[BearingData] = (),
+    ranges: Sequence[RangeData] = (),
+    frequencies: FrequencyData | None = None,
+    final_time: float | None = None,
+    final_observer_position: np.ndarray | None = None,
+    notes: Sequence[str] = (),
+) -> CRLBResult:
+    """Array-level CRLB of a deterministic track.
+
+    Parameters
+    ----------
+    model : TrackModel
+    theta : ndarray, shape (dim,)
+        True motion parameters (SI).
+    bearings, ranges, frequencies
+        Measurement sets, see :func:`fisher_information`.
+    final_time : float, optional
+        t_N [s] (default: the last measurement time).
+    final_observer_position : ndarray, shape (2,), optional
+        Observer position at t_N [m] (default: the observer position of the last measurement
+        at t_N).
+    notes : sequence of str
+        Caveats copied into the result.
+
+    Returns
+    -------
+    CRLBResult
+
+    Raises
+    ------
+    ObservabilityError
+        Singular FIM, too few measurements, observer at the target.
+    ScenarioError
+        Non-positive or non-finite noise, NaN inputs.
+    """
+    theta = np.asarray(theta, dtype=float)
+    fim, counts = fisher_information(model, theta, bearings=bearings, ranges=ranges,
+                                     frequencies=frequencies)
+    n_tones = fim.shape[0] - model.dim
+    names = tuple(model.names) + tuple(f"f0[{q}]" for q in range(n_tones))
+    units = tuple(model.units) + ("Hz",) * n_tones
+    values = np.concatenate([theta, [] if frequencies is None
+                             else np.asarray(frequencies.f0, float).reshape(-1)])
+    cov, cond = _invert(fim, names, _physical_scales(model, theta, bearings, ranges,
+                                                     frequencies))
+
+    # final time and observer position
+    sets: list[tuple[np.ndarray, np.ndarray]] = [(np.asarray(b.times, float).reshape(-1),
+                                                  np.asarray(b.observer_position, float))
+                                                 for b in (*bearings, *ranges)]
+    if frequencies is not None:
+        sets.append((np.asarray(frequencies.times, float).reshape(-1),
+                     np.asarray(frequencies.observer_position, float)))
+    sets = [s for s in sets if s[0].size]
+    t_last = max(float(np.max(s[0])) for s in sets)
+    t_n = t_last if final_time is None else float(final_time)
+    if final_observer_position is None:
+        cand = [s[1][np.argmax(s[0])] for s in sets if np.isclose(np.max(s[0]), t_n)]
+        if not cand:
+            raise ScenarioError("final_observer_position", f"given when final_time ({t_n} s) "
+                                "is not a measurement time", None)
+        obs_n = cand[0]
+    else:
+        obs_n = np.asarray(final_observer_position, float).reshape(2)
+
+    pos_n, _ = model.track(theta, np.array([t_n]))
+    dpos_n, _ = model.jacobian(theta, np.array([t_n]))
+    jac_pos = np.zeros((2, len(names)))
+    jac_pos[:, : model.dim] = dpos_n[0]
+    # Z -> Z_N: position parameters (the first two in every model) replaced by p(t_N).
+    T = np.eye(len(names))
+    T[:2, :] = jac_pos
+    final_cov = T @ cov @ T.T
+    final_values = values.copy()
+    final_values[:2] = pos_n[0]
+    final_names = ("x_final", "y_final", *names[2:])
+    d_n = pos_n[0] - obs_n
+    r_n = float(np.hypot(*d_n))
+    if r_n <= 0.0:
+        raise ObservabilityError("the observer is at the target at the final time")
+    g = d_n / r_n
+    var_r = float(g @ final_cov[:2, :2] @ g)
+    std_r = float(np.sqrt(max(var_r, 0.0)))
+    return CRLBResult(
+        model=model.kind, parameters=names, units=units, values=values, fim=fim,
+        covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)), condition_number=cond,
+        final_time=t_n, final_parameters=final_names, final_values=final_values,
+        final_covariance=final_cov, final_std=np.sqrt(np.clip(np.diag(final_cov), 0.0, None)),
+        final_position=pos_n[0], final_range=r_n, final_range_std=std_r,
+        final_range_rsd=std_r / r_n, n_measurements=counts, notes=tuple(notes))
+
+
+# --------------------------------------------------------------------------------------------
+# Scenario adapter
+# --------------------------------------------------------------------------------------------
+
+
+def scenario_data(
+    scenario: Scenario, *, frequencies: int | None = None, t_ref: float | None = None,
+) -> tuple[TrackModel, np.ndarray, dict[str, object], list[str]]:
+    """Track model, true parameters and measurement sets of a scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    frequencies : int, optional
+        Number of frequency lines to use (the first N tones of the scenario's frequency
+        sensors; 0 = none). Default: all lines in the scenario.
+    t_ref : float, optional
+        Reference time of the position parameters (cv, multi-leg) [s]; default t0.
+
+    Returns
+    -------
+    model, theta, data, notes
+        ``data`` holds keyword arguments for :func:`crlb_from_data`.
+    """
+    from tmaplan.models.observer import observer_track
+    from tmaplan.models.target import initial_velocity
+    from tmaplan.scenario import (
+        BearingSensor,
+        FrequencySensor,
+        RangeSensor,
+        measurement_steps,
+    )
+
+    grid = scenario.time
+    times = grid.times
+    tgt = scenario.target
+    notes: list[str] = []
+    t_ref = float(grid.t0 if t_ref is None else t_ref)
+    if tgt.model == "constant-turn":
+        model = constant_turn_model()
+        theta = np.array([tgt.centre[0], tgt.centre[1], tgt.radius, tgt.phase, tgt.omega],
+                         dtype=float)
+    else:
+        p0 = np.asarray(tgt.position, float)
+        v0 = initial_velocity(tgt)
+        legs = tgt.legs if tgt.model == "multi-leg" else ()
+        ct = [float(leg.start) for leg in legs]
+        vels = [v0] + [initial_velocity(leg) for leg in legs]
+        model = multi_leg_model(ct, t_ref=float(grid.t0))
+        theta = np.concatenate([p0, *vels])
+        if t_ref != float(grid.t0):  # move the position parameters to t_ref
+            pos, _ = model.track(theta, np.array([t_ref]))
+            model = dataclasses.replace(model, t_ref=t_ref)
+            theta = np.concatenate([pos[0], theta[2:]])
+        if tgt.q > 0.0:
+            notes.append(f"target process noise q = {tgt.q:g} m²/s³ ignored: the batch CRLB "
+                         "is for a deterministic track (use `tmaplan bound` for the PCRB)")
+    obs = observer_track(scenario.observer, grid)
+    bearings: list[BearingData] = []
+    ranges: list[RangeData] = []
+    lines_f0: list[float] = []
+    lines_sigma: list[float] = []
+    freq_sensor = None
+    for sen in scenario.sensors:
+        steps = measurement_steps(sen, grid)
+        if isinstance(sen, BearingSensor):
+            bearings.append(BearingData(times=times[steps], observer_position=obs.position[steps],
+                                        sigma=sen.sigma))
+        elif isinstance(sen, RangeSensor):
+            if steps.size:
+                ranges.append(RangeData(times=times[steps],
+                                        observer_position=obs.position[steps],
+                                        sigma=sen.sigma))
+        elif isinstance(sen, FrequencySensor):
+            if freq_sensor is None:
+                freq_sensor = (sen, steps)
+            elif not np.array_equal(steps, freq_sensor[1]) or sen.c != freq_sensor[0].c:
+                raise ScenarioError("sensors", "frequency sensors sharing steps and sound "
+                                    "speed", sen)
+            lines_f0 += list(sen.f0)
+            lines_sigma += list(sen.sigma)
+    n_avail = len(lines_f0)
+    n_lines = n_avail if frequencies is None else int(frequencies)
+    if n_lines < 0 or n_lines > n_avail:
+        raise ScenarioError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
+                            "scenario)", frequencies, source=scenario.name)
+    freq = None
+    if n_lines and freq_sensor is not None:
+        sen, steps = freq_sensor
+        freq = FrequencyData(times=times[steps], observer_position=obs.position[steps],
+                             observer_velocity=obs.velocity[steps],
+                             f0=np.array(lines_f0[:n_lines]),
+                             sigma=np.array(lines_sigma[:n_lines]), c=sen.c)
+    data = {"bearings": bearings, "ranges": ranges, "frequencies": freq,
+            "final_time": float(times[-1]), "final_observer_position": obs.position[-1]}
+    return model, theta, data, notes
+
+
+def crlb(scenario: Scenario, *, frequencies: int | None = None,
+         t_ref: float | None = None) -> CRLBResult:
+    """Batch CRLB of a scenario's deterministic target track.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Constant-velocity ("ncv"; process noise is ignored with a note), "multi-leg" (known
+        change times) or "constant-turn" target; bearing, range and frequency sensors.
+    frequencies : int, optional
+        Use the first N frequency lines (0 = bearings/ranges only). Default: all lines.
+    t_ref : float, optional
+        Reference time of the cv/multi-leg position parameters [s] (default t0). The
+        final-time quantities do not depend on it.
+
+    Returns
+    -------
+    CRLBResult
+        With the final time t_N = the scenario's last grid instant.
+
+    Examples
+    --------
+    >>> from tmaplan.scenario import load_problem
+    >>> res = crlb(load_problem("clavard2013-halfturn-cw"), frequencies=0)
+    >>> round(res.final_range_rsd, 3)  # file 002 Table 1: 0.71 km / 9.76 km  # doctest: +SKIP
+    0.073
+    """
+    model, theta, data, notes = scenario_data(scenario, frequencies=frequencies, t_ref=t_ref)
+    return crlb_from_data(model, theta, notes=notes, **data)  # type: ignore[arg-type]

@@ -1,0 +1,89 @@
+"""Common runner, Track, Monte Carlo seeding, PCRB fallback and the ``track`` CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.errors import ScenarioError
+from tmaplan.estimators import Track, cartesian_pcrb, monte_carlo, run
+from tmaplan.scenario import load_problem
+from tmaplan.simulate import simulate
+
+
+def test_run_returns_frozen_track() -> None:
+    sc = load_problem("clavard2013-halfturn-cw")
+    sim = simulate(sc, np.random.default_rng(0))
+    tr = run("mle", sc, sim)
+    assert isinstance(tr, Track)
+    assert tr.estimates.shape == (sc.n_steps + 1, 4)
+    assert tr.seconds > 0
+    with pytest.raises(AttributeError):
+        tr.status = "x"  # type: ignore[misc]
+    # The MLE track is relative: at the last step close to the truth (final range ~9.8 km).
+    assert np.hypot(*(tr.estimates[-1, :2] - sim.relative[-1, :2])) < 5000
+
+
+def test_unknown_estimator_is_a_named_error() -> None:
+    sc = load_problem("clavard2013-halfturn-cw")
+    with pytest.raises(ScenarioError, match="estimator"):
+        run("kalman", sc, simulate(sc, None))  # type: ignore[arg-type]
+
+
+def test_monte_carlo_is_reproducible_from_seed() -> None:
+    sc = load_problem("ristic-bot-moderate")
+    a = monte_carlo(sc, "pf", runs=2, seed=5, n_particles=300, bound=False)
+    b = monte_carlo(sc, "pf", runs=2, seed=5, n_particles=300, bound=False)
+    np.testing.assert_array_equal(a.position_errors, b.position_errors)
+    c = monte_carlo(sc, "pf", runs=2, seed=6, n_particles=300, bound=False)
+    assert not np.array_equal(a.position_errors, c.position_errors)
+
+
+def test_fallback_pcrb_equals_bounds_module() -> None:
+    pytest.importorskip("tmaplan.bounds.pcrb")
+    from tmaplan.bounds.pcrb import monte_carlo_pcrb
+
+    sc = load_problem("ristic-bot-moderate")
+    a = cartesian_pcrb(sc, samples=1000, rng=np.random.default_rng(0))
+    b = monte_carlo_pcrb(sc, samples=1000, rng=np.random.default_rng(0),
+                         coords="cartesian").position_std
+    np.testing.assert_allclose(a, b, rtol=1e-6)
+
+
+def test_pcrb_linear_gaussian_equals_kalman_covariance() -> None:
+    # With range-only pings the fallback's information recursion is the inverse Kalman
+    # covariance when every sample has the same H (check: prior J0 + no measurement ⇒
+    # propagated prior covariance).
+    sc = load_problem("ristic-bot-moderate")
+    sc = sc.replace(sensors=(sc.sensors[0].__class__(sigma=1.0, steps=()),))
+    b = cartesian_pcrb(sc, samples=100, rng=np.random.default_rng(0))
+    from tmaplan.models.prior import prior_relative_moments
+    from tmaplan.models.target import ncv_matrices
+
+    _, P = prior_relative_moments(sc)
+    F, Q = ncv_matrices(sc.time.dt, sc.target.q)
+    for _ in range(sc.n_steps):
+        P = F @ P @ F.T + Q
+    assert b[-1] == pytest.approx(np.sqrt(np.trace(P[:2, :2])), rel=1e-9)
+
+
+def test_cli_track_json(tmp_path, capsys) -> None:
+    out = tmp_path / "r.json"
+    rc = main(["track", "clavard2013-halfturn-cw", "--estimator", "mle", "--runs", "2",
+               "--out", str(tmp_path), "--json", str(out)])
+    assert rc == 0
+    d = json.loads(out.read_text())
+    for key in ("times", "rmse_position", "rmse_range", "bound_position", "divergence_rate",
+                "seconds"):
+        assert key in d
+    assert len(d["times"]) == len(d["rmse_position"]) == 628
+    assert (tmp_path / "track_clavard2013-halfturn-cw_mle.png").exists()
+
+
+def test_cli_track_bad_runs(capsys) -> None:
+    rc = main(["track", "clavard2013-halfturn-cw", "--runs", "0", "--json", "-"])
+    assert rc == 1
+    assert "--runs" in capsys.readouterr().err

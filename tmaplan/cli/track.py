@@ -1,0 +1,81 @@
+"""``tmaplan track P --estimator pf|pf-bearings|mle|range-only``: Monte Carlo of an estimator
+against its bound (PCRB for the filters, CRLB for the MLE), with a figure of RMSE over time."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from tmaplan.errors import ScenarioError
+from tmaplan.estimators.runner import ESTIMATORS, monte_carlo
+from tmaplan.scenario import load
+
+HELP = "run an estimator over Monte Carlo runs against its bound"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``tmaplan track``."""
+    parser.add_argument("problem", help="built-in problem name or .toml path")
+    parser.add_argument("--estimator", choices=ESTIMATORS, default="pf",
+                        help="pf (prior), pf-bearings (file 001 init), mle, range-only")
+    parser.add_argument("--particles", type=int, default=10_000, help="particles (pf)")
+    parser.add_argument("--runs", type=int, default=20, help="Monte Carlo runs")
+    parser.add_argument("--seed", type=int, default=0, help="root SeedSequence seed")
+    parser.add_argument("--out", default="out", help="figure directory")
+    parser.add_argument("--no-figure", action="store_true", help="skip the figure")
+
+
+def _figure(res: Any, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    t = res.times / 60.0
+    ax.semilogy(t, res.rmse_position, label=f"{res.estimator} RMSE ({res.runs} runs)")
+    ax.semilogy(t, res.bound_position, "--", label="bound (CRLB)" if res.estimator == "mle"
+                else "bound (PCRB)")
+    ax.set_xlabel("time [min]")
+    ax.set_ylabel("position error [m]")
+    ax.set_title(res.problem)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run the Monte Carlo and return the DESIGN §4 ``track`` fields."""
+    if args.runs < 1:
+        raise ScenarioError("--runs", ">= 1", args.runs)
+    if args.particles < 2:
+        raise ScenarioError("--particles", ">= 2", args.particles)
+    scenario = load(args.problem)
+    quiet = args.json == "-"
+    show = not quiet and sys.stderr.isatty()
+
+    def progress(done: int, total: int) -> None:
+        if show:
+            print(f"\rrun {done}/{total}", end="", file=sys.stderr, flush=True)
+
+    res = monte_carlo(scenario, args.estimator, runs=args.runs, seed=args.seed,
+                      n_particles=args.particles, progress=progress)
+    if show:
+        print(file=sys.stderr)
+    payload = res.to_json()
+    if not args.no_figure:
+        fig = Path(args.out) / f"track_{scenario.name}_{args.estimator}.png"
+        _figure(res, fig)
+        payload["figure"] = str(fig)
+    if not quiet:
+        print(f"{scenario.name}: {args.estimator}, {res.runs} runs, {res.seconds:.1f} s")
+        print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
+              f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
+        if "figure" in payload:
+            print(f"  figure: {payload['figure']}")
+    return payload

@@ -1,0 +1,268 @@
+"""Inputs shared by the Monte Carlo and the closed-form PCRB: dynamics, sensors, prior.
+
+Everything a PCRB needs from a :class:`~tmaplan.scenario.Scenario` is resolved here once:
+the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing
+information per step, the ping weights per step, and the prior of the relative initial state
+(moments and the LPC information ``J₀`` of file 000 eq. 56).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy import stats
+
+from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.geometry import cart_to_lpc, wrap_angle
+from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.prior import relative_prior_samples, true_initial_state
+from tmaplan.models.target import ncv_matrices
+from tmaplan.scenario import BearingSensor, FrequencySensor, RangeSensor, measurement_steps
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["PCRBInputs", "lpc_prior", "prepare", "resolve_ping_steps"]
+
+#: Prior samples closer than this to the observer count as "mass at zero range" [m].
+MIN_PRIOR_RANGE = 1.0
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class PCRBInputs:
+    """Resolved inputs of a PCRB computation (K transitions, K + 1 instants).
+
+    Attributes
+    ----------
+    times : ndarray, shape (K + 1,)
+        [s].
+    dt : float
+        [s].
+    A, Q : ndarray, shape (4, 4)
+        NCV transition and process-noise covariance (``q·Σ⊗I₂``) [m², m²/s, m²/s²].
+    observer : ObserverTrack
+    c : ndarray, shape (K, 4)
+        ``c_t = −H Δv_t`` [m, m, m/s, m/s]: ``X_{t+1} = A X_t + c_t + w_t``.
+    bearing_info : ndarray, shape (K + 1,)
+        Σ 1/σ_β² over the bearing sensors measuring at each step [rad⁻²].
+    ambiguity : {"none", "pi"}
+        "pi" if any bearing sensor is π-ambiguous (file 000 eq. 4).
+    bearing_sensors : tuple of (BearingSensor, ndarray)
+        Each bearing sensor with its steps.
+    ping_steps : ndarray of int
+        Steps with a range ping.
+    ping_weight : ndarray, shape (K + 1,)
+        Σ 1/σ_r² of the pings at each step [m⁻²] (0 where there is none).
+    range_sigma : float or None
+        σ_r of the (first) range sensor [m].
+    frequency_sensors : tuple of (FrequencySensor, ndarray)
+        Each frequency sensor with its steps.
+    prior_samples : int
+        Number of prior samples behind ``m0, S0, cov_lpc0, cov_cart0``.
+    m0 : ndarray, shape (4,)
+        Mean of the relative initial state [m, m, m/s, m/s].
+    S0 : ndarray, shape (4, 4)
+        Raw second moment ``E X₀X₀ᵀ``.
+    cov_cart0 : ndarray, shape (4, 4)
+        Covariance of X₀.
+    cov_lpc0 : ndarray, shape (4, 4), or None
+        Covariance of the LPC initial state (file 000 eq. 56, bearing centred on its circular
+        mean).
+    min_prior_range : float
+        Smallest prior sample range [m].
+    prior_subsample : ndarray, shape (n_sub, 4)
+        The first ≤ 500 prior samples of X₀ (for the side-assumption diagnostic).
+    """
+
+    times: np.ndarray
+    dt: float
+    A: np.ndarray
+    Q: np.ndarray
+    observer: ObserverTrack
+    c: np.ndarray
+    bearing_info: np.ndarray
+    ambiguity: str
+    bearing_sensors: tuple[tuple[BearingSensor, np.ndarray], ...]
+    ping_steps: np.ndarray
+    ping_weight: np.ndarray
+    range_sigma: float | None
+    frequency_sensors: tuple[tuple[FrequencySensor, np.ndarray], ...]
+    prior_samples: int
+    m0: np.ndarray
+    S0: np.ndarray
+    cov_cart0: np.ndarray
+    cov_lpc0: np.ndarray | None
+    min_prior_range: float
+    prior_subsample: np.ndarray
+
+    @property
+    def n_steps(self) -> int:
+        """K."""
+        return self.times.shape[0] - 1
+
+
+def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
+                       ) -> tuple[np.ndarray, np.ndarray, float | None]:
+    """Ping steps and per-step ping weights Σ 1/σ_r² [m⁻²].
+
+    ``ping_steps=None``: the steps of the scenario's range sensors (each with its own σ).
+    An explicit list overrides them and uses the σ of the first range sensor; a non-empty list
+    without a range sensor raises :class:`ScenarioError`.
+    """
+    K = scenario.time.n_steps
+    sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
+    weight = np.zeros(K + 1)
+    sigma = float(sensors[0].sigma) if sensors else None
+    if ping_steps is None:
+        all_steps = []
+        for s in sensors:
+            st = measurement_steps(s, scenario.time)
+            weight[st] += 1.0 / float(s.sigma) ** 2
+            all_steps.append(st)
+        steps = np.unique(np.concatenate(all_steps)) if all_steps else np.zeros(0, int)
+        return steps.astype(int), weight, sigma
+    steps = np.asarray(list(ping_steps), dtype=int).reshape(-1)
+    if steps.size and sigma is None:
+        raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
+                            "no range sensor", source=scenario.name)
+    if steps.size and (steps.min() < 0 or steps.max() > K):
+        raise ScenarioError("ping_steps", f"steps in [0, {K}]", steps.tolist(),
+                            source=scenario.name)
+    steps = np.unique(steps)
+    weight[steps] = 1.0 / sigma**2 if sigma else 0.0
+    return steps, weight, sigma
+
+
+def _check_prior_range_support(scenario: Scenario) -> None:
+    p = scenario.prior
+    if p is None or p.kind != "polar":
+        return
+    if p.range_min > 0.0:
+        return
+    bad = p.range_distribution in ("uniform", "log-uniform")
+    if p.range_distribution == "normal" and p.range_std:
+        rel = true_initial_state(scenario)[:2] - np.asarray(scenario.observer.position, float)
+        mean = p.range_mean if p.range_mean is not None else float(np.hypot(*rel))
+        bad = bad or stats.norm.cdf(0.0, loc=mean, scale=p.range_std) > 1e-12
+    if bad:
+        raise ScenarioError(
+            "prior.range_min",
+            "> 0: the range prior puts mass at zero range, where ln r and the rates "
+            "β̇, ṙ/r (∝ 1/r) are undefined, so the LPC prior information J₀ does not exist",
+            p.range_min, source=scenario.name)
+
+
+def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """LPC covariance of prior samples (file 000 eq. 56) and its inverse J₀.
+
+    Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer product about the sample
+    mean (NOTES_000 §2.8). The bearing is centred on its circular mean before averaging, so a
+    prior straddling β = ±π is handled.
+
+    Raises
+    ------
+    ScenarioError
+        If a sample is at (near) zero range.
+    ObservabilityError
+        If the covariance is not positive definite (J₀ would not exist).
+    """
+    r = np.hypot(X0[:, 0], X0[:, 1])
+    if r.min() < MIN_PRIOR_RANGE:
+        raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
+                            "observer (ln r and 1/r diverge at zero range)",
+                            f"a sample at range {r.min():.3g} m", source=source)
+    Y = cart_to_lpc(X0)
+    bm = np.angle(np.mean(np.exp(1j * Y[:, 0])))
+    Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
+    cov = np.cov(Y, rowvar=False)
+    var = np.diag(cov)
+    msg = ("prior information J0 (inverse LPC prior covariance, file 000 eq. 56) is not "
+           f"positive definite: LPC prior variances {var.tolist()} (a zero std in the prior?)")
+    # a degenerate prior component leaves only round-off variance: judge on the correlation
+    if np.any(var <= 1e-24):
+        raise ObservabilityError(msg)
+    d = np.sqrt(var)
+    if np.linalg.eigvalsh(cov / np.outer(d, d)).min() < 1e-10:
+        raise ObservabilityError(msg)
+    try:
+        J0 = np.linalg.inv(cov)
+        np.linalg.cholesky(J0)
+    except np.linalg.LinAlgError as exc:
+        raise ObservabilityError(msg) from exc
+    return cov, J0
+
+
+def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
+            observer: ObserverTrack | None = None, prior_samples: int | None = None,
+            rng: np.random.Generator | None = None, lpc: bool = True) -> PCRBInputs:
+    """Resolve a scenario into :class:`PCRBInputs`.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Needs a ``prior`` and an NCV target (the PCRB's dynamics).
+    ping_steps : sequence of int, optional
+        See :func:`resolve_ping_steps`.
+    observer : ObserverTrack, optional
+        Default: the scenario's scripted observer.
+    prior_samples : int, optional
+        Default ``scenario.prior.samples``.
+    rng : numpy.random.Generator, optional
+        For the prior samples; default ``default_rng(scenario.prior.seed)`` (reproducible).
+    lpc : bool
+        Form the LPC prior (eq. 56) and check the prior for mass at zero range; a Cartesian
+        PCRB does not need either (``cov_lpc0`` is then None).
+    """
+    if scenario.prior is None:
+        raise ScenarioError("prior", "a [prior] table (the PCRB needs a prior)", None,
+                            source=scenario.name)
+    if scenario.target.model == "constant-turn":
+        raise ScenarioError("target.model", "'ncv' or 'multi-leg' (the PCRB uses NCV dynamics)",
+                            scenario.target.model, source=scenario.name)
+    grid = scenario.time
+    K = grid.n_steps
+    obs = observer if observer is not None else observer_track(scenario.observer, grid)
+    if obs.position.shape[0] != K + 1:
+        raise ScenarioError("observer", f"a track with {K + 1} steps",
+                            f"{obs.position.shape[0]} steps", source=scenario.name)
+    A, Q = ncv_matrices(grid.dt, float(scenario.target.q))
+    dv = obs.velocity_increments
+    c = -np.hstack([grid.dt * dv, dv])
+
+    bearing_info = np.zeros(K + 1)
+    bearing_sensors: list[tuple[Any, np.ndarray]] = []
+    freq: list[tuple[Any, np.ndarray]] = []
+    ambiguity = "none"
+    for s in scenario.sensors:
+        if isinstance(s, BearingSensor):
+            st = measurement_steps(s, grid)
+            st = st[st <= K]
+            bearing_info[st] += 1.0 / float(s.sigma) ** 2
+            bearing_sensors.append((s, st))
+            if s.ambiguity == "pi":
+                ambiguity = "pi"
+        elif isinstance(s, FrequencySensor):
+            st = measurement_steps(s, grid)
+            freq.append((s, st[st <= K]))
+    steps, weight, sigma = resolve_ping_steps(scenario, ping_steps)
+
+    if lpc:
+        _check_prior_range_support(scenario)
+    n = int(prior_samples) if prior_samples is not None else scenario.prior.samples
+    if n < 10:
+        raise ScenarioError("prior_samples", ">= 10", n, source=scenario.name)
+    rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
+    X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
+    cov_lpc = lpc_prior(X0, source=scenario.name)[0] if lpc else None
+    m0 = X0.mean(axis=0)
+    S0 = X0.T @ X0 / n
+    return PCRBInputs(
+        times=np.asarray(grid.times), dt=float(grid.dt), A=A, Q=Q, observer=obs, c=c,
+        bearing_info=bearing_info, ambiguity=ambiguity, bearing_sensors=tuple(bearing_sensors),
+        ping_steps=steps, ping_weight=weight, range_sigma=sigma, frequency_sensors=tuple(freq),
+        prior_samples=n, m0=m0, S0=S0, cov_cart0=np.cov(X0, rowvar=False), cov_lpc0=cov_lpc,
+        min_prior_range=float(np.hypot(X0[:, 0], X0[:, 1]).min()),
+        prior_subsample=X0[:500].copy())

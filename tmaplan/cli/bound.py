@@ -1,0 +1,142 @@
+"""``tmaplan bound``: posterior CRB over time (closed form in LPC, or Monte Carlo)."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tmaplan.errors import ScenarioError
+from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
+
+HELP = "posterior Cramér-Rao bound over time (closed form in LPC or Monte Carlo)"
+
+_LPC_LABELS = ("β [rad]", "ln r [-]", "β̇ [rad/s]", "ṙ/r [1/s]")
+_CART_LABELS = ("r_x [m]", "r_y [m]", "v_x [m/s]", "v_y [m/s]")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``tmaplan bound``."""
+    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+    parser.add_argument("--method", choices=("closed-form", "monte-carlo"),
+                        default="closed-form")
+    parser.add_argument("--coords", choices=("lpc", "cartesian"), default=None,
+                        help="coordinates (closed form: lpc only; default lpc for the closed "
+                             "form, cartesian for Monte Carlo)")
+    parser.add_argument("--samples", type=int, default=1000,
+                        help="Monte Carlo samples (default 1000, as file 000 L612)")
+    pings = parser.add_mutually_exclusive_group()
+    pings.add_argument("--ping-every", type=float, metavar="SEC",
+                       help="a range ping at the first step at or after each multiple of SEC")
+    pings.add_argument("--ping-steps", metavar="K,K,..", help="range pings at these steps")
+    parser.add_argument("--seed", type=int, default=0, help="Monte Carlo seed")
+    parser.add_argument("--out", default="out", help="figure directory (default out/)")
+    parser.add_argument("--no-overlay", action="store_true",
+                        help="do not overlay the other method on the LPC figure")
+    parser.add_argument("--no-figure", action="store_true", help="do not write a figure")
+
+
+def ping_steps_from_args(scenario: Scenario, every: float | None,
+                         steps: str | None) -> list[int] | None:
+    """Ping steps from ``--ping-every`` / ``--ping-steps`` (None: the scenario's own)."""
+    if every is None and steps is None:
+        return None
+    ranges = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
+    if not ranges:
+        raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
+                            "no range sensor", source=scenario.name)
+    if every is not None:
+        if not every > 0:
+            raise ScenarioError("--ping-every", "> 0 s", every)
+        sensor = dataclasses.replace(ranges[0], steps=(), period=float(every), every=None)
+        return measurement_steps(sensor, scenario.time).tolist()
+    try:
+        return [int(x) for x in str(steps).split(",") if x.strip()]
+    except ValueError as exc:
+        raise ScenarioError("--ping-steps", "comma-separated integers", steps) from exc
+
+
+def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: int,
+             pings: list[int] | None) -> Any:
+    from tmaplan.bounds.closed_form import closed_form_pcrb
+    from tmaplan.bounds.pcrb import monte_carlo_pcrb
+
+    if method == "closed-form":
+        if coords != "lpc":
+            raise ScenarioError("--coords", "lpc for the closed form (DESIGN §4)", coords)
+        return closed_form_pcrb(scenario, ping_steps=pings)
+    return monte_carlo_pcrb(scenario, samples=samples, rng=np.random.default_rng(seed),
+                            coords=coords, ping_steps=pings)  # type: ignore[arg-type]
+
+
+def _figure(results: list[Any], path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    coords = results[0].coords
+    labels = _LPC_LABELS if coords == "lpc" else _CART_LABELS
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6.5), sharex=True)
+    styles = {"closed-form": dict(ls="--", color="C0"), "monte-carlo": dict(ls="-", color="C1")}
+    for res in results:
+        st = styles[res.method]
+        for i in range(4):
+            ax = axes.flat[i]
+            ax.semilogy(res.times, res.std[:, i], label=res.method, **st)
+            ax.set_ylabel(f"std {labels[i]}")
+        axes.flat[4].plot(res.times, res.range_std, label=res.method, **st)
+        axes.flat[5].plot(res.times, res.position_std, label=res.method, **st)
+    axes.flat[4].set_ylabel("range bound [m]")
+    axes.flat[5].set_ylabel("position bound [m]")
+    for ax in axes[1]:
+        ax.set_xlabel("time [s]")
+    for ax in axes.flat:
+        ax.grid(True, alpha=0.3)
+    axes.flat[0].legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Compute the bound, write the figure, return the DESIGN §4 JSON fields."""
+    scenario = load(args.problem)
+    coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
+    if args.samples < 2:
+        raise ScenarioError("--samples", ">= 2", args.samples)
+    pings = ping_steps_from_args(scenario, args.ping_every, args.ping_steps)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = _compute(scenario, args.method, coords, args.samples, args.seed, pings)
+        results = [res]
+        if not args.no_figure and not args.no_overlay and coords == "lpc":
+            other = "monte-carlo" if args.method == "closed-form" else "closed-form"
+            results.append(_compute(scenario, other, coords, args.samples, args.seed, pings))
+    quiet = args.json == "-"
+    notes = sorted({str(w.message) for w in caught})
+    payload = res.to_json()
+    payload["warnings"] = notes
+    payload["problem"] = scenario.name
+    if not args.no_figure:
+        fig_path = Path(args.out) / f"bound_{scenario.name}_{args.method}_{coords}.png"
+        _figure(results, fig_path, f"PCRB {scenario.name} ({coords})")
+        payload["figure"] = str(fig_path)
+    if not quiet:
+        k = len(res.times) - 1
+        print(f"{scenario.name}: {args.method} PCRB in {coords}, {k} steps, "
+              f"{len(res.ping_steps)} pings, {res.seconds:.3f} s")
+        print(f"  final std: {np.array2string(res.std[-1], precision=4)}")
+        print(f"  final range bound {res.range_std[-1]:.1f} m, "
+              f"position bound {res.position_std[-1]:.1f} m")
+        for n in notes:
+            print(f"  warning: {n}")
+        if "figure" in payload:
+            print(f"  figure: {payload['figure']}")
+    return payload

@@ -1,0 +1,129 @@
+"""Monte Carlo comparison: common random numbers, backend independence, resume, metrics."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import PlanningError
+from tmaplan.experiments import CampaignSpec, run_campaign, run_one
+from tmaplan.metrics import paired_difference, time_to_accuracy
+from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
+from tmaplan.report import write_report
+from tmaplan.scenario import dump, load_problem
+
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_problem("default")
+
+
+def _spec(scenario, runs=3, policies=("straight", "zigzag+uniform")):
+    return CampaignSpec(scenario_toml=dump(scenario), policies=policies, runs=runs, seed=11,
+                        n_particles=300)
+
+
+def test_time_to_accuracy():
+    t = np.arange(6) * 10.0
+    assert time_to_accuracy(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
+    assert time_to_accuracy(t, np.array([0.05] * 6), 0.1) == 0.0
+    assert time_to_accuracy(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
+
+
+def test_paired_difference_interval():
+    rng = np.random.default_rng(0)
+    base = rng.normal(100, 30, 400)
+    vals = {"a": base - 5 + rng.normal(0, 1, 400), "b": base}
+    d = paired_difference(vals, "a", "b", "m")
+    # pairing removes the ±30 spread: the interval is about ±0.1 around −5
+    assert d.ci_low < -5 < d.ci_high and d.ci_high - d.ci_low < 0.3 and d.excludes_zero
+    d2 = paired_difference({"a": np.array([1.0, np.inf]), "b": np.array([2.0, 3.0])}, "a", "b",
+                           "t", censor=10.0)
+    assert d2.mean == pytest.approx(3.0)
+
+
+def test_common_random_numbers(scenario):
+    spec = _spec(scenario, policies=("straight", "zigzag"))
+    pols = {"straight": Combined(manoeuvre=Straight()),
+            "zigzag": Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.7))}
+    a = run_one(spec, pols, 0)
+    b = run_one(spec, pols, 0)
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+    # same truth for every policy in a run, a different truth in another run
+    assert np.array_equal(a["straight/target"], a["zigzag/target"])
+    c = run_one(spec, pols, 1)
+    assert not np.array_equal(a["straight/target"], c["straight/target"])
+    # the manoeuvre changes the track (so the comparison is not vacuous)
+    assert not np.array_equal(a["straight/observer"], a["zigzag/observer"])
+
+
+def test_policies_respect_limits_and_budget(scenario):
+    spec = _spec(scenario, policies=("x",))
+    pol = Combined(manoeuvre=SingleTurn(angle=np.radians(120), time=600.0),
+                   ping=UniformPings(budget=3))
+    out = run_one(spec, {"x": pol}, 0)
+    assert out["x/pings_used"] == 3 and len(out["x/ping_steps"]) == 3
+    obs = out["x/observer"]
+    v = np.diff(obs, axis=0) / scenario.time.dt
+    speed = np.hypot(*v.T)
+    assert np.allclose(speed, scenario.observer.speed, rtol=1e-3)  # chord ≈ arc at 0.5°/s
+    course = np.unwrap(np.arctan2(v[:, 0], v[:, 1]))
+    assert np.max(np.abs(np.diff(course))) <= scenario.observer.turn_rate_max * 15.0 + 1e-9
+
+
+@pytest.mark.timeout(300)
+def test_backends_bit_identical(scenario):
+    spec = _spec(scenario)
+    serial = run_campaign(spec)
+    procs = run_campaign(spec, workers=2, backend="processes")
+    dask = run_campaign(spec, workers=2, backend="dask")
+    for other in (procs, dask):
+        assert other.policies == serial.policies
+        for name in serial.policies:
+            for key in ("rmse_position", "rmse_range", "time_to_accuracy_runs"):
+                assert np.array_equal(serial.summary[name][key], other.summary[name][key])
+        assert json.dumps(other.to_json()["policies"]) == json.dumps(serial.to_json()["policies"])
+
+
+def test_interrupted_campaign_resumes(scenario, tmp_path):
+    spec = _spec(scenario, runs=4)
+    with pytest.raises(PlanningError, match="incomplete"):
+        run_campaign(spec, out_dir=tmp_path, max_new_runs=2)  # "killed" after two runs
+    files = sorted((tmp_path / f"campaign-{spec.key()}" / "runs").glob("*.npz"))
+    assert [f.name for f in files] == ["run_00000.npz", "run_00001.npz"]
+    # a torn file left by a kill is recomputed, not trusted
+    (files[1].parent / "run_00002.npz").write_bytes(b"partial")
+    res = run_campaign(spec, out_dir=tmp_path)
+    assert res.loaded_runs == (0, 1) and res.computed_runs == (2, 3)
+    fresh = run_campaign(spec)
+    for name in spec.policies:
+        assert np.array_equal(res.summary[name]["rmse_position"],
+                              fresh.summary[name]["rmse_position"])
+    again = run_campaign(spec, out_dir=tmp_path)
+    assert again.computed_runs == () and again.loaded_runs == (0, 1, 2, 3)
+
+
+def test_report_has_every_figure(scenario, tmp_path):
+    res = run_campaign(_spec(scenario, runs=2))
+    path = write_report(res, tmp_path, command="tmaplan compare default --runs 2")
+    text = path.read_text()
+    assert text.count("data:image/png;base64,") == 3
+    assert "tmaplan compare default --runs 2" in text and "[time]" in text
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("no headless chromium on this machine: figures checked as embedded PNGs")
+    proc = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'chrome'}",
+         "--virtual-time-budget=5000", "--dump-dom", path.as_uri()],
+        capture_output=True, text=True, timeout=120)
+    assert 'data-images-loaded="3"' in proc.stdout, proc.stderr[-2000:]
+    assert 'data-images-total="3"' in proc.stdout

@@ -1,0 +1,403 @@
+"""Monte Carlo comparison of policies with common random numbers.
+
+A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
+its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter),
+and every policy re-creates them from the same seeds, so differences between policies are
+paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
+run, so serial, process-pool and Dask backends with any worker count give bit-identical
+results.
+
+Runs are written to ``<out>/campaign-<key>/runs/run_XXXXX.npz`` as they finish (atomically);
+re-running the same campaign loads them and computes only the missing runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from tmaplan.errors import PlanningError
+from tmaplan.metrics import PairedDifference, paired_difference, run_metrics
+
+__all__ = [
+    "CampaignResult",
+    "CampaignSpec",
+    "resolve_policies",
+    "run_campaign",
+    "run_one",
+]
+
+Backend = Literal["serial", "processes", "dask"]
+_SCALARS = ("time_to_accuracy", "diverged", "pings_used", "final_position_error",
+            "final_range_error", "final_rel_range_error")
+_SERIES = ("position_error", "range_error", "rel_range_error", "course_error", "speed_error")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CampaignSpec:
+    """Everything that defines a campaign (and its cache key).
+
+    Attributes
+    ----------
+    scenario_toml : str
+        The scenario, as TOML (``tmaplan.scenario.dump``).
+    policies : tuple of str
+        Policy specs, ``manoeuvre[+ping]`` (:func:`tmaplan.policies.parse_policy`).
+    runs : int
+        Number of Monte Carlo runs.
+    seed : int
+        Root seed.
+    n_particles : int
+        Particle-filter size.
+    truth : {"prior", "scenario"}
+        Draw each run's target initial state from the prior, or use the scenario's.
+    accuracy : float
+        Relative range error that counts as localised.
+    """
+
+    scenario_toml: str
+    policies: tuple[str, ...]
+    runs: int
+    seed: int = 0
+    n_particles: int = 3000
+    truth: Literal["prior", "scenario"] = "prior"
+    accuracy: float = 0.1
+
+    def key(self) -> str:
+        """Hash of everything but ``runs`` (extending a campaign reuses its runs)."""
+        d = dataclasses.asdict(self)
+        d.pop("runs")
+        return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def resolve_policies(scenario: Any, specs: Sequence[str]) -> dict[str, Any]:
+    """Parse policy specs and precompute what is shared by all runs (offline plans,
+    schedules, the best single turn), so workers do not recompute it.
+
+    Returns
+    -------
+    dict
+        Policy name -> policy object (picklable).
+    """
+    from tmaplan.policies import (
+        Combined,
+        Planned,
+        ScheduledPings,
+        _offline_plan,
+        _offline_schedule,
+        parse_policy,
+    )
+
+    out: dict[str, Any] = {}
+    for spec in specs:
+        pol = parse_policy(spec, scenario)
+        man, ping = pol.manoeuvre, pol.ping
+        if isinstance(man, Planned) and man.plan is None:
+            man = dataclasses.replace(man, plan=_offline_plan(scenario, man.objective))
+        if isinstance(ping, ScheduledPings) and ping.steps is None:
+            from tmaplan.policies import _budget
+
+            steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
+                                      ping.objective)
+            ping = dataclasses.replace(ping, steps=tuple(int(s) for s in steps))
+        pol = Combined(manoeuvre=man, ping=ping)
+        if spec in out:
+            raise PlanningError(f"policy {spec!r} given twice")
+        out[spec] = pol
+    return out
+
+
+def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
+    return np.random.SeedSequence(seed, spawn_key=(run,)).spawn(3)
+
+
+def run_one(spec: CampaignSpec, policies: dict[str, Any], run: int) -> dict[str, np.ndarray]:
+    """Run every policy on Monte Carlo run ``run``; returns flat arrays keyed
+    ``"<policy>/<field>"`` (metrics, plus tracks for figures)."""
+    from threadpoolctl import threadpool_limits
+
+    from tmaplan.closed_loop import draw_truth, run_closed_loop
+    from tmaplan.scenario import loads
+
+    scenario = loads(spec.scenario_toml)
+    s_truth, s_noise, s_filter = _run_seeds(spec.seed, run)
+    out: dict[str, np.ndarray] = {}
+    with threadpool_limits(limits=1):
+        target = draw_truth(scenario, np.random.default_rng(s_truth),
+                            from_prior=spec.truth == "prior")
+        for name, pol in policies.items():
+            res = run_closed_loop(scenario, pol, target,
+                                  noise_rng=np.random.default_rng(s_noise),
+                                  filter_rng=np.random.default_rng(s_filter),
+                                  n_particles=spec.n_particles)
+            m = run_metrics(res.times, res.truth, res.estimate, res.observer.mean_velocity,
+                            accuracy=spec.accuracy, n_pings=len(res.ping_steps))
+            for f in _SERIES + _SCALARS:
+                out[f"{name}/{f}"] = np.asarray(m[f])
+            out[f"{name}/observer"] = res.observer.position
+            out[f"{name}/target"] = res.target[:, :2]
+            out[f"{name}/estimate"] = res.estimate[:, :2] + res.observer.position
+            out[f"{name}/ping_steps"] = res.ping_steps
+            out[f"{name}/replan_seconds"] = np.array([e["seconds"] for e in res.replans])
+            out[f"{name}/replan_failures"] = np.array(sum(not e["success"]
+                                                          for e in res.replans))
+    return out
+
+
+def _save_run(path: Path, data: dict[str, np.ndarray]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    os.close(fd)
+    with open(tmp, "wb") as fh:
+        np.savez(fh, **data)
+    os.replace(tmp, path)
+
+
+def _load_run(path: Path) -> dict[str, np.ndarray] | None:
+    try:
+        with np.load(path) as z:
+            return {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError):  # a torn or foreign file: recompute that run
+        return None
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CampaignResult:
+    """Aggregated results of a campaign.
+
+    Attributes
+    ----------
+    spec : CampaignSpec
+    times : ndarray, shape (K + 1,)
+        [s].
+    policies : tuple of str
+    summary : dict
+        Per policy: ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
+        ``time_to_accuracy`` (median [s], inf if most runs never get there),
+        ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
+        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_rel_range_error``
+        (per run), ``replan_seconds`` (mean per re-plan), ``replan_failures``.
+    differences : tuple of PairedDifference
+        All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
+        ``final_range_error``.
+    examples : dict
+        Run 0's tracks per policy (observer, target, estimate positions).
+    directory : Path or None
+        Where runs are stored.
+    computed_runs, loaded_runs : tuple of int
+        Which runs were computed now and which were loaded from disk.
+    seconds : float
+    """
+
+    spec: CampaignSpec
+    times: np.ndarray
+    policies: tuple[str, ...]
+    summary: dict[str, dict[str, Any]]
+    differences: tuple[PairedDifference, ...]
+    examples: dict[str, dict[str, np.ndarray]]
+    directory: Path | None
+    computed_runs: tuple[int, ...]
+    loaded_runs: tuple[int, ...]
+    seconds: float
+
+    def to_json(self) -> dict[str, Any]:
+        """DESIGN §4 payload (SI units)."""
+        pol = {}
+        for name in self.policies:
+            s = self.summary[name]
+            pol[name] = {
+                "rmse_position": s["rmse_position"].tolist(),
+                "rmse_range": s["rmse_range"].tolist(),
+                "time_to_accuracy": s["time_to_accuracy"],
+                "reached_fraction": s["reached_fraction"],
+                "divergence_rate": s["divergence_rate"],
+                "pings_used": s["pings_used"],
+                "final_range_rmse": s["final_range_rmse"],
+                "replan_seconds": s["replan_seconds"],
+            }
+        return {
+            "policies": pol,
+            "times": self.times.tolist(),
+            "runs": self.spec.runs,
+            "seed": self.spec.seed,
+            "particles": self.spec.n_particles,
+            "accuracy": self.spec.accuracy,
+            "differences": [dataclasses.asdict(d) for d in self.differences],
+            "computed_runs": len(self.computed_runs),
+            "loaded_runs": len(self.loaded_runs),
+        }
+
+
+def _aggregate(spec: CampaignSpec, runs: list[dict[str, np.ndarray]], times: np.ndarray
+               ) -> tuple[dict[str, dict[str, Any]], tuple[PairedDifference, ...]]:
+    summary: dict[str, dict[str, Any]] = {}
+    tta: dict[str, np.ndarray] = {}
+    fre: dict[str, np.ndarray] = {}
+    for name in spec.policies:
+        pe = np.stack([r[f"{name}/position_error"] for r in runs])
+        re = np.stack([r[f"{name}/range_error"] for r in runs])
+        t = np.array([float(r[f"{name}/time_to_accuracy"]) for r in runs])
+        fin = np.array([float(r[f"{name}/final_range_error"]) for r in runs])
+        rel = np.array([float(r[f"{name}/final_rel_range_error"]) for r in runs])
+        rs = np.concatenate([r[f"{name}/replan_seconds"] for r in runs])
+        tta[name], fre[name] = t, fin
+        summary[name] = {
+            "rmse_position": np.sqrt(np.mean(pe**2, axis=0)),
+            "rmse_range": np.sqrt(np.mean(re**2, axis=0)),
+            "time_to_accuracy": float(np.median(t)),
+            "time_to_accuracy_runs": t,
+            "reached_fraction": float(np.mean(np.isfinite(t))),
+            "divergence_rate": float(np.mean([bool(r[f"{name}/diverged"]) for r in runs])),
+            "pings_used": float(np.mean([int(r[f"{name}/pings_used"]) for r in runs])),
+            "final_range_rmse": float(np.sqrt(np.mean(fin**2))),
+            "final_rel_range_error": rel,
+            "replan_seconds": float(rs.mean()) if rs.size else 0.0,
+            "replan_failures": int(sum(int(r[f"{name}/replan_failures"]) for r in runs)),
+        }
+    censor = float(times[-1] - times[0] + (times[1] - times[0]))
+    diffs = []
+    names = list(spec.policies)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            diffs.append(paired_difference(tta, a, b, "time_to_accuracy", censor=censor))
+            diffs.append(paired_difference(fre, a, b, "final_range_error"))
+    return summary, tuple(diffs)
+
+
+def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
+                  fn: Callable[..., dict[str, np.ndarray]], spec: CampaignSpec,
+                  policies: dict[str, Any], todo: list[int]
+                  ) -> Iterable[tuple[int, dict[str, np.ndarray]]]:
+    if backend == "serial" or not todo:
+        for i in todo:
+            yield i, fn(spec, policies, i)
+    elif backend == "processes":
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as ex:
+            futs = {ex.submit(fn, spec, policies, i): i for i in todo}
+            for f in as_completed(futs):
+                yield futs[f], f.result()
+    elif backend == "dask":
+        from dask.distributed import Client, LocalCluster
+        from dask.distributed import as_completed as d_as_completed
+
+        cluster = None
+        if scheduler is None:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(scheduler)
+        try:
+            futs = [client.submit(fn, spec, policies, i, pure=False, key=f"run-{spec.key()}-{i}")
+                    for i in todo]
+            index = {f.key: i for f, i in zip(futs, todo)}
+            for f in d_as_completed(futs):
+                yield index[f.key], f.result()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    else:
+        raise PlanningError(f"unknown backend {backend!r}: expected serial, processes or dask")
+
+
+def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, workers: int = 1,
+                 backend: Backend | None = None, scheduler: str | None = None,
+                 progress: bool = False, policies: dict[str, Any] | None = None,
+                 max_new_runs: int | None = None) -> CampaignResult:
+    """Run (or resume) a campaign.
+
+    Parameters
+    ----------
+    spec : CampaignSpec
+    out_dir : path, optional
+        Store runs under ``out_dir/campaign-<key>/`` and resume from there.
+    workers : int
+        Worker processes (backend "processes" or a local Dask cluster).
+    backend : {"serial", "processes", "dask"}, optional
+        Default: "dask" if ``scheduler`` is given, "processes" if ``workers > 1``, else
+        "serial".
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    progress : bool
+        Show a progress bar (rich) on the terminal.
+    policies : dict, optional
+        Pre-resolved policies (default: :func:`resolve_policies`).
+    max_new_runs : int, optional
+        Stop after computing this many new runs (used to test interruption and resume).
+
+    Returns
+    -------
+    CampaignResult
+    """
+    from tmaplan.scenario import loads
+
+    t0 = time.perf_counter()
+    if spec.runs < 1:
+        raise PlanningError(f"runs must be >= 1, received {spec.runs}")
+    scenario = loads(spec.scenario_toml)
+    backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
+    pols = policies if policies is not None else resolve_policies(scenario, spec.policies)
+    directory = None
+    results: dict[int, dict[str, np.ndarray]] = {}
+    if out_dir is not None:
+        directory = Path(out_dir) / f"campaign-{spec.key()}"
+        (directory / "runs").mkdir(parents=True, exist_ok=True)
+        meta = dataclasses.asdict(spec)
+        meta.pop("runs")
+        (directory / "spec.json").write_text(json.dumps(meta, indent=1))
+        for i in range(spec.runs):
+            p = directory / "runs" / f"run_{i:05d}.npz"
+            if p.exists():
+                d = _load_run(p)
+                if d is not None:
+                    results[i] = d
+    loaded = tuple(sorted(results))
+    todo = [i for i in range(spec.runs) if i not in results]
+    if max_new_runs is not None:
+        todo = todo[:max_new_runs]
+    computed = []
+    bar = None
+    if progress:
+        from rich.progress import Progress
+
+        bar = Progress(transient=True)
+        bar.start()
+        task = bar.add_task("Monte Carlo runs", total=len(todo))
+    try:
+        for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo):
+            results[i] = data
+            computed.append(i)
+            if directory is not None:
+                _save_run(directory / "runs" / f"run_{i:05d}.npz", data)
+            if bar is not None:
+                bar.advance(task)
+    finally:
+        if bar is not None:
+            bar.stop()
+    done = sorted(results)
+    if len(done) < spec.runs:
+        raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "
+                            f"(re-run to resume{' from ' + str(directory) if directory else ''})")
+    ordered = [results[i] for i in range(spec.runs)]
+    summary, diffs = _aggregate(spec, ordered, scenario.times)
+    examples = {name: {"observer": ordered[0][f"{name}/observer"],
+                       "target": ordered[0][f"{name}/target"],
+                       "estimate": ordered[0][f"{name}/estimate"],
+                       "ping_steps": ordered[0][f"{name}/ping_steps"]}
+                for name in spec.policies}
+    return CampaignResult(spec=spec, times=scenario.times, policies=tuple(spec.policies),
+                          summary=summary, differences=diffs, examples=examples,
+                          directory=directory, computed_runs=tuple(sorted(computed)),
+                          loaded_runs=loaded, seconds=time.perf_counter() - t0)

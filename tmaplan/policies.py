@@ -538,13 +538,35 @@ class _Both:
         return Action(turn_rate=self.m.act(belief, t).turn_rate, ping=self.p.act(belief, t).ping)
 
 
-def best_single_turn(scenario: Scenario) -> SingleTurn:
-    """The single course change (grid of angles 30°…180° both ways, times ¼…¾ of the horizon)
-    with the lowest mean closed-form range bound from the prior (``tmaplan.planning``)."""
-    from tmaplan.planning.baselines import best_single_turn as _best
+_BASELINE_CACHE: dict[str, dict[str, Any]] = {}
 
-    angle, t = _best(scenario)
-    return SingleTurn(angle=float(angle), time=float(t), name="single-turn")
+
+def _best_baselines(scenario: Scenario) -> dict[str, Any]:
+    from tmaplan.scenario import dump
+
+    key = dump(scenario)
+    if key not in _BASELINE_CACHE:
+        from tmaplan.planning.baselines import evaluate_baselines
+
+        objective = scenario.planning.objective if scenario.planning else "range-bound"
+        res = evaluate_baselines(scenario, objective)
+        _BASELINE_CACHE[key] = {k: v[0].params for k, v in res.items()}
+    return _BASELINE_CACHE[key]
+
+
+def best_single_turn(scenario: Scenario) -> SingleTurn:
+    """The single course change with the best planning objective from the prior, over the grid
+    of :func:`tmaplan.planning.baselines.evaluate_baselines` (angles 30°…180° both ways, start
+    times ¼…¾ of the horizon)."""
+    p = _best_baselines(scenario)["single-turn"]
+    return SingleTurn(angle=float(p["angle"]), time=scenario.time.t0 + float(p["time"]))
+
+
+def best_zigzag(scenario: Scenario) -> Zigzag:
+    """The best zig-zag of the baseline grid (legs ⅛…⅓ of the horizon, 60°…120° total)."""
+    p = _best_baselines(scenario)["zigzag"]
+    return Zigzag(leg_duration=float(p["leg_duration"]), angle=0.5 * float(p["angle"]),
+                  start=scenario.time.t0)
 
 
 _MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding"}
@@ -554,9 +576,9 @@ _PINGS = {"no-ping", "uniform", "scheduled", "adaptive"}
 def parse_policy(spec: str, scenario: Scenario) -> Combined:
     """Policy from a CLI name: ``manoeuvre[+ping]``, e.g. ``receding+scheduled``.
 
-    Manoeuvres: straight, single-turn (best single course change from the grid), zigzag
-    (legs of an eighth of the horizon, ±45°), planned, receding. Pings: no-ping, uniform,
-    scheduled, adaptive.
+    Manoeuvres: straight, single-turn and zigzag (the best of the baseline grids of
+    :mod:`tmaplan.planning.baselines` for the scenario's planning objective), planned,
+    receding. Pings: no-ping, uniform, scheduled, adaptive.
 
     Raises
     ------
@@ -569,13 +591,12 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         raise PlanningError(f"unknown policy {spec!r}: expected MANOEUVRE[+PING] with MANOEUVRE "
                             f"in {sorted(_MANOEUVRES)} and PING in {sorted(_PINGS)}")
     name = parts[0]
-    H = scenario.time.horizon
     if name == "straight":
         man: Any = Straight()
     elif name == "single-turn":
         man = best_single_turn(scenario)
     elif name == "zigzag":
-        man = Zigzag(leg_duration=H / 8, angle=np.radians(45.0))
+        man = best_zigzag(scenario)
     elif name == "planned":
         man = Planned()
     else:

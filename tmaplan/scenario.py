@@ -579,11 +579,16 @@ def _convert_validation_error(exc: ValidationError, source: str | None) -> Scena
     elif kind == "missing":
         expected = "a value (this key is required)"
         received = None
-    elif kind == "union_tag_invalid":
+    elif kind in ("union_tag_invalid", "union_tag_not_found"):
         expected = "kind = 'bearing', 'range' or 'frequency'"
         field += ".kind"
+        received = received.get("kind") if isinstance(received, dict) else received
     else:
-        expected = msg.removeprefix("Value error, ").removeprefix("Input should be ")
+        cause = (e.get("ctx") or {}).get("error")
+        if isinstance(cause, ScenarioError):  # a unit error raised by our own parser
+            expected, received = cause.expected, cause.received
+        else:
+            expected = msg.removeprefix("Value error, ").removeprefix("Input should be ")
     if isinstance(received, dict):
         received = "{" + ", ".join(received) + "}"
     return ScenarioError(field, expected, received, source=source)

@@ -222,7 +222,8 @@ def _times_positions(times: np.ndarray, pos: np.ndarray, field: str) -> tuple[np
 
 def _check_range(d: np.ndarray, t: np.ndarray, field: str) -> None:
     r = np.hypot(d[:, 0], d[:, 1])
-    if r.size and np.min(r) <= 1e-9 * max(1.0, float(np.max(r))):
+    # "at the target": within a millionth of the largest range (1 cm at 10 km)
+    if r.size and np.min(r) <= 1e-6 * max(1.0, float(np.max(r))):
         k = int(np.argmin(r))
         raise ObservabilityError(
             f"{field}: the observer is at the target at t = {t[k]:g} s (range {r[k]:.3g} m); "

@@ -1,6 +1,7 @@
 """Performance bounds: batch CRLB, PCRB, closed forms, FIM-determinant costs, observability.
 
-Modules (import them directly; this package imports nothing on purpose):
+Modules (import them directly; this package imports nothing on purpose, so that importing one
+bound does not pay for the others):
 
 * :mod:`tmaplan.bounds.crlb` — batch Fisher information / CRLB of a deterministic target track
   (constant velocity, multi-leg, constant turn; bearings, frequency lines, range pings).
@@ -8,6 +9,12 @@ Modules (import them directly; this package imports nothing on purpose):
   bearing-rate approximations.
 * :mod:`tmaplan.bounds.observability` — discrete-time rank tests (file 003) and file 002's
   observability conditions.
+* :mod:`tmaplan.bounds.pcrb` — posterior CRB by Tichavský's recursion with Monte Carlo
+  D-terms (Cartesian or log-polar coordinates).
+* :mod:`tmaplan.bounds.closed_form` — the closed-form PCRB in log-polar coordinates of
+  Bréhard & Le Cadre (file 000, corrected), numeric, batched over ping schedules and casadi.
 """
 
 from __future__ import annotations
+
+__all__: list[str] = []

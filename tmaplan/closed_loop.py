@@ -26,7 +26,7 @@ from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.policies import BeliefView
 from tmaplan.scenario import BearingSensor, RangeSensor, Scenario, measurement_steps
 
-__all__ = ["ClosedLoopRun", "draw_truth", "run_closed_loop"]
+__all__ = ["ClosedLoopRun", "draw_truth", "run_closed_loop", "tempered_range_update"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -66,6 +66,46 @@ class ClosedLoopRun:
     turn_rate: np.ndarray
     replans: tuple[dict[str, Any], ...]
     seconds: float
+
+
+def tempered_range_update(pf: ParticleFilter, state: Any, z: float, sigma: float,
+                          rng: np.random.Generator, *, shrink: float = 2.0) -> Any:
+    """Assimilate a very informative range (an active ping) by progressive correction.
+
+    A 50 m ping against a particle cloud spread over kilometres would leave one particle
+    standing. The likelihood is split into stages ``L = Π L^{α_i}`` with Gaussian stage
+    precisions ``α_i/σ²`` growing geometrically (stage std shrinking by ``shrink``) from about
+    half the cloud's RMS range offset from the measurement, with resampling and regularisation
+    between stages (Oudjane & Musso's progressive correction). The stage precisions sum to
+    ``1/σ²``, so the posterior is unchanged in expectation.
+
+    Parameters
+    ----------
+    pf : ParticleFilter
+    state : PFState
+    z : float
+        Measured range [m].
+    sigma : float
+        Range noise std [m].
+    rng : numpy.random.Generator
+    shrink : float
+        Ratio of successive stage standard deviations.
+    """
+    r = np.hypot(state.particles[:, 0], state.particles[:, 1])
+    w = state.weights
+    # spread of the cloud about the measurement (a confident but wrong cloud counts as wide)
+    spread = float(np.sqrt(max(w @ (r - z) ** 2, 0.0)))
+    total = 1.0 / sigma**2
+    p = 1.0 / max(spread / 2.0, sigma) ** 2
+    precisions = []
+    while sum(precisions) + p < total:
+        precisions.append(p)
+        p *= shrink**2
+    precisions.append(total - sum(precisions))
+    for prec in precisions:
+        state = pf.update(state, [Measurement(kind="range", value=z,
+                                              sigma=float(1.0 / np.sqrt(prec)))], rng)
+    return state
 
 
 def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool = True
@@ -174,13 +214,12 @@ def run_closed_loop(scenario: Scenario, policy: Any, target: np.ndarray, *,
                 meas.append(Measurement(kind="range", value=float(range_(rel) + s.sigma
                                                                   * e_range[k + 1, j]),
                                         sigma=s.sigma))
-        if act.ping and ping_sigma is not None:
-            pings.append(k + 1)
-            meas.append(Measurement(kind="range", value=float(range_(rel) + ping_sigma
-                                                              * e_ping[k + 1]),
-                                    sigma=ping_sigma))
         if meas:
             state = pf.update(state, meas, filter_rng)
+        if act.ping and ping_sigma is not None:
+            pings.append(k + 1)
+            z = float(range_(rel) + ping_sigma * e_ping[k + 1])
+            state = tempered_range_update(pf, state, z, ping_sigma, filter_rng)
         est[k + 1], cov[k + 1] = state.mean, state.cov
     from tmaplan.geometry import wrap_angle
 

@@ -108,8 +108,9 @@ def resolve_policies(scenario: Any, specs: Sequence[str]) -> dict[str, Any]:
         if isinstance(ping, ScheduledPings) and ping.steps is None:
             from tmaplan.policies import _budget
 
+            # schedule along the track this manoeuvre will (nominally) fly
             steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
-                                      ping.objective)
+                                      ping.objective, man.nominal_track(scenario))
             ping = dataclasses.replace(ping, steps=tuple(int(s) for s in steps))
         pol = Combined(manoeuvre=man, ping=ping)
         if spec in out:

@@ -161,6 +161,12 @@ class Straight:
         """A controller that never turns."""
         return _Const()
 
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import straight_track
+
+        return straight_track(scenario)
+
 
 class _Const:
     def act(self, belief: BeliefView, t: float) -> Action:
@@ -181,6 +187,12 @@ class SingleTurn:
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
         return _CourseSchedule([(scenario.time.t0, c0), (self.time, c0 + self.angle)], u_max, dt)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import single_turn_track
+
+        return single_turn_track(scenario, self.angle, self.time - scenario.time.t0)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -207,6 +219,14 @@ class Zigzag:
             t += self.leg_duration
             sign = -sign
         return _CourseSchedule(sched, u_max, dt)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import zigzag_track
+
+        if self.start != scenario.time.t0:
+            raise PlanningError("zigzag.nominal_track: only zig-zags starting at t0")
+        return zigzag_track(scenario, self.leg_duration, 2.0 * self.angle)
 
 
 class _CourseSchedule:
@@ -241,6 +261,11 @@ class Planned:
         """A controller replaying the plan's turn rates."""
         plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
         return _TurnRatePlayback(plan, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The planned own-ship track (used to schedule pings offline)."""
+        plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
+        return plan.observer
 
 
 _PLAN_CACHE: dict[tuple[str, str | None], Any] = {}
@@ -304,6 +329,10 @@ class Receding:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller owning a planner built once for the whole run."""
         return _RecedingController(self, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The offline plan from the prior: the receding controller's first plan."""
+        return _offline_plan(scenario, self.objective).observer
 
 
 _PLANNER_CACHE: dict[tuple[str, str | None, float | None], Any] = {}
@@ -421,30 +450,29 @@ class ScheduledPings:
     name: str = "scheduled"
 
     def controller(self, scenario: Scenario) -> Controller:
-        """Controller replaying the schedule."""
+        """Controller replaying the schedule (computed along the scenario's own track if no
+        steps are given; :class:`Combined` schedules along its manoeuvre's nominal track)."""
         if self.steps is not None:
             return _StepPings(np.asarray(self.steps, dtype=int))
         return _StepPings(_offline_schedule(scenario, _budget(scenario, self.budget),
                                             self.method, self.objective))
 
 
-_SCHEDULE_CACHE: dict[tuple[str, int, str, str], np.ndarray] = {}
+_SCHEDULE_CACHE: dict[tuple[Any, ...], np.ndarray] = {}
 
 
-def _offline_schedule(scenario: Scenario, budget: int, method: str, objective: str) -> np.ndarray:
+def _offline_schedule(scenario: Scenario, budget: int, method: str, objective: str,
+                      track: Any = None) -> np.ndarray:
+    """Offline ping schedule from the prior along ``track`` (default: the scripted track)."""
     from tmaplan.scenario import dump
 
-    key = (dump(scenario), budget, method, objective)
+    tkey = None if track is None else np.asarray(track.position).tobytes()
+    key = (dump(scenario), budget, method, objective, tkey)
     if key not in _SCHEDULE_CACHE:
         from tmaplan.planning import schedule_pings
 
-        pl = scenario.planning
-        kw: dict[str, Any] = {}
-        if pl is not None:
-            kw["min_spacing"] = pl.ping_min_spacing or None
-            kw["forbidden"] = pl.ping_forbidden
         sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
-                               **kw)
+                               observer=track)
         _SCHEDULE_CACHE[key] = np.asarray(sched.steps, dtype=int)
     return _SCHEDULE_CACHE[key]
 

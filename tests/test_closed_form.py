@@ -291,3 +291,116 @@ def test_information_is_consistent(s1):
     np.testing.assert_allclose(np.sqrt(np.diagonal(P, axis1=1, axis2=2)), r.std, rtol=1e-8)
     J = unpack_sym(list(range(10)))
     assert J[1][0] == J[0][1] == 1
+
+
+# ------------------------------------------- compiled fast paths vs the reference paths
+def _fresh_jit_caches(monkeypatch):
+    import tmaplan.bounds._jit as lt
+
+    monkeypatch.setattr(lt, "_COMPILED", {})
+    monkeypatch.setattr(lt, "_KERNEL", {})
+
+
+def _schedules(K, rng):
+    # binary schedules (pings incl. at steps 0 and K), relaxed u in [0, 1], and no ping at all;
+    # 301 schedules: not a multiple of the kernel's chunk of 128
+    U = (rng.uniform(size=(301, K + 1)) < 0.05).astype(float)
+    U[:60] = rng.uniform(size=(60, K + 1))
+    U[60, :] = 0.0
+    U[61, [0, K]] = 1.0
+    return U
+
+
+@pytest.mark.skipif(not __import__("tmaplan.bounds._jit", fromlist=["x"]).jit_enabled(),
+                    reason="no C compiler: the compiled path is not available")
+def test_compiled_paths_equal_reference_paths():
+    # issue 4 speed work: the compiled step functions (casadi codegen + gcc) and the C schedule
+    # kernel (emitted from the SX graph of the same generic step) must reproduce the casadi-VM
+    # and numpy reference paths to 1e-10 (same operations in the same order: in practice exact)
+    sc = _short("brehard2005-s2", 1800.0)  # includes the 1500 s manoeuvre (c_t ≠ 0)
+    ref = _quiet(closed_form_model, sc, prior_samples=5000, backend="casadi")
+    fast = _quiet(closed_form_model, sc, prior_samples=5000, backend="compiled")
+    blocks = {"aux": [(0, 10), (10, 26), (26, 36), (36, 37)], "moments": [(0, 4), (4, 14)]}
+    for name in blocks:  # D11, D12, D22, E r²; m, S
+        for lo, hi in blocks[name]:
+            a, b = getattr(fast, name)[lo:hi], getattr(ref, name)[lo:hi]
+            # entries that cancel to ~0 are compared on the scale of their matrix
+            np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-13 * np.abs(b).max())
+    K = ref.n_steps
+    U = _schedules(K, np.random.default_rng(5))
+    for u in (None, U[0], U[61]):
+        for a, b in zip(fast.evaluate(u, backend="compiled"), ref.evaluate(u, backend="casadi")):
+            np.testing.assert_allclose(a, b, rtol=1e-10, atol=0)
+    full = ref.evaluate_schedules(U, backend="numpy")
+    assert np.all(np.diff(full[60]) != 0) and full.shape == (301, K + 1)
+    for reduce, expect in ((None, full), ("mean", full.mean(1)), ("terminal", full[:, -1])):
+        got = fast.evaluate_schedules(U, reduce=reduce, backend="compiled")
+        np.testing.assert_allclose(got, ref.evaluate_schedules(U, reduce=reduce,
+                                                               backend="numpy"),
+                                   rtol=1e-10, atol=0)
+        np.testing.assert_allclose(got, expect, rtol=1e-12)
+    # a single schedule, and the per-step bound equals evaluate()'s variance (two code paths)
+    one = fast.evaluate_schedules(U[:1], backend="compiled")
+    var, _, _ = fast.evaluate(U[0])
+    np.testing.assert_allclose(one[0], np.sqrt(fast.er2 * var[:, 1]), rtol=1e-10)
+    # pings lower the bound (a wrong ping wiring in the kernel would not)
+    assert np.all(full[61, 1:] <= full[60, 1:]) and full[61, 0] < full[60, 0]
+
+
+def test_without_compiler_falls_back_to_reference(monkeypatch):
+    import tmaplan.bounds._jit as lt
+
+    sc = _short("brehard2005-s1", 600.0)
+    base = _quiet(closed_form_model, sc, prior_samples=3000, backend="casadi")
+    U = _schedules(base.n_steps, np.random.default_rng(6))[:20]
+    expect = base.evaluate_schedules(U, reduce="mean", backend="numpy")
+    _fresh_jit_caches(monkeypatch)
+    monkeypatch.setenv("TMAPLAN_JIT", "0")
+    assert not lt.jit_enabled()
+    assert lt.compiled_step_functions(base.inputs.A, base.inputs.Q) is None
+    assert lt.schedule_kernel() is None
+    m = _quiet(closed_form_model, sc, prior_samples=3000)  # auto: the casadi VM
+    np.testing.assert_array_equal(m.aux, base.aux)
+    np.testing.assert_array_equal(m.evaluate_schedules(U, reduce="mean"), expect)
+    with pytest.raises(RuntimeError, match="no working C compiler"):
+        m.evaluate_schedules(U, backend="compiled")
+    with pytest.raises(RuntimeError, match="no working C compiler"):
+        m.evaluate(backend="compiled")
+    with pytest.raises(ScenarioError, match="backend"):
+        m.evaluate_schedules(U, backend="fortran")
+
+
+def test_failed_compile_is_reported_not_used(monkeypatch, tmp_path):
+    import tmaplan.bounds._jit as lt
+
+    monkeypatch.setenv("TMAPLAN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", "false")  # a "compiler" that always fails
+    with pytest.warns(RuntimeWarning, match="compiling t failed"):
+        assert lt.compile_c("int f(void) { return 1; }\n", "t") is None
+    assert not list((tmp_path / "jit").glob("*.so"))
+
+
+def test_jit_cache_is_reused(monkeypatch, tmp_path):
+    import tmaplan.bounds._jit as lt
+
+    if not lt.jit_enabled():
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("TMAPLAN_CACHE_DIR", str(tmp_path))
+    src = "double tmaplan_probe(void) { return 2.5; }\n"
+    lib = lt.compile_c(src, "probe")
+    assert lib is not None and lib.parent == tmp_path / "jit"
+    stamp = lib.stat().st_mtime_ns
+    assert lt.compile_c(src, "probe") == lib and lib.stat().st_mtime_ns == stamp
+    assert lt.compile_c(src.replace("2.5", "3.5"), "probe") != lib  # keyed on the source
+
+
+def test_kernel_emitter_rejects_unknown_operations():
+    import tmaplan.bounds._jit as lt
+
+    x = ca.SX.sym("j", 10)
+    f = ca.Function("f", [x, ca.SX.sym("a", 37), ca.SX.sym("b"), ca.SX.sym("p")],
+                    [x, ca.sin(x[0])])
+    with pytest.raises(NotImplementedError):
+        lt._emit_body(f)
+    body = lt._emit_body(lt._schedule_step_sx())
+    assert sum(" / " in line for line in body) > 0 and not any("sin" in s for s in body)

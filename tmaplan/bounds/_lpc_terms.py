@@ -9,7 +9,8 @@ same code gives
   shape (S,)),
 * the casadi one-step functions (:func:`step_functions`) that are ``mapaccum``-ed over the
   horizon, evaluated numerically (fast single evaluation) or symbolically (planning with exact
-  derivatives).
+  derivatives),
+* their compiled C versions for numeric speed (:mod:`tmaplan.bounds._jit`).
 
 Mathematics (file 000 §4 with the corrections of NOTES_000, moment form of NOTES_000 §2.9):
 the relative state obeys ``X_{t+1} = A X_t + c_t + w_t``, ``w_t ~ N(0, Q)`` with
@@ -39,6 +40,7 @@ from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
 
 __all__ = [
     "SYM_INDEX",
+    "aux_to_dterms",
     "basis",
     "inverse_diagonal",
     "lpc_noise_constant",

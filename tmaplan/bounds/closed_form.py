@@ -10,6 +10,13 @@ One implementation, three uses (DESIGN §2): the recursion of :mod:`tmaplan.boun
 * built as a casadi expression of the observer velocities and relaxed pings u_k ∈ [0, 1]
   (:meth:`ClosedFormModel.casadi_function`, :func:`closed_form_casadi`) for planners.
 
+Speed (issue 4 targets): numerically, the casadi step functions are compiled to C once per
+(A, Q) (casadi code generation + gcc, cached under ``~/.cache/tmaplan/jit``) and called through
+zero-copy buffers; the batched schedule path runs a C kernel emitted from the ``SX`` graph of
+the same generic step, vectorised over schedules. Without a C compiler (or with
+``TMAPLAN_JIT=0``) the casadi VM and the numpy reference loop are used; every path is selectable
+with ``backend=`` and the tests check that they agree to 1e-10.
+
 Corrections to file 000 that are implemented (NOTES_000): information (not its inverse) in the
 Tichavský bracket (Prop. 5, L327); the true Jacobian ∂X/∂Y instead of the printed F (eq. 31);
 the constant 𝒞 = diag(0, 8, 2α3²/detΣ, 2α3²/detΣ) instead of eq. 43/101; exact moment
@@ -33,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import special
 
+from tmaplan.bounds._jit import compiled_step_functions, schedule_kernel
 from tmaplan.bounds._lpc_terms import (
     SYM_INDEX,
     aux_to_dterms,
@@ -157,7 +165,8 @@ class ClosedFormModel:
         return self.inputs.ping_weight * self.ping_sigma**2
 
     # ---------------------------------------------------------------- numeric (casadi VM)
-    def evaluate(self, u: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evaluate(self, u: np.ndarray | None = None, *, backend: str = "auto"
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Bound for one ping schedule.
 
         Parameters
@@ -165,6 +174,9 @@ class ClosedFormModel:
         u : ndarray, shape (K + 1,), optional
             Ping weights in [0, 1] (1 = a ping of σ_r at that step); default the resolved
             ping steps.
+        backend : {"auto", "compiled", "casadi"}
+            "compiled": the step function compiled to C (an error if there is no compiler);
+            "casadi": the casadi VM; "auto": compiled when available.
 
         Returns
         -------
@@ -177,13 +189,12 @@ class ClosedFormModel:
         K = self.n_steps
         u = self.default_pings() if u is None else np.asarray(u, float)
         scale = self._ping_scale() if np.any(u) else 0.0
-        _, riccati_fn = step_functions(self.inputs.A, self.inputs.Q)
+        _, riccati_fn = _numeric_step_functions(self.inputs.A, self.inputs.Q, backend)
         J0 = self.J0.copy()
         J0[1, 1] += u[0] * scale * self.er2[0]
-        out = _accumulated(riccati_fn, K)(
+        jn, varn, piv = _call(_accumulated(riccati_fn, K), [
             _pack(J0), self.aux, self.inputs.bearing_info[1:][None, :],
-            (u[1:] * scale)[None, :])
-        jn, varn, piv = (np.asarray(o) for o in out)
+            (u[1:] * scale)[None, :]])
         var0, d0 = inverse_diagonal(J0.tolist())
         if min(d0) <= 0 or np.any(piv <= 0):
             raise ObservabilityError("closed-form PCRB: J_0 or J_t + D11 is not positive "
@@ -193,10 +204,14 @@ class ClosedFormModel:
         return var, info, piv.T
 
     # ------------------------------------------------------------------- numpy batched
-    def evaluate_schedules(self, u: np.ndarray, *, reduce: str | None = None) -> np.ndarray:
-        """Range bound of eq. 58 for many ping schedules at once (numpy, batched).
+    def evaluate_schedules(self, u: np.ndarray, *, reduce: str | None = None,
+                           backend: str = "auto") -> np.ndarray:
+        """Range bound of eq. 58 for many ping schedules at once (batched).
 
-        Runs :func:`tmaplan.bounds._lpc_terms.tichavsky_step` on entries of shape (S,).
+        Runs :func:`tmaplan.bounds._lpc_terms.tichavsky_step` on entries of shape (S,) —
+        with numpy, or as the C kernel emitted from its ``SX`` graph
+        (:func:`tmaplan.bounds._jit.schedule_kernel`), SIMD-vectorised over schedules.
+        The moments and D-terms are the model's (per observer track, schedule-independent).
 
         Parameters
         ----------
@@ -205,6 +220,9 @@ class ClosedFormModel:
         reduce : {None, "mean", "terminal"}
             None: the per-step bound (S, K + 1); "mean": its mean over the K + 1 steps
             (the ``mean-range-bound`` objective, DESIGN §4); "terminal": the last step.
+        backend : {"auto", "compiled", "numpy"}
+            "compiled": the C kernel (an error if there is no compiler); "numpy": the
+            reference loop over steps; "auto": compiled when available.
 
         Returns
         -------
@@ -215,9 +233,14 @@ class ClosedFormModel:
         K = self.n_steps
         if u.shape[1] != K + 1:
             raise ScenarioError("u", f"shape (S, {K + 1})", u.shape)
+        if reduce not in (None, "mean", "terminal"):
+            raise ScenarioError("reduce", "None, 'mean' or 'terminal'", reduce)
         scale = self._ping_scale() if np.any(u) else 0.0
         J = [[float(x) + 0.0 * u[:, 0] for x in row] for row in self.J0.tolist()]
         J[1][1] = J[1][1] + u[:, 0] * scale * self.er2[0]
+        kernel = _schedule_backend(backend)
+        if kernel is not None:
+            return self._schedules_compiled(kernel, u, J, scale, reduce)
         rb = np.empty((u.shape[0], K + 1)) if reduce != "mean" else None
         acc = np.zeros(u.shape[0])
         aux = self.aux.T.tolist()
@@ -238,6 +261,42 @@ class ClosedFormModel:
         if reduce == "terminal":
             return rb[:, -1]  # type: ignore[index]
         return rb  # type: ignore[return-value]
+
+    def _schedules_compiled(self, kernel: Any, u: np.ndarray, J: list[list[Any]],
+                            scale: float, reduce: str | None) -> np.ndarray:
+        """:meth:`evaluate_schedules` through the C kernel (step 0 with the generic code)."""
+        K, S = self.n_steps, u.shape[0]
+        u = np.ascontiguousarray(u)
+        var0, _ = _inverse_lnr(J)
+        val0 = np.sqrt(self.er2[0] * var0)
+        acc = np.array(np.broadcast_to(0.0 + val0, (S,)))  # the numpy path's 0 + v₀
+        last = acc.copy()
+        out = None if reduce is not None else np.empty((S, K + 1))
+        if out is not None:
+            out[:, 0] = val0
+        j0 = np.empty((10, S))  # packed J₀ per schedule, structure of arrays
+        for n, (i, k) in enumerate(SYM_INDEX):
+            j0[n] = J[i][k]
+        aux = self._aux_rows()
+        b = np.ascontiguousarray(self.inputs.bearing_info[1:], float)
+        pw = np.ascontiguousarray((scale * self.er2)[1:])
+        er2 = np.ascontiguousarray(self.er2[1:], float)
+        kernel(K, S, j0.ctypes.data, aux.ctypes.data, b.ctypes.data, pw.ctypes.data,
+               er2.ctypes.data, u.ctypes.data, K + 1, acc.ctypes.data, last.ctypes.data,
+               None if out is None else out.ctypes.data)
+        if reduce == "mean":
+            return acc / (K + 1)
+        if reduce == "terminal":
+            return last if K > 0 else acc
+        return out  # type: ignore[return-value]
+
+    def _aux_rows(self) -> np.ndarray:
+        """``aux.T`` as a C-contiguous (K, 37) array (cached on the frozen instance)."""
+        cached = self.__dict__.get("_aux_rows_cache")
+        if cached is None:
+            cached = np.ascontiguousarray(self.aux.T, dtype=float)
+            object.__setattr__(self, "_aux_rows_cache", cached)
+        return cached
 
     # ---------------------------------------------------------------------- symbolic
     def casadi_function(self) -> Any:
@@ -277,6 +336,58 @@ class ClosedFormModel:
 _ACC_CACHE: dict[tuple[int, int], Any] = {}
 
 
+def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple[Any, Any]:
+    """Step functions for numeric evaluation: compiled C when available, else the casadi VM."""
+    if backend not in ("auto", "compiled", "casadi"):
+        raise ScenarioError("backend", "'auto', 'compiled' or 'casadi'", backend)
+    if backend != "casadi":
+        fns = compiled_step_functions(A, Q)
+        if fns is not None:
+            return fns
+        if backend == "compiled":
+            raise RuntimeError("backend='compiled': no working C compiler (set CC, or "
+                               "TMAPLAN_JIT is 0)")
+    return step_functions(A, Q)
+
+
+def _schedule_backend(backend: str) -> Any:
+    if backend not in ("auto", "compiled", "numpy"):
+        raise ScenarioError("backend", "'auto', 'compiled' or 'numpy'", backend)
+    if backend == "numpy":
+        return None
+    kernel = schedule_kernel()
+    if kernel is None and backend == "compiled":
+        raise RuntimeError("backend='compiled': no working C compiler (set CC, or TMAPLAN_JIT "
+                           "is 0)")
+    return kernel
+
+
+def _call(fn: Any, args: list[np.ndarray]) -> list[np.ndarray]:
+    """Evaluate a casadi Function on numpy arrays through zero-copy buffers.
+
+    Converting numpy arrays to ``casadi.DM`` and back costs more than the whole compiled
+    recursion (≈ 2 ms for a 37 × 1000 aux array), so inputs and outputs are bound as raw
+    column-major memory (``Function.buffer``). Dense inputs/outputs only.
+    """
+    buf, run = fn.buffer()
+    keep = []
+    for i, a in enumerate(args):
+        a = np.asarray(a, dtype=float)
+        a = np.ascontiguousarray(a.T if a.ndim == 2 else a)  # column-major bytes
+        keep.append(a)
+        buf.set_arg(i, memoryview(a))
+    outs = []
+    for i in range(fn.n_out()):
+        rows, cols = fn.size_out(i)
+        o = np.empty((cols, rows))
+        buf.set_res(i, memoryview(o))
+        outs.append(o)
+    run()
+    if buf.ret() != 0:
+        raise RuntimeError(f"casadi function {fn.name()} failed (status {buf.ret()})")
+    return [o.T for o in outs]
+
+
 def _accumulated(fn: Any, K: int) -> Any:
     key = (id(fn), K)
     if key not in _ACC_CACHE:
@@ -292,10 +403,12 @@ def _inverse_lnr(J: list[list[Any]]) -> tuple[Any, Any]:
 
 def closed_form_model(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
                       observer: ObserverTrack | None = None, prior_samples: int | None = None,
-                      rng: np.random.Generator | None = None) -> ClosedFormModel:
+                      rng: np.random.Generator | None = None,
+                      backend: str = "auto") -> ClosedFormModel:
     """Prepare the closed-form LPC PCRB of a scenario (moments, D-terms, J₀).
 
-    Parameters are those of :func:`closed_form_pcrb`.
+    Parameters are those of :func:`closed_form_pcrb`; ``backend`` ("auto", "compiled",
+    "casadi") selects how the moment recursion is evaluated (see :meth:`ClosedFormModel.evaluate`).
 
     Raises
     ------
@@ -319,8 +432,8 @@ def closed_form_model(scenario: Scenario, *, ping_steps: Sequence[int] | None = 
     J0[0, 0] += inp.bearing_info[0]
     J0 = 0.5 * (J0 + J0.T)
     x0 = np.concatenate([inp.m0, _pack(inp.S0)])
-    moment_fn, _ = step_functions(inp.A, inp.Q)
-    xs, aux = (np.asarray(o) for o in _accumulated(moment_fn, K)(x0, inp.c.T))
+    moment_fn, _ = _numeric_step_functions(inp.A, inp.Q, backend)
+    xs, aux = _call(_accumulated(moment_fn, K), [x0, inp.c.T])
     moments = np.hstack([x0[:, None], xs])
     er2 = moments[4] + moments[4 + 4]  # S[0,0] and S[1,1] in the packed order
     sigma = inp.range_sigma

@@ -16,9 +16,9 @@ lint: $(STAMP)
 	$(BIN)/ruff check tmaplan tests $(wildcard benchmarks notebooks/*.py)
 
 typecheck: $(STAMP)
-	$(BIN)/mypy tmaplan
+	$(BIN)/mypy --follow-imports=silent tests/typing/public_api.py
 
-test: $(STAMP) lint
+test: $(STAMP) lint typecheck
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow"
 
 test-slow: $(STAMP)

@@ -1,0 +1,144 @@
+"""Ping scheduling (issue 6): exact vs exhaustive, gaps, monotonicity, constraints, errors."""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import PlanningError
+from tmaplan.models.observer import observer_track
+from tmaplan.planning import Belief, PingEvaluator, plan_joint, schedule_pings
+from tmaplan.scenario import load_problem
+
+CAND = list(range(4, 161, 4))  # 40 candidate steps
+
+
+@pytest.fixture(scope="module")
+def default():
+    return load_problem("default")
+
+
+@pytest.fixture(scope="module")
+def prior(default):
+    return Belief.from_prior(default)
+
+
+@pytest.fixture(scope="module")
+def evaluator(default, prior):
+    return PingEvaluator(default, observer_track(default.observer, default.time), prior,
+                         "mean-range-bound")
+
+
+def test_evaluator_matches_closed_form_model(default, evaluator):
+    # independent evaluation path: tmaplan.bounds.closed_form (scenario prior, np.cov J0)
+    from tmaplan.bounds.closed_form import closed_form_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cf = closed_form_model(default, prior_samples=20000)
+    rng = np.random.default_rng(1)
+    U = (rng.random((6, default.time.n_steps + 1)) < 0.03).astype(float)
+    # J0 differs by the n/(n−1) covariance normalisation only (5e-5 relative)
+    np.testing.assert_allclose(evaluator.per_step(U), cf.evaluate_schedules(U), rtol=2e-4)
+
+
+@pytest.mark.parametrize("budget", [1, 2, 3])
+@pytest.mark.parametrize("objective", ["mean-range-bound", "terminal-range-bound"])
+def test_exact_equals_exhaustive(default, prior, budget, objective):
+    from tmaplan.bounds.closed_form import closed_form_model
+
+    res = schedule_pings(default, budget=budget, method="exact", objective=objective,
+                         candidate_steps=CAND, min_spacing=0.0, belief=prior)
+    assert res.status == "optimal" and res.gap == 0.0
+    # exhaustive optimum with the independent closed-form evaluator
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cf = closed_form_model(default, prior_samples=20000)
+    combos = list(itertools.combinations(CAND, budget))
+    U = np.zeros((len(combos), default.time.n_steps + 1))
+    for i, c in enumerate(combos):
+        U[i, list(c)] = 1.0
+    vals = cf.evaluate_schedules(U, reduce="mean" if objective.startswith("mean")
+                                 else "terminal")
+    best = int(np.argmin(vals))
+    assert tuple(res.steps) == combos[best] or vals[combos.index(tuple(res.steps))] <= \
+        vals[best] * (1 + 2e-4)
+    assert res.objective == pytest.approx(vals[best], rel=2e-4)
+
+
+def test_branch_and_bound_equals_enumeration(default, prior):
+    kw = {"budget": 2, "method": "exact", "candidate_steps": CAND[:20], "belief": prior,
+          "min_spacing": 0.0}
+    enum = schedule_pings(default, **kw)
+    bb = schedule_pings(default, max_enumerate=0, **kw)
+    assert bb.status == "optimal"
+    assert bb.objective == pytest.approx(enum.objective, rel=1e-12)
+
+
+def test_more_pings_never_worse(default, prior):
+    vals = [schedule_pings(default, budget=k, method="exact", objective="terminal-range-bound",
+                           candidate_steps=CAND, min_spacing=0.0, belief=prior).objective
+            for k in range(4)]
+    assert all(b <= a for a, b in itertools.pairwise(vals))
+    g = [schedule_pings(default, budget=k, method="greedy", objective="terminal-range-bound",
+                        candidate_steps=CAND, min_spacing=0.0, belief=prior,
+                        gap_reference="none").objective for k in range(1, 4)]
+    assert all(b <= a for a, b in itertools.pairwise(g))
+
+
+@pytest.mark.parametrize("method", ["relaxed", "greedy"])
+def test_heuristics_report_gap_to_exact(default, prior, method):
+    res = schedule_pings(default, budget=3, method=method, candidate_steps=CAND,
+                         min_spacing=0.0, belief=prior)
+    ex = schedule_pings(default, budget=3, method="exact", candidate_steps=CAND,
+                        min_spacing=0.0, belief=prior)
+    assert res.gap_reference == "exact"
+    assert res.lower_bound == pytest.approx(ex.objective, rel=1e-12)
+    assert res.gap == pytest.approx(res.objective - ex.objective, abs=1e-9)
+    assert res.gap >= -1e-9
+    assert res.objective < res.uniform_objective < res.no_ping_objective
+
+
+def test_relaxation_is_a_lower_bound_for_terminal(default, prior):
+    # convex relaxation (NOTES_000 §4.2 (iii)): its optimum bounds the integer optimum below
+    res = schedule_pings(default, budget=2, method="relaxed", objective="terminal-range-bound",
+                         candidate_steps=CAND, min_spacing=0.0, belief=prior,
+                         gap_reference="none")
+    ex = schedule_pings(default, budget=2, method="exact", objective="terminal-range-bound",
+                        candidate_steps=CAND, min_spacing=0.0, belief=prior)
+    assert res.gap_reference == "lower-bound"
+    assert res.lower_bound <= ex.objective * (1 + 1e-6)
+    assert res.objective >= ex.objective * (1 - 1e-12)
+
+
+def test_spacing_and_forbidden_windows(default, prior):
+    res = schedule_pings(default, budget=3, method="exact", candidate_steps=CAND,
+                         min_spacing=600.0, forbidden=[(0.0, 400.0)], belief=prior)
+    t = np.sort(res.times)
+    assert np.all(np.diff(t) >= 600.0 - 1e-9)
+    assert np.all(t > 400.0)
+    for m in ("relaxed", "greedy"):
+        r = schedule_pings(default, budget=3, method=m, min_spacing=600.0,
+                           forbidden=[(0.0, 400.0)], belief=prior, gap_reference="none")
+        assert np.all(np.diff(np.sort(r.times)) >= 600.0 - 1e-9) and np.all(r.times > 400.0)
+
+
+def test_infeasible_requests(default, prior):
+    with pytest.raises(PlanningError, match="budget"):
+        schedule_pings(default, budget=500, belief=prior)
+    with pytest.raises(PlanningError, match="min_spacing"):
+        schedule_pings(default, budget=30, min_spacing=600.0, belief=prior)
+    no_range = default.replace(sensors=tuple(s for s in default.sensors if s.kind != "range"))
+    with pytest.raises(PlanningError, match="range sensor"):
+        schedule_pings(no_range, budget=2, belief=prior)
+
+
+def test_joint_plan_improves_on_separate(default, prior):
+    joint = plan_joint(default, budget=2, belief=prior, n_starts=1, control_interval=120.0)
+    assert all(b <= a * (1 + 1e-6) for a, b in zip(joint.history, joint.history[1:]))
+    sep = schedule_pings(default, budget=2, belief=prior, gap_reference="none")
+    assert joint.objective < sep.objective
+    assert joint.pings.steps.size == 2

@@ -1,0 +1,88 @@
+"""``tmaplan schedule P --budget K [--method ...] [--objective ...] --json``: ping times."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tmaplan.models.observer import observer_track
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.pings import PING_OBJECTIVES, PingEvaluator, schedule_pings
+from tmaplan.scenario import load
+
+HELP = "schedule active range pings under a budget (closed-form PCRB)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``schedule``."""
+    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+    parser.add_argument("--budget", type=int, default=None,
+                        help="maximum number of pings (default: planning.ping_budget)")
+    parser.add_argument("--method", choices=("exact", "relaxed", "greedy"), default="relaxed")
+    parser.add_argument("--objective", choices=PING_OBJECTIVES, default="mean-range-bound")
+    parser.add_argument("--min-spacing", type=float, default=None, metavar="SEC",
+                        help="minimum time between pings [s] (default: the problem's)")
+    parser.add_argument("--time-limit", type=float, default=30.0, metavar="SEC",
+                        help="branch-and-bound time limit for --method exact [s]")
+    parser.add_argument("--out", default="out", help="directory for the figure (default out/)")
+    parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Schedule, write ``<out>/<problem>_schedule.png`` and return the payload."""
+    scenario = load(args.problem)
+    budget = args.budget
+    if budget is None:
+        budget = scenario.planning.ping_budget if scenario.planning is not None else 0
+    belief = Belief.from_prior(scenario)
+    obs = observer_track(scenario.observer, scenario.time)
+    res = schedule_pings(scenario, budget=budget, method=args.method,
+                         objective=args.objective, observer=obs, belief=belief,
+                         min_spacing=args.min_spacing, time_limit=args.time_limit)
+    payload: dict[str, Any] = {
+        "problem": scenario.name, "budget": budget, "objective_name": res.objective_name,
+        "ping_times": res.times, "ping_steps": res.steps, "objective": res.objective,
+        "no_ping_objective": res.no_ping_objective, "uniform_objective": res.uniform_objective,
+        "lower_bound": res.lower_bound, "gap": res.gap, "gap_reference": res.gap_reference,
+        "times": obs.times, "bound": res.bound,
+        "solver": {"status": res.status, "seconds": res.seconds, "method": res.method},
+    }
+    if args.json != "-":
+        print(f"{scenario.name}: {res.objective_name} = {res.objective:.4g} m with pings at "
+              f"{', '.join(f'{t:.0f}' for t in res.times)} s ({res.method}, {res.status}); "
+              f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
+    if not args.no_plot:
+        path = Path(args.out) / f"{scenario.name}_schedule.png"
+        _figure(scenario, obs, belief, res, path)
+        payload["figure"] = str(path)
+        if args.json != "-":
+            print(f"wrote {path}")
+    return payload
+
+
+def _figure(scenario: Any, obs: Any, belief: Belief, res: Any, path: Path) -> None:
+    from tmaplan.planning.pings import _uniform_steps
+    from tmaplan.plotting import new_figure, save_figure
+
+    ev = PingEvaluator(scenario, obs, belief, res.objective_name)
+    uni = _uniform_steps(np.arange(1, ev.K + 1), res.budget, ev.K) if res.budget else []
+    curves = ev.per_step(ev.schedules([[], uni]))
+    fig, axes = new_figure(1, 1, size=(8.0, 5.0))
+    ax = axes[0, 0]
+    t = (obs.times - obs.times[0]) / 60.0
+    ax.plot(t, curves[0], "--", color="0.5", label=f"no pings ({res.no_ping_objective:.3g} m)")
+    ax.plot(t, curves[1], ":", color="C1", label=f"uniform ({res.uniform_objective:.3g} m)")
+    ax.plot(t, res.bound, "-", color="C0", lw=2,
+            label=f"{res.method} ({res.objective:.3g} m)")
+    for tp in res.times:
+        ax.axvline((tp - obs.times[0]) / 60.0, color="C3", lw=0.8, alpha=0.6)
+    ax.set_yscale("log")
+    ax.set_xlabel("time [min] (red lines: ping times)")
+    ax.set_ylabel("position bound [m]" if "position" in res.objective_name
+                  else "range bound [m]")
+    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}")
+    ax.legend(fontsize=8)
+    save_figure(fig, path)

@@ -1,0 +1,59 @@
+"""Observer planning: heading OCP (casadi), active-ping scheduling, joint plans, baselines.
+
+See :mod:`tmaplan.planning.heading`, :mod:`tmaplan.planning.pings`,
+:mod:`tmaplan.planning.joint`, :mod:`tmaplan.planning.baselines`,
+:mod:`tmaplan.planning.objectives` and :mod:`tmaplan.planning.belief`.
+"""
+
+from __future__ import annotations
+
+from tmaplan.planning.baselines import (
+    Baseline,
+    BearingRatePlan,
+    baseline_objectives,
+    bearing_rate_plan,
+    evaluate_baselines,
+    single_turn_track,
+    straight_track,
+    zigzag_track,
+)
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner, plan_heading
+from tmaplan.planning.joint import JointPlan, plan_joint
+from tmaplan.planning.objectives import (
+    Objective,
+    ObjectiveEvaluator,
+    logdet,
+    make_objective,
+    position_bound,
+    range_bound,
+    turn_penalty,
+)
+from tmaplan.planning.pings import PingEvaluator, PingSchedule, schedule_pings
+
+__all__ = [
+    "Baseline",
+    "BearingRatePlan",
+    "Belief",
+    "HeadingPlan",
+    "HeadingPlanner",
+    "JointPlan",
+    "Objective",
+    "ObjectiveEvaluator",
+    "PingEvaluator",
+    "PingSchedule",
+    "baseline_objectives",
+    "bearing_rate_plan",
+    "evaluate_baselines",
+    "logdet",
+    "make_objective",
+    "plan_heading",
+    "plan_joint",
+    "position_bound",
+    "range_bound",
+    "schedule_pings",
+    "single_turn_track",
+    "straight_track",
+    "turn_penalty",
+    "zigzag_track",
+]

@@ -1,0 +1,228 @@
+"""Belief on the relative target state that a planner optimises against.
+
+A :class:`Belief` holds the moments (and optionally weighted samples) of the relative state
+``X = target − observer = [r_x, r_y, v_x, v_y]`` at a time t, relative to the observer's state
+``[position, velocity]`` at that time (DESIGN §1). The planners turn it into
+
+* the raw moments ``m₀ = E X``, ``S₀ = E X Xᵀ`` that seed the exact moment propagation of the
+  closed-form PCRB (file 000, NOTES_000 §2.9),
+* the LPC prior information ``J₀`` (file 000 eq. 56: inverse of the LPC covariance of the
+  samples, bearing centred on its circular mean),
+* the Cartesian prior information ``Cov(X)⁻¹`` for the ``logdet`` objective (file 003).
+
+Beliefs without samples (moments only, e.g. from a Gaussian filter) get deterministic Gaussian
+samples (fixed seed) for J₀, truncated to ranges above :data:`MIN_RANGE`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from tmaplan.errors import PlanningError
+from tmaplan.geometry import cart_to_lpc, wrap_angle
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["MIN_RANGE", "Belief"]
+
+#: Samples closer than this to the observer are dropped when forming J₀ [m].
+MIN_RANGE = 1.0
+#: Samples drawn for J₀ when a belief has moments only.
+_GAUSS_SAMPLES = 20_000
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Belief:
+    """Belief on the relative state at time ``t``.
+
+    Attributes
+    ----------
+    mean : ndarray, shape (4,)
+        ``E X`` [m, m, m/s, m/s].
+    cov : ndarray, shape (4, 4)
+        ``Cov X`` [m², m²/s, m²/s²], positive definite.
+    samples : ndarray, shape (n, 4), optional
+        Samples of X (e.g. particles).
+    weights : ndarray, shape (n,), optional
+        Normalised sample weights (None: equal weights).
+    t : float
+        Time of the belief [s].
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+    samples: np.ndarray | None = None
+    weights: np.ndarray | None = None
+    t: float = 0.0
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def from_samples(cls, samples: np.ndarray, weights: np.ndarray | None = None, *,
+                     t: float = 0.0) -> Belief:
+        """Belief from (weighted) samples of the relative state.
+
+        Parameters
+        ----------
+        samples : ndarray, shape (n, 4)
+            [m, m, m/s, m/s].
+        weights : ndarray, shape (n,), optional
+            Non-negative weights (normalised here).
+        t : float
+            [s].
+
+        Raises
+        ------
+        PlanningError
+            No samples, non-finite samples, weights with no mass, or a degenerate covariance
+            ("a target prior with no mass").
+        """
+        X = np.asarray(samples, dtype=float)
+        if X.ndim != 2 or X.shape[1] != 4 or X.shape[0] < 5:
+            raise PlanningError(f"belief: samples of shape (n >= 5, 4) expected, received "
+                                f"{X.shape}: the target prior has no mass to plan against")
+        if not np.all(np.isfinite(X)):
+            raise PlanningError("belief: non-finite samples")
+        if weights is None:
+            w = np.full(X.shape[0], 1.0 / X.shape[0])
+        else:
+            w = np.asarray(weights, dtype=float).reshape(-1)
+            if w.shape[0] != X.shape[0] or np.any(~np.isfinite(w)) or np.any(w < 0):
+                raise PlanningError("belief: weights must be finite, >= 0, one per sample")
+            tot = float(w.sum())
+            if tot <= 0.0:
+                raise PlanningError("belief: the weights sum to zero: the target prior has no "
+                                    "mass to plan against")
+            w = w / tot
+        mean = w @ X
+        d = X - mean
+        cov = (d * w[:, None]).T @ d
+        cov = 0.5 * (cov + cov.T)
+        _check_cov(cov)
+        return cls(mean=mean, cov=cov, samples=X, weights=w, t=float(t))
+
+    @classmethod
+    def from_moments(cls, mean: np.ndarray, cov: np.ndarray, *, t: float = 0.0) -> Belief:
+        """Belief from the mean (4,) and covariance (4, 4) of the relative state."""
+        m = np.asarray(mean, dtype=float).reshape(4)
+        C = np.asarray(cov, dtype=float).reshape(4, 4)
+        C = 0.5 * (C + C.T)
+        _check_cov(C)
+        return cls(mean=m, cov=C, t=float(t))
+
+    @classmethod
+    def from_prior(cls, scenario: Scenario, *, n: int | None = None,
+                   rng: np.random.Generator | None = None) -> Belief:
+        """Belief of the relative initial state from ``scenario.prior`` (at ``scenario.time.t0``).
+
+        Parameters
+        ----------
+        scenario : Scenario
+        n : int, optional
+            Number of samples (default ``min(scenario.prior.samples, 20000)``).
+        rng : numpy.random.Generator, optional
+            Default ``default_rng(scenario.prior.seed)`` (reproducible).
+
+        Raises
+        ------
+        PlanningError
+            No prior, or a prior with no mass.
+        """
+        from tmaplan.errors import ScenarioError
+        from tmaplan.models.prior import relative_prior_samples
+
+        if scenario.prior is None:
+            raise PlanningError(f"{scenario.name}: the scenario has no [prior]: nothing to "
+                                "plan against")
+        n = min(scenario.prior.samples, _GAUSS_SAMPLES) if n is None else int(n)
+        rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
+        try:
+            X = relative_prior_samples(scenario, n, rng)
+        except (ScenarioError, ValueError) as exc:
+            raise PlanningError(f"{scenario.name}: cannot sample the target prior ({exc})"
+                                ) from exc
+        return cls.from_samples(X, t=float(scenario.time.t0))
+
+    # ------------------------------------------------------------------- derived values
+    @property
+    def second_moment(self) -> np.ndarray:
+        """``S = E X Xᵀ = Cov + m mᵀ``, shape (4, 4)."""
+        return self.cov + np.outer(self.mean, self.mean)
+
+    def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """``n`` samples (n, 4): resampled from ``samples`` if any, else Gaussian."""
+        if self.samples is not None:
+            idx = rng.choice(self.samples.shape[0], size=n, p=self.weights)
+            return self.samples[idx]
+        return rng.multivariate_normal(self.mean, self.cov, size=n)
+
+    def representative_samples(self, n: int) -> np.ndarray:
+        """Deterministic ``n`` samples for sample-averaged objectives, shape (n, 4).
+
+        ``n = 1`` gives the mean; otherwise a fixed-seed draw (so re-planning with an
+        unchanged belief gives the same objective).
+        """
+        if n <= 1:
+            return self.mean[None, :].copy()
+        return self.draw(n, np.random.default_rng(20240601))
+
+    def lpc_information(self) -> np.ndarray:
+        """LPC prior information ``J₀`` (4, 4) of file 000 eq. 56 (weighted samples).
+
+        Raises
+        ------
+        PlanningError
+            If the LPC covariance is not positive definite.
+        """
+        if self.samples is not None:
+            X, w = self.samples, self.weights
+        else:
+            X = np.random.default_rng(7).multivariate_normal(self.mean, self.cov,
+                                                             size=_GAUSS_SAMPLES)
+            w = None
+        keep = np.hypot(X[:, 0], X[:, 1]) > MIN_RANGE
+        X = X[keep]
+        if w is None:
+            w = np.full(X.shape[0], 1.0 / max(X.shape[0], 1))
+        else:
+            w = w[keep]
+            if w.sum() <= 0:
+                raise PlanningError("belief: all the mass is at zero range")
+            w = w / w.sum()
+        Y = cart_to_lpc(X)
+        bm = np.angle(np.sum(w * np.exp(1j * Y[:, 0])))
+        Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
+        mu = w @ Y
+        d = Y - mu
+        cov = (d * w[:, None]).T @ d
+        try:
+            J0 = np.linalg.inv(0.5 * (cov + cov.T))
+            np.linalg.cholesky(J0)
+        except np.linalg.LinAlgError as exc:
+            raise PlanningError("belief: the LPC covariance of the belief is singular (a zero "
+                                "std in the prior?)") from exc
+        return 0.5 * (J0 + J0.T)
+
+    def cartesian_information(self) -> np.ndarray:
+        """``Cov(X)⁻¹`` (4, 4) [1/m², ...]."""
+        J = np.linalg.inv(self.cov)
+        return 0.5 * (J + J.T)
+
+    def mean_range(self) -> float:
+        """Range of the mean relative position [m]."""
+        return float(np.hypot(self.mean[0], self.mean[1]))
+
+
+def _check_cov(cov: np.ndarray) -> None:
+    if not np.all(np.isfinite(cov)):
+        raise PlanningError("belief: non-finite covariance")
+    try:
+        np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError as exc:
+        raise PlanningError(
+            "belief: the covariance of the relative state is not positive definite "
+            f"(variances {np.diag(cov).tolist()}): the target prior has no mass in some "
+            "direction, so no bound can be planned against it") from exc

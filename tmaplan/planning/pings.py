@@ -1,0 +1,566 @@
+"""Active-ping scheduling under a budget with the closed-form PCRB (file 000 §5, NOTES_000 §4.2).
+
+Choose at most ``budget`` ping steps on a fixed observer track to minimise a closed-form PCRB
+objective. Structure used (NOTES_000 §4.2): the moments, the D-terms and ``E r_k²`` do not
+depend on the schedule; a ping at step k adds ``u_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]``
+(file 000 eq. 51); the Riccati map is matrix-monotone, so adding a ping never increases any
+objective below (range bound ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, position bound
+``sqrt(tr P_pos)``), which makes "all remaining candidates pinged" a valid lower bound for
+branch and bound.
+
+Methods
+    ``exact``: exhaustive enumeration on the batched evaluator when the number of schedules is
+    at most ``max_enumerate`` (proven optimum), else best-first branch and bound with the
+    monotone lower bound, a time limit and the reported gap.
+    ``relaxed``: u_k ∈ [0, 1] NLP (casadi + IPOPT, exact gradients through the recursion,
+    Σu ≤ K, Σ_{window} u ≤ 1 for the spacing), then rounding (largest u first, spacing
+    respected) and local swaps. For terminal objectives the relaxed problem is convex
+    (``[J⁻¹]_{ln r}`` is convex and decreasing in J, J_T concave in u), so its optimum is a proven
+    lower bound.
+    ``greedy``: add the best ping one at a time (then the same local swaps).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from tmaplan.bounds._lpc_terms import (
+    SYM_INDEX,
+    aux_to_dterms,
+    basis,
+    inverse_diagonal,
+    step_functions,
+    tichavsky_step,
+)
+from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.target import ncv_matrices
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.objectives import bearing_information, ping_sigma
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "schedule_pings"]
+
+PING_OBJECTIVES = ("mean-range-bound", "terminal-range-bound", "mean-position-bound")
+_OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class PingSchedule:
+    """A ping schedule and its quality.
+
+    Attributes
+    ----------
+    steps : ndarray of int, shape (n_pings,)
+        Ping steps on the observer track's grid.
+    times : ndarray, shape (n_pings,)
+        [s].
+    objective : float
+        Objective with these pings [m].
+    no_ping_objective, uniform_objective : float
+        Without pings, and with ``budget`` evenly spaced pings [m].
+    lower_bound : float
+        Proven lower bound on the optimum [m] (nan if none is known).
+    gap : float
+        ``objective − reference`` [m]: to the exact optimum when it was computed, else to
+        ``lower_bound`` (nan if neither).
+    gap_reference : str
+        "exact", "lower-bound", "relaxation (not proven)" or "none".
+    bound : ndarray, shape (K + 1,)
+        Range bound per step with the schedule [m].
+    status : str
+        "optimal", "gap", solver status, ...
+    seconds : float
+    method : str
+    objective_name : str
+    budget : int
+    """
+
+    steps: np.ndarray
+    times: np.ndarray
+    objective: float
+    no_ping_objective: float
+    uniform_objective: float
+    lower_bound: float
+    gap: float
+    gap_reference: str
+    bound: np.ndarray
+    status: str
+    seconds: float
+    method: str
+    objective_name: str
+    budget: int
+
+
+class PingEvaluator:
+    """Batched closed-form PCRB objective of ping schedules on a fixed observer track.
+
+    The recursion is :func:`tmaplan.bounds._lpc_terms.tichavsky_step` (the one implementation
+    of the closed form) on entries of shape (S,), one entry per schedule.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    observer : ObserverTrack
+    belief : Belief
+        Relative state at the track's first instant.
+    objective : str
+        One of :data:`PING_OBJECTIVES`.
+    """
+
+    def __init__(self, scenario: Scenario, observer: ObserverTrack, belief: Belief,
+                 objective: str = "mean-range-bound") -> None:
+        if objective not in PING_OBJECTIVES:
+            raise ScenarioError("objective", f"one of {', '.join(PING_OBJECTIVES)}", objective)
+        self.objective = objective
+        sig = ping_sigma(scenario)
+        if sig is None:
+            raise PlanningError(f"{scenario.name}: no range sensor to ping with (add a "
+                                "[[sensors]] kind = 'range' or planning.ping_sigma)")
+        self.sigma = sig
+        self.scale = 1.0 / sig**2
+        dt = float(scenario.time.dt)
+        K = observer.position.shape[0] - 1
+        self.K, self.dt = K, dt
+        self.times = observer.times
+        A, Q = ncv_matrices(dt, float(scenario.target.q))
+        moment_fn, riccati_fn = step_functions(A, Q)
+        self._riccati = riccati_fn
+        dv = observer.velocity_increments
+        c = -np.hstack([dt * dv, dv])
+        S0 = belief.second_moment
+        x0 = np.concatenate([belief.mean, [S0[i, j] for i, j in SYM_INDEX]])
+        xs, aux = (np.asarray(o) for o in moment_fn.mapaccum(K)(x0, c.T))
+        self.aux = aux
+        self.moments = np.hstack([x0[:, None], xs])
+        self.er2 = self.moments[4] + self.moments[8]
+        self.J0 = belief.lpc_information()
+        self.bearing = bearing_information(scenario, belief.t, K)
+        self._pw = self.scale * self.er2
+        self._dterms = [aux_to_dterms(aux[:, k].tolist()) for k in range(K)]
+        if objective == "mean-position-bound":
+            E = basis()[:, :2, :]
+            T = np.einsum("kai,laj->klij", E, E)
+            Sk = np.zeros((K + 1, 4, 4))
+            for n, (i, j) in enumerate(SYM_INDEX):
+                Sk[:, i, j] = Sk[:, j, i] = self.moments[4 + n]
+            self._W = np.einsum("nkl,klij->nij", Sk, T)
+
+    # ------------------------------------------------------------------------ numeric
+    def per_step(self, U: np.ndarray) -> np.ndarray:
+        """Bound per step (S, K+1) [m]: range bound, or sqrt(tr P_pos) (position objective)."""
+        U = np.atleast_2d(np.asarray(U, float))
+        S, K = U.shape[0], self.K
+        if U.shape[1] != K + 1:
+            raise ScenarioError("u", f"shape (S, {K + 1})", U.shape)
+        J = [[float(x) + np.zeros(S) for x in row] for row in self.J0.tolist()]
+        J[1][1] = J[1][1] + U[:, 0] * self._pw[0]
+        out = np.empty((S, K + 1))
+        pos = self.objective == "mean-position-bound"
+        pw = U * self._pw[None, :]
+        b = self.bearing.tolist()
+        for k in range(K + 1):  # loop over time steps; schedules are batched
+            if k > 0:
+                D11, D12, D22 = self._dterms[k - 1]
+                J, piv = tichavsky_step(J, D11, D12, D22, b[k], pw[:, k])
+                if np.any(piv[3] <= 0):
+                    raise PlanningError("closed-form PCRB: J_t + D11 is not positive definite")
+            if pos:
+                M = np.stack([np.stack(r, axis=-1) for r in J], axis=-2)
+                P = np.linalg.inv(M)
+                out[:, k] = np.sqrt(np.maximum(np.einsum("ij,sij->s", self._W[k], P), 0))
+            else:
+                var, _ = inverse_diagonal(J)
+                out[:, k] = np.sqrt(self.er2[k] * var[1])
+        return out
+
+    def evaluate(self, U: np.ndarray, chunk: int = 4096) -> np.ndarray:
+        """Objective (S,) [m] of schedules U (S, K+1) (weights in [0, 1])."""
+        U = np.atleast_2d(np.asarray(U, float))
+        res = []
+        for s in range(0, U.shape[0], chunk):
+            pb = self.per_step(U[s:s + chunk])
+            res.append(pb[:, -1] if self.objective == "terminal-range-bound"
+                       else pb.mean(axis=1))
+        return np.concatenate(res) if res else np.zeros(0)
+
+    def schedules(self, sets: Sequence[Sequence[int]]) -> np.ndarray:
+        """0/1 matrix (S, K+1) of ping-step sets."""
+        U = np.zeros((len(sets), self.K + 1))
+        for i, st in enumerate(sets):
+            U[i, list(st)] = 1.0
+        return U
+
+    def value(self, steps: Sequence[int]) -> float:
+        """Objective of one schedule."""
+        return float(self.evaluate(self.schedules([steps]))[0])
+
+    # ---------------------------------------------------------------------- symbolic
+    def casadi_objective(self, u: Any) -> Any:
+        """casadi expression of the objective of relaxed weights ``u`` ((K+1)×1 MX).
+
+        For ``terminal-range-bound`` it is ``[J_K⁻¹]_{ln r}·E r_K²`` (the square of the range
+        bound: same minimiser, and convex in u).
+        """
+        import casadi as ca
+
+        K = self.K
+        J0 = [[ca.MX(float(x)) for x in row] for row in self.J0.tolist()]
+        J0[1][1] = J0[1][1] + u[0] * float(self._pw[0])
+        j0 = ca.vertcat(*[J0[i][j] for i, j in SYM_INDEX])
+        acc = self._riccati.mapaccum("ping_riccati", K)
+        jn, varn, _ = acc(j0, ca.DM(self.aux), ca.DM(self.bearing[1:][None, :]),
+                          (u[1:] * self.scale).T)
+        var0, _ = inverse_diagonal(J0)
+        if self.objective == "terminal-range-bound":
+            return varn[1, -1] * float(self.er2[-1])
+        if self.objective == "mean-range-bound":
+            rb = ca.sqrt(ca.DM(self.er2[1:]).T * varn[1, :])
+            return (ca.sum2(rb) + ca.sqrt(var0[1] * float(self.er2[0]))) / (K + 1)
+        j = ca.SX.sym("j", 10)
+        w = ca.SX.sym("w", 4, 4)
+        Jm = ca.SX(4, 4)
+        for n, (a, b_) in enumerate(SYM_INDEX):
+            Jm[a, b_] = j[n]
+            Jm[b_, a] = j[n]
+        f = ca.Function("posw", [j, w], [ca.sqrt(ca.sum1(ca.sum2(w * ca.inv(Jm))))])
+        Wk = ca.DM(np.hstack([self._W[k] for k in range(K + 1)]))
+        vals = f.map(K + 1)(ca.horzcat(j0, jn), Wk)
+        return ca.sum2(vals) / (K + 1)
+
+
+# --------------------------------------------------------------------------------------------
+# Feasibility helpers
+# --------------------------------------------------------------------------------------------
+def _candidates(ev: PingEvaluator, candidate_steps: Sequence[int] | None,
+                forbidden: Sequence[tuple[float, float]]) -> np.ndarray:
+    K = ev.K
+    cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
+        np.asarray(list(candidate_steps), int))
+    if cand.size and (cand.min() < 0 or cand.max() > K):
+        raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
+                            f"[{cand.min()}, {cand.max()}]")
+    t = ev.times[cand]
+    for a, b in forbidden:
+        cand = cand[~((t >= a) & (t <= b))]
+        t = ev.times[cand]
+    return cand
+
+
+def _spacing_ok(steps: Sequence[int], gap: int) -> bool:
+    s = sorted(steps)
+    return all(b - a >= gap for a, b in itertools.pairwise(s))
+
+
+def _max_pings(cand: np.ndarray, gap: int) -> int:
+    n, last = 0, -10**9
+    for c in cand:  # earliest-first is optimal for interval packing
+        if c - last >= gap:
+            n, last = n + 1, c
+    return n
+
+
+def _round(u: np.ndarray, cand: np.ndarray, budget: int, gap: int) -> list[list[int]]:
+    """Two roundings of relaxed weights: largest-u-first, and systematic (the steps where the
+    cumulative Σu crosses i + 1/2); both respect the spacing."""
+    def feasible(order: Sequence[int]) -> list[int]:
+        chosen: list[int] = []
+        for i in order:
+            c = int(cand[i])
+            if all(abs(c - x) >= gap for x in chosen):
+                chosen.append(c)
+            if len(chosen) == budget:
+                break
+        return chosen
+
+    top = feasible(np.argsort(-u, kind="stable").tolist())
+    cs = np.cumsum(u) * budget / max(u.sum(), 1e-12)
+    idx = np.searchsorted(cs, np.arange(budget) + 0.5)
+    syst = feasible(list(dict.fromkeys(np.clip(idx, 0, cand.size - 1).tolist()))
+                    + np.argsort(-u, kind="stable").tolist())
+    return [sorted(top), sorted(syst)]
+
+
+def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int,
+                 max_rounds: int = 8, radius: Sequence[int] = (1, 2, 4, 8, 16)) -> tuple[
+                     list[int], float]:
+    """Move pings to nearby candidates (±radius in candidate index) while that improves.
+
+    Each round evaluates every single move in one batch, then applies the best move of every
+    ping together if that beats the best single move (else the best single move).
+    """
+    pos = {int(c): i for i, c in enumerate(cand)}
+    steps = sorted(steps)
+    best = ev.value(steps)
+    for _ in range(max_rounds):
+        trials, owner, moves = [], [], []
+        for i, s in enumerate(steps):
+            for r in radius:
+                for j in (pos[s] - r, pos[s] + r):
+                    if 0 <= j < cand.size and int(cand[j]) not in steps:
+                        trial = [*steps[:i], int(cand[j]), *steps[i + 1:]]
+                        if _spacing_ok(trial, gap):
+                            trials.append(sorted(trial))
+                            owner.append(i)
+                            moves.append(int(cand[j]))
+        if not trials:
+            break
+        vals = ev.evaluate(ev.schedules(trials))
+        j = int(np.argmin(vals))
+        if vals[j] >= best - 1e-12 * max(1.0, abs(best)):
+            break
+        combined = list(steps)
+        for i in range(len(steps)):
+            mine = [t for t, o in enumerate(owner) if o == i and vals[t] < best]
+            if mine:
+                combined[i] = moves[min(mine, key=lambda t: vals[t])]
+        new, new_val = sorted(trials[j]), float(vals[j])
+        if len(set(combined)) == len(combined) and _spacing_ok(combined, gap) and \
+                sorted(combined) != new:
+            cv = ev.value(sorted(combined))
+            if cv < new_val:
+                new, new_val = sorted(combined), cv
+        steps, best = new, new_val
+    return steps, best
+
+
+def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[int]:
+    chosen: list[int] = []
+    for _ in range(budget):
+        opts = [c for c in cand if all(abs(int(c) - x) >= gap for x in chosen)]
+        if not opts:
+            break
+        vals = ev.evaluate(ev.schedules([[*chosen, int(c)] for c in opts]))
+        chosen = sorted([*chosen, int(opts[int(np.argmin(vals))])])
+    return chosen
+
+
+def _relaxed(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
+             ) -> tuple[np.ndarray, float, str]:
+    import casadi as ca
+
+    n = cand.size
+    x = ca.MX.sym("u", n)
+    from scipy import sparse
+
+    sel = sparse.csc_matrix((np.ones(n), (cand, np.arange(n))), shape=(ev.K + 1, n))
+    U = ca.mtimes(ca.DM(sel), x)
+    f = ev.casadi_objective(U)
+    from scipy import sparse
+
+    rows = [np.arange(n)]
+    if gap > 1:
+        for c in cand:
+            win = np.flatnonzero((cand >= c) & (cand < c + gap))
+            if win.size > 1:
+                rows.append(win)
+    r_idx = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)])
+    Amat = ca.DM(sparse.csc_matrix((np.ones(r_idx.size), (r_idx, np.concatenate(rows))),
+                                   shape=(len(rows), n)))
+    g = ca.mtimes(Amat, x)
+    ub = np.concatenate([[budget], np.ones(len(rows) - 1)])
+    f0 = float(ca.Function("f0", [x], [f])(np.full(n, budget / n)))
+    solver = ca.nlpsol("ping_relaxed", "ipopt", {"x": x, "f": f / abs(f0), "g": g},
+                       {"print_time": False,
+                        "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 1000,
+                                  "tol": 1e-7, "acceptable_tol": 1e-5, "acceptable_iter": 10,
+                                  "hessian_approximation": "limited-memory"}})
+    sol = solver(x0=np.full(n, budget / n), lbx=0.0, ubx=1.0, lbg=-np.inf, ubg=ub)
+    st = str(solver.stats()["return_status"])
+    u = np.clip(np.asarray(sol["x"]).reshape(-1), 0, 1)
+    return u, float(sol["f"]) * abs(f0), st
+
+
+def _uniform_steps(cand: np.ndarray, budget: int, K: int) -> list[int]:
+    targets = [round((i + 1) * K / budget) for i in range(budget)]
+    out: list[int] = []
+    for t in targets:
+        free = [int(c) for c in cand if int(c) not in out]
+        if free:
+            out.append(min(free, key=lambda c: abs(c - t)))
+    return sorted(out)
+
+
+def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
+           inc_val: float, max_enumerate: int, time_limit: float) -> tuple[list[int], float,
+                                                                          float, str]:
+    """Exhaustive enumeration or best-first branch and bound. Returns (steps, val, lb, status)."""
+    n = cand.size
+    if math.comb(n, budget) <= max_enumerate:
+        combos = [c for c in itertools.combinations(cand.tolist(), budget)
+                  if _spacing_ok(c, gap)]
+        vals = ev.evaluate(ev.schedules(combos))
+        j = int(np.argmin(vals))
+        return list(combos[j]), float(vals[j]), float(vals[j]), "optimal"
+    import heapq
+
+    t0 = time.perf_counter()
+    best, best_val = list(incumbent), inc_val
+    # node: (lower bound, chosen tuple, next candidate index)
+    root_lb = float(ev.evaluate(ev.schedules([cand.tolist()]))[0])
+    heap: list[tuple[float, tuple[int, ...], int]] = [(root_lb, (), 0)]
+    while heap and time.perf_counter() - t0 < time_limit:
+        batch = [heapq.heappop(heap) for _ in range(min(len(heap), 64))]
+        kids, kid_sets = [], []
+        for lb, chosen, nxt in batch:
+            if lb >= best_val - 1e-12:
+                continue
+            for i in range(nxt, n):
+                c = int(cand[i])
+                if chosen and c - chosen[-1] < gap:
+                    continue
+                ch = (*chosen, c)
+                if len(ch) == budget or i == n - 1:
+                    kids.append((ch, n))
+                    kid_sets.append(list(ch))
+                else:
+                    kids.append((ch, i + 1))
+                    kid_sets.append(list(ch) + cand[i + 1:].tolist())
+        if not kids:
+            continue
+        vals = ev.evaluate(ev.schedules(kid_sets))
+        for (ch, nxt), v in zip(kids, vals):
+            if nxt >= n or len(ch) == budget:
+                if v < best_val:
+                    best, best_val = list(ch), float(v)
+            elif v < best_val - 1e-12:
+                heapq.heappush(heap, (float(v), ch, nxt))
+    lb = min([h[0] for h in heap], default=best_val)
+    lb = min(lb, best_val)
+    return best, best_val, lb, "optimal" if not heap else "gap (time limit)"
+
+
+def schedule_pings(scenario: Scenario, *, budget: int,
+                   method: Literal["exact", "relaxed", "greedy"] = "relaxed",
+                   objective: Literal["mean-range-bound", "terminal-range-bound",
+                                      "mean-position-bound"] = "mean-range-bound",
+                   observer: ObserverTrack | None = None, belief: Belief | None = None,
+                   min_spacing: float | None = None,
+                   forbidden: Sequence[tuple[float, float]] = (),
+                   candidate_steps: Sequence[int] | None = None,
+                   max_enumerate: int = 50_000, time_limit: float = 30.0,
+                   max_relaxed: int = 200,
+                   gap_reference: Literal["auto", "exact", "none"] = "auto") -> PingSchedule:
+    """Choose at most ``budget`` ping steps (see the module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Needs a prior (or ``belief``) and a range sensor (or ``planning.ping_sigma``).
+    budget : int
+        Maximum number of pings K.
+    method : {"exact", "relaxed", "greedy"}
+    objective : {"mean-range-bound", "terminal-range-bound", "mean-position-bound"}
+    observer : ObserverTrack, optional
+        Default the scenario's scripted track.
+    belief : Belief, optional
+        Default the prior.
+    min_spacing : float, optional
+        Minimum time between pings [s] (default ``planning.ping_min_spacing``).
+    forbidden : sequence of (start, end)
+        Time windows [s] without pings (counter-detection), added to
+        ``planning.ping_forbidden``.
+    candidate_steps : sequence of int, optional
+        Allowed steps (default 1..K).
+    max_enumerate : int
+        ``exact``: enumerate when C(n, K) is at most this, else branch and bound.
+    time_limit : float
+        Branch-and-bound time limit [s] (the gap is reported when it is hit).
+    max_relaxed : int
+        ``relaxed``: at most this many candidates (every stride-th) enter the NLP; rounding
+        and local swaps then use every candidate. The relaxation is then a lower bound of the
+        coarse problem only (so no proven lower bound is reported).
+    gap_reference : {"auto", "exact", "none"}
+        ``relaxed``/``greedy``: compute the exact optimum to report the gap ("auto": when
+        enumeration is cheap, C(n, K) ≤ 20 000).
+
+    Raises
+    ------
+    PlanningError
+        Budget larger than the candidate steps (or than the spacing allows), no range sensor.
+    SolverError
+        The relaxed NLP did not converge.
+    """
+    from tmaplan.errors import SolverError
+
+    t_start = time.perf_counter()
+    budget = int(budget)
+    if budget < 0:
+        raise PlanningError(f"budget: expected >= 0 pings, received {budget}")
+    if method not in ("exact", "relaxed", "greedy"):
+        raise PlanningError(f"method: expected 'exact', 'relaxed' or 'greedy', received "
+                            f"{method!r}")
+    obs = observer if observer is not None else observer_track(scenario.observer,
+                                                               scenario.time)
+    bel = belief if belief is not None else Belief.from_prior(scenario)
+    ev = PingEvaluator(scenario, obs, bel, objective)
+    pl = scenario.planning
+    spacing = float(min_spacing if min_spacing is not None else
+                    (pl.ping_min_spacing if pl is not None else 0.0))
+    gap = max(1, math.ceil(spacing / ev.dt - 1e-9))
+    windows = list(forbidden) + (list(pl.ping_forbidden) if pl is not None else [])
+    cand = _candidates(ev, candidate_steps, windows)
+    if budget > cand.size:
+        raise PlanningError(f"budget K = {budget} pings is larger than the {cand.size} "
+                            f"candidate ping steps in the horizon ({ev.K} steps)")
+    if budget > _max_pings(cand, gap):
+        raise PlanningError(f"budget K = {budget} pings cannot be met with min_spacing "
+                            f"{spacing:g} s: at most {_max_pings(cand, gap)} fit")
+    no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
+    uni = _uniform_steps(cand, budget, ev.K) if budget else []
+    uniform = float(ev.value(uni))
+    lb, ref, status = float("nan"), "none", "ok"
+    if budget == 0:
+        steps, val, status = [], no_ping, "optimal"
+        lb, ref = val, "exact"
+    elif method == "greedy":
+        steps = _greedy(ev, cand, budget, gap)
+        steps, val = _local_swaps(ev, steps, cand, gap)
+    elif method == "relaxed":
+        # Relax on at most max_relaxed candidates (every stride-th one); the local swaps
+        # then work on the full candidate set with radii up to the stride.
+        stride = max(1, math.ceil(cand.size / max_relaxed))
+        coarse = cand[::stride]
+        if coarse.size < budget:
+            coarse = cand
+        u, fr, st = _relaxed(ev, coarse, budget, gap)
+        if st not in _OK:
+            raise SolverError("ipopt", st, "relaxed ping scheduling NLP")
+        radius = sorted({1, 2, 4} | {max(1, stride // 2), stride})
+        rounded = _round(u, coarse, budget, gap)
+        rv = ev.evaluate(ev.schedules(rounded))
+        steps, val = _local_swaps(ev, rounded[int(np.argmin(rv))], cand, gap, radius=radius)
+        status = st
+        if objective == "terminal-range-bound" and stride == 1:
+            lb, ref = math.sqrt(max(fr, 0.0)), "lower-bound"
+        else:
+            lb, ref = fr, "relaxation (not proven)"
+    else:
+        g0 = _greedy(ev, cand, budget, gap) if math.comb(cand.size, budget) > max_enumerate \
+            else []
+        v0 = ev.value(g0) if g0 else float("inf")
+        steps, val, lb, status = _exact(ev, cand, budget, gap, g0, v0, max_enumerate,
+                                        time_limit)
+        ref = "exact" if status == "optimal" else "lower-bound"
+    if method != "exact" and budget and (gap_reference == "exact" or (
+            gap_reference == "auto" and math.comb(cand.size, budget) <= 20_000)):
+        _, ex_val, _, _ = _exact(ev, cand, budget, gap, [], float("inf"), 20_000 if
+                                 gap_reference == "auto" else max_enumerate, time_limit)
+        lb, ref = ex_val, "exact"
+    steps_a = np.asarray(sorted(steps), int)
+    bound = ev.per_step(ev.schedules([steps_a.tolist()]))[0]
+    return PingSchedule(steps=steps_a, times=ev.times[steps_a], objective=val,
+                        no_ping_objective=no_ping, uniform_objective=uniform,
+                        lower_bound=lb, gap=val - lb if np.isfinite(lb) else float("nan"),
+                        gap_reference=ref, bound=bound, status=status,
+                        seconds=time.perf_counter() - t_start, method=method,
+                        objective_name=objective, budget=budget)

@@ -20,14 +20,30 @@ cells = [
         "ratio = mle_res.rmse_position[-1] / mle_res.bound_position[-1]\n"
         "print('final position RMSE / CRLB:', ratio)\n"
         "assert 0.4 < ratio < 2.0"),
-    nbf.v4.new_markdown_cell("## PF vs PCRB on ristic-bot-moderate"),
+    nbf.v4.new_markdown_cell(
+        "## The half-turn mirror ghost (bearings only)\n"
+        "Noise-free clockwise bearings are fitted almost exactly (cost ≈ 0.10, i.e. 0.006° RMS)\n"
+        "by a source turning the *other* way and ending at ~1.9 km instead of 9.8 km. The\n"
+        "multistart MLE reports it in `alternatives`; with noise it wins ~45 % of the time."),
+    nbf.v4.new_code_cell(
+        "from tmaplan.simulate import simulate\n"
+        "from tmaplan.estimators import mle, tma_data\n"
+        "sim = simulate(sc, None)\n"
+        "d = tma_data(sc, sim.measurements, sim.observer, frequencies=0)\n"
+        "r = mle(d, MLEConfig(init='multistart'))\n"
+        "print('estimate', r.params.round(4), 'cost', round(r.cost, 6))\n"
+        "print('alternatives', [(a.round(4), round(c, 3)) for a, c in r.alternatives])\n"
+        "assert r.ambiguous and r.alternatives[0][1] < 0.2"),
+    nbf.v4.new_markdown_cell("## PF vs PCRB (along the runs' truths, BENCHMARK §B2) on "
+                             "ristic-bot-moderate"),
     nbf.v4.new_code_cell(
         "sc = load_problem('ristic-bot-moderate')\n"
-        "pf = monte_carlo(sc, 'pf', runs=10, seed=2, n_particles=3000, bound_samples=2000)\n"
+        "pf = monte_carlo(sc, 'pf', runs=20, seed=2, n_particles=5000)\n"
         "plt.semilogy(pf.times/60, pf.rmse_position, label='PF')\n"
         "plt.semilogy(pf.times/60, pf.bound_position, '--', label='PCRB'); plt.legend()\n"
-        "print('RMSE/PCRB after the turn:', (pf.rmse_position/pf.bound_position)[20:].round(1))\n"
-        "assert pf.rmse_position[-1] < 0.2 * pf.rmse_position[10]"),
+        "print('RMSE/PCRB after the turn:', (pf.rmse_position/pf.bound_position)[18:].round(2))\n"
+        "assert pf.rmse_position[-1] < 0.2 * pf.rmse_position[10]\n"
+        "assert np.all(pf.rmse_position[18:] < 3.0 * pf.bound_position[18:])"),
     nbf.v4.new_markdown_cell("## Range-only filter vs PF on sharma2024-range-only"),
     nbf.v4.new_code_cell(
         "sc = load_problem('sharma2024-range-only')\n"

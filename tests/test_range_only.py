@@ -142,11 +142,19 @@ def test_range_only_smoke_on_sharma() -> None:
 
 @pytest.mark.slow
 def test_range_only_vs_pf_sharma() -> None:
+    # Issue 5 target: range-only final RMSE ≤ 1.3× the PF's (10^4 particles, 100 runs) with a
+    # consistent NEES. NOT MET at the time of writing (issue-5 report): both filters end ~6×
+    # above the truth-conditional PCRB because the posterior is a ring arc (rotational
+    # ambiguity of range-only tracking on straight relative legs, strong process noise), and
+    # the single-Gaussian range-only filter becomes overconfident after the manoeuvre.
     from tmaplan.scenario import load_problem
 
     sc = load_problem("sharma2024-range-only")
     ro = monte_carlo(sc, "range-only", runs=100, seed=4, bound=False)
     pf = monte_carlo(sc, "pf", runs=100, seed=4, n_particles=10_000, bound=False)
     assert ro.rmse_position[-1] <= 1.3 * pf.rmse_position[-1]
-    # NEES (4-D) within a loose consistency band.
-    assert 1.0 < np.nanmedian(ro.nees) < 12.0
+    # NEES (4-D) in the 95 % band of NOTES_004 §4.2 (100 runs).
+    from scipy.stats import chi2
+
+    lo, hi = chi2.ppf([0.025, 0.975], 400) / 100
+    assert lo < ro.nees[-1] < hi

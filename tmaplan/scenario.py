@@ -441,7 +441,8 @@ class Planning:
     horizon : float, optional
         Planning horizon [s] (default: the scenario's).
     objective : str
-        Default heading objective ("logdet", "range-bound", "position-bound").
+        Default heading objective (:data:`tmaplan.planning.objectives.OBJECTIVE_NAMES`:
+        "logdet", "range-bound", "position-bound", "mean-relative-range-bound", ...).
     ping_budget : int
         Maximum number of active pings.
     ping_sigma : float, optional
@@ -459,7 +460,11 @@ class Planning:
     """
 
     horizon: PositiveTime | None = None
-    objective: Literal["logdet", "range-bound", "position-bound"] = "range-bound"
+    objective: Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
+                       "terminal-range-bound", "mean-position-bound",
+                       "terminal-position-bound", "relative-range-bound",
+                       "mean-relative-range-bound", "relative-range-crlb",
+                       "mean-relative-range-crlb", "time-to-accuracy"] = "range-bound"
     ping_budget: NonNegInt = 0
     ping_sigma: PositiveLength | None = None
     ping_min_spacing: NonNegTime = 0.0

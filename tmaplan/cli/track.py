@@ -23,6 +23,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--particles", type=int, default=10_000, help="particles (pf)")
     parser.add_argument("--runs", type=int, default=20, help="Monte Carlo runs")
     parser.add_argument("--seed", type=int, default=0, help="root SeedSequence seed")
+    parser.add_argument("--bound", choices=("truth", "prior"), default="truth",
+                        help="filters: PCRB along the runs' truths (B2, default) or "
+                             "averaged over prior draws")
     parser.add_argument("--out", default="out", help="figure directory")
     parser.add_argument("--no-figure", action="store_true", help="skip the figure")
 
@@ -64,7 +67,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(f"\rrun {done}/{total}", end="", file=sys.stderr, flush=True)
 
     res = monte_carlo(scenario, args.estimator, runs=args.runs, seed=args.seed,
-                      n_particles=args.particles, progress=progress)
+                      n_particles=args.particles, progress=progress,
+                      bound=getattr(args, "bound", "truth"))
     if show:
         print(file=sys.stderr)
     payload = res.to_json()

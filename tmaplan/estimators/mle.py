@@ -16,6 +16,14 @@ measurement streams s with ``d_s = N_s − n_geom`` for bearings and ranges and
 ``d_s = N_s − n_geom − 1`` per frequency line. NOTE (NOTES_002 §3.3): these are not the
 99.5 % χ² quantiles they are claimed to be (the BO one is ≈ 99.8 %, the MFB one is very loose).
 
+Initialisation and the half-turn ghost. ``MLEConfig(init="paper")`` is file 002's scheme as
+written (single best grid node). On the reconstructed §III.4 half turn, a distinct source turning
+the other way fits the noise-free cw bearings with cost 0.10 (acw: 0.12), so the acceptance test
+cannot reject it and, with noise, it is the global minimum in ~45 % of runs (predicted
+Φ(−√0.10/2) = 0.44). ``init="multistart"`` (default) refines the best nodes of both turn
+directions, keeps the lowest cost and reports statistically indistinguishable distinct minima
+in :attr:`MLEResult.alternatives` instead of hiding the ambiguity.
+
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
 * ``cv``: ``[x, y, v_x, v_y]`` at t0;
@@ -365,9 +373,19 @@ class MLEConfig:
     grid_turn_rates : tuple of float
         |ω| [rad/s] (both signs are tried) for the constant-turn model.
     n_starts : int
-        Best grid nodes refined.
+        ``init="multistart"``: best grid nodes refined *per turn direction* (constant turn;
+        per grid otherwise).
     frequencies : int, optional
         Use only the first lines (0 = bearings only; None = all available).
+    init : {"multistart", "paper"}
+        "paper": file 002 L258–L263 as written — refine the single best node of the coarse
+        grid (10 Gauss–Newton iterations, then descent to convergence). "multistart": refine
+        the ``n_starts`` best nodes of each turn direction and keep the lowest cost (the
+        global MLE over the basins found); distinct local minima whose cost is within
+        ``ambiguity_margin`` of the best are reported in :attr:`MLEResult.alternatives`.
+    ambiguity_margin : float
+        Cost difference below which two distinct minima are statistically indistinguishable
+        (default 6.63 = χ²₁ 99 % quantile of a likelihood-ratio test).
     """
 
     model: Literal["auto", "cv", "multi-leg", "constant-turn"] = "auto"
@@ -379,6 +397,14 @@ class MLEConfig:
     grid_turn_rates: tuple[float, ...] = (0.002, 0.005, 0.01)
     n_starts: int = 3
     frequencies: int | None = None
+    init: Literal["multistart", "paper"] = "multistart"
+    ambiguity_margin: float = 6.63
+
+    def __post_init__(self) -> None:
+        if self.init not in ("multistart", "paper"):
+            raise ScenarioError("init", "'multistart' or 'paper'", self.init)
+        if not isinstance(self.n_starts, int | np.integer) or self.n_starts < 1:
+            raise ScenarioError("n_starts", "an integer >= 1", self.n_starts)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -406,6 +432,11 @@ class MLEResult:
         "converged", "max-iterations" or "failed".
     message : str
     seconds : float
+    alternatives : tuple of (ndarray, float)
+        Other local minima ``(params, cost)`` found by the multistart, distinct from the
+        estimate (final positions more than 3 CRLB std apart) and with a cost within
+        ``MLEConfig.ambiguity_margin`` of it: bearings cannot tell them apart (e.g. the
+        mirror-turn near-ambiguity of the file 002 half turn, noise-free cost 0.10).
     """
 
     model: str
@@ -420,6 +451,12 @@ class MLEResult:
     status: str
     message: str
     seconds: float
+    alternatives: tuple[tuple[np.ndarray, float], ...] = ()
+
+    @property
+    def ambiguous(self) -> bool:
+        """Whether a statistically indistinguishable distinct solution was found."""
+        return bool(self.alternatives)
 
     @property
     def success(self) -> bool:
@@ -607,24 +644,27 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     else:
         grid = _grid(data, cfg)
         costs, tones = _grid_costs(data, grid)
-        order = np.argsort(costs)[: cfg.n_starts]
+        if cfg.init == "paper":
+            order = np.argsort(costs)[:1]
+        elif data.model == "constant-turn":
+            # Both turn directions: the half-turn geometry of file 002 has a mirror-turn
+            # near-ghost whose basin holds the best grid node in ~20 % of the runs.
+            order = np.concatenate([np.flatnonzero(sgn)[np.argsort(costs[sgn])[: cfg.n_starts]]
+                                    for sgn in (grid[:, 4] > 0, grid[:, 4] < 0)])
+        else:
+            order = np.argsort(costs)[: cfg.n_starts]
         starts = [np.concatenate([grid[i], tones[i]]) for i in order]
-    best: tuple[np.ndarray, float, int, int, str, str] | None = None
+    results = []
     total_it = 0
     total_fev = 0
     for x0 in starts:
         res = _refine(data, x0, cfg)
         total_it += res[2]
         total_fev += res[3]
-        if best is None or (res[4] != "failed" and res[1] < best[1]) or best[4] == "failed":
-            best = res
-    assert best is not None
+        results.append((_canonical(data, res[0]), *res[1:]))
+    ok = [r for r in results if r[4] != "failed"]
+    best = min(ok, key=lambda r: r[1]) if ok else results[0]
     x, cost, _, _, status, message = best
-    if data.model == "constant-turn":
-        x = x.copy()
-        if x[2] < 0:  # ρ < 0 is the same circle with φ + π
-            x[2], x[3] = -x[2], x[3] + np.pi
-        x[3] = wrap_angle(x[3])
     F = fisher_information(data, x) if np.isfinite(x).all() else np.full((x.size,) * 2, np.nan)
     try:
         s = _scale(data, x)
@@ -633,10 +673,45 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
         cov = np.full_like(F, np.nan)
         status, message = "failed", "singular Fisher information at the estimate"
     thr = acceptance_threshold(data)
+    alts = _alternatives(data, x, cov, [r for r in ok if r is not best], cost,
+                         cfg.ambiguity_margin)
     return MLEResult(model=data.model, names=_names(data), params=x, covariance=cov,
                      cost=cost, threshold=thr, accepted=bool(cost < thr), iterations=total_it,
                      nfev=total_fev, status=status, message=message,
-                     seconds=_time.perf_counter() - t_start)
+                     seconds=_time.perf_counter() - t_start, alternatives=alts)
+
+
+def _canonical(data: TMAData, x: np.ndarray) -> np.ndarray:
+    """Constant turn: ρ > 0 (ρ < 0 is the same circle with φ + π) and φ in (−π, π]."""
+    if data.model != "constant-turn":
+        return x
+    x = x.copy()
+    if x[2] < 0:
+        x[2], x[3] = -x[2], x[3] + np.pi
+    x[3] = wrap_angle(x[3])
+    return x
+
+
+def _alternatives(data: TMAData, x: np.ndarray, cov: np.ndarray, others: list, cost: float,
+                  margin: float) -> tuple[tuple[np.ndarray, float], ...]:
+    """Distinct local minima within ``margin`` of the best cost (see MLEResult)."""
+    t_end = np.array([max(data.b_times.max(initial=-np.inf), data.r_times.max(initial=-np.inf),
+                          data.f_times.max(initial=-np.inf))])
+    S, C = state_track(data, x, cov if np.isfinite(cov).all() else None, t_end)
+    sd = np.sqrt(np.trace(C[0, :2, :2])) if C is not None else 0.0
+    found: list[tuple[np.ndarray, float]] = []
+    for r in sorted(others, key=lambda r: r[1]):
+        if not (np.isfinite(r[1]) and r[1] - cost < margin):
+            continue
+        Sa, _ = state_track(data, r[0], None, t_end)
+        tol = max(3.0 * sd, 1e-3 * np.hypot(*S[0, :2]))
+        if np.hypot(*(Sa[0, :2] - S[0, :2])) <= tol:
+            continue
+        if any(np.hypot(*(state_track(data, f[0], None, t_end)[0][0, :2] - Sa[0, :2])) <= tol
+               for f in found):
+            continue
+        found.append((r[0], float(r[1])))
+    return tuple(found)
 
 
 def state_track(data: TMAData, params: np.ndarray, covariance: np.ndarray | None,

@@ -3,9 +3,10 @@
 ``run(estimator, scenario, measurements) -> Track`` runs one estimator on one set of
 measurements; ``monte_carlo(scenario, estimator, runs=..., seed=...)`` repeats it over runs
 seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares the RMSE
-with the bound: the PCRB (``tmaplan.bounds.pcrb.monte_carlo_pcrb`` when importable, else the
-Cartesian Tichavský recursion :func:`cartesian_pcrb` below) for the filters, the CRLB of the
-batch estimate for the MLE.
+with the bound: for the filters the PCRB along the runs' true trajectories, averaged over the
+runs (:func:`tmaplan.estimators.truth_bound.truth_pcrb`, BENCHMARK_SCENARIOS §B2; option
+``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb`` when
+importable, else :func:`cartesian_pcrb`), the CRLB of the batch estimate for the MLE.
 
 Priors. The papers centre their priors on the truth; following Ristic et al. (BENCHMARK B2)
 the *centre* of the prior is itself random per run: :func:`run_prior` draws the prior bearing
@@ -39,9 +40,9 @@ from tmaplan.estimators.range_only import (
     range_only_predict,
     range_only_update,
 )
+from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_pcrb
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
-from tmaplan.models.target import ncv_matrices
 from tmaplan.simulate import MeasurementSet, Simulation, simulate
 
 if TYPE_CHECKING:
@@ -356,67 +357,6 @@ def run(estimator: EstimatorName | PFConfig | MLEConfig | RangeOnlyConfig, scena
 # --------------------------------------------------------------------------------------------
 
 
-def cartesian_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generator,
-                   observer: ObserverTrack | None = None) -> np.ndarray:
-    """Cartesian PCRB position std per step (fallback when ``tmaplan.bounds.pcrb`` is absent).
-
-    Tichavský's recursion for the linear-Gaussian dynamics
-    ``J_{k+1} = (Q + F J_k⁻¹ F')⁻¹ + E[H̃'R⁻¹H̃]`` with ``J_0 = P_0⁻¹`` from the prior and the
-    expectation over ``samples`` trajectories drawn from the prior and the process noise.
-    Bearings and ranges are included (frequency lines are not).
-
-    Returns
-    -------
-    ndarray, shape (K + 1,)
-        ``sqrt(tr [J_k⁻¹]_{pos})`` [m].
-    """
-    from tmaplan.scenario import measurement_steps
-
-    obs = observer or observer_track(scenario.observer, scenario.time)
-    K = scenario.n_steps
-    F, Q = ncv_matrices(scenario.time.dt, scenario.target.q)
-    _, P0 = prior_relative_moments(scenario)
-    X = relative_prior_samples(scenario, samples, rng)
-    info_b = np.zeros(K + 1)
-    info_r = np.zeros(K + 1)
-    for s in scenario.sensors:
-        steps = measurement_steps(s, scenario.time)
-        if s.kind == "bearing":
-            info_b[steps] += 1.0 / s.sigma**2
-        elif s.kind == "range":
-            info_r[steps] += 1.0 / s.sigma**2
-    dv = obs.velocity_increments
-    L = np.linalg.cholesky(Q) if scenario.target.q > 0 else np.zeros((4, 4))
-    J = np.linalg.inv(P0)
-    out = np.zeros(K + 1)
-
-    def meas_info(X: np.ndarray, k: int) -> np.ndarray:
-        r2 = X[:, 0] ** 2 + X[:, 1] ** 2
-        M = np.zeros((4, 4))
-        if info_b[k]:
-            g = np.stack([X[:, 1] / r2, -X[:, 0] / r2], -1)
-            M[:2, :2] += info_b[k] * g.T @ g / X.shape[0]
-        if info_r[k]:
-            g = X[:, :2] / np.sqrt(r2)[:, None]
-            M[:2, :2] += info_r[k] * g.T @ g / X.shape[0]
-        return M
-
-    J = J + meas_info(X, 0)
-    out[0] = np.sqrt(np.trace(np.linalg.inv(J)[:2, :2]))
-    Fi = np.linalg.inv(F)
-    for k in range(K):
-        X = X @ F.T + rng.standard_normal(X.shape) @ L.T
-        X[:, :2] -= scenario.time.dt * dv[k]
-        X[:, 2:] -= dv[k]
-        if scenario.target.q > 0:
-            J = np.linalg.inv(Q + F @ np.linalg.solve(J, F.T))
-        else:
-            J = Fi.T @ J @ Fi
-        J = J + meas_info(X, k + 1)
-        out[k + 1] = np.sqrt(np.trace(np.linalg.inv(J)[:2, :2]))
-    return out
-
-
 def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -> np.ndarray:
     try:
         from tmaplan.bounds.pcrb import monte_carlo_pcrb
@@ -476,7 +416,10 @@ class MonteCarloResult:
     rmse_position, rmse_range : ndarray, shape (K + 1,)
         Over the runs that were not rejected or failed [m]; NaN where no estimate.
     bound_position : ndarray, shape (K + 1,)
-        PCRB (filters) or CRLB (MLE) position std [m].
+        PCRB (filters: along the runs' truths, or prior-averaged, see ``bound_kind``) or CRLB
+        (MLE) position std [m].
+    bound_kind : str
+        "truth", "prior", "crlb" or "none".
     divergence_rate : float
         Fraction of runs rejected, failed, or ending with a position error > 5× the bound.
     nees : ndarray, shape (K + 1,)
@@ -496,6 +439,7 @@ class MonteCarloResult:
     rmse_position: np.ndarray
     rmse_range: np.ndarray
     bound_position: np.ndarray
+    bound_kind: str
     divergence_rate: float
     nees: np.ndarray
     position_errors: np.ndarray
@@ -507,14 +451,15 @@ class MonteCarloResult:
         return {"problem": self.problem, "estimator": self.estimator, "runs": self.runs,
                 "seed": self.seed, "times": self.times, "rmse_position": self.rmse_position,
                 "rmse_range": self.rmse_range, "bound_position": self.bound_position,
-                "divergence_rate": self.divergence_rate, "nees": self.nees,
+                "bound_kind": self.bound_kind, "divergence_rate": self.divergence_rate,
+                "nees": self.nees,
                 "rejected": sum(s in ("rejected", "failed") for s in self.statuses),
                 "seconds": self.seconds}
 
 
 def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLEConfig
                 | RangeOnlyConfig, *, runs: int, seed: int = 0, n_particles: int = 10_000,
-                bound: bool = True, bound_samples: int = 2000,
+                bound: bool | Literal["truth", "prior"] = True, bound_samples: int = 2000,
                 progress: Callable[[int, int], None] | None = None,
                 **run_kwargs: Any) -> MonteCarloResult:
     """Monte Carlo runs of one estimator: truth + measurements + estimate per run.
@@ -529,10 +474,14 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
         Root of ``numpy.random.SeedSequence(seed)``; child i seeds run i (simulation and
         estimator share the child's generator, in that order).
     n_particles : int
-    bound : bool
-        Compute the bound (else NaN).
+    bound : bool or {"truth", "prior"}
+        Compute the bound (False: NaN). Filters: True / "truth" is the PCRB along each run's
+        true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
+        runs (BENCHMARK §B2, Ristic's bound); "prior" is the PCRB averaged over trajectories
+        drawn from the prior (optimistic before an unobservable geometry becomes observable).
+        The MLE always uses the CRLB at the truth.
     bound_samples : int
-        Monte Carlo samples of the PCRB.
+        Monte Carlo samples of the prior-averaged PCRB.
     progress : callable(done, total), optional
     **run_kwargs
         Passed to :func:`run`.
@@ -549,10 +498,12 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
     err_rng = np.full((runs, K + 1), np.nan)
     nees = np.full((runs, K + 1), np.nan)
     statuses = []
+    truths = np.zeros((runs, K + 1, 4))
     children = np.random.SeedSequence(seed).spawn(runs + 1)
     for i in range(runs):
         rng = np.random.default_rng(children[i])
         sim = simulate(scenario, rng)
+        truths[i] = sim.relative
         tr = run(estimator, scenario, sim, rng=rng, n_particles=n_particles, **run_kwargs)
         statuses.append(tr.status)
         e = tr.estimates - sim.relative
@@ -568,13 +519,18 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
         if progress is not None:
             progress(i + 1, runs)
     name = estimator if isinstance(estimator, str) else type(estimator).__name__
+    kind = "none"
     if bound:
         brng = np.random.default_rng(children[runs])
         if name == "mle" or isinstance(estimator, MLEConfig):
             cfg = estimator if isinstance(estimator, MLEConfig) else MLEConfig()
-            b = _crlb_position(scenario, cfg)
+            b, kind = _crlb_position(scenario, cfg), "crlb"
+        elif bound == "prior":
+            b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
+        elif bound is True or bound == "truth":
+            b, kind = truth_pcrb(scenario, truths), "truth"
         else:
-            b = _pcrb_position(scenario, brng, bound_samples)
+            raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
     else:
         b = np.full(K + 1, np.nan)
     used = np.array([s not in ("rejected", "failed") for s in statuses])
@@ -588,6 +544,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
     final_bad = ~used | ~(err_pos[:, -1] <= 5.0 * b[-1]) if bound else ~used
     return MonteCarloResult(problem=scenario.name, estimator=str(name), runs=runs, seed=seed,
                             times=scenario.times, rmse_position=rmse_p, rmse_range=rmse_r,
-                            bound_position=b, divergence_rate=float(np.mean(final_bad)),
+                            bound_position=b, bound_kind=kind,
+                            divergence_rate=float(np.mean(final_bad)),
                             nees=mean_nees, position_errors=err_pos, statuses=tuple(statuses),
                             seconds=_time.perf_counter() - t0)

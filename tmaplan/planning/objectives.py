@@ -58,12 +58,17 @@ __all__ = [
     "make_objective",
     "position_bound",
     "range_bound",
+    "relative_range_bound",
+    "relative_range_crlb",
+    "time_to_accuracy",
     "turn_penalty",
 ]
 
 #: Names accepted by :func:`make_objective`.
 OBJECTIVE_NAMES = ("logdet", "range-bound", "position-bound", "mean-range-bound",
-                   "terminal-range-bound", "mean-position-bound", "terminal-position-bound")
+                   "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
+                   "relative-range-bound", "mean-relative-range-bound",
+                   "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy")
 
 _L = 1000.0  # length scale of the logdet FIM [m]
 _T = 100.0  # time scale of the logdet FIM [s]
@@ -297,7 +302,9 @@ def logdet_graph(ctx: PlanContext) -> Any:
     svx, svy = smp[2, :] * _T / _L, smp[3, :] * _T / _L
     rx = ca.mtimes(ones_k, sx) + ca.mtimes(t, svx) - ca.mtimes(d[:, 0], ones_s)
     ry = ca.mtimes(ones_k, sy) + ca.mtimes(t, svy) - ca.mtimes(d[:, 1], ones_s)
-    r2 = rx * rx + ry * ry
+    # floor the squared range at (100 m)²: a prior sample the own ship sails through would
+    # otherwise give an infinite (NaN) information and stall the solver
+    r2 = ca.fmax(rx * rx + ry * ry, (100.0 / _L) ** 2)
     w = ca.mtimes(ctx.param("bearing"), ones_s) / (r2 * r2)
     tt = ca.mtimes(t, ones_s)
     g = (ry, -rx, tt * ry, -tt * rx)
@@ -310,6 +317,59 @@ def logdet_graph(ctx: PlanContext) -> Any:
     ld = ca.log(piv[0]) + ca.log(piv[1]) + ca.log(piv[2]) + ca.log(piv[3])
     # log det F_SI = log det F' − 8 log L + 4 log T
     return ca.sum2(ld) / ns - 8.0 * math.log(_L) + 4.0 * math.log(_T)
+
+
+def relative_range_crlb_graph(ctx: PlanContext) -> Any:
+    """Relative range std ``σ_{r_k}/r_k`` from the bearings up to step k, (K+1, n_samples).
+
+    For each belief sample (a deterministic relative track, file 003's batch setting) the
+    information on X₀ after k steps is ``F_k + I₀`` (bearing FIM of the steps ≤ k, file 003
+    eq. 64–65, plus the prior information); the range at step k is ``r_k = ‖p₀ + t_k v₀ − d_k‖``
+    with gradient ``g_k = [u_k, t_k u_k]`` (u_k the line of sight), so
+    ``σ²_{r_k} = g_kᵀ (F_k + I₀)⁻¹ g_k`` (delta method, LDLᵀ solve on entries). Unlike the LPC
+    PCRB's ln r component, it carries no coordinate pseudo-information (NOTES_000 §0 item 3:
+    the 𝒞 term), so it rewards exactly the bearing-rate geometry that localises the contact.
+    """
+    if "rel_crlb" in ctx.cache:
+        return ctx.cache["rel_crlb"]
+    import casadi as ca
+
+    from tmaplan.bounds._lpc_terms import _ldl
+
+    ns = ctx.layout.n_samples
+    smp = ca.reshape(ctx.param("samples"), 4, ns)
+    K1 = ctx.n_steps + 1
+    t = ca.DM(ctx.times.reshape(-1, 1) / _T)
+    ones_k, ones_s = ca.DM.ones(K1, 1), ca.DM.ones(1, ns)
+    v0 = ctx.v_obs[0, :]
+    d = (ctx.disp - ca.mtimes(ca.DM(ctx.times.reshape(-1, 1)), v0)) / _L
+    sx, sy = smp[0, :] / _L, smp[1, :] / _L
+    svx, svy = smp[2, :] * _T / _L, smp[3, :] * _T / _L
+    rx = ca.mtimes(ones_k, sx) + ca.mtimes(t, svx) - ca.mtimes(d[:, 0], ones_s)
+    ry = ca.mtimes(ones_k, sy) + ca.mtimes(t, svy) - ca.mtimes(d[:, 1], ones_s)
+    r2 = ca.fmax(rx * rx + ry * ry, (100.0 / _L) ** 2)
+    w = ca.mtimes(ctx.param("bearing"), ones_s) / (r2 * r2)
+    tt = ca.mtimes(t, ones_s)
+    g = (ry, -rx, tt * ry, -tt * rx)
+    Dinv = np.array([_L, _L, _L / _T, _L / _T])
+    ic = unpack_sym([ctx.param("icart")[n] for n in range(10)])
+    F = [[ca.cumsum(g[i] * g[j] * w) + ic[i][j] * float(Dinv[i] * Dinv[j])
+          for j in range(4)] for i in range(4)]
+    L, piv = _ldl(F)
+    r = ca.sqrt(r2)
+    ux, uy = rx / r, ry / r
+    grad = [ux, uy, tt * ux, tt * uy]
+    y: list[Any] = []
+    for i in range(4):  # forward substitution L y = g
+        acc = grad[i]
+        for k in range(i):
+            acc = acc - L[i][k] * y[k]
+        y.append(acc)
+    var = y[0] * y[0] / piv[0] + y[1] * y[1] / piv[1] + y[2] * y[2] / piv[2] \
+        + y[3] * y[3] / piv[3]
+    rel = ca.sqrt(ca.fmax(var, 0.0)) / r
+    ctx.cache["rel_crlb"] = rel
+    return rel
 
 
 # --------------------------------------------------------------------------------------------
@@ -369,6 +429,70 @@ def range_bound(reduce: str = "terminal") -> Objective:
                      ((1.0, term),))
 
 
+def relative_range_bound(reduce: str = "mean") -> Objective:
+    """Closed-form PCRB of ln r, ``sqrt([J_k⁻¹]_{ln r}) ≈ σ_r/r`` (dimensionless).
+
+    Scale-free: unlike the range bound [m], it does not reward closing on the contact for its
+    own sake, so it tracks the *relative* range accuracy that a time-to-accuracy metric
+    measures. ``reduce`` "mean" (over the horizon: rewards early localisation) or "terminal".
+    """
+    if reduce not in ("terminal", "mean"):
+        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
+
+    def term(ctx: PlanContext) -> Any:
+        import casadi as ca
+
+        rel = ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0))
+        return rel[-1] if reduce == "terminal" else ca.sum1(rel) / rel.shape[0]
+
+    return Objective("relative-range-bound" if reduce == "terminal"
+                     else "mean-relative-range-bound", ((1.0, term),))
+
+
+def relative_range_crlb(reduce: str = "mean", samples: int = 16) -> Objective:
+    """Relative range std σ_r/r of the batch bearings CRLB with prior information, averaged
+    over ``samples`` belief samples and (``reduce="mean"``) over the horizon, which rewards
+    localising early; ``"terminal"``: at the last step (dimensionless, minimised)."""
+    if reduce not in ("terminal", "mean"):
+        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
+    if int(samples) < 1:
+        raise ScenarioError("samples", ">= 1", samples)
+
+    def term(ctx: PlanContext) -> Any:
+        import casadi as ca
+
+        rel = relative_range_crlb_graph(ctx)
+        if reduce == "terminal":
+            return ca.sum2(rel[-1, :]) / rel.shape[1]
+        return ca.sum1(ca.sum2(rel)) / (rel.shape[0] * rel.shape[1])
+
+    return Objective("relative-range-crlb" if reduce == "terminal"
+                     else "mean-relative-range-crlb", ((1.0, term),), int(samples))
+
+
+def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.2) -> Objective:
+    """Expected fraction of the horizon spent *not* localised (a smooth time to accuracy).
+
+    ``mean_{k,s} σ((ρ_ks − τ)/(w τ))`` with ρ = σ_r/r of :func:`relative_range_crlb_graph`,
+    τ = accuracy/2 (a Gaussian error is then within ``accuracy`` of range with 95 %
+    probability) and σ the logistic function of relative width ``w``: the number of steps
+    until the relative range bound crosses τ, made differentiable (dimensionless, minimised).
+    """
+    if not 0 < accuracy < 1:
+        raise ScenarioError("accuracy", "in (0, 1)", accuracy)
+    tau = 0.5 * float(accuracy)
+
+    def term(ctx: PlanContext) -> Any:
+        import casadi as ca
+
+        rel = relative_range_crlb_graph(ctx)
+        z = (rel - tau) / (width * tau)
+        sig = 0.5 * (1.0 + ca.tanh(0.5 * z))
+        return ca.sum1(ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
+
+    return Objective("time-to-accuracy", ((1.0, term),), int(samples))
+
+
 def position_bound(reduce: str = "terminal") -> Objective:
     """``sqrt(tr P_pos)`` [m] of the closed-form PCRB, terminal or mean."""
     if reduce not in ("terminal", "mean"):
@@ -420,6 +544,11 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "position-bound": lambda: position_bound("terminal"),
         "terminal-position-bound": lambda: position_bound("terminal"),
         "mean-position-bound": lambda: position_bound("mean"),
+        "relative-range-bound": lambda: relative_range_bound("terminal"),
+        "mean-relative-range-bound": lambda: relative_range_bound("mean"),
+        "relative-range-crlb": lambda: relative_range_crlb("terminal", max(samples, 16)),
+        "mean-relative-range-crlb": lambda: relative_range_crlb("mean", max(samples, 16)),
+        "time-to-accuracy": lambda: time_to_accuracy(0.1, max(samples, 16)),
     }
     if name not in table:
         raise ScenarioError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 if TYPE_CHECKING:
     from tmaplan.simulate import Simulation
 
-__all__ = ["new_figure", "plot_geometry", "save_figure"]
+__all__ = ["new_figure", "plot_geometry", "plot_plan", "plot_schedule", "save_figure"]
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
@@ -87,4 +87,84 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     if path is not None:
         save_figure(fig, path)
+    return fig
+
+
+def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path) -> Figure:
+    """Planned track over the prior cloud with the best baselines, and the closed-form range
+    bound over time (plan vs baselines).
+
+    Parameters
+    ----------
+    plan : tmaplan.planning.HeadingPlan
+    base : dict
+        :func:`tmaplan.planning.baselines.evaluate_baselines` output.
+    belief : tmaplan.planning.Belief
+    path : path
+        PNG file.
+    """
+    fig, axes = new_figure(1, 2, size=(12.0, 5.5))
+    ax, bx = axes[0, 0], axes[0, 1]
+    p0 = plan.observer.position[0]
+    if belief.samples is not None:
+        cloud = p0 + belief.samples[:2000, :2]
+        ax.plot(cloud[:, 0] / 1e3, cloud[:, 1] / 1e3, ".", ms=1, color="0.7",
+                label="prior (target at t0)")
+    t_h = (plan.observer.times - plan.observer.times[0]) / 60.0
+    for i, (name, lst) in enumerate(base.items()):
+        b = lst[0]
+        ax.plot(b.track.position[:, 0] / 1e3, b.track.position[:, 1] / 1e3, "--",
+                color=f"C{i + 1}", lw=1, label=f"best {name}")
+        bx.plot(t_h, b.range_bound, "--", color=f"C{i + 1}", label=f"best {name}")
+    ax.plot(plan.observer.position[:, 0] / 1e3, plan.observer.position[:, 1] / 1e3, "-",
+            color="C0", lw=2, label="plan")
+    ax.set_xlabel("East [km]")
+    ax.set_ylabel("North [km]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(fontsize=8)
+    ax.set_title("planned track over the prior")
+    bx.plot(t_h, plan.range_bound, "-", color="C0", lw=2, label="plan")
+    bx.set_yscale("log")
+    bx.set_xlabel("time [min]")
+    bx.set_ylabel("closed-form PCRB range bound [m]")
+    bx.legend(fontsize=8)
+    bx.set_title("range bound over time")
+    save_figure(fig, path)
+    return fig
+
+
+def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Path) -> Figure:
+    """Bound over time with the scheduled pings, against no pings and uniform pings.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    obs : ObserverTrack
+        The track the schedule was computed along.
+    belief : tmaplan.planning.Belief
+    res : tmaplan.planning.PingSchedule
+    path : path
+        PNG file.
+    """
+    from tmaplan.planning.pings import PingEvaluator, _uniform_steps
+
+    ev = PingEvaluator(scenario, obs, belief, res.objective_name)
+    uni = _uniform_steps(np.arange(1, ev.K + 1), res.budget, ev.K) if res.budget else []
+    curves = ev.per_step(ev.schedules([[], uni]))
+    fig, axes = new_figure(1, 1, size=(8.0, 5.0))
+    ax = axes[0, 0]
+    t = (obs.times - obs.times[0]) / 60.0
+    ax.plot(t, curves[0], "--", color="0.5", label=f"no pings ({res.no_ping_objective:.3g} m)")
+    ax.plot(t, curves[1], ":", color="C1", label=f"uniform ({res.uniform_objective:.3g} m)")
+    ax.plot(t, res.bound, "-", color="C0", lw=2,
+            label=f"{res.method} ({res.objective:.3g} m)")
+    for tp in res.times:
+        ax.axvline((tp - obs.times[0]) / 60.0, color="C3", lw=0.8, alpha=0.6)
+    ax.set_yscale("log")
+    ax.set_xlabel("time [min] (red lines: ping times)")
+    ax.set_ylabel("position bound [m]" if "position" in res.objective_name
+                  else "range bound [m]")
+    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}")
+    ax.legend(fontsize=8)
+    save_figure(fig, path)
     return fig

@@ -608,7 +608,7 @@ def best_zigzag(scenario: Scenario) -> Zigzag:
 
 
 _MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding"}
-_PINGS = {"no-ping", "uniform", "scheduled", "adaptive"}
+_PINGS = {"no-ping", "uniform", "scheduled", "scheduled-terminal", "adaptive"}
 
 
 def parse_policy(spec: str, scenario: Scenario) -> Combined:
@@ -616,7 +616,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres: straight, single-turn and zigzag (the best of the baseline grids of
     :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`), planned,
-    receding. Pings: no-ping, uniform, scheduled, adaptive.
+    receding. Pings: no-ping, uniform, scheduled (offline schedule minimising the mean range
+    bound over the horizon), scheduled-terminal (minimising the terminal range bound),
+    adaptive.
 
     Raises
     ------
@@ -642,5 +644,7 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     ping: Any = NoPing()
     if len(parts) == 2:
         ping = {"no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
+                "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",
+                                                     name="scheduled-terminal"),
                 "adaptive": AdaptivePings()}[parts[1]]
     return Combined(manoeuvre=man, ping=ping)

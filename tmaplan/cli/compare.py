@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--policies", default="straight,single-turn,zigzag",
                         help="comma-separated MANOEUVRE[+PING] (manoeuvres: straight, "
                              "single-turn, zigzag, planned, receding; pings: no-ping, uniform, "
-                             "scheduled, adaptive)")
+                             "scheduled, scheduled-terminal, adaptive)")
     parser.add_argument("--runs", type=int, default=50, help="Monte Carlo runs (default 50)")
     parser.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
     parser.add_argument("--particles", type=int, default=3000,

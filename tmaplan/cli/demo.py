@@ -1,53 +1,129 @@
 """``tmaplan demo``: the main job on the built-in ``default`` problem.
 
-Placeholder until the planning and comparison verbs exist (issue 7): it simulates ``default``
-and writes its geometry figure and a minimal HTML report to ``--out``.
+1. Plan a manoeuvre offline from the prior (heading OCP, :data:`CLOSED_LOOP_OBJECTIVE`)
+   and compare it with the baselines (straight, best single turn, best zig-zag).
+2. Schedule the ping budget along the planned track (closed-form PCRB, ``relaxed``).
+3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding``, without
+   and with pings (scheduled and uniformly spaced), by paired Monte Carlo runs of the closed
+   loop (particle filter, re-planning).
+4. Write the figures and a self-contained ``report.html`` to ``--out``.
 """
 
 from __future__ import annotations
 
 import argparse
-import base64
 import html
+import sys
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tmaplan.plotting import plot_geometry
+from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
+from tmaplan.plotting import plot_plan, plot_schedule
+from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
+from tmaplan.report import write_report
 from tmaplan.scenario import dump, load_problem
-from tmaplan.simulate import simulate
 
-HELP = "run the main job on the built-in 'default' problem and write figures and a report"
+HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
+
+#: Policies compared by the demo (manoeuvre[+ping]).
+DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
+                 "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
+                 "receding+scheduled")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``demo``."""
     parser.add_argument("--out", default="out", help="output directory (default out/)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
+    parser.add_argument("--runs", type=int, default=40,
+                        help="Monte Carlo runs per policy (default 40: under 10 minutes on 2 "
+                             "cores; use `tmaplan compare` for 200)")
+    parser.add_argument("--particles", type=int, default=3000,
+                        help="particle-filter size (default 3000)")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+
+
+def _say(args: argparse.Namespace, msg: str) -> None:
+    if args.json != "-":
+        print(msg, flush=True)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Simulate ``default``, write ``geometry.png`` and ``report.html``."""
+    """Plan, schedule, compare and write ``report.html``."""
+    t0 = time.perf_counter()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     scenario = load_problem("default")
-    sim = simulate(scenario, np.random.default_rng(args.seed))
-    fig_path = out / "geometry.png"
-    plot_geometry(sim, fig_path)
-    img = base64.b64encode(fig_path.read_bytes()).decode("ascii")
-    report = out / "report.html"
-    report.write_text(
-        "<!doctype html><html><head><meta charset='utf-8'><title>tmaplan demo</title></head>"
-        "<body><h1>tmaplan demo: problem <code>default</code></h1>"
-        "<p>Placeholder demo: one simulated run of the built-in planning case. Planning, "
-        "ping scheduling and the policy comparison are added by later releases.</p>"
-        f"<img alt='geometry' src='data:image/png;base64,{img}'>"
-        f"<h2>Scenario</h2><pre>{html.escape(dump(scenario))}</pre>"
-        f"<p>Reproduce: <code>tmaplan demo --seed {args.seed} --out {html.escape(str(out))}"
-        "</code></p></body></html>",
-        encoding="utf-8",
-    )
-    if args.json != "-":
-        print(f"wrote {fig_path} and {report}")
-    return {"figures": [str(fig_path)], "report": str(report), "seed": args.seed}
+    belief = Belief.from_prior(scenario)
+
+    _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
+    planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
+    plan = planner.solve(belief)
+    base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K)
+    plan_fig = plot_plan(plan, base, belief, out / "plan.png")
+    del plan_fig
+    best = {k: v[0] for k, v in base.items()}
+    _say(args, f"      objective {plan.objective:.4g} (straight {best['straight'].objective:.4g}"
+               f", best single turn {best['single-turn'].objective:.4g}, best zig-zag "
+               f"{best['zigzag'].objective:.4g}); {plan.status}, {plan.seconds:.1f} s")
+
+    budget = scenario.planning.ping_budget if scenario.planning else 0
+    _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
+    sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,
+                           belief=belief)
+    plot_schedule(scenario, plan.observer, belief, sched, out / "schedule.png")
+    _say(args, f"      pings at {', '.join(f'{t / 60:.1f}' for t in sched.times)} min: mean "
+               f"range bound {sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m,"
+               f" none {sched.no_ping_objective:.0f} m)")
+
+    _say(args, f"[3/3] comparing {len(DEMO_POLICIES)} policies over {args.runs} paired runs "
+               f"({args.particles} particles, {args.workers} workers) ...")
+    spec = CampaignSpec(scenario_toml=dump(scenario), policies=DEMO_POLICIES, runs=args.runs,
+                        seed=args.seed, n_particles=args.particles)
+    result = run_campaign(spec, out_dir=out, workers=args.workers,
+                          progress=args.json != "-" and sys.stderr.isatty())
+    extra = _extra_html(plan, best, sched)
+    cmd = (f"tmaplan demo --runs {args.runs} --particles {args.particles} --seed {args.seed} "
+           f"--workers {args.workers} --out {args.out}")
+    report = write_report(result, out, command=cmd, title="tmaplan demo: problem 'default'",
+                          extra_html=extra,
+                          figures={"planned manoeuvre": out / "plan.png",
+                                   "ping schedule": out / "schedule.png"})
+    for name in result.policies:
+        s = result.summary[name]
+        tta = s["time_to_accuracy"]
+        _say(args, f"      {name:<20} median time to 10 % range accuracy "
+                   f"{'never' if not np.isfinite(tta) else f'{tta / 60:5.1f} min'}, final "
+                   f"range RMSE {s['final_range_rmse']:6.0f} m")
+    seconds = time.perf_counter() - t0
+    _say(args, f"wrote {report} ({seconds:.0f} s)")
+    payload = result.to_json()
+    payload.update(report=str(report), seconds=seconds,
+                   plan={"objective": plan.objective, "status": plan.status,
+                         "baselines": {k: b.objective for k, b in best.items()},
+                         "times": plan.times, "turn_rate": plan.turn_rate},
+                   schedule={"ping_times": sched.times, "objective": sched.objective,
+                             "uniform_objective": sched.uniform_objective,
+                             "no_ping_objective": sched.no_ping_objective})
+    return payload
+
+
+def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:
+    rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{b.objective:.4g}</td>"
+                   f"<td>{html.escape(str(b.params))}</td></tr>" for k, b in best.items())
+    pings = ", ".join(f"{t / 60:.1f}" for t in sched.times)
+    return (
+        "<h2>Offline plan from the prior</h2>"
+        f"<p>Objective <code>{CLOSED_LOOP_OBJECTIVE}</code> (minimised): plan "
+        f"{plan.objective:.4g} ({html.escape(plan.status)}, {plan.seconds:.1f} s).</p>"
+        "<table><tr><th>best baseline</th><th>objective</th><th>parameters</th></tr>"
+        f"{rows}</table>"
+        "<h2>Ping schedule along the plan</h2>"
+        f"<p>Pings at {pings} min ({html.escape(sched.method)}, "
+        f"{html.escape(sched.status)}): mean closed-form range bound {sched.objective:.0f} m, "
+        f"against {sched.uniform_objective:.0f} m for uniformly spaced pings and "
+        f"{sched.no_ping_objective:.0f} m without pings.</p>")

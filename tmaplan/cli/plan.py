@@ -10,6 +10,7 @@ from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
+from tmaplan.plotting import plot_plan
 from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
@@ -58,40 +59,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(f"  baseline {k:<12} {v:.4g}")
     if not args.no_plot:
         path = Path(args.out) / f"{scenario.name}_plan.png"
-        _figure(plan, base, belief, path)
+        plot_plan(plan, base, belief, path)
         payload["figure"] = str(path)
         if args.json != "-":
             print(f"wrote {path}")
     return payload
-
-
-def _figure(plan: Any, base: dict[str, Any], belief: Belief, path: Path) -> None:
-    from tmaplan.plotting import new_figure, save_figure
-
-    fig, axes = new_figure(1, 2, size=(12.0, 5.5))
-    ax, bx = axes[0, 0], axes[0, 1]
-    p0 = plan.observer.position[0]
-    if belief.samples is not None:
-        cloud = p0 + belief.samples[:2000, :2]
-        ax.plot(cloud[:, 0] / 1e3, cloud[:, 1] / 1e3, ".", ms=1, color="0.7",
-                label="prior (target at t0)")
-    t_h = (plan.observer.times - plan.observer.times[0]) / 60.0
-    for i, (name, lst) in enumerate(base.items()):
-        b = lst[0]
-        ax.plot(b.track.position[:, 0] / 1e3, b.track.position[:, 1] / 1e3, "--",
-                color=f"C{i + 1}", lw=1, label=f"best {name}")
-        bx.plot(t_h, b.range_bound, "--", color=f"C{i + 1}", label=f"best {name}")
-    ax.plot(plan.observer.position[:, 0] / 1e3, plan.observer.position[:, 1] / 1e3, "-",
-            color="C0", lw=2, label="plan")
-    ax.set_xlabel("East [km]")
-    ax.set_ylabel("North [km]")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=8)
-    ax.set_title("planned track over the prior")
-    bx.plot(t_h, plan.range_bound, "-", color="C0", lw=2, label="plan")
-    bx.set_yscale("log")
-    bx.set_xlabel("time [min]")
-    bx.set_ylabel("closed-form PCRB range bound [m]")
-    bx.legend(fontsize=8)
-    bx.set_title("range bound over time")
-    save_figure(fig, path)

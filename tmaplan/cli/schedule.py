@@ -6,11 +6,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from tmaplan.models.observer import observer_track
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.pings import PING_OBJECTIVES, PingEvaluator, schedule_pings
+from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
+from tmaplan.plotting import plot_schedule
 from tmaplan.scenario import load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
@@ -56,33 +55,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
               f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
     if not args.no_plot:
         path = Path(args.out) / f"{scenario.name}_schedule.png"
-        _figure(scenario, obs, belief, res, path)
+        plot_schedule(scenario, obs, belief, res, path)
         payload["figure"] = str(path)
         if args.json != "-":
             print(f"wrote {path}")
     return payload
-
-
-def _figure(scenario: Any, obs: Any, belief: Belief, res: Any, path: Path) -> None:
-    from tmaplan.planning.pings import _uniform_steps
-    from tmaplan.plotting import new_figure, save_figure
-
-    ev = PingEvaluator(scenario, obs, belief, res.objective_name)
-    uni = _uniform_steps(np.arange(1, ev.K + 1), res.budget, ev.K) if res.budget else []
-    curves = ev.per_step(ev.schedules([[], uni]))
-    fig, axes = new_figure(1, 1, size=(8.0, 5.0))
-    ax = axes[0, 0]
-    t = (obs.times - obs.times[0]) / 60.0
-    ax.plot(t, curves[0], "--", color="0.5", label=f"no pings ({res.no_ping_objective:.3g} m)")
-    ax.plot(t, curves[1], ":", color="C1", label=f"uniform ({res.uniform_objective:.3g} m)")
-    ax.plot(t, res.bound, "-", color="C0", lw=2,
-            label=f"{res.method} ({res.objective:.3g} m)")
-    for tp in res.times:
-        ax.axvline((tp - obs.times[0]) / 60.0, color="C3", lw=0.8, alpha=0.6)
-    ax.set_yscale("log")
-    ax.set_xlabel("time [min] (red lines: ping times)")
-    ax.set_ylabel("position bound [m]" if "position" in res.objective_name
-                  else "range bound [m]")
-    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}")
-    ax.legend(fontsize=8)
-    save_figure(fig, path)

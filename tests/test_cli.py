@@ -69,6 +69,16 @@ def test_debug_shows_traceback(tmp_path):
     assert proc.returncode != 0 and "Traceback" in proc.stderr
 
 
-def test_demo_placeholder_writes_report(tmp_path):
-    assert main(["demo", "--out", str(tmp_path)]) == 0
-    assert (tmp_path / "report.html").read_text().count("data:image/png;base64,") >= 1
+def test_demo_writes_report(tmp_path):
+    # the demo at toy size: plan, schedule, compare every demo policy, report
+    js = tmp_path / "demo.json"
+    assert main(["demo", "--out", str(tmp_path), "--runs", "2", "--particles", "400",
+                 "--workers", "1", "--json", str(js)]) == 0
+    text = (tmp_path / "report.html").read_text()
+    assert text.count("data:image/png;base64,") == 5  # plan, schedule, rmse, tracks, tta
+    d = json.loads(js.read_text())
+    from tmaplan.cli.demo import DEMO_POLICIES
+
+    assert set(d["policies"]) == set(DEMO_POLICIES)
+    assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
+    assert d["schedule"]["objective"] <= d["schedule"]["uniform_objective"]

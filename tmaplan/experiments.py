@@ -185,6 +185,7 @@ class CampaignResult:
     policies : tuple of str
     summary : dict
         Per policy: ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
+        ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
         ``time_to_accuracy`` (median [s], inf if most runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_rel_range_error``
@@ -220,7 +221,10 @@ class CampaignResult:
             pol[name] = {
                 "rmse_position": s["rmse_position"].tolist(),
                 "rmse_range": s["rmse_range"].tolist(),
+                "rmse_course": s["rmse_course"].tolist(),
+                "rmse_speed": s["rmse_speed"].tolist(),
                 "time_to_accuracy": s["time_to_accuracy"],
+                "time_to_accuracy_runs": s["time_to_accuracy_runs"].tolist(),
                 "reached_fraction": s["reached_fraction"],
                 "divergence_rate": s["divergence_rate"],
                 "pings_used": s["pings_used"],
@@ -253,9 +257,13 @@ def _aggregate(spec: CampaignSpec, runs: list[dict[str, np.ndarray]], times: np.
         rel = np.array([float(r[f"{name}/final_rel_range_error"]) for r in runs])
         rs = np.concatenate([r[f"{name}/replan_seconds"] for r in runs])
         tta[name], fre[name] = t, fin
+        ce = np.stack([r[f"{name}/course_error"] for r in runs])
+        se = np.stack([r[f"{name}/speed_error"] for r in runs])
         summary[name] = {
             "rmse_position": np.sqrt(np.mean(pe**2, axis=0)),
             "rmse_range": np.sqrt(np.mean(re**2, axis=0)),
+            "rmse_course": np.sqrt(np.mean(ce**2, axis=0)),
+            "rmse_speed": np.sqrt(np.mean(se**2, axis=0)),
             "time_to_accuracy": float(np.median(t)),
             "time_to_accuracy_runs": t,
             "reached_fraction": float(np.mean(np.isfinite(t))),

@@ -15,7 +15,7 @@ from tmaplan.plotting import new_figure, save_figure
 if TYPE_CHECKING:
     from tmaplan.experiments import CampaignResult
 
-__all__ = ["comparison_figures", "write_report"]
+__all__ = ["comparison_figures", "efficiency", "write_report"]
 
 
 def _bounds(result: CampaignResult) -> dict[str, np.ndarray]:
@@ -48,6 +48,19 @@ def _bounds(result: CampaignResult) -> dict[str, np.ndarray]:
         except (ArithmeticError, ValueError, RuntimeError):  # decoration only, never fatal
             continue
     return out
+
+
+def efficiency(result: CampaignResult) -> dict[str, float]:
+    """Final position RMSE over the closed-form PCRB position bound, per policy.
+
+    The bound is evaluated along run 0's own-ship track and pings (the closed form averages over
+    the prior, which is where the runs' truths come from). Ratios near 1 mean the filter is
+    as good as the bound allows; the LPC bound is optimistic in range for weakly observable
+    geometries (README, "Findings"), so large ratios there are expected.
+    """
+    b = _bounds(result)
+    return {name: float(result.summary[name]["rmse_position"][-1] / b[name][-1])
+            for name in result.policies if name in b and b[name][-1] > 0}
 
 
 def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str, Path]:
@@ -143,13 +156,17 @@ def write_report(result: CampaignResult, out_dir: str | Path, *, command: str,
     figs = dict(figures or {})
     figs.update(comparison_figures(result, out))
     rows = []
+    eff = efficiency(result)
     for name in result.policies:
         s = result.summary[name]
         rows.append(
             "<tr>" + "".join(f"<td>{v}</td>" for v in (
                 html.escape(name), _fmt_time(s["time_to_accuracy"]),
                 f"{s['reached_fraction']:.0%}", f"{s['final_range_rmse']:.0f}",
-                f"{s['rmse_position'][-1]:.0f}", f"{s['divergence_rate']:.0%}",
+                f"{s['rmse_position'][-1]:.0f}",
+                f"{np.degrees(s['rmse_course'][-1]):.0f}", f"{s['rmse_speed'][-1]:.2f}",
+                f"{eff[name]:.1f}" if name in eff else "–",
+                f"{s['divergence_rate']:.0%}",
                 f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}")) + "</tr>")
     drows = []
     for d in result.differences:
@@ -186,7 +203,8 @@ every policy in a run (paired comparison). Localised = relative range error belo
 {extra_html}
 <h2>Results</h2>
 <table><tr><th>policy</th><th>median time to accuracy</th><th>localised</th>
-<th>final range RMSE [m]</th><th>final position RMSE [m]</th><th>diverged</th>
+<th>final range RMSE [m]</th><th>final position RMSE [m]</th><th>final course RMSE [°]</th>
+<th>final speed RMSE [m/s]</th><th>RMSE / PCRB (final)</th><th>diverged</th>
 <th>pings</th><th>re-plan [s]</th></tr>
 {''.join(rows)}</table>
 <h2>Paired differences (95 % confidence intervals)</h2>

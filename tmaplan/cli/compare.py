@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from tmaplan.experiments import CampaignSpec, run_campaign
-from tmaplan.report import write_report
+from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import dump, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
@@ -55,6 +55,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     report = write_report(result, args.out, command=cmd,
                           title=f"tmaplan compare: {scenario.name}")
     payload = result.to_json()
+    for name, e in efficiency(result).items():
+        payload["policies"][name]["efficiency"] = e
     payload["report"] = str(report)
     payload["directory"] = str(result.directory)
     if not quiet:

@@ -24,7 +24,7 @@ from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
-from tmaplan.report import write_report
+from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import dump, load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
@@ -102,6 +102,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     seconds = time.perf_counter() - t0
     _say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
+    for name, e in efficiency(result).items():
+        payload["policies"][name]["efficiency"] = e
     payload.update(report=str(report), seconds=seconds,
                    plan={"objective": plan.objective, "status": plan.status,
                          "baselines": {k: b.objective for k, b in best.items()},

@@ -127,3 +127,18 @@ def test_report_has_every_figure(scenario, tmp_path):
         capture_output=True, text=True, timeout=120)
     assert 'data-images-loaded="3"' in proc.stdout, proc.stderr[-2000:]
     assert 'data-images-total="3"' in proc.stdout
+
+
+@pytest.mark.timeout(300)
+def test_compare_cli_json_identical_for_any_worker_count(tmp_path):
+    from tmaplan.cli import main
+
+    outs = []
+    for workers in ("1", "2"):
+        js = tmp_path / f"w{workers}.json"
+        assert main(["compare", "default", "--policies", "straight,zigzag+uniform", "--runs",
+                     "3", "--particles", "300", "--seed", "5", "--workers", workers,
+                     "--out", str(tmp_path / f"out{workers}"), "--json", str(js)]) == 0
+        d = json.loads(js.read_text())
+        outs.append({k: d[k] for k in ("policies", "differences", "runs", "seed", "times")})
+    assert json.dumps(outs[0], sort_keys=True) == json.dumps(outs[1], sort_keys=True)

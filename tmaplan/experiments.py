@@ -90,14 +90,9 @@ def resolve_policies(scenario: Any, specs: Sequence[str]) -> dict[str, Any]:
     dict
         Policy name -> policy object (picklable).
     """
-    from tmaplan.policies import (
-        Combined,
-        Planned,
-        ScheduledPings,
-        _offline_plan,
-        _offline_schedule,
-        parse_policy,
-    )
+    from tmaplan.policies import Combined, Planned, ScheduledPings, parse_policy
+    from tmaplan.policies.manoeuvres import _offline_plan
+    from tmaplan.policies.pings import _budget, _offline_schedule
 
     out: dict[str, Any] = {}
     for spec in specs:
@@ -106,8 +101,6 @@ def resolve_policies(scenario: Any, specs: Sequence[str]) -> dict[str, Any]:
         if isinstance(man, Planned) and man.plan is None:
             man = dataclasses.replace(man, plan=_offline_plan(scenario, man.objective))
         if isinstance(ping, ScheduledPings) and ping.steps is None:
-            from tmaplan.policies import _budget
-
             # schedule along the track this manoeuvre will (nominally) fly
             steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
                                       ping.objective, man.nominal_track(scenario))

@@ -1,0 +1,176 @@
+"""Scenario TOML load/dump, validation errors in one line, and the built-in problem registry.
+
+The public names are re-exported by :mod:`tmaplan.scenario`; import them from there.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+from collections.abc import Mapping
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from pydantic import TypeAdapter, ValidationError
+
+from tmaplan._scenario_checks import check
+from tmaplan.errors import ScenarioError
+from tmaplan.scenario import Scenario
+
+__all__ = [
+    "dump",
+    "from_dict",
+    "list_problems",
+    "load",
+    "load_problem",
+    "loads",
+    "problems_dir",
+    "save",
+    "to_dict",
+]
+
+
+@cache
+def _adapter() -> TypeAdapter[Scenario]:
+    return TypeAdapter(Scenario)
+
+
+def _loc(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif part in ("bearing", "range", "frequency"):  # discriminator tag in the path
+            continue
+        else:
+            out += ("." if out else "") + str(part)
+    return out or "<root>"
+
+
+def _convert_validation_error(exc: ValidationError, source: str | None) -> ScenarioError:
+    e = exc.errors()[0]
+    field = _loc(tuple(e["loc"]))
+    msg = str(e["msg"])
+    received = e.get("input")
+    kind = e["type"]
+    if kind in ("extra_forbidden", "unexpected_keyword_argument"):
+        expected = "no such key (check the spelling; see the Scenario docs for valid keys)"
+    elif kind == "missing":
+        expected = "a value (this key is required)"
+        received = None
+    elif kind in ("union_tag_invalid", "union_tag_not_found"):
+        expected = "kind = 'bearing', 'range' or 'frequency'"
+        field += ".kind"
+        received = received.get("kind") if isinstance(received, dict) else received
+    else:
+        cause = (e.get("ctx") or {}).get("error")
+        if isinstance(cause, ScenarioError):  # a unit error raised by our own parser
+            expected, received = cause.expected, cause.received
+        else:
+            expected = msg.removeprefix("Value error, ").removeprefix("Input should be ")
+    if isinstance(received, dict):
+        received = "{" + ", ".join(received) + "}"
+    return ScenarioError(field, expected, received, source=source)
+
+
+def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario:
+    """Build and validate a scenario from a plain dict (as read from TOML).
+
+    Raises
+    ------
+    ScenarioError
+        Naming the field, the expected and the received value.
+    """
+    if not isinstance(data, Mapping):
+        raise ScenarioError("<root>", "a table of scenario fields", type(data).__name__,
+                            source=source)
+    try:
+        scenario = _adapter().validate_python(dict(data))
+    except ValidationError as exc:
+        raise _convert_validation_error(exc, source) from None
+    check(scenario, source)
+    return scenario
+
+
+def _strip_none(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _strip_none(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, list | tuple):
+        return [_strip_none(v) for v in obj]
+    return obj
+
+
+def to_dict(scenario: Scenario) -> dict[str, Any]:
+    """Plain-dict (TOML-ready) form of a scenario, SI values, ``None`` fields omitted."""
+    return _strip_none(dataclasses.asdict(scenario))
+
+
+def dump(scenario: Scenario) -> str:
+    """TOML text of a scenario. ``loads(dump(s)) == s`` exactly."""
+    return tomli_w.dumps(to_dict(scenario))
+
+
+def loads(text: str, *, source: str | None = None) -> Scenario:
+    """Parse TOML text into a validated :class:`Scenario`."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError("<file>", "valid TOML", str(exc), source=source) from None
+    return from_dict(data, source=source)
+
+
+def problems_dir() -> Path:
+    """Directory of the built-in problem files (``$TMAPLAN_PROBLEMS`` overrides)."""
+    env = os.environ.get("TMAPLAN_PROBLEMS")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parent.parent / "problems"
+
+
+def list_problems() -> list[dict[str, str]]:
+    """Built-in problems as ``[{name, description}]``, sorted by name."""
+    out = []
+    for path in sorted(problems_dir().glob("*.toml")):
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+        out.append({"name": path.stem, "description": str(data.get("description", ""))})
+    return out
+
+
+def load_problem(name: str) -> Scenario:
+    """Load a built-in problem by name.
+
+    Raises
+    ------
+    ScenarioError
+        If there is no such problem; the message lists the valid names.
+    """
+    path = problems_dir() / f"{name}.toml"
+    if not path.is_file():
+        names = ", ".join(p["name"] for p in list_problems())
+        raise ScenarioError("problem", f"one of: {names}", name)
+    return loads(path.read_text(encoding="utf-8"), source=name)
+
+
+def load(name_or_path: str | os.PathLike[str]) -> Scenario:
+    """Load a scenario from a TOML file path or a built-in problem name."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            names = ", ".join(p["name"] for p in list_problems())
+            raise ScenarioError("problem", f"an existing .toml file or one of: {names}",
+                                str(name_or_path))
+        return loads(path.read_text(encoding="utf-8"), source=str(path))
+    return load_problem(str(name_or_path))
+
+
+def save(scenario: Scenario, path: str | os.PathLike[str], *, overwrite: bool = False) -> Path:
+    """Write a scenario as TOML. Refuses to overwrite an existing file unless asked."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    path.write_text(dump(scenario), encoding="utf-8")
+    return path

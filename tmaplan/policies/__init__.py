@@ -1,0 +1,41 @@
+"""Tactical policies behind one interface: ``act(belief, t) -> Action``.
+
+A policy is a frozen dataclass (its parameters). For one closed-loop run it makes a
+:class:`Controller` (``policy.controller(scenario)``), the only place where per-run state lives
+(the current plan, pings used, the last re-plan time). Manoeuvre policies command a turn rate
+over the next step; ping policies decide whether to ping at the next step; :class:`Combined`
+joins one of each.
+
+Manoeuvre policies: :class:`Straight`, :class:`SingleTurn`, :class:`Zigzag`, :class:`Planned`
+(offline heading plan from the prior), :class:`Receding` (re-plans on the particle filter's
+posterior every ``replan_interval``). Ping policies: :class:`NoPing`, :class:`UniformPings`,
+:class:`ScheduledPings` (offline schedule), :class:`AdaptivePings` (ping when the filter's
+relative range uncertainty calls for it).
+"""
+
+from __future__ import annotations
+
+from tmaplan.policies._base import CLOSED_LOOP_OBJECTIVE, Action, BeliefView, Controller
+from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
+from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
+from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
+
+__all__ = [
+    "CLOSED_LOOP_OBJECTIVE",
+    "Action",
+    "AdaptivePings",
+    "BeliefView",
+    "Combined",
+    "Controller",
+    "NoPing",
+    "Planned",
+    "Receding",
+    "ScheduledPings",
+    "SingleTurn",
+    "Straight",
+    "UniformPings",
+    "Zigzag",
+    "best_single_turn",
+    "best_zigzag",
+    "parse_policy",
+]

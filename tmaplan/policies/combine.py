@@ -1,0 +1,125 @@
+"""Combining a manoeuvre and a ping policy; the best baseline manoeuvres; CLI policy names."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING, Any
+
+from tmaplan.errors import PlanningError
+from tmaplan.policies._base import CLOSED_LOOP_OBJECTIVE, Action, BeliefView, Controller
+from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
+from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["Combined", "best_single_turn", "best_zigzag", "parse_policy"]
+
+
+# --------------------------------------------------------------------------------------------
+# combination and parsing
+# --------------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Combined:
+    """A manoeuvre policy and a ping policy acting together."""
+
+    manoeuvre: Any
+    ping: Any = dataclasses.field(default_factory=NoPing)
+
+    @property
+    def name(self) -> str:
+        """``manoeuvre`` or ``manoeuvre+ping``."""
+        return self.manoeuvre.name if isinstance(self.ping, NoPing) else \
+            f"{self.manoeuvre.name}+{self.ping.name}"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """Controller taking the turn rate of one and the ping of the other."""
+        return _Both(self.manoeuvre.controller(scenario), self.ping.controller(scenario))
+
+
+class _Both:
+    def __init__(self, m: Controller, p: Controller) -> None:
+        self.m, self.p = m, p
+
+    @property
+    def log(self) -> list[dict[str, Any]]:
+        return getattr(self.m, "log", [])
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        return Action(turn_rate=self.m.act(belief, t).turn_rate, ping=self.p.act(belief, t).ping)
+
+
+_BASELINE_CACHE: dict[str, dict[str, Any]] = {}
+
+
+def _best_baselines(scenario: Scenario) -> dict[str, Any]:
+    from tmaplan.scenario import dump
+
+    key = dump(scenario)
+    if key not in _BASELINE_CACHE:
+        from tmaplan.planning.baselines import evaluate_baselines
+
+        res = evaluate_baselines(scenario, CLOSED_LOOP_OBJECTIVE)
+        _BASELINE_CACHE[key] = {k: v[0].params for k, v in res.items()}
+    return _BASELINE_CACHE[key]
+
+
+def best_single_turn(scenario: Scenario) -> SingleTurn:
+    """The single course change with the best :data:`CLOSED_LOOP_OBJECTIVE` from the prior,
+    over the grid of :func:`tmaplan.planning.baselines.evaluate_baselines` (angles 30°…180°
+    both ways, start times ¼…¾ of the horizon)."""
+    p = _best_baselines(scenario)["single-turn"]
+    return SingleTurn(angle=float(p["angle"]), time=scenario.time.t0 + float(p["time"]))
+
+
+def best_zigzag(scenario: Scenario) -> Zigzag:
+    """The best zig-zag of the baseline grid (legs ⅛…⅓ of the horizon, 60°…120° total)."""
+    p = _best_baselines(scenario)["zigzag"]
+    return Zigzag(leg_duration=float(p["leg_duration"]), angle=0.5 * float(p["angle"]),
+                  start=scenario.time.t0)
+
+
+_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding"}
+_PINGS = {"no-ping", "uniform", "scheduled", "scheduled-terminal", "adaptive"}
+
+
+def parse_policy(spec: str, scenario: Scenario) -> Combined:
+    """Policy from a CLI name: ``manoeuvre[+ping]``, e.g. ``receding+scheduled``.
+
+    Manoeuvres: straight, single-turn and zigzag (the best of the baseline grids of
+    :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`), planned,
+    receding. Pings: no-ping, uniform, scheduled (offline schedule minimising the mean range
+    bound over the horizon), scheduled-terminal (minimising the terminal range bound),
+    adaptive.
+
+    Raises
+    ------
+    PlanningError
+        For an unknown name (the message lists the valid ones).
+    """
+    parts = spec.strip().split("+")
+    if len(parts) > 2 or parts[0] not in _MANOEUVRES or (len(parts) == 2
+                                                         and parts[1] not in _PINGS):
+        raise PlanningError(f"unknown policy {spec!r}: expected MANOEUVRE[+PING] with MANOEUVRE "
+                            f"in {sorted(_MANOEUVRES)} and PING in {sorted(_PINGS)}")
+    name = parts[0]
+    if name == "straight":
+        man: Any = Straight()
+    elif name == "single-turn":
+        man = best_single_turn(scenario)
+    elif name == "zigzag":
+        man = best_zigzag(scenario)
+    elif name == "planned":
+        man = Planned()
+    else:
+        man = Receding()
+    ping: Any = NoPing()
+    if len(parts) == 2:
+        ping = {"no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
+                "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",
+                                                     name="scheduled-terminal"),
+                "adaptive": AdaptivePings()}[parts[1]]
+    return Combined(manoeuvre=man, ping=ping)
+

@@ -1,0 +1,291 @@
+"""Manoeuvre policies: straight, single turn, zig-zag, offline plan, receding horizon."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.policies._base import (
+    CLOSED_LOOP_OBJECTIVE,
+    Action,
+    BeliefView,
+    Controller,
+    _initial_course,
+    _steer,
+    _turn_limits,
+    log,
+)
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["Planned", "Receding", "SingleTurn", "Straight", "Zigzag"]
+
+
+# --------------------------------------------------------------------------------------------
+# manoeuvre policies
+# --------------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Straight:
+    """Hold the initial course."""
+
+    name: str = "straight"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller that never turns."""
+        return _Const()
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import straight_track
+
+        return straight_track(scenario)
+
+
+class _Const:
+    def act(self, belief: BeliefView, t: float) -> Action:
+        return Action(turn_rate=0.0)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SingleTurn:
+    """One course change of ``angle`` [rad] (positive = starboard) starting at ``time`` [s],
+    at the maximum turn rate."""
+
+    angle: float
+    time: float
+    name: str = "single-turn"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller steering to the new course after ``time``."""
+        u_max, dt = _turn_limits(scenario)
+        c0 = _initial_course(scenario)
+        return _CourseSchedule([(scenario.time.t0, c0), (self.time, c0 + self.angle)], u_max, dt)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import single_turn_track
+
+        return single_turn_track(scenario, self.angle, self.time - scenario.time.t0)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Zigzag:
+    """Legs of ``leg_duration`` [s] alternately ``+angle`` and ``−angle`` [rad] about the
+    initial course, turning at the maximum rate; the first leg starts at ``start`` [s]."""
+
+    leg_duration: float
+    angle: float
+    start: float = 0.0
+    name: str = "zigzag"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller following the zig-zag course schedule."""
+        if not self.leg_duration > 0:
+            raise ScenarioError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+        u_max, dt = _turn_limits(scenario)
+        c0 = _initial_course(scenario)
+        end = scenario.time.t0 + scenario.time.horizon
+        sched = [(scenario.time.t0, c0)]
+        t, sign = self.start, 1.0
+        while t < end:
+            sched.append((t, c0 + sign * self.angle))
+            t += self.leg_duration
+            sign = -sign
+        return _CourseSchedule(sched, u_max, dt)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The own-ship track flown (used to schedule pings offline)."""
+        from tmaplan.planning.baselines import zigzag_track
+
+        if self.start != scenario.time.t0:
+            raise PlanningError("zigzag.nominal_track: only zig-zags starting at t0")
+        return zigzag_track(scenario, self.leg_duration, 2.0 * self.angle)
+
+
+class _CourseSchedule:
+    def __init__(self, schedule: list[tuple[float, float]], u_max: float, dt: float) -> None:
+        self.times = np.array([s[0] for s in schedule])
+        self.courses = np.array([s[1] for s in schedule])
+        self.u_max, self.dt = u_max, dt
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        i = int(np.searchsorted(self.times, t + 1e-9, side="right") - 1)
+        course = self.courses[max(i, 0)]
+        return Action(turn_rate=_steer(belief.heading, course, self.u_max, self.dt))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Planned:
+    """Fly the offline heading plan computed from the prior (``tmaplan.planning``).
+
+    Attributes
+    ----------
+    objective : str
+        Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
+    plan : object, optional
+        A precomputed ``HeadingPlan``; computed once per scenario otherwise (and cached).
+    """
+
+    objective: str | None = CLOSED_LOOP_OBJECTIVE
+    plan: Any = None
+    name: str = "planned"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller replaying the plan's turn rates."""
+        plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
+        return _TurnRatePlayback(plan, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The planned own-ship track (used to schedule pings offline)."""
+        plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
+        return plan.observer
+
+
+_PLAN_CACHE: dict[tuple[str, str | None], Any] = {}
+
+
+def _offline_plan(scenario: Scenario, objective: str | None) -> Any:
+    from tmaplan.scenario import dump
+
+    key = (dump(scenario), objective)
+    if key not in _PLAN_CACHE:
+        from tmaplan.planning import plan_heading
+
+        kw = {} if objective is None else {"objective": objective}
+        _PLAN_CACHE[key] = plan_heading(scenario, **kw)
+    return _PLAN_CACHE[key]
+
+
+class _TurnRatePlayback:
+    def __init__(self, plan: Any, scenario: Scenario, t_start: float | None = None) -> None:
+        self.times = np.asarray(plan.times, float)
+        self.rates = np.asarray(plan.turn_rate, float)
+        u_max, _ = _turn_limits(scenario)
+        self.u_max = u_max
+
+    def rate_at(self, t: float) -> float:
+        i = int(np.searchsorted(self.times, t + 1e-9, side="right") - 1)
+        if i < 0 or i >= len(self.rates):
+            return 0.0
+        return float(np.clip(self.rates[i], -self.u_max, self.u_max))
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        return Action(turn_rate=self.rate_at(t))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Receding:
+    """Receding-horizon re-planning on the particle filter's posterior.
+
+    Every ``replan_interval`` [s] the heading OCP is re-solved from the current own-ship state
+    over ``horizon`` [s] with the filter's particles as the belief, warm-started from the last
+    plan; its first segment is flown until the next re-plan. If a re-plan fails, the previous
+    plan is kept (and the failure logged in the controller's ``log``).
+
+    Attributes
+    ----------
+    replan_interval : float, optional
+        [s]; default: ``scenario.planning.replan_interval``.
+    horizon : float, optional
+        Look-ahead [s]; default: the planner's.
+    objective : str
+        Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
+    max_particles : int
+        Particles passed to the planner as belief samples (a systematic subsample).
+    """
+
+    replan_interval: float | None = None
+    horizon: float | None = None
+    objective: str | None = CLOSED_LOOP_OBJECTIVE
+    max_particles: int = 2000
+    name: str = "receding"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller owning a planner built once for the whole run."""
+        return _RecedingController(self, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> Any:
+        """The offline plan from the prior: the receding controller's first plan."""
+        return _offline_plan(scenario, self.objective).observer
+
+
+_PLANNER_CACHE: dict[tuple[str, str | None, float | None], Any] = {}
+
+
+def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
+    from tmaplan.scenario import dump
+
+    key = (dump(scenario), objective, horizon)
+    if key not in _PLANNER_CACHE:
+        from tmaplan.planning import HeadingPlanner
+
+        kw: dict[str, Any] = {}
+        if objective is not None:
+            kw["objective"] = objective
+        if horizon is not None:
+            kw["horizon"] = horizon
+        _PLANNER_CACHE[key] = HeadingPlanner(scenario, **kw)
+    return _PLANNER_CACHE[key]
+
+
+class _RecedingController:
+    def __init__(self, policy: Receding, scenario: Scenario) -> None:
+        pl = scenario.planning
+        interval = policy.replan_interval or (pl.replan_interval if pl else None)
+        if interval is None:
+            raise ScenarioError("planning.replan_interval", "a re-planning interval for the "
+                                "receding policy", None, source=scenario.name)
+        self.interval = float(interval)
+        self.policy = policy
+        self.scenario = scenario
+        self.planner = _planner(scenario, policy.objective, policy.horizon)
+        self.u_max, self.dt = _turn_limits(scenario)
+        self.plan: Any = None
+        self.playback: _TurnRatePlayback | None = None
+        self.next_replan = scenario.time.t0
+        self.log: list[dict[str, Any]] = []
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        if t + 1e-9 >= self.next_replan:
+            self._replan(belief, t)
+            self.next_replan = t + self.interval
+        rate = self.playback.rate_at(t) if self.playback is not None else 0.0
+        return Action(turn_rate=rate)
+
+    def _replan(self, belief: BeliefView, t: float) -> None:
+        from tmaplan.planning import Belief
+
+        t0 = time.perf_counter()
+        idx = _subsample(belief.weights, self.policy.max_particles)
+        b = Belief.from_samples(belief.particles[idx], t=t)
+        entry: dict[str, Any] = {"t": t}
+        try:
+            plan = self.planner.solve(b, heading0=belief.heading, position0=belief.position,
+                                      warm_start=self.plan)
+            entry.update(status=plan.status, success=True)
+            self.plan = plan
+            self.playback = _TurnRatePlayback(plan, self.scenario)
+        except PlanningError as exc:  # keep flying the previous plan
+            entry.update(status=str(exc), success=False)
+            log.info("re-plan at t=%.0f s failed (%s); keeping the previous plan", t, exc)
+        entry["seconds"] = time.perf_counter() - t0
+        self.log.append(entry)
+
+
+def _subsample(weights: np.ndarray, n: int) -> np.ndarray:
+    """Systematic subsample of ``n`` indices (deterministic: fixed offset 0.5)."""
+    if weights.size <= n:
+        return np.arange(weights.size)
+    c = np.cumsum(weights)
+    c[-1] = 1.0
+    u = (np.arange(n) + 0.5) / n
+    return np.searchsorted(c, u)
+
+

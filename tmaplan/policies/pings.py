@@ -1,0 +1,140 @@
+"""Ping policies: none, uniformly spaced, offline schedule, adaptive to the filter."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tmaplan.policies._base import Action, BeliefView, Controller
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["AdaptivePings", "NoPing", "ScheduledPings", "UniformPings"]
+
+
+# --------------------------------------------------------------------------------------------
+# ping policies
+# --------------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class NoPing:
+    """Never ping."""
+
+    name: str = "no-ping"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """Controller that never pings."""
+        return _StepPings(np.zeros(0, dtype=int))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class UniformPings:
+    """``budget`` pings evenly spaced over the horizon: steps ``round((i + ½)·K/budget)``."""
+
+    budget: int | None = None
+    name: str = "uniform"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """Controller pinging at evenly spaced steps."""
+        b = _budget(scenario, self.budget)
+        K = scenario.n_steps
+        steps = np.unique(np.clip(np.round((np.arange(b) + 0.5) * K / max(b, 1)), 1, K))
+        return _StepPings(steps.astype(int))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ScheduledPings:
+    """Ping at the steps of an offline schedule (``tmaplan.planning.schedule_pings``)."""
+
+    budget: int | None = None
+    method: str = "relaxed"
+    objective: str = "mean-range-bound"
+    steps: tuple[int, ...] | None = None
+    name: str = "scheduled"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """Controller replaying the schedule (computed along the scenario's own track if no
+        steps are given; :class:`Combined` schedules along its manoeuvre's nominal track)."""
+        if self.steps is not None:
+            return _StepPings(np.asarray(self.steps, dtype=int))
+        return _StepPings(_offline_schedule(scenario, _budget(scenario, self.budget),
+                                            self.method, self.objective))
+
+
+_SCHEDULE_CACHE: dict[tuple[Any, ...], np.ndarray] = {}
+
+
+def _offline_schedule(scenario: Scenario, budget: int, method: str, objective: str,
+                      track: Any = None) -> np.ndarray:
+    """Offline ping schedule from the prior along ``track`` (default: the scripted track)."""
+    from tmaplan.scenario import dump
+
+    tkey = None if track is None else np.asarray(track.position).tobytes()
+    key = (dump(scenario), budget, method, objective, tkey)
+    if key not in _SCHEDULE_CACHE:
+        from tmaplan.planning import schedule_pings
+
+        sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
+                               observer=track)
+        _SCHEDULE_CACHE[key] = np.asarray(sched.steps, dtype=int)
+    return _SCHEDULE_CACHE[key]
+
+
+class _StepPings:
+    def __init__(self, steps: np.ndarray) -> None:
+        self.steps = set(int(s) for s in steps)
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        return Action(ping=(belief.step + 1) in self.steps)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class AdaptivePings:
+    """Ping when the filter's relative range std exceeds ``threshold`` (σ_r / r̂), within the
+    budget and at least ``min_spacing`` [s] after the previous ping."""
+
+    threshold: float = 0.1
+    budget: int | None = None
+    min_spacing: float | None = None
+    name: str = "adaptive"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """Controller with its own ping count and last ping time."""
+        pl = scenario.planning
+        spacing = self.min_spacing if self.min_spacing is not None else (
+            pl.ping_min_spacing if pl else 0.0)
+        return _Adaptive(self.threshold, _budget(scenario, self.budget), float(spacing),
+                         scenario)
+
+
+class _Adaptive:
+    def __init__(self, threshold: float, budget: int, spacing: float, scenario: Scenario) -> None:
+        self.threshold, self.budget, self.spacing = threshold, budget, spacing
+        self.last = -np.inf
+        self.forbidden = scenario.planning.ping_forbidden if scenario.planning else ()
+        self.dt = scenario.time.dt
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        t_next = t + self.dt
+        if belief.pings_used >= self.budget or t_next - self.last < self.spacing - 1e-9:
+            return Action()
+        if any(a <= t_next <= b for a, b in self.forbidden):
+            return Action()
+        m, s = belief.range_stats()
+        if s / max(m, 1.0) > self.threshold:
+            self.last = t_next
+            return Action(ping=True)
+        return Action()
+
+
+def _budget(scenario: Scenario, budget: int | None) -> int:
+    if budget is not None:
+        return int(budget)
+    pl = scenario.planning
+    return int(pl.ping_budget) if pl is not None else 0
+
+

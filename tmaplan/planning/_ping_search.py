@@ -1,0 +1,249 @@
+"""Search methods of the active-ping scheduler (file 000 §5, NOTES_000 §4.2).
+
+Role: the combinatorial side of :func:`tmaplan.planning.pings.schedule_pings`, which builds
+a :class:`~tmaplan.planning.pings.PingEvaluator` (the batched closed-form PCRB of Bréhard &
+Le Cadre, file 000, with a ping adding ``u_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]``, eq. 51) and
+hands it to the helpers here:
+
+* feasibility: candidate steps outside the forbidden windows, minimum spacing, the largest
+  number of pings the spacing allows;
+* ``exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
+  bound "all remaining candidates pinged" (NOTES_000 §4.2);
+* ``relaxed``: the u_k ∈ [0, 1] NLP (casadi + IPOPT) and its roundings;
+* ``greedy``, the local swaps that polish every method, and the evenly spaced reference
+  schedule.
+
+The helpers are private to :mod:`tmaplan.planning.pings`, which re-exports the ones used
+elsewhere.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from tmaplan.errors import PlanningError
+
+if TYPE_CHECKING:
+    from tmaplan.planning.pings import PingEvaluator
+
+__all__ = [
+    "_candidates",
+    "_exact",
+    "_greedy",
+    "_local_swaps",
+    "_max_pings",
+    "_relaxed",
+    "_round",
+    "_spacing_ok",
+    "_uniform_steps",
+]
+
+
+# --------------------------------------------------------------------------------------------
+# Feasibility helpers
+# --------------------------------------------------------------------------------------------
+def _candidates(ev: PingEvaluator, candidate_steps: Sequence[int] | None,
+                forbidden: Sequence[tuple[float, float]]) -> np.ndarray:
+    K = ev.K
+    cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
+        np.asarray(list(candidate_steps), int))
+    if cand.size and (cand.min() < 0 or cand.max() > K):
+        raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
+                            f"[{cand.min()}, {cand.max()}]")
+    t = ev.times[cand]
+    for a, b in forbidden:
+        cand = cand[~((t >= a) & (t <= b))]
+        t = ev.times[cand]
+    return cand
+
+
+def _spacing_ok(steps: Sequence[int], gap: int) -> bool:
+    s = sorted(steps)
+    return all(b - a >= gap for a, b in itertools.pairwise(s))
+
+
+def _max_pings(cand: np.ndarray, gap: int) -> int:
+    n, last = 0, -10**9
+    for c in cand:  # earliest-first is optimal for interval packing
+        if c - last >= gap:
+            n, last = n + 1, c
+    return n
+
+
+# --------------------------------------------------------------------------------------------
+# Search: rounding, local swaps, greedy, relaxed NLP, exact
+# --------------------------------------------------------------------------------------------
+def _round(u: np.ndarray, cand: np.ndarray, budget: int, gap: int) -> list[list[int]]:
+    """Two roundings of relaxed weights: largest-u-first, and systematic (the steps where the
+    cumulative Σu crosses i + 1/2); both respect the spacing."""
+    def feasible(order: Sequence[int]) -> list[int]:
+        chosen: list[int] = []
+        for i in order:
+            c = int(cand[i])
+            if all(abs(c - x) >= gap for x in chosen):
+                chosen.append(c)
+            if len(chosen) == budget:
+                break
+        return chosen
+
+    top = feasible(np.argsort(-u, kind="stable").tolist())
+    cs = np.cumsum(u) * budget / max(u.sum(), 1e-12)
+    idx = np.searchsorted(cs, np.arange(budget) + 0.5)
+    syst = feasible(list(dict.fromkeys(np.clip(idx, 0, cand.size - 1).tolist()))
+                    + np.argsort(-u, kind="stable").tolist())
+    return [sorted(top), sorted(syst)]
+
+
+def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int,
+                 max_rounds: int = 8, radius: Sequence[int] = (1, 2, 4, 8, 16)) -> tuple[
+                     list[int], float]:
+    """Move pings to nearby candidates (±radius in candidate index) while that improves.
+
+    Each round evaluates every single move in one batch, then applies the best move of every
+    ping together if that beats the best single move (else the best single move).
+    """
+    pos = {int(c): i for i, c in enumerate(cand)}
+    steps = sorted(steps)
+    best = ev.value(steps)
+    for _ in range(max_rounds):
+        trials, owner, moves = [], [], []
+        for i, s in enumerate(steps):
+            for r in radius:
+                for j in (pos[s] - r, pos[s] + r):
+                    if 0 <= j < cand.size and int(cand[j]) not in steps:
+                        trial = [*steps[:i], int(cand[j]), *steps[i + 1:]]
+                        if _spacing_ok(trial, gap):
+                            trials.append(sorted(trial))
+                            owner.append(i)
+                            moves.append(int(cand[j]))
+        if not trials:
+            break
+        vals = ev.evaluate(ev.schedules(trials))
+        j = int(np.argmin(vals))
+        if vals[j] >= best - 1e-12 * max(1.0, abs(best)):
+            break
+        combined = list(steps)
+        for i in range(len(steps)):
+            mine = [t for t, o in enumerate(owner) if o == i and vals[t] < best]
+            if mine:
+                combined[i] = moves[min(mine, key=lambda t: vals[t])]
+        new, new_val = sorted(trials[j]), float(vals[j])
+        if len(set(combined)) == len(combined) and _spacing_ok(combined, gap) and \
+                sorted(combined) != new:
+            cv = ev.value(sorted(combined))
+            if cv < new_val:
+                new, new_val = sorted(combined), cv
+        steps, best = new, new_val
+    return steps, best
+
+
+def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[int]:
+    chosen: list[int] = []
+    for _ in range(budget):
+        opts = [c for c in cand if all(abs(int(c) - x) >= gap for x in chosen)]
+        if not opts:
+            break
+        vals = ev.evaluate(ev.schedules([[*chosen, int(c)] for c in opts]))
+        chosen = sorted([*chosen, int(opts[int(np.argmin(vals))])])
+    return chosen
+
+
+def _relaxed(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
+             ) -> tuple[np.ndarray, float, str]:
+    import casadi as ca
+
+    n = cand.size
+    x = ca.MX.sym("u", n)
+    from scipy import sparse
+
+    sel = sparse.csc_matrix((np.ones(n), (cand, np.arange(n))), shape=(ev.K + 1, n))
+    U = ca.mtimes(ca.DM(sel), x)
+    f = ev.casadi_objective(U)
+    from scipy import sparse
+
+    rows = [np.arange(n)]
+    if gap > 1:
+        for c in cand:
+            win = np.flatnonzero((cand >= c) & (cand < c + gap))
+            if win.size > 1:
+                rows.append(win)
+    r_idx = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)])
+    Amat = ca.DM(sparse.csc_matrix((np.ones(r_idx.size), (r_idx, np.concatenate(rows))),
+                                   shape=(len(rows), n)))
+    g = ca.mtimes(Amat, x)
+    ub = np.concatenate([[budget], np.ones(len(rows) - 1)])
+    f0 = float(ca.Function("f0", [x], [f])(np.full(n, budget / n)))
+    solver = ca.nlpsol("ping_relaxed", "ipopt", {"x": x, "f": f / abs(f0), "g": g},
+                       {"print_time": False,
+                        "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 1000,
+                                  "tol": 1e-7, "acceptable_tol": 1e-5, "acceptable_iter": 10,
+                                  "hessian_approximation": "limited-memory"}})
+    sol = solver(x0=np.full(n, budget / n), lbx=0.0, ubx=1.0, lbg=-np.inf, ubg=ub)
+    st = str(solver.stats()["return_status"])
+    u = np.clip(np.asarray(sol["x"]).reshape(-1), 0, 1)
+    return u, float(sol["f"]) * abs(f0), st
+
+
+def _uniform_steps(cand: np.ndarray, budget: int, K: int) -> list[int]:
+    targets = [round((i + 1) * K / budget) for i in range(budget)]
+    out: list[int] = []
+    for t in targets:
+        free = [int(c) for c in cand if int(c) not in out]
+        if free:
+            out.append(min(free, key=lambda c: abs(c - t)))
+    return sorted(out)
+
+
+def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
+           inc_val: float, max_enumerate: int, time_limit: float) -> tuple[list[int], float,
+                                                                          float, str]:
+    """Exhaustive enumeration or best-first branch and bound. Returns (steps, val, lb, status)."""
+    n = cand.size
+    if math.comb(n, budget) <= max_enumerate:
+        combos = [c for c in itertools.combinations(cand.tolist(), budget)
+                  if _spacing_ok(c, gap)]
+        vals = ev.evaluate(ev.schedules(combos))
+        j = int(np.argmin(vals))
+        return list(combos[j]), float(vals[j]), float(vals[j]), "optimal"
+    import heapq
+
+    t0 = time.perf_counter()
+    best, best_val = list(incumbent), inc_val
+    # node: (lower bound, chosen tuple, next candidate index)
+    root_lb = float(ev.evaluate(ev.schedules([cand.tolist()]))[0])
+    heap: list[tuple[float, tuple[int, ...], int]] = [(root_lb, (), 0)]
+    while heap and time.perf_counter() - t0 < time_limit:
+        batch = [heapq.heappop(heap) for _ in range(min(len(heap), 64))]
+        kids, kid_sets = [], []
+        for lb, chosen, nxt in batch:
+            if lb >= best_val - 1e-12:
+                continue
+            for i in range(nxt, n):
+                c = int(cand[i])
+                if chosen and c - chosen[-1] < gap:
+                    continue
+                ch = (*chosen, c)
+                if len(ch) == budget or i == n - 1:
+                    kids.append((ch, n))
+                    kid_sets.append(list(ch))
+                else:
+                    kids.append((ch, i + 1))
+                    kid_sets.append(list(ch) + cand[i + 1:].tolist())
+        if not kids:
+            continue
+        vals = ev.evaluate(ev.schedules(kid_sets))
+        for (ch, nxt), v in zip(kids, vals):
+            if nxt >= n or len(ch) == budget:
+                if v < best_val:
+                    best, best_val = list(ch), float(v)
+            elif v < best_val - 1e-12:
+                heapq.heappush(heap, (float(v), ch, nxt))
+    lb = min([h[0] for h in heap], default=best_val)
+    lb = min(lb, best_val)
+    return best, best_val, lb, "optimal" if not heap else "gap (time limit)"

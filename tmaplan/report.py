@@ -198,7 +198,8 @@ document.body.setAttribute("data-images-total",im.length);}});</script></head>
 <p>{spec.runs} Monte Carlo runs, seed {spec.seed}, {spec.n_particles} particles; truths drawn
 from the {'prior' if spec.truth == 'prior' else 'scenario'}; the same truth and noise for
 every policy in a run (paired comparison). Localised = relative range error below
-{spec.accuracy:.0%} and staying there. Wall time {result.seconds:.0f} s.</p>
+{spec.accuracy:.0%} and staying there. Wall time {result.seconds:.0f} s
+({len(result.computed_runs)} runs computed now, {len(result.loaded_runs)} loaded from disk).</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
 {extra_html}
 <h2>Results</h2>

@@ -6,7 +6,15 @@ DESIGN §1's Δv), ``P⁻ = F P F' + Q``. The range update uses the linear-posit
 given the azimuth θ, ``y = r·b(θ)``, ``b = [cos θ, sin θ]`` is a linear measurement of the
 position with noise σ_r²I (eq. 6 model), so with ``V = H P⁻ H' + σ_r² I``, ``K = P⁻ H' V⁻¹``:
 
-* ``mode="moments"`` (default): the exact moment-matched posterior of eqs. (12)–(13),
+* ``mode="mixture"`` (default): a Gaussian mixture kept across scans, every component split
+  into azimuth sectors each updated with eqs. (12)–(13) restricted to its sector, weighted by
+  its marginal range likelihood and reduced by Runnalls merging
+  (:mod:`tmaplan.estimators.range_only_gm`). File 004 collapses to one Gaussian after every
+  scan (§VI.A step 7, L355) and names the mixture prior as future work (L357); on
+  ``sharma2024-range-only`` the collapse loses the second passing side near the closest
+  approach and ends ≈ 1.8× worse than the mixture (issue-5 report). On a single Gaussian state
+  (:func:`range_only_update`) the mixture collapses exactly to the moment update below;
+* ``mode="moments"`` (the paper's recursion): the exact moment-matched posterior of eqs. (12)–(13),
   ``x̂ = (I−KH)x̂⁻ + r K E[b|r]``, ``P = (I−KH)P⁻ + r² K P_b K'`` with ``E[b|r]`` and ``P_b`` from
   the first two trigonometric moments (eqs. 40–44);
 * ``mode="dirac"``: the paper's L-point wrapped Dirac mixture fitted to M moments (eq. 52), one
@@ -37,6 +45,7 @@ from tmaplan.estimators.gvm_moments import (
     moments_grid,
     moments_series,
 )
+from tmaplan.estimators.range_only_gm import MixtureConfig
 from tmaplan.models.target import ncv_matrices
 
 __all__ = [
@@ -58,7 +67,10 @@ class RangeOnlyConfig:
         [s].
     q : float
         Process-noise intensity of the filter [m²/s³].
-    mode : {"moments", "dirac"}
+    mode : {"mixture", "moments", "dirac"}
+        "mixture": Gaussian-mixture filter (ours, default); "moments": file 004's single
+        Gaussian with the exact moment update; "dirac": file 004's L-point Dirac mixture and
+        collapse.
     component_cov : {"exact", "paper"}
         Dirac mode only.
     moments : {"grid", "series"}
@@ -68,24 +80,40 @@ class RangeOnlyConfig:
         M (10 in Table II).
     n_points : int
         L (8 in Table II).
+    max_components, max_sectors : int
+        Mixture mode: components kept after each scan; sectors per component and scan.
+    sagitta : float
+        Mixture mode: allowed arc sagitta of one sector in units of σ_r.
     """
 
     dt: float
     q: float
-    mode: Literal["moments", "dirac"] = "moments"
+    mode: Literal["mixture", "moments", "dirac"] = "mixture"
     component_cov: Literal["exact", "paper"] = "exact"
     moments: Literal["grid", "series"] = "grid"
     series_terms: int = 5
     n_moments: int = 10
     n_points: int = 8
+    max_components: int = 24
+    max_sectors: int = 12
+    sagitta: float = 1.0
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
             raise ScenarioError("dt", "> 0 s", self.dt)
         if not self.q >= 0:
             raise ScenarioError("q", ">= 0 m²/s³", self.q)
-        if self.mode not in ("moments", "dirac"):
-            raise ScenarioError("mode", "'moments' or 'dirac'", self.mode)
+        if self.mode not in ("mixture", "moments", "dirac"):
+            raise ScenarioError("mode", "'mixture', 'moments' or 'dirac'", self.mode)
+        if self.component_cov not in ("exact", "paper"):
+            raise ScenarioError("component_cov", "'exact' or 'paper'", self.component_cov)
+        if self.moments not in ("grid", "series"):
+            raise ScenarioError("moments", "'grid' or 'series'", self.moments)
+
+    def mixture(self) -> MixtureConfig:
+        """The :class:`~tmaplan.estimators.range_only_gm.MixtureConfig` of mixture mode."""
+        return MixtureConfig(dt=self.dt, q=self.q, max_components=self.max_components,
+                             max_sectors=self.max_sectors, sagitta=self.sagitta)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -156,6 +184,10 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
                       config: RangeOnlyConfig) -> RangeOnlyState:
     """Range update (file 004 eqs. 12–14, or eqs. 52–55 + collapse in ``dirac`` mode).
 
+    A single Gaussian state cannot carry a mixture: in ``mixture`` mode this is the moment
+    update (the collapse of the sector mixture, which it equals exactly). Use
+    :func:`tmaplan.estimators.range_only_gm.mixture_update` to keep the mixture.
+
     Parameters
     ----------
     state : RangeOnlyState
@@ -192,7 +224,7 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
     Pb = Ebb - np.outer(Eb, Eb)
     base = IKH @ x
     Pc = IKH @ P
-    if config.mode == "moments":
+    if config.mode in ("moments", "mixture"):
         mean = base + r * K @ Eb
         cov = Pc + r * r * K @ Pb @ K.T
     else:

@@ -40,6 +40,12 @@ from tmaplan.estimators.range_only import (
     range_only_predict,
     range_only_update,
 )
+from tmaplan.estimators.range_only_gm import (
+    RangeOnlyMixture,
+    mixture_from_gaussian,
+    mixture_predict,
+    mixture_update,
+)
 from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_pcrb
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
@@ -78,7 +84,8 @@ class Track:
     covariances : ndarray, shape (K + 1, 4, 4)
         Posterior (filters) or delta-method CRLB-at-estimate (MLE) covariances.
     ess : ndarray or None, shape (K + 1,)
-        Particle filter: effective sample size after each update.
+        Particle filter: effective sample size after each update; range-only mixture: the
+        number of mixture components after each scan.
     seconds : float
         Wall time [s].
     status : str
@@ -262,7 +269,6 @@ def _run_range_only(scenario: Scenario, meas: Sequence[MeasurementSet], obs: Obs
     K = scenario.n_steps
     sc = run_prior(scenario, rng, meas)
     mean, P = prior_relative_moments(sc, 20_000, rng)
-    state = RangeOnlyState(step=0, mean=mean, cov=P)
     ranges: dict[int, tuple[float, float]] = {}
     for ms in meas:
         if ms.kind == "range":
@@ -271,17 +277,32 @@ def _run_range_only(scenario: Scenario, meas: Sequence[MeasurementSet], obs: Obs
     dv = obs.velocity_increments
     est = np.full((K + 1, 4), np.nan)
     cov = np.full((K + 1, 4, 4), np.nan)
-    if 0 in ranges:
-        state = range_only_update(state, *ranges[0], config)
-    est[0], cov[0] = state.mean, state.cov
-    for k in range(K):
-        state = range_only_predict(state, dv[k], config)
-        if k + 1 in ranges:
-            state = range_only_update(state, *ranges[k + 1], config)
-        est[k + 1], cov[k + 1] = state.mean, state.cov
+    mixture = config.mode == "mixture"
+    n_comp = np.zeros(K + 1)
+    if mixture:
+        mcfg = config.mixture()
+        gm: RangeOnlyMixture = mixture_from_gaussian(mean, P)
+        for k in range(K + 1):
+            if k > 0:
+                gm = mixture_predict(gm, dv[k - 1], mcfg)
+            if k in ranges:
+                gm = mixture_update(gm, *ranges[k], mcfg)
+            est[k], cov[k], n_comp[k] = gm.mean, gm.cov, gm.n_components
+        final: Any = gm
+    else:
+        st = RangeOnlyState(step=0, mean=mean, cov=P)
+        for k in range(K + 1):
+            if k > 0:
+                st = range_only_predict(st, dv[k - 1], config)
+            if k in ranges:
+                st = range_only_update(st, *ranges[k], config)
+            est[k], cov[k] = st.mean, st.cov
+        final = st
     ok = np.isfinite(est).all()
     return Track(estimator="range-only", times=scenario.times, estimates=est, covariances=cov,
-                 ess=None, seconds=0.0, status="ok" if ok else "failed")
+                 ess=n_comp if mixture else None, seconds=0.0,
+                 status="ok" if ok else "failed",
+                 message=f"mode {config.mode}", details=final)
 
 
 def _run_mle(scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,

@@ -82,6 +82,32 @@ def test_logdet_matches_independent_fim(default, prior):
     assert val == pytest.approx(-np.linalg.slogdet(F)[1], rel=1e-8, abs=1e-7)
 
 
+def test_relative_range_crlb_matches_independent_computation(default, prior):
+    # mean over steps and belief samples of sqrt(g_kᵀ (F_k + I₀)⁻¹ g_k)/r_k, with F_k the
+    # bearing FIM of X₀ from steps 1..k (rows [r_y, −r_x, t r_y, −t r_x]/(σ r²), numpy) and
+    # g_k the range gradient
+    trk = turn_rate_track(np.zeros(2), 0.0, 3.0, np.r_[np.zeros(60), np.full(60, 0.008),
+                                                       np.zeros(60)], 15.0)
+    val = ObjectiveEvaluator(default, "mean-relative-range-crlb", belief=prior)(trk)[0]
+    t = trk.times
+    I0 = np.linalg.inv(prior.cov)
+    vals = []
+    for X0 in prior.representative_samples(16):
+        rel = X0[:2] + t[:, None] * (X0[2:] + trk.mean_velocity[0]) - trk.position
+        r2 = (rel**2).sum(axis=1)
+        rows = np.stack([rel[:, 1], -rel[:, 0], t * rel[:, 1], -t * rel[:, 0]], axis=1)
+        rows /= np.radians(1.0) * r2[:, None]
+        rows[0] = 0.0  # no bearing at plan step 0 (the belief already holds it)
+        cum = np.cumsum(rows[:, :, None] * rows[:, None, :], axis=0)
+        for k in range(len(t)):
+            F = I0 + cum[k]
+            r = np.sqrt(r2[k])
+            u = rel[k] / r
+            g = np.r_[u, t[k] * u]
+            vals.append(np.sqrt(g @ np.linalg.solve(F, g)) / r)
+    assert val == pytest.approx(np.mean(vals), rel=1e-6)
+
+
 def test_rotation_and_translation_invariance(default, prior):
     th = 0.7
     R = np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]])  # bearing += th

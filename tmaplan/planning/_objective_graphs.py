@@ -267,8 +267,14 @@ def position_bound_graph(ctx: PlanContext) -> Any:
     return ctx.cache["pos"]
 
 
-def logdet_graph(ctx: PlanContext) -> Any:
-    """``log det(F + I₀)`` [SI] averaged over the logdet samples (file 003 eq. 64–65)."""
+def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
+    """Per-sample bearing geometry in scaled units (km, 100 s) and the FIM entries of X₀.
+
+    Each belief sample is a deterministic relative track ``r_k = p₀ + t_k v₀ − d_k`` (d_k the
+    own ship's displacement beyond constant velocity). The bearing FIM rows are
+    ``g = [r_y, −r_x, t r_y, −t r_x]/r²`` (file 003 eq. 64–65); the entries of ``F + I₀`` are
+    summed over steps (``cumulative``: up to each step), with ``I₀`` the prior information.
+    """
     import casadi as ca
 
     ns = ctx.layout.n_samples
@@ -292,12 +298,21 @@ def logdet_graph(ctx: PlanContext) -> Any:
     # prior information in the scaled units: I' = D⁻¹ I D⁻¹, D = diag(1/L, 1/L, T/L, T/L)
     Dinv = np.array([_L, _L, _L / _T, _L / _T])
     ic = unpack_sym([ctx.param("icart")[n] for n in range(10)])
-    F = [[ca.sum1(g[i] * g[j] * w) + ic[i][j] * float(Dinv[i] * Dinv[j]) for j in range(4)]
+    acc = ca.cumsum if cumulative else ca.sum1
+    F = [[acc(g[i] * g[j] * w) + ic[i][j] * float(Dinv[i] * Dinv[j]) for j in range(4)]
          for i in range(4)]
-    _, piv = inverse_diagonal(F)
+    return {"F": F, "rx": rx, "ry": ry, "r2": r2, "tt": tt, "ns": ns}
+
+
+def logdet_graph(ctx: PlanContext) -> Any:
+    """``log det(F + I₀)`` [SI] averaged over the logdet samples (file 003 eq. 64–65)."""
+    import casadi as ca
+
+    terms = _sample_fim_terms(ctx, cumulative=False)
+    _, piv = inverse_diagonal(terms["F"])
     ld = ca.log(piv[0]) + ca.log(piv[1]) + ca.log(piv[2]) + ca.log(piv[3])
     # log det F_SI = log det F' − 8 log L + 4 log T
-    return ca.sum2(ld) / ns - 8.0 * math.log(_L) + 4.0 * math.log(_T)
+    return ca.sum2(ld) / terms["ns"] - 8.0 * math.log(_L) + 4.0 * math.log(_T)
 
 
 def relative_range_crlb_graph(ctx: PlanContext) -> Any:
@@ -317,25 +332,8 @@ def relative_range_crlb_graph(ctx: PlanContext) -> Any:
 
     from tmaplan.bounds._lpc_terms import _ldl
 
-    ns = ctx.layout.n_samples
-    smp = ca.reshape(ctx.param("samples"), 4, ns)
-    K1 = ctx.n_steps + 1
-    t = ca.DM(ctx.times.reshape(-1, 1) / _T)
-    ones_k, ones_s = ca.DM.ones(K1, 1), ca.DM.ones(1, ns)
-    v0 = ctx.v_obs[0, :]
-    d = (ctx.disp - ca.mtimes(ca.DM(ctx.times.reshape(-1, 1)), v0)) / _L
-    sx, sy = smp[0, :] / _L, smp[1, :] / _L
-    svx, svy = smp[2, :] * _T / _L, smp[3, :] * _T / _L
-    rx = ca.mtimes(ones_k, sx) + ca.mtimes(t, svx) - ca.mtimes(d[:, 0], ones_s)
-    ry = ca.mtimes(ones_k, sy) + ca.mtimes(t, svy) - ca.mtimes(d[:, 1], ones_s)
-    r2 = ca.fmax(rx * rx + ry * ry, (100.0 / _L) ** 2)
-    w = ca.mtimes(ctx.param("bearing"), ones_s) / (r2 * r2)
-    tt = ca.mtimes(t, ones_s)
-    g = (ry, -rx, tt * ry, -tt * rx)
-    Dinv = np.array([_L, _L, _L / _T, _L / _T])
-    ic = unpack_sym([ctx.param("icart")[n] for n in range(10)])
-    F = [[ca.cumsum(g[i] * g[j] * w) + ic[i][j] * float(Dinv[i] * Dinv[j])
-          for j in range(4)] for i in range(4)]
+    terms = _sample_fim_terms(ctx, cumulative=True)
+    F, rx, ry, r2, tt = terms["F"], terms["rx"], terms["ry"], terms["r2"], terms["tt"]
     L, piv = _ldl(F)
     r = ca.sqrt(r2)
     ux, uy = rx / r, ry / r

@@ -83,6 +83,24 @@ def test_cli_track_json(tmp_path, capsys) -> None:
     assert (tmp_path / "track_clavard2013-halfturn-cw_mle.png").exists()
 
 
+def test_cli_track_range_only_mode_and_pf_variant(tmp_path) -> None:
+    out = tmp_path / "ro.json"
+    rc = main(["track", "sharma2024-range-only", "--estimator", "range-only", "--runs", "2",
+               "--range-only-mode", "moments", "--out", str(tmp_path), "--json", str(out)])
+    assert rc == 0
+    d = json.loads(out.read_text())
+    assert d["estimator"] == "range-only" and d["range_only_mode"] == "moments"
+    assert (tmp_path / "track_sharma2024-range-only_range-only-moments.png").exists()
+    out = tmp_path / "pf.json"
+    rc = main(["track", "sharma2024-range-only", "--estimator", "pf", "--runs", "2",
+               "--particles", "500", "--pf-variant", "resample-move", "--no-figure",
+               "--json", str(out)])
+    assert rc == 0
+    d = json.loads(out.read_text())
+    assert d["estimator"] == "pf" and d["pf_variant"] == "resample-move"
+    assert len(d["rmse_position"]) == 31
+
+
 def test_cli_track_bad_runs(capsys) -> None:
     rc = main(["track", "clavard2013-halfturn-cw", "--runs", "0", "--json", "-"])
     assert rc == 1

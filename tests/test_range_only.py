@@ -7,14 +7,19 @@ import pytest
 from scipy.integrate import quad
 
 from tmaplan.estimators import (
+    MixtureConfig,
     RangeOnlyConfig,
+    RangeOnlyMixture,
     RangeOnlyState,
     dirac_mixture,
     gvm2_from_gaussian,
+    mixture_from_gaussian,
+    mixture_update,
     moments_grid,
     moments_series,
     monte_carlo,
     range_only_update,
+    reduce_mixture,
 )
 
 # File 004 §VII.A (L365): ŷ = [−11, 20], V = [[50, −10], [−10, 50]], r = √521 (NOTES_004 §2.5a).
@@ -130,6 +135,136 @@ def test_dirac_exact_collapse_equals_moment_update() -> None:
     np.testing.assert_allclose(b.cov, a.cov, rtol=0.02, atol=1e-3)
 
 
+# --------------------------------------------------------------------------------------------
+# Gaussian-mixture range-only filter (azimuth sectors, file 004 moments per sector)
+# --------------------------------------------------------------------------------------------
+
+
+def _rot4(a: float) -> np.ndarray:
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    T = np.zeros((4, 4))
+    T[:2, :2] = T[2:, 2:] = R
+    return T
+
+
+@pytest.mark.parametrize("case", ["moderate", "concentrated"])
+def test_mixture_collapse_equals_moment_update(case: str) -> None:
+    # The sector pieces are the exact masses of the posterior, so their collapse must equal
+    # eqs. (12)–(13) computed by the independent full-circle FFT engine — also in the
+    # concentrated regime of the Sharma prior (κ ~ 1e5–1e6, windowed grid).
+    if case == "moderate":
+        x = np.array([3000.0, 4000.0, 1.0, -1.0])
+        P = np.diag([600.0**2, 500.0**2, 4.0, 4.0])
+        P[0, 1] = P[1, 0] = 5e4
+        P[0, 2] = P[2, 0] = 300.0
+        r, s = 5100.0, 20.0
+    else:
+        c, sn = np.cos(np.pi / 4), np.sin(np.pi / 4)
+        J = np.array([[c, -1e4 * sn], [sn, 1e4 * c]])
+        P = np.diag([0.0, 0.0, 16.0, 16.0])
+        P[:2, :2] = J @ np.diag([10.0**2, np.deg2rad(1.0) ** 2]) @ J.T + 72.0 * np.eye(2)
+        x = np.array([7071.0, 7071.0, -3.0, -2.0])
+        r, s = 9985.0, 10.0
+    cfg = MixtureConfig(dt=1.0, q=0.0)
+    gm = mixture_update(mixture_from_gaussian(x, P), r, s, cfg)
+    ref = range_only_update(RangeOnlyState(step=0, mean=x, cov=P), r, s,
+                            RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
+    assert gm.n_components > 1  # it did split
+    np.testing.assert_allclose(gm.mean, ref.mean, rtol=0, atol=1e-6 * np.sqrt(P[0, 0]))
+    np.testing.assert_allclose(gm.cov, ref.cov, rtol=1e-6, atol=1e-9 * np.abs(ref.cov).max())
+
+
+def test_mixture_range_likelihood_matches_monte_carlo() -> None:
+    # log p(r) of the update (eq. 6 model: r = |y|, y ~ N(ŷ, HPH' + σ²I)) against a
+    # histogram of |y| (2·10⁶ draws, ±5 m bin: MC error ≈ 0.4 %).
+    x = np.array([300.0, 400.0, 0.0, 0.0])
+    P = np.diag([100.0**2, 60.0**2, 1.0, 1.0])
+    P[0, 1] = P[1, 0] = 2000.0
+    s, r = 20.0, 520.0
+    gm = mixture_update(mixture_from_gaussian(x, P), r, s, MixtureConfig(dt=1.0, q=0.0))
+    rng = np.random.default_rng(7)
+    V = P[:2, :2] + s * s * np.eye(2)
+    y = rng.multivariate_normal(x[:2], V, 2_000_000)
+    rho = np.hypot(y[:, 0], y[:, 1])
+    p_mc = np.mean(np.abs(rho - r) < 5.0) / 10.0
+    assert np.exp(gm.log_likelihood) == pytest.approx(p_mc, rel=0.02)
+
+
+def test_mixture_keeps_both_modes_of_a_ring_posterior() -> None:
+    # Prior broad across the line of sight, range shorter than the predicted one: the exact
+    # posterior (importance sampling) has two separated modes. The mixture must give their
+    # masses; the single Gaussian of file 004 puts much of its mass between them.
+    from scipy.stats import norm, rice
+
+    x = np.array([150.0, 300.0, 0.0, 0.0])
+    P = np.diag([1000.0**2, 100.0**2, 1.0, 1.0])
+    s, r = 10.0, 800.0
+    gm = mixture_update(mixture_from_gaussian(x, P), r, s, MixtureConfig(dt=1.0, q=0.0))
+    rng = np.random.default_rng(3)
+    X = x + rng.standard_normal((1_000_000, 4)) * np.sqrt(np.diag(P))
+    w = rice.pdf(r, np.hypot(X[:, 0], X[:, 1]) / s, scale=s)
+    w /= w.sum()
+    p_right = w @ (X[:, 0] > 0)
+    p_far = w @ (np.abs(X[:, 0]) > 500)
+    sd = np.sqrt(gm.covs[:, 0, 0])
+    m = gm.means[:, 0]
+    gm_right = gm.weights @ norm.sf(0.0, m, sd)
+    gm_far = gm.weights @ (norm.sf(500.0, m, sd) + norm.cdf(-500.0, m, sd))
+    assert 0.1 < p_right < 0.9  # genuinely bimodal
+    assert abs(gm_right - p_right) < 0.02
+    assert abs(gm_far - p_far) < 0.02
+    g = range_only_update(RangeOnlyState(step=0, mean=x, cov=P), r, s,
+                          RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
+    sg = np.sqrt(g.cov[0, 0])
+    single_far = norm.sf(500.0, g.mean[0], sg) + norm.cdf(-500.0, g.mean[0], sg)
+    assert abs(single_far - p_far) > 0.2
+
+
+def test_mixture_update_is_rotation_invariant() -> None:
+    x = np.array([3000.0, 1000.0, 1.0, -2.0])
+    P = np.diag([800.0**2, 300.0**2, 9.0, 4.0])
+    P[0, 3] = P[3, 0] = 200.0
+    cfg = MixtureConfig(dt=1.0, q=0.0)
+    a = mixture_update(mixture_from_gaussian(x, P), 3300.0, 15.0, cfg)
+    T = _rot4(2.3)
+    b = mixture_update(mixture_from_gaussian(T @ x, T @ P @ T.T), 3300.0, 15.0, cfg)
+    np.testing.assert_allclose(b.mean, T @ a.mean, atol=1e-6)
+    np.testing.assert_allclose(b.cov, T @ a.cov @ T.T, rtol=1e-6, atol=1e-6)
+    assert np.exp(a.log_likelihood) == pytest.approx(np.exp(b.log_likelihood), rel=1e-8)
+
+
+def test_reduce_mixture_preserves_moments_and_keeps_separated_modes() -> None:
+    rng = np.random.default_rng(4)
+    C = 40
+    means = rng.normal(0, 100, (C, 4))
+    means[:20, 0] += 5000.0  # two far-apart clusters
+    A = rng.normal(0, 10, (C, 4, 4))
+    covs = A @ np.swapaxes(A, 1, 2) + np.eye(4)
+    w = rng.random(C)
+    mix = RangeOnlyMixture(step=0, weights=w / w.sum(), means=means, covs=covs)
+    red = reduce_mixture(mix, 2)
+    np.testing.assert_allclose(red.mean, mix.mean, atol=1e-9 * np.abs(mix.mean).max())
+    np.testing.assert_allclose(red.cov, mix.cov, rtol=1e-9, atol=1e-9 * mix.cov.max())
+    # Runnalls merging keeps the two clusters apart rather than merging across them.
+    assert sorted(red.means[:, 0] > 2500.0) == [False, True]
+
+
+def test_mixture_beats_single_gaussian_on_sharma_seeded() -> None:
+    # Small seeded version of the slow comparison (20 of its 100 runs): the single-Gaussian
+    # recursion of file 004 loses the second passing side near the closest approach; the
+    # mixture does not and stays within 1.3× the PF (10⁴ particles) at the last scan.
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("sharma2024-range-only")
+    gm = monte_carlo(sc, "range-only", runs=20, seed=4, bound=False)
+    sg = monte_carlo(sc, RangeOnlyConfig(dt=sc.time.dt, q=sc.target.q, mode="moments"),
+                     runs=20, seed=4, bound=False)
+    pf = monte_carlo(sc, "pf", runs=20, seed=4, n_particles=10_000, bound=False)
+    assert gm.rmse_position[-1] < 0.8 * sg.rmse_position[-1]
+    assert gm.rmse_position[-1] <= 1.3 * pf.rmse_position[-1]
+    assert np.all(gm.nees[1:] < 10.0)
+
+
 def test_range_only_smoke_on_sharma() -> None:
     from tmaplan.scenario import load_problem
 
@@ -142,19 +277,29 @@ def test_range_only_smoke_on_sharma() -> None:
 
 @pytest.mark.slow
 def test_range_only_vs_pf_sharma() -> None:
-    # Issue 5 target: range-only final RMSE ≤ 1.3× the PF's (10^4 particles, 100 runs) with a
-    # consistent NEES. NOT MET at the time of writing (issue-5 report): both filters end ~6×
-    # above the truth-conditional PCRB because the posterior is a ring arc (rotational
-    # ambiguity of range-only tracking on straight relative legs, strong process noise), and
-    # the single-Gaussian range-only filter becomes overconfident after the manoeuvre.
+    # Issue 5 target: range-only final RMSE ≤ 1.3× the PF's (10⁴ particles, 100 runs) with a
+    # consistent NEES. Met by the Gaussian-mixture filter (default mode); measured (issue-5
+    # report): mixture 1154 m vs PF 1875 m at the last scan, while file 004's single-Gaussian
+    # recursion (mode="moments") ends at ≈ 2600 m with NEES in the thousands.
+    from scipy.stats import chi2
+
     from tmaplan.scenario import load_problem
 
     sc = load_problem("sharma2024-range-only")
     ro = monte_carlo(sc, "range-only", runs=100, seed=4, bound=False)
     pf = monte_carlo(sc, "pf", runs=100, seed=4, n_particles=10_000, bound=False)
     assert ro.rmse_position[-1] <= 1.3 * pf.rmse_position[-1]
-    # NEES (4-D) in the 95 % band of NOTES_004 §4.2 (100 runs).
-    from scipy.stats import chi2
+    # Also against the PF variant that suits ring posteriors (exact MH moves after
+    # resampling; the default regularised kernel throws particles off the ring).
+    from tmaplan.estimators import PFConfig
 
+    rm = monte_carlo(sc, PFConfig(n_particles=10_000, dt=sc.time.dt, q=sc.target.q,
+                                  variant="resample-move"), runs=100, seed=4, bound=False)
+    assert ro.rmse_position[-1] <= 1.3 * rm.rmse_position[-1]
+    # 4-D NEES against the 95 % band of NOTES_004 §4.2 (100 runs): the time average inside
+    # it, every scan within 1.5× its upper end. Step 0 is excluded: the truth's fixed 15 kn
+    # velocity sits at 2σ of the zero-mean prior (σ_v = v_max/2, NOTES_004 §4.2), so the
+    # initial NEES is 2 + 4 = 6 by construction, not a filter property.
     lo, hi = chi2.ppf([0.025, 0.975], 400) / 100
-    assert lo < ro.nees[-1] < hi
+    assert lo < np.mean(ro.nees[1:]) < hi
+    assert np.all(ro.nees[1:] < 1.5 * hi)

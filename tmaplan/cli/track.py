@@ -4,11 +4,14 @@ against its bound (PCRB for the filters, CRLB for the MLE), with a figure of RMS
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 from typing import Any
 
 from tmaplan.errors import ScenarioError
+from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import ESTIMATORS, monte_carlo
 from tmaplan.scenario import load
 
@@ -26,6 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bound", choices=("truth", "prior"), default="truth",
                         help="filters: PCRB along the runs' truths (B2, default) or "
                              "averaged over prior draws")
+    parser.add_argument("--pf-variant", choices=("regularised", "bootstrap", "resample-move"),
+                        default="regularised",
+                        help="pf: regularised (default), bootstrap, or resample-move (exact "
+                             "MH moves; better on ring-shaped range-only posteriors)")
+    parser.add_argument("--range-only-mode", choices=("mixture", "moments", "dirac"),
+                        default="mixture",
+                        help="range-only: Gaussian mixture over azimuth sectors (default), or "
+                             "file 004's single-Gaussian moment / Dirac-mixture recursion")
     parser.add_argument("--out", default="out", help="figure directory")
     parser.add_argument("--no-figure", action="store_true", help="skip the figure")
 
@@ -66,14 +77,31 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if show:
             print(f"\rrun {done}/{total}", end="", file=sys.stderr, flush=True)
 
-    res = monte_carlo(scenario, args.estimator, runs=args.runs, seed=args.seed,
+    estimator: Any = args.estimator
+    mode: Any = getattr(args, "range_only_mode", "mixture")
+    if estimator == "range-only" and mode != "mixture":
+        estimator = RangeOnlyConfig(dt=scenario.time.dt, q=float(scenario.target.q), mode=mode)
+    variant: Any = getattr(args, "pf_variant", "regularised")
+    if estimator == "pf" and variant != "regularised":
+        estimator = PFConfig(n_particles=args.particles, dt=scenario.time.dt,
+                             q=float(scenario.target.q), variant=variant)
+    res = monte_carlo(scenario, estimator, runs=args.runs, seed=args.seed,
                       n_particles=args.particles, progress=progress,
                       bound=getattr(args, "bound", "truth"))
+    if not isinstance(estimator, str):
+        res = dataclasses.replace(res, estimator=args.estimator)
     if show:
         print(file=sys.stderr)
     payload = res.to_json()
+    if args.estimator == "range-only":
+        payload["range_only_mode"] = mode
+    if args.estimator == "pf":
+        payload["pf_variant"] = variant
     if not args.no_figure:
-        fig = Path(args.out) / f"track_{scenario.name}_{args.estimator}.png"
+        suffix = (f"-{mode}" if args.estimator == "range-only" and mode != "mixture"
+                  else f"-{variant}" if args.estimator == "pf" and variant != "regularised"
+                  else "")
+        fig = Path(args.out) / f"track_{scenario.name}_{args.estimator}{suffix}.png"
         _figure(res, fig)
         payload["figure"] = str(fig)
     if not quiet:

@@ -208,7 +208,9 @@ def mixture_update(state: RangeOnlyMixture, r: float, sigma_r: float, config: Mi
     Returns
     -------
     RangeOnlyMixture
-        Reduced to at most ``max_components`` components.
+        Reduced to at most ``max_components`` components. If the range has zero (underflowed)
+        likelihood under every component the predicted mixture is returned unchanged with
+        ``log_likelihood = −inf``.
     """
     if not r > 0:
         return state
@@ -282,6 +284,8 @@ def mixture_update(state: RangeOnlyMixture, r: float, sigma_r: float, config: Mi
     covs = Pc[comp] + r * r * Kc @ Pb @ np.swapaxes(Kc, 1, 2)  # eq. (13) on the sector
     logw = np.log(w[comp]) + logml[comp] + np.log(ms)
     total = logsumexp(logw)
+    if not np.isfinite(total):  # the range has zero likelihood under every component
+        return dataclasses.replace(state, log_likelihood=float(total))
     out = RangeOnlyMixture(step=state.step, weights=np.exp(logw - total), means=means,
                            covs=0.5 * (covs + np.swapaxes(covs, 1, 2)),
                            log_likelihood=float(total))

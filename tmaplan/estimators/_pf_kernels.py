@@ -1,0 +1,202 @@
+"""Batched numerical kernels of the particle filter (resampling, noise, likelihoods).
+
+Private helpers of :mod:`tmaplan.estimators.particle_filter`, split out by role. Clouds are
+handled in the (4, N) row layout (see :func:`_rows`); every function is vectorised over
+particles.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.special import logsumexp
+
+from tmaplan.errors import EstimationError
+from tmaplan.models.sensors import bearing_loglik
+
+if TYPE_CHECKING:
+    from tmaplan.estimators.particle_filter import Measurement
+
+__all__ = ["systematic_resample"]
+
+_TWO_PI = 2.0 * np.pi
+# Layout: the cloud is stored column-major, ``particles`` (N, 4) being the transpose of a
+# C-contiguous (4, N) array, so every per-component operation (x, y, vx, vy) runs on a
+# contiguous vector and no thin (N, 4) × (4, 4) BLAS product is needed (multi-threaded
+# OpenBLAS spins on those, and limiting its threads per call costs milliseconds).
+
+
+def _rows(X: np.ndarray) -> np.ndarray:
+    """The (4, N) C-contiguous row view of a cloud (a copy if X is not column-major)."""
+    A = X.T
+    return A if A.flags.c_contiguous else np.ascontiguousarray(A)
+
+
+
+# --------------------------------------------------------------------------------------------
+# Resampling
+# --------------------------------------------------------------------------------------------
+
+
+def systematic_resample(log_weights: np.ndarray, rng: np.random.Generator,
+                        n: int | None = None) -> np.ndarray:
+    """Systematic resampling indices (one uniform draw, N stratified points).
+
+    Parameters
+    ----------
+    log_weights : ndarray, shape (N,)
+        Normalised log-weights.
+    rng : numpy.random.Generator
+    n : int, optional
+        Number of draws (default N).
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+    """
+    m = log_weights.shape[0] if n is None else n
+    cdf = np.cumsum(np.exp(log_weights))
+    cdf /= cdf[-1]
+    u = (rng.random() + np.arange(m)) / m
+    idx = np.searchsorted(cdf, u, side="right")
+    np.minimum(idx, log_weights.shape[0] - 1, out=idx)
+    return idx
+
+
+def _systematic(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Systematic resampling from normalised weights ``w`` (no exp), in O(N).
+
+    Same draw as :func:`systematic_resample` (``u_j = (u + j)/N``, index = number of CDF
+    values ≤ u_j) without a binary search: ``c_i = ⌈N·cdf_i − u⌉`` counts the points below
+    ``cdf_i``, and the index of point j is ``#{i : c_i ≤ j}``, a cumulative ``bincount``.
+    """
+    n = w.shape[0]
+    c = np.cumsum(w)
+    c *= n / c[-1]
+    c -= rng.random()
+    np.ceil(c, out=c)
+    ci = c.astype(np.intp)
+    np.maximum(ci, 0, out=ci)
+    ci[-1] = n  # guard against rounding in the last CDF value
+    idx = np.cumsum(np.bincount(ci, minlength=n + 1)[:n])
+    np.minimum(idx, n - 1, out=idx)
+    return idx
+
+
+def _ess(log_weights: np.ndarray) -> float:
+    return float(np.exp(-logsumexp(2.0 * log_weights)))
+
+
+def _weighted_cov(A: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Weighted covariance of a (4, N) row-layout cloud with normalised weights w."""
+    D = A - (A @ w)[:, None]
+    return (D * w) @ D.T
+
+
+def _safe_cholesky(C: np.ndarray) -> np.ndarray:
+    C = 0.5 * (C + C.T)
+    scale = np.sqrt(np.maximum(np.diag(C), 1e-300))
+    Cn = C / np.outer(scale, scale)
+    for eps in (0.0, 1e-12, 1e-9, 1e-6, 1e-3):
+        try:
+            return scale[:, None] * np.linalg.cholesky(Cn + eps * np.eye(C.shape[0]))
+        except np.linalg.LinAlgError:
+            continue
+    return np.diag(scale)
+
+
+
+_TWO_PI_F32 = np.float32(_TWO_PI)
+
+
+def _normals_f32(rng: np.random.Generator, out: np.ndarray) -> None:
+    """Fill ``out`` (2m, n) float64 with standard normals by float32 Box–Muller.
+
+    ``z1 = ρ cos φ``, ``z2 = ρ sin φ`` with ``ρ = sqrt(−2 ln(1 − u1))``, ``φ = 2π u2`` for
+    independent uniforms u1, u2 ∈ [0, 1) (so 1 − u1 > 0 and ρ ≤ sqrt(2·24 ln 2) = 5.77).
+    """
+    h = out.shape[0] // 2
+    u = rng.random((2, h, out.shape[1]), dtype=np.float32)
+    rho, phi = u[0], u[1]
+    np.negative(rho, out=rho)
+    np.log1p(rho, out=rho)
+    rho *= np.float32(-2.0)
+    np.sqrt(rho, out=rho)
+    phi *= _TWO_PI_F32
+    np.multiply(rho, np.cos(phi), out=out[:h])
+    np.sin(phi, out=phi)
+    np.multiply(rho, phi, out=out[h:])
+
+
+@functools.lru_cache(maxsize=64)
+def _dynamics(dt: float, q: float) -> tuple[float, float, float]:
+    """Per-axis Cholesky factor ``[[l11, 0], [l21, l22]]`` of the NCV ``Q`` (DESIGN §1)."""
+    l11 = np.sqrt(q * dt**3 / 3.0)
+    l21 = (q * dt**2 / 2.0) / l11 if l11 > 0 else 0.0
+    l22 = np.sqrt(max(q * dt - l21 * l21, 0.0))
+    return float(l11), float(l21), float(l22)
+
+
+
+def _bearing_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
+    if m.ambiguity == "pi":
+        return bearing_loglik(m.value, X, float(m.sigma), "pi")
+    A = _rows(X)
+    d = np.arctan2(A[0], A[1])  # one atan2, contiguous rows
+    np.subtract(float(m.value), d, out=d)
+    # wrap to [−π, π]: d − 2π·round(d/2π) (cheaper than np.mod), in place
+    t = np.multiply(d, 1.0 / _TWO_PI)
+    np.rint(t, out=t)
+    t *= _TWO_PI
+    d -= t
+    d *= np.sqrt(0.5) / float(m.sigma)
+    np.square(d, out=d)
+    np.negative(d, out=d)
+    return d
+
+
+def _range_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
+    A = _rows(X)
+    d = np.hypot(A[0], A[1])
+    np.subtract(float(m.value), d, out=d)
+    d *= np.sqrt(0.5) / float(m.sigma)
+    np.square(d, out=d)
+    np.negative(d, out=d)
+    return d
+
+
+def _frequency_update(X: np.ndarray, m: Measurement, fm: np.ndarray | None,
+                      fv: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    z = np.atleast_1d(np.asarray(m.value, float))
+    s2 = np.atleast_1d(np.asarray(m.sigma, float)) ** 2 * np.ones_like(z)
+    P = z.shape[0]
+    N = X.shape[0]
+    if fm is None or fv is None:
+        fm = np.full((N, P), np.nan)
+        fv = np.full((N, P), np.nan)
+    elif fm.shape[1] != P:
+        raise EstimationError(f"frequency measurement has {P} lines, the filter tracks "
+                              f"{fm.shape[1]}")
+    v = X[:, 2:4]
+    if m.velocity_offset is not None:
+        v = v - np.asarray(m.velocity_offset, float)
+    r = np.hypot(X[:, 0], X[:, 1])
+    rdot = (X[:, 0] * v[:, 0] + X[:, 1] * v[:, 1]) / r
+    a = (1.0 - rdot / m.c)[:, None]  # (N, 1)
+    new = np.isnan(fm)
+    # Flat prior on f_p: posterior N(z/a, σ²/a²), marginal likelihood 1/|a|.
+    S = a * a * fv + s2
+    innov = z - a * fm
+    ll_old = -0.5 * innov * innov / S - 0.5 * np.log(S)
+    K = fv * a / S
+    fm_up = fm + K * innov
+    fv_up = fv - K * a * fv
+    ll_new = -np.log(np.abs(a)) + np.zeros_like(fm)
+    fm_out = np.where(new, z / a, fm_up)
+    fv_out = np.where(new, s2 / (a * a), fv_up)
+    ll = np.where(new, ll_new, ll_old).sum(axis=1)
+    return ll, fm_out, fv_out
+
+

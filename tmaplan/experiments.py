@@ -75,9 +75,13 @@ class CampaignSpec:
     accuracy: float = 0.1
 
     def key(self) -> str:
-        """Hash of everything but ``runs`` (extending a campaign reuses its runs)."""
+        """Hash of everything but ``runs`` (extending a campaign reuses its runs), plus the
+        tmaplan version, so that runs stored by another release are never reused."""
+        from tmaplan import __version__
+
         d = dataclasses.asdict(self)
         d.pop("runs")
+        d["tmaplan_version"] = __version__
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
 

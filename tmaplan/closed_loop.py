@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.estimators.particle_filter import Measurement, ParticleFilter, PFConfig
-from tmaplan.geometry import course_speed
+from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, arc_displacement
 from tmaplan.models.sensors import bearing as bearing_of
 from tmaplan.models.sensors import range_
@@ -221,8 +221,6 @@ def run_closed_loop(scenario: Scenario, policy: Any, target: np.ndarray, *,
             z = float(range_(rel) + ping_sigma * e_ping[k + 1])
             state = tempered_range_update(pf, state, z, ping_sigma, filter_rng)
         est[k + 1], cov[k + 1] = state.mean, state.cov
-    from tmaplan.geometry import wrap_angle
-
     obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
                         heading=wrap_angle(headings), speed=np.full(K + 1, speed))
     truth = target - obs.state

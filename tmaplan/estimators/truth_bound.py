@@ -113,7 +113,8 @@ def cartesian_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generator
 
     ``J_{k+1} = (Q + F J_k⁻¹ F')⁻¹ + E[H̃'R⁻¹H̃]`` with ``J_0 = P_0⁻¹`` from the prior and the
     expectation over ``samples`` trajectories drawn from the prior and the process noise.
-    Also the fallback when ``tmaplan.bounds.pcrb`` is absent.
+    An independent, deliberately simple implementation kept as a cross-check of
+    :func:`tmaplan.bounds.pcrb.monte_carlo_pcrb` (the runner uses the latter).
 
     Returns
     -------

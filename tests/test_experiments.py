@@ -142,3 +142,19 @@ def test_compare_cli_json_identical_for_any_worker_count(tmp_path):
         d = json.loads(js.read_text())
         outs.append({k: d[k] for k in ("policies", "differences", "runs", "seed", "times")})
     assert json.dumps(outs[0], sort_keys=True) == json.dumps(outs[1], sort_keys=True)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--runs", "0"], "runs must be >= 1, received 0"),
+    (["--particles", "1"], "particles must be >= 2, received 1"),
+    (["--workers", "0"], "workers must be >= 1, received 0"),
+    (["--accuracy", "2"], "accuracy must be in (0, 1), received 2.0"),
+    (["--policies", "straight,loop"], "unknown policy 'loop'"),
+])
+def test_compare_rejects_bad_input_with_one_line(args, message, tmp_path, capsys):
+    from tmaplan.cli import main
+
+    base = ["compare", "default", "--runs", "2", "--out", str(tmp_path)]
+    assert main(base + args) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]

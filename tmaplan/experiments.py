@@ -352,6 +352,12 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     t0 = time.perf_counter()
     if spec.runs < 1:
         raise PlanningError(f"runs must be >= 1, received {spec.runs}")
+    if spec.n_particles < 2:
+        raise PlanningError(f"particles must be >= 2, received {spec.n_particles}")
+    if workers < 1:
+        raise PlanningError(f"workers must be >= 1, received {workers}")
+    if not 0 < spec.accuracy < 1:
+        raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
     scenario = loads(spec.scenario_toml)
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
     pols = policies if policies is not None else resolve_policies(scenario, spec.policies)

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.errors import PlanningError
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
@@ -55,6 +56,10 @@ def _say(args: argparse.Namespace, msg: str) -> None:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Plan, schedule, compare and write ``report.html``."""
     t0 = time.perf_counter()
+    for name, value, low in (("--runs", args.runs, 1), ("--particles", args.particles, 2),
+                             ("--workers", args.workers, 1)):
+        if value < low:
+            raise PlanningError(f"{name}: expected >= {low}, received {value}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     scenario = load_problem("default")

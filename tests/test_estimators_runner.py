@@ -105,3 +105,61 @@ def test_cli_track_bad_runs(capsys) -> None:
     rc = main(["track", "clavard2013-halfturn-cw", "--runs", "0", "--json", "-"])
     assert rc == 1
     assert "--runs" in capsys.readouterr().err
+
+
+def test_cli_track_mle_frequencies_and_turn_direction(tmp_path, capsys) -> None:
+    # --frequencies N as in `tmaplan crlb` (default 0 = bearings only): the CRLB range std
+    # reported by `track` equals the one of `crlb` (file 002 Table 1: 0.71 km; Table 4 with
+    # 4 lines far smaller); --turn-direction overrides the problem's [estimation] section.
+    from tmaplan.bounds.crlb import crlb
+
+    sc = load_problem("clavard2013-halfturn-cw")
+    out = tmp_path / "a.json"
+    assert main(["track", sc.name, "--estimator", "mle", "--runs", "2", "--no-figure",
+                 "--json", str(out)]) == 0
+    d = json.loads(out.read_text())
+    assert d["turn_direction"] == "clockwise" and d["ambiguous_runs"] == 0
+    ref = crlb(sc, frequencies=0)
+    assert d["bound_range"][-1] == pytest.approx(ref.final_range_std, rel=1e-6)
+    out4 = tmp_path / "b.json"
+    assert main(["track", sc.name, "--estimator", "mle", "--runs", "2", "--no-figure",
+                 "--frequencies", "4", "--turn-direction", "either", "--json", str(out4)]) == 0
+    d4 = json.loads(out4.read_text())
+    assert d4["turn_direction"] == "either"
+    assert d4["bound_range"][-1] == pytest.approx(crlb(sc, frequencies=4).final_range_std,
+                                                  rel=1e-6)
+    assert d4["bound_range"][-1] < 0.3 * d["bound_range"][-1]
+    assert main(["track", sc.name, "--frequencies", "5", "--runs", "1"]) == 1
+    assert "--frequencies" in capsys.readouterr().err
+    assert main(["track", sc.name, "--estimator", "pf", "--turn-direction", "clockwise",
+                 "--runs", "1"]) == 1
+    assert "--turn-direction" in capsys.readouterr().err
+
+
+def test_truth_bounds_range_is_the_line_of_sight_projection() -> None:
+    # Independent check of the range bound: a single run, the position information recursion
+    # re-done here with a plain loop, projected on the true line of sight.
+    from tmaplan.estimators.truth_bound import truth_bounds, truth_pcrb
+    from tmaplan.models.prior import prior_relative_moments
+    from tmaplan.models.target import ncv_matrices
+    from tmaplan.simulate import simulate
+
+    sc = load_problem("ristic-bot-moderate")
+    sim = simulate(sc, np.random.default_rng(2))
+    pos, rng_b = truth_bounds(sc, sim.relative)
+    np.testing.assert_array_equal(pos, truth_pcrb(sc, sim.relative))
+    F, Q = ncv_matrices(sc.time.dt, sc.target.q)
+    J = np.linalg.inv(prior_relative_moments(sc)[1])
+    sig = float(sc.sensors[0].sigma)
+    steps = set(range(sc.sensors[0].first_step, sc.n_steps + 1, sc.sensors[0].every))
+    for k in range(sc.n_steps + 1):
+        if k:
+            J = np.linalg.inv(Q + F @ np.linalg.inv(J) @ F.T)
+        x, y = sim.relative[k, :2]
+        if k in steps:
+            g = np.array([y, -x, 0, 0]) / (x * x + y * y)
+            J = J + np.outer(g, g) / sig**2
+        u = np.array([x, y]) / np.hypot(x, y)
+        C = np.linalg.inv(J)[:2, :2]
+        assert rng_b[k] == pytest.approx(np.sqrt(u @ C @ u), rel=1e-6)
+    assert np.all(rng_b <= pos)

@@ -171,6 +171,11 @@ def check(s: Any, source: str | None) -> None:
             if t.model == "constant-turn" and (p.range_mean is None or p.bearing_mean is None):
                 raise _err("prior", "explicit means for a constant-turn target", None, source)
 
+    est = s.estimation
+    if est is not None and est.turn_direction != "either" and t.model != "constant-turn":
+        raise _err("estimation.turn_direction", "'either' unless the target model is "
+                   "'constant-turn'", est.turn_direction, source)
+
     pl = s.planning
     if pl is not None:
         for i, (a, b) in enumerate(pl.ping_forbidden):

@@ -24,6 +24,7 @@ from tmaplan.units import to_si
 
 __all__ = [
     "BearingSensor",
+    "Estimation",
     "FrequencySensor",
     "Observer",
     "ObserverLeg",
@@ -470,6 +471,23 @@ class Planning:
 
 
 @_frozen
+class Estimation:
+    """Optional settings of the batch estimators (``tmaplan track --estimator mle``).
+
+    Attributes
+    ----------
+    turn_direction : {"either", "clockwise", "anticlockwise"}
+        Sense of turn that the constant-turn MLE searches (clockwise = starboard, ω > 0 in
+        file 002's convention). "either" (default) searches both senses and reports
+        indistinguishable mirror solutions (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`);
+        a given sense is prior knowledge of the contact's turn, the way file 002 §III
+        evaluates its clockwise and anticlockwise sources separately (L300).
+    """
+
+    turn_direction: Literal["either", "clockwise", "anticlockwise"] = "either"
+
+
+@_frozen
 class Scenario:
     """A complete TMA scenario.
 
@@ -483,6 +501,7 @@ class Scenario:
     sensors : tuple of BearingSensor | RangeSensor | FrequencySensor
     prior : Prior, optional
     planning : Planning, optional
+    estimation : Estimation, optional
     """
 
     name: str
@@ -493,6 +512,7 @@ class Scenario:
     sensors: tuple[Sensor, ...]
     prior: Prior | None = None
     planning: Planning | None = None
+    estimation: Estimation | None = None
 
     # -- convenience -------------------------------------------------------------------------
     @property

@@ -10,10 +10,11 @@ from pathlib import Path
 from typing import Any
 
 from tmaplan.errors import ScenarioError
+from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import ESTIMATORS, monte_carlo
-from tmaplan.scenario import load
+from tmaplan.scenario import Scenario, load
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
 
@@ -37,8 +38,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default="mixture",
                         help="range-only: Gaussian mixture over azimuth sectors (default), or "
                              "file 004's single-Gaussian moment / Dirac-mixture recursion")
+    parser.add_argument("--frequencies", type=int, default=0, metavar="N",
+                        help="also use the first N frequency lines of the scenario (default 0: "
+                             "bearings, and pings if any, only; as `tmaplan crlb`)")
+    parser.add_argument("--turn-direction", default="auto",
+                        choices=("auto", "either", "clockwise", "anticlockwise"),
+                        help="mle, constant-turn source: sense of turn searched (auto: the "
+                             "problem's [estimation] section, else either)")
     parser.add_argument("--out", default="out", help="figure directory")
     parser.add_argument("--no-figure", action="store_true", help="skip the figure")
+
+
+def _with_lines(scenario: Scenario, n: int) -> Scenario:
+    """The scenario with only the first ``n`` lines of its frequency sensors (0: none)."""
+    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if n < 0 or n > available:
+        raise ScenarioError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
+    if n == available:
+        return scenario
+    sensors = tuple(s if s.kind != "frequency" else
+                    dataclasses.replace(s, f0=s.f0[:n], sigma=s.sigma[:n])
+                    for s in scenario.sensors if s.kind != "frequency" or n > 0)
+    return scenario.replace(sensors=sensors)
 
 
 def _figure(res: Any, path: Path) -> None:
@@ -69,7 +90,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         raise ScenarioError("--runs", ">= 1", args.runs)
     if args.particles < 2:
         raise ScenarioError("--particles", ">= 2", args.particles)
-    scenario = load(args.problem)
+    scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
 
@@ -85,6 +106,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if estimator == "pf" and variant != "regularised":
         estimator = PFConfig(n_particles=args.particles, dt=scenario.time.dt,
                              q=float(scenario.target.q), variant=variant)
+    turn: Any = getattr(args, "turn_direction", "auto")
+    if turn != "auto":
+        if estimator != "mle":
+            raise ScenarioError("--turn-direction", "only with --estimator mle", turn)
+        estimator = MLEConfig(turn_direction=turn)
     res = monte_carlo(scenario, estimator, runs=args.runs, seed=args.seed,
                       n_particles=args.particles, progress=progress,
                       bound=getattr(args, "bound", "truth"))
@@ -97,6 +123,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         payload["range_only_mode"] = mode
     if args.estimator == "pf":
         payload["pf_variant"] = variant
+    if args.estimator == "mle":
+        est = scenario.estimation
+        payload["turn_direction"] = (turn if turn != "auto" else
+                                     est.turn_direction if est is not None else "either")
     if not args.no_figure:
         suffix = (f"-{mode}" if args.estimator == "range-only" and mode != "mixture"
                   else f"-{variant}" if args.estimator == "pf" and variant != "regularised"
@@ -108,6 +138,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         print(f"{scenario.name}: {args.estimator}, {res.runs} runs, {res.seconds:.1f} s")
         print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
               f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
+        print(f"  final range RMSE {res.rmse_range[-1]:.1f} m, bound {res.bound_range[-1]:.1f} m")
+        if args.estimator == "mle":
+            print(f"  sense of turn searched: {payload['turn_direction']}; "
+                  f"{res.ambiguous_runs} run(s) with an indistinguishable alternative "
+                  "solution")
         if "figure" in payload:
             print(f"  figure: {payload['figure']}")
     return payload

@@ -72,6 +72,9 @@ class TMAData:
         Observer position [m] and instantaneous velocity [m/s].
     c : float
         Sound speed [m/s].
+    turn_direction : {"either", "clockwise", "anticlockwise"}
+        Known sense of turn of a constant-turn source (``scenario.estimation``); used by
+        ``MLEConfig(turn_direction="auto")``.
     """
 
     model: Model
@@ -92,6 +95,7 @@ class TMAData:
     f_obs: np.ndarray
     f_obs_vel: np.ndarray
     c: float = 1500.0
+    turn_direction: Literal["either", "clockwise", "anticlockwise"] = "either"
 
     @property
     def n_geom(self) -> int:
@@ -163,7 +167,10 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
                    r_times=cat(r, "times"), r_values=cat(r, "values"), r_sigma=sig(r),
                    r_obs=pos[r_steps] if r else e2,
                    f_times=np.asarray(f_times, float), f_values=np.asarray(f_values, float),
-                   f_sigma=f_sigma, f_obs=f_obs, f_obs_vel=f_vel, c=c)
+                   f_sigma=f_sigma, f_obs=f_obs, f_obs_vel=f_vel, c=c,
+                   turn_direction=(scenario.estimation.turn_direction
+                                   if scenario.estimation is not None and mdl == "constant-turn"
+                                   else "either"))
 
 
 # --------------------------------------------------------------------------------------------

@@ -18,11 +18,15 @@ measurement streams s with ``d_s = N_s − n_geom`` for bearings and ranges and
 
 Initialisation and the half-turn ghost. ``MLEConfig(init="paper")`` is file 002's scheme as
 written (single best grid node). On the reconstructed §III.4 half turn, a distinct source turning
-the other way fits the noise-free cw bearings with cost 0.10 (acw: 0.12), so the acceptance test
-cannot reject it and, with noise, it is the global minimum in ~45 % of runs (predicted
-Φ(−√0.10/2) = 0.44). ``init="multistart"`` (default) refines the best nodes of both turn
-directions, keeps the lowest cost and reports statistically indistinguishable distinct minima
-in :attr:`MLEResult.alternatives` instead of hiding the ambiguity.
+the other way fits the noise-free cw bearings with cost 0.10 (acw: 0.60), so the acceptance test
+cannot reject it and, searching both senses, it is the global minimum in ~45 % of runs
+(predicted Φ(−√0.10/2) = 0.44). ``init="multistart"`` (default) refines the best nodes of each
+searched sense, keeps the lowest cost and reports statistically indistinguishable distinct
+minima in :attr:`MLEResult.alternatives` instead of hiding the ambiguity.
+``MLEConfig.turn_direction`` (default: the scenario's ``[estimation]`` section) restricts the
+search to one sense of turn, prior knowledge that file 002's Table 1 shows its clockwise study
+had (σ̂_ω = σ_CRLB leaves no room for a single mirror estimate), while its Table 2 biases are
+those of a both-senses search (a 21 % mixture with the clockwise mirror; tests/test_mle.py).
 
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
@@ -111,6 +115,12 @@ class MLEConfig:
     ambiguity_margin : float
         Cost difference below which two distinct minima are statistically indistinguishable
         (default 6.63 = χ²₁ 99 % quantile of a likelihood-ratio test).
+    turn_direction : {"auto", "either", "clockwise", "anticlockwise"}
+        Constant turn: the sense of turn searched (clockwise: ω > 0). "auto" takes the
+        scenario's ``estimation.turn_direction`` (carried by :class:`TMAData`; "either" when
+        the scenario says nothing). With a given sense only grid nodes of that sense are
+        refined and a refinement that crosses ω = 0 is discarded (status "failed" if no start
+        stays in the sense).
     """
 
     model: Literal["auto", "cv", "multi-leg", "constant-turn"] = "auto"
@@ -124,8 +134,13 @@ class MLEConfig:
     frequencies: int | None = None
     init: Literal["multistart", "paper"] = "multistart"
     ambiguity_margin: float = 6.63
+    turn_direction: Literal["auto", "either", "clockwise", "anticlockwise"] = "auto"
 
     def __post_init__(self) -> None:
+        if self.turn_direction not in ("auto", "either", "clockwise", "anticlockwise"):
+            raise ScenarioError("turn_direction",
+                                "'auto', 'either', 'clockwise' or 'anticlockwise'",
+                                self.turn_direction)
         if self.init not in ("multistart", "paper"):
             raise ScenarioError("init", "'multistart' or 'paper'", self.init)
         if not isinstance(self.n_starts, int | np.integer) or self.n_starts < 1:
@@ -272,8 +287,8 @@ def _grid_costs(data: TMAData, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return cost, tones
 
 
-def _gauss_newton(data: TMAData, x: np.ndarray, scale: np.ndarray, iters: int
-                  ) -> tuple[np.ndarray, int]:
+def _gauss_newton(data: TMAData, x: np.ndarray, scale: np.ndarray, iters: int,
+                  sense: int = 0) -> tuple[np.ndarray, int]:
     r, J = residuals(data, x)
     cost = float(r @ r)
     it = 0
@@ -285,6 +300,9 @@ def _gauss_newton(data: TMAData, x: np.ndarray, scale: np.ndarray, iters: int
         lam = 1.0
         while lam > 1e-3:
             xn = x + lam * step
+            if sense and xn[4] * sense <= 0:  # the step would cross ω = 0
+                lam *= 0.5
+                continue
             rn, Jn = residuals(data, xn)
             cn = float(rn @ rn)
             if np.isfinite(cn) and cn < cost:
@@ -296,10 +314,10 @@ def _gauss_newton(data: TMAData, x: np.ndarray, scale: np.ndarray, iters: int
     return x, it
 
 
-def _refine(data: TMAData, x0: np.ndarray, config: MLEConfig
+def _refine(data: TMAData, x0: np.ndarray, config: MLEConfig, sense: int = 0
             ) -> tuple[np.ndarray, float, int, int, str, str]:
     scale = _scale(data, x0)
-    x, gn_it = _gauss_newton(data, x0, scale, config.gn_iterations)
+    x, gn_it = _gauss_newton(data, x0, scale, config.gn_iterations, sense)
     try:
         sol = least_squares(lambda p: residuals(data, p, jacobian=False)[0], x,
                             jac=lambda p: residuals(data, p)[1], method="lm", x_scale=scale,
@@ -312,7 +330,26 @@ def _refine(data: TMAData, x0: np.ndarray, config: MLEConfig
     if not np.isfinite(cost):
         status = "failed"
     njev = int(sol.njev) if sol.njev is not None else 0
-    return sol.x, cost, gn_it + njev, int(sol.nfev), status, str(sol.message)
+    message = str(sol.message)
+    if sense and sol.x[4] * sense <= 0:
+        status = "failed"
+        message = (f"left the {_SENSE_NAMES[sense]} sense of turn (omega = {sol.x[4]:.3g} "
+                   "rad/s)")
+    return sol.x, cost, gn_it + njev, int(sol.nfev), status, message
+
+
+_SENSE_NAMES = {1: "clockwise", -1: "anticlockwise"}
+
+
+def _sense(data: TMAData, config: MLEConfig) -> int:
+    """+1 clockwise, −1 anticlockwise, 0 either (see ``MLEConfig.turn_direction``)."""
+    name = data.turn_direction if config.turn_direction == "auto" else config.turn_direction
+    if name == "either":
+        return 0
+    if data.model != "constant-turn":
+        raise ScenarioError("turn_direction", f"'auto' or 'either' for a '{data.model}' model",
+                            name)
+    return 1 if name == "clockwise" else -1
 
 
 def mle(data: TMAData, config: MLEConfig | None = None, *,
@@ -338,17 +375,23 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     if n_meas < data.n_params + 1:
         raise ScenarioError("measurements", f"more than {data.n_params} measurements for a "
                             f"'{data.model}' batch estimate", n_meas)
+    sense = _sense(data, cfg)
     if initial is not None:
         init = np.asarray(initial, float)
         if init.size == data.n_geom and data.n_lines:
             init = np.concatenate([init, data.f_values.mean(axis=0)])
+        if sense and init[4] * sense <= 0:
+            raise ScenarioError("initial[4] (omega)", f"{'>' if sense > 0 else '<'} 0 for a "
+                                f"{_SENSE_NAMES[sense]} turn", float(init[4]))
         starts = [init]
     else:
         grid = _grid(data, cfg)
+        if sense:
+            grid = grid[grid[:, 4] * sense > 0]
         costs, tones = _grid_costs(data, grid)
         if cfg.init == "paper":
             order = np.argsort(costs)[:1]
-        elif data.model == "constant-turn":
+        elif data.model == "constant-turn" and not sense:
             # Both turn directions: the half-turn geometry of file 002 has a mirror-turn
             # near-ghost whose basin holds the best grid node in ~20 % of the runs.
             order = np.concatenate([np.flatnonzero(sgn)[np.argsort(costs[sgn])[: cfg.n_starts]]
@@ -360,7 +403,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     total_it = 0
     total_fev = 0
     for x0 in starts:
-        res = _refine(data, x0, cfg)
+        res = _refine(data, x0, cfg, sense)
         total_it += res[2]
         total_fev += res[3]
         results.append((_canonical(data, res[0]), *res[1:]))

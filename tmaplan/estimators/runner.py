@@ -46,7 +46,7 @@ from tmaplan.estimators.range_only_gm import (
     mixture_predict,
     mixture_update,
 )
-from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_pcrb
+from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_bounds
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
 from tmaplan.simulate import MeasurementSet, Simulation, simulate
@@ -388,8 +388,8 @@ def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -
     return np.asarray(res.position_std, float)
 
 
-def _crlb_position(scenario: Scenario, config: MLEConfig) -> np.ndarray:
-    """Position std of the batch CRLB at the truth, per step [m]."""
+def _crlb_position(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Position and range std of the batch CRLB at the truth, per step [m]."""
     from tmaplan.estimators.mle import fisher_information
 
     sim = simulate(scenario, None)
@@ -410,9 +410,12 @@ def _crlb_position(scenario: Scenario, config: MLEConfig) -> np.ndarray:
         f0 = list(fs.f0[: data.n_lines])
     p = np.concatenate([geom, f0])
     C = np.linalg.inv(fisher_information(data, p))
-    _, Cs = state_track(data, p, C, scenario.times)
+    S, Cs = state_track(data, p, C, scenario.times)
     assert Cs is not None
-    return np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2))
+    rel = S[:, :2] - sim.observer.position
+    u = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
+    return (np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2)),
+            np.sqrt(np.einsum("ki,kij,kj->k", u, Cs[:, :2, :2], u)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -435,6 +438,9 @@ class MonteCarloResult:
     bound_position : ndarray, shape (K + 1,)
         PCRB (filters: along the runs' truths, or prior-averaged, see ``bound_kind``) or CRLB
         (MLE) position std [m].
+    bound_range : ndarray, shape (K + 1,)
+        Range std of the same bound (delta method along the true line of sight) [m]; NaN for
+        the prior-averaged bound.
     bound_kind : str
         "truth", "prior", "crlb" or "none".
     divergence_rate : float
@@ -446,6 +452,9 @@ class MonteCarloResult:
     statuses : tuple of str
     seconds : float
         Total wall time [s].
+    ambiguous_runs : int
+        MLE: runs whose estimate has a statistically indistinguishable distinct alternative
+        (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`); 0 for the filters.
     """
 
     problem: str
@@ -456,21 +465,25 @@ class MonteCarloResult:
     rmse_position: np.ndarray
     rmse_range: np.ndarray
     bound_position: np.ndarray
+    bound_range: np.ndarray
     bound_kind: str
     divergence_rate: float
     nees: np.ndarray
     position_errors: np.ndarray
     statuses: tuple[str, ...]
     seconds: float
+    ambiguous_runs: int = 0
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dict (SI units)."""
         return {"problem": self.problem, "estimator": self.estimator, "runs": self.runs,
                 "seed": self.seed, "times": self.times, "rmse_position": self.rmse_position,
                 "rmse_range": self.rmse_range, "bound_position": self.bound_position,
+                "bound_range": self.bound_range,
                 "bound_kind": self.bound_kind, "divergence_rate": self.divergence_rate,
                 "nees": self.nees,
                 "rejected": sum(s in ("rejected", "failed") for s in self.statuses),
+                "ambiguous_runs": self.ambiguous_runs,
                 "seconds": self.seconds}
 
 
@@ -515,6 +528,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
     err_rng = np.full((runs, K + 1), np.nan)
     nees = np.full((runs, K + 1), np.nan)
     statuses = []
+    ambiguous = 0
     truths = np.zeros((runs, K + 1, 4))
     children = np.random.SeedSequence(seed).spawn(runs + 1)
     for i in range(runs):
@@ -523,6 +537,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
         truths[i] = sim.relative
         tr = run(estimator, scenario, sim, rng=rng, n_particles=n_particles, **run_kwargs)
         statuses.append(tr.status)
+        ambiguous += bool(getattr(tr.details, "ambiguous", False))
         e = tr.estimates - sim.relative
         err_pos[i] = np.hypot(e[:, 0], e[:, 1])
         err_rng[i] = np.hypot(tr.estimates[:, 0], tr.estimates[:, 1]) - np.hypot(
@@ -541,15 +556,16 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
         brng = np.random.default_rng(children[runs])
         if name == "mle" or isinstance(estimator, MLEConfig):
             cfg = estimator if isinstance(estimator, MLEConfig) else MLEConfig()
-            b, kind = _crlb_position(scenario, cfg), "crlb"
+            (b, br), kind = _crlb_position(scenario, cfg), "crlb"
         elif bound == "prior":
             b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
+            br = np.full(K + 1, np.nan)
         elif bound is True or bound == "truth":
-            b, kind = truth_pcrb(scenario, truths), "truth"
+            (b, br), kind = truth_bounds(scenario, truths), "truth"
         else:
             raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
     else:
-        b = np.full(K + 1, np.nan)
+        b = br = np.full(K + 1, np.nan)
     used = np.array([s not in ("rejected", "failed") for s in statuses])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -561,7 +577,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
     final_bad = ~used | ~(err_pos[:, -1] <= 5.0 * b[-1]) if bound else ~used
     return MonteCarloResult(problem=scenario.name, estimator=str(name), runs=runs, seed=seed,
                             times=scenario.times, rmse_position=rmse_p, rmse_range=rmse_r,
-                            bound_position=b, bound_kind=kind,
+                            bound_position=b, bound_range=br, bound_kind=kind,
                             divergence_rate=float(np.mean(final_bad)),
                             nees=mean_nees, position_errors=err_pos, statuses=tuple(statuses),
-                            seconds=_time.perf_counter() - t0)
+                            seconds=_time.perf_counter() - t0, ambiguous_runs=ambiguous)

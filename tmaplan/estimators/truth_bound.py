@@ -33,7 +33,7 @@ from tmaplan.models.target import ncv_matrices
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["cartesian_pcrb", "truth_pcrb"]
+__all__ = ["cartesian_pcrb", "truth_bounds", "truth_pcrb"]
 
 
 def _information_rates(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
@@ -84,6 +84,21 @@ def truth_pcrb(scenario: Scenario, relative: np.ndarray, *,
     ndarray, shape (K + 1,)
         ``sqrt(mean_runs tr [J_k⁻¹]_pos)`` [m].
     """
+    return truth_bounds(scenario, relative, prior_cov=prior_cov)[0]
+
+
+def truth_bounds(scenario: Scenario, relative: np.ndarray, *,
+                 prior_cov: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Position and range PCRB along given true relative trajectories (see :func:`truth_pcrb`).
+
+    Returns
+    -------
+    position : ndarray, shape (K + 1,)
+        ``sqrt(mean_runs tr [J_k⁻¹]_pos)`` [m].
+    range : ndarray, shape (K + 1,)
+        ``sqrt(mean_runs uᵀ [J_k⁻¹]_pos u)`` [m], u the true line-of-sight unit vector (the
+        range bound by the delta method).
+    """
     X = np.asarray(relative, float)
     if X.ndim == 2:
         X = X[None]
@@ -94,6 +109,7 @@ def truth_pcrb(scenario: Scenario, relative: np.ndarray, *,
     R = X.shape[0]
     J = np.broadcast_to(np.linalg.inv(P0), (R, 4, 4)).copy()
     out = np.zeros(K + 1)
+    out_r = np.zeros(K + 1)
     Fi = np.linalg.inv(F)
     for k in range(K + 1):
         if k > 0:
@@ -104,7 +120,9 @@ def truth_pcrb(scenario: Scenario, relative: np.ndarray, *,
         J[:, :2, :2] += _meas_info(X[:, k], info_b[k], info_r[k])
         C = np.linalg.inv(J)
         out[k] = np.sqrt(np.mean(C[:, 0, 0] + C[:, 1, 1]))
-    return out
+        u = X[:, k, :2] / np.hypot(X[:, k, 0], X[:, k, 1])[:, None]
+        out_r[k] = np.sqrt(np.mean(np.einsum("ri,rij,rj->r", u, C[:, :2, :2], u)))
+    return out, out_r
 
 
 def cartesian_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generator,

@@ -7,12 +7,6 @@ import json
 import numpy as np
 import pytest
 
-from tmaplan.bounds._batch_models import (
-    bearing_rows,
-    range_rate_rows,
-    range_rows,
-    relative_kinematics,
-)
 from tmaplan.bounds.crlb import (
     BearingData,
     FrequencyData,
@@ -27,6 +21,12 @@ from tmaplan.bounds.crlb import (
 from tmaplan.bounds.fimdet import fim_bearings
 from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.models.target import constant_turn_state
+from tmaplan.models.tracks import (
+    bearing_rows,
+    range_rate_rows,
+    range_rows,
+    relative_kinematics,
+)
 from tmaplan.scenario import from_dict, load_problem
 
 SIG = np.radians(0.5)

@@ -4,7 +4,7 @@ Role: the information half of :mod:`tmaplan.bounds.crlb` (which inverts it into 
 its final-time quantities). It holds the array-level measurement sets (:class:`BearingData`,
 :class:`RangeData`, :class:`FrequencyData`), their input checks, and
 :func:`fisher_information`: ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` with analytic rows from
-:mod:`tmaplan.bounds._batch_models`, for bearings, range pings and P frequency lines with
+:mod:`tmaplan.models.tracks`, for bearings, range pings and P frequency lines with
 unknown tones as nuisance parameters — the FIM of Clavard, Pillon, Pignol & Jauffret
 (file 002, eq. 3, eqs. 11–16, L503–L524; §3.1 of NOTES_002).
 
@@ -18,14 +18,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tmaplan.bounds._batch_models import (
+from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.models.tracks import (
     TrackModel,
     bearing_rows,
     range_rate_rows,
     range_rows,
     relative_kinematics,
 )
-from tmaplan.errors import ObservabilityError, ScenarioError
 
 __all__ = ["BearingData", "FrequencyData", "RangeData", "fisher_information"]
 

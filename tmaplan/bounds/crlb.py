@@ -2,7 +2,7 @@
 
 The target track is a deterministic function of a parameter vector θ (constant velocity,
 multi-leg with known change times, or file 002's constant turn, see
-:mod:`tmaplan.bounds._batch_models`). Measurements are independent Gaussian:
+:mod:`tmaplan.models.tracks`). Measurements are independent Gaussian:
 
 * bearings ``β_k = atan2(d_x, d_y) + ε``, σ_β [rad];
 * range pings ``R_k + ε``, σ_R [m];
@@ -29,13 +29,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import linalg
 
-from tmaplan.bounds._batch_models import (
-    TrackModel,
-    constant_turn_model,
-    cv_model,
-    multi_leg_model,
-)
-
 # The measurement sets and the Fisher information live in their own module; re-exported here
 # (the public home of the API).
 from tmaplan.bounds._crlb_fim import (
@@ -45,6 +38,12 @@ from tmaplan.bounds._crlb_fim import (
     fisher_information,
 )
 from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.models.tracks import (
+    TrackModel,
+    constant_turn_model,
+    cv_model,
+    multi_leg_model,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario

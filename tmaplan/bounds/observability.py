@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.bounds._batch_models import constant_turn_model
 from tmaplan.errors import ScenarioError
+from tmaplan.models.tracks import constant_turn_model
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario

@@ -7,7 +7,7 @@ lives there:
 * :class:`TMAData` / :func:`tma_data`: the measurements of a run and the observer geometry;
 * :func:`kinematics`: target position and velocity of the cv, multi-leg and constant-turn
   parametrisations (file 002's ``Z = [x_C, y_C, ρ_C, φ, ω]``, L108, L141) with analytic
-  Jacobians;
+  Jacobians, from :mod:`tmaplan.models.tracks` (the same models as the batch CRLB);
 * :func:`residuals`: whitened bearing, range and frequency-line residuals (unknown tones as
   nuisance parameters, file 002 eq. 3, §IV) and their Jacobian (file 002 §1.6 of the notes);
 * :func:`fisher_information` (file 002 eqs. 11–16) and :func:`acceptance_threshold`
@@ -26,6 +26,15 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from tmaplan.geometry import wrap_angle, wrap_half_angle
+from tmaplan.models.tracks import (
+    TrackModel,
+    bearing_rows,
+    constant_turn_model,
+    cv_model,
+    multi_leg_model,
+    range_rate_rows,
+    range_rows,
+)
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -41,6 +50,7 @@ __all__ = [
     "residuals",
     "state_track",
     "tma_data",
+    "track_model",
 ]
 
 Model = Literal["cv", "multi-leg", "constant-turn"]
@@ -178,6 +188,16 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
 # --------------------------------------------------------------------------------------------
 
 
+def track_model(data: TMAData) -> TrackModel:
+    """The :class:`~tmaplan.models.tracks.TrackModel` of the data's parametrisation
+    (position parameters at ``data.t0``; legs change at ``data.leg_starts``)."""
+    if data.model == "constant-turn":
+        return constant_turn_model()
+    if data.model == "multi-leg":
+        return multi_leg_model(tuple(float(x) for x in data.leg_starts), t_ref=data.t0)
+    return cv_model(data.t0)
+
+
 def kinematics(data: TMAData, theta: np.ndarray, t: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Target position and velocity and their Jacobians w.r.t. the geometric parameters.
@@ -195,70 +215,18 @@ def kinematics(data: TMAData, theta: np.ndarray, t: np.ndarray
         [m], [m/s].
     dP, dV : ndarray, shape (n, 2, n_geom)
     """
+    model = track_model(data)
+    th = np.asarray(theta, float)[: data.n_geom]
     t = np.asarray(t, float)
-    n = t.shape[0]
-    th = np.asarray(theta, float)
-    if data.model == "constant-turn":
-        xc, yc, rho, phi, om = th[:5]
-        u = om * t + phi
-        s, c = np.sin(u), np.cos(u)
-        P = np.stack([xc + rho * s, yc + rho * c], axis=-1)
-        V = np.stack([rho * om * c, -rho * om * s], axis=-1)
-        dP = np.zeros((n, 2, 5))
-        dV = np.zeros((n, 2, 5))
-        dP[:, 0, 0] = 1.0
-        dP[:, 1, 1] = 1.0
-        dP[:, 0, 2], dP[:, 1, 2] = s, c
-        dP[:, 0, 3], dP[:, 1, 3] = rho * c, -rho * s
-        dP[:, 0, 4], dP[:, 1, 4] = t * rho * c, -t * rho * s
-        dV[:, 0, 2], dV[:, 1, 2] = om * c, -om * s
-        dV[:, 0, 3], dV[:, 1, 3] = -rho * om * s, -rho * om * c
-        dV[:, 0, 4] = rho * c - rho * om * t * s
-        dV[:, 1, 4] = -rho * s - rho * om * t * c
-        return P, V, dP, dV
-    knots = np.concatenate([[data.t0], data.leg_starts]) if data.model == "multi-leg" \
-        else np.array([data.t0])
-    m = knots.size
-    ends = np.concatenate([knots[1:], [np.inf]])
-    # time spent in each leg up to t (legs before t0 are not modelled)
-    overlap = np.clip(np.minimum(t[:, None], ends[None]) - knots[None], 0.0, None)
-    if data.model == "cv":
-        overlap = (t - data.t0)[:, None]
-    vel = th[2:].reshape(m, 2)
-    seg = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, m - 1)
-    P = th[:2] + overlap @ vel
-    V = vel[seg]
-    dP = np.zeros((n, 2, 2 + 2 * m))
-    dV = np.zeros((n, 2, 2 + 2 * m))
-    dP[:, 0, 0] = dP[:, 1, 1] = 1.0
-    for j in range(m):
-        dP[:, 0, 2 + 2 * j] = overlap[:, j]
-        dP[:, 1, 3 + 2 * j] = overlap[:, j]
-        dV[:, 0, 2 + 2 * j] = seg == j
-        dV[:, 1, 3 + 2 * j] = seg == j
+    P, V = model.track(th, t)
+    dP, dV = model.jacobian(th, t)
     return P, V, dP, dV
 
 
 def _positions(data: TMAData, th: np.ndarray, t: np.ndarray, *, velocity: bool = False
                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Batched positions (and velocities) for many parameter vectors, shape (G, n, 2)."""
-    if data.model == "constant-turn":
-        xc, yc, rho, phi, om = (th[:, i, None] for i in range(5))
-        u = om * t + phi
-        s, c = np.sin(u), np.cos(u)
-        P = np.stack([xc + rho * s, yc + rho * c], -1)
-        V = np.stack([rho * om * c, -rho * om * s], -1)
-    else:
-        knots = np.concatenate([[data.t0], data.leg_starts]) if data.model == "multi-leg" \
-            else np.array([data.t0])
-        ends = np.concatenate([knots[1:], [np.inf]])
-        ov = np.clip(np.minimum(t[:, None], ends[None]) - knots[None], 0.0, None)
-        if data.model == "cv":
-            ov = (t - data.t0)[:, None]
-        vel = th[:, 2:].reshape(th.shape[0], -1, 2)
-        P = th[:, None, :2] + np.einsum("nj,gjk->gnk", ov, vel)
-        seg = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, knots.size - 1)
-        V = vel[:, seg]
+    P, V = track_model(data).track_many(np.asarray(th, float)[:, : data.n_geom], t)
     return (P, V) if velocity else P
 
 
@@ -288,14 +256,12 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
     if data.b_times.size:
         P, _, dP, _ = kinematics(data, th[:ng], data.b_times)
         d = P - data.b_obs
-        R2 = d[:, 0] ** 2 + d[:, 1] ** 2
         beta = np.arctan2(d[:, 0], d[:, 1])
         wrap = wrap_half_angle if data.ambiguity == "pi" else wrap_angle
         out_r.append(wrap(data.b_values - beta) / data.b_sigma)
         if jacobian:
-            db = (d[:, 1, None] * dP[:, 0] - d[:, 0, None] * dP[:, 1]) / R2[:, None]
             J = np.zeros((P.shape[0], npar))
-            J[:, :ng] = -db / data.b_sigma[:, None]
+            J[:, :ng] = -bearing_rows(d, dP) / data.b_sigma[:, None]
             out_j.append(J)
     if data.r_times.size:
         P, _, dP, _ = kinematics(data, th[:ng], data.r_times)
@@ -303,22 +269,13 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
         R = np.hypot(d[:, 0], d[:, 1])
         out_r.append((data.r_values - R) / data.r_sigma)
         if jacobian:
-            dR = (d[:, 0, None] * dP[:, 0] + d[:, 1, None] * dP[:, 1]) / R[:, None]
             J = np.zeros((P.shape[0], npar))
-            J[:, :ng] = -dR / data.r_sigma[:, None]
+            J[:, :ng] = -range_rows(d, dP) / data.r_sigma[:, None]
             out_j.append(J)
     if data.n_lines:
         P, V, dP, dV = kinematics(data, th[:ng], data.f_times)
-        d = P - data.f_obs
-        v = V - data.f_obs_vel
-        R = np.hypot(d[:, 0], d[:, 1])
-        rdot = (d[:, 0] * v[:, 0] + d[:, 1] * v[:, 1]) / R
+        rdot, ddot = range_rate_rows(P - data.f_obs, V - data.f_obs_vel, dP, dV)
         a = 1.0 - rdot / data.c
-        if jacobian:
-            ddot = ((v[:, 0, None] * dP[:, 0] + v[:, 1, None] * dP[:, 1]
-                     + d[:, 0, None] * dV[:, 0] + d[:, 1, None] * dV[:, 1]) / R[:, None]
-                    - rdot[:, None] * (d[:, 0, None] * dP[:, 0] + d[:, 1, None] * dP[:, 1])
-                    / (R * R)[:, None])
         for p in range(data.n_lines):
             fp = th[ng + p]
             s = data.f_sigma[p]

@@ -59,6 +59,7 @@ from tmaplan.estimators._mle_models import (
     residuals,
     state_track,
     tma_data,
+    track_model,
 )
 from tmaplan.geometry import wrap_angle, wrap_half_angle
 
@@ -205,11 +206,8 @@ class MLEResult:
 
 
 def _names(data: TMAData) -> tuple[str, ...]:
-    if data.model == "constant-turn":
-        g = ["x_C", "y_C", "rho_C", "phi", "omega"]
-    else:
-        g = ["x0", "y0"] + [f"v{c}_{j}" for j in range(data.n_geom // 2 - 1) for c in "xy"]
-    return tuple(g + [f"f_{p}" for p in range(data.n_lines)])
+    """The batch CRLB's names (:mod:`tmaplan.models.tracks`), then the tones ``f0[p]``."""
+    return track_model(data).names + tuple(f"f0[{p}]" for p in range(data.n_lines))
 
 
 def _scale(data: TMAData, theta: np.ndarray) -> np.ndarray:

@@ -1,4 +1,8 @@
-"""Deterministic target-track models and measurement Jacobians for the batch FIM.
+"""Deterministic target-track models and measurement Jacobians (batch CRLB and batch MLE).
+
+The one implementation of the cv / multi-leg / constant-turn parametrisations: the batch CRLB
+(:mod:`tmaplan.bounds.crlb`) and the batch maximum-likelihood estimator
+(:mod:`tmaplan.estimators.mle`) both evaluate tracks and Jacobians here.
 
 A *track model* maps a parameter vector ``θ`` to the target position and velocity at given
 times, with analytic Jacobians ``∂p/∂θ`` and ``∂v/∂θ``:
@@ -113,6 +117,34 @@ class TrackModel:
         pos = theta[:2] + tau @ v
         leg = np.searchsorted(np.asarray(self.change_times, float), t, side="right")
         return pos, v[leg]
+
+    def track_many(self, thetas: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions and velocities for many parameter vectors at once (coarse grids).
+
+        Parameters
+        ----------
+        thetas : ndarray, shape (G, dim)
+        t : ndarray, shape (n,)
+            Times [s].
+
+        Returns
+        -------
+        position, velocity : ndarray, shape (G, n, 2)
+            [m], [m/s].
+        """
+        th = np.asarray(thetas, float)
+        t = np.asarray(t, float)
+        if self.kind == "constant-turn":
+            xc, yc, rho, phi, om = (th[:, i, None] for i in range(5))
+            u = om * t + phi
+            s, c = np.sin(u), np.cos(u)
+            return (np.stack([xc + rho * s, yc + rho * c], -1),
+                    np.stack([rho * om * c, -rho * om * s], -1))
+        tau = self._leg_durations(t)  # (n, ℓ)
+        v = th[:, 2:].reshape(th.shape[0], -1, 2)  # (G, ℓ, 2)
+        pos = th[:, None, :2] + np.einsum("nj,gjk->gnk", tau, v)
+        leg = np.searchsorted(np.asarray(self.change_times, float), t, side="right")
+        return pos, v[:, leg]
 
     def jacobian(self, theta: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Analytic Jacobians of position and velocity with respect to the parameters.

@@ -17,17 +17,6 @@ from tmaplan.planning import (
     evaluate_baselines,
     straight_track,
 )
-from tmaplan.scenario import load_problem
-
-
-@pytest.fixture(scope="module")
-def default():
-    return load_problem("default")
-
-
-@pytest.fixture(scope="module")
-def prior(default):
-    return Belief.from_prior(default)
 
 
 @pytest.fixture(scope="module")

@@ -9,14 +9,8 @@ import pytest
 
 from tmaplan.errors import PlanningError
 from tmaplan.planning import Belief, HeadingPlanner, plan_heading
-from tmaplan.scenario import load_problem
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
-
-
-@pytest.fixture(scope="module")
-def default():
-    return load_problem("default")
 
 
 def _with_observer(s, **kw):

@@ -17,16 +17,6 @@ CAND = list(range(4, 161, 4))  # 40 candidate steps
 
 
 @pytest.fixture(scope="module")
-def default():
-    return load_problem("default")
-
-
-@pytest.fixture(scope="module")
-def prior(default):
-    return Belief.from_prior(default)
-
-
-@pytest.fixture(scope="module")
 def evaluator(default, prior):
     return PingEvaluator(default, observer_track(default.observer, default.time), prior,
                          "mean-range-bound")
@@ -148,8 +138,7 @@ def test_compiled_schedule_evaluation_equals_reference():
     # the C schedule kernel (tmaplan.bounds._jit) and the numpy reference loop agree to 1e-12
     import tmaplan.bounds._jit as jit
     from tmaplan.models.observer import observer_track
-    from tmaplan.planning import Belief, PingEvaluator
-    from tmaplan.scenario import load_problem
+    from tmaplan.planning import PingEvaluator
 
     if not jit.jit_enabled():
         pytest.skip("no C compiler")

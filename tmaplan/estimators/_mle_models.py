@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -253,8 +253,18 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
     out_r: list[np.ndarray] = []
     out_j: list[np.ndarray] = []
     npar = data.n_params
+    model = track_model(data)
+
+    def kin(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+        # Jacobians only when asked: the LM cost evaluations skip them (hot path).
+        P, V = model.track(th[:ng], t)
+        if not jacobian:
+            return P, V, None, None
+        dP, dV = model.jacobian(th[:ng], t)
+        return P, V, dP, dV
+
     if data.b_times.size:
-        P, _, dP, _ = kinematics(data, th[:ng], data.b_times)
+        P, _, dP, _ = kin(data.b_times)
         d = P - data.b_obs
         beta = np.arctan2(d[:, 0], d[:, 1])
         wrap = wrap_half_angle if data.ambiguity == "pi" else wrap_angle
@@ -264,7 +274,7 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
             J[:, :ng] = -bearing_rows(d, dP) / data.b_sigma[:, None]
             out_j.append(J)
     if data.r_times.size:
-        P, _, dP, _ = kinematics(data, th[:ng], data.r_times)
+        P, _, dP, _ = kin(data.r_times)
         d = P - data.r_obs
         R = np.hypot(d[:, 0], d[:, 1])
         out_r.append((data.r_values - R) / data.r_sigma)
@@ -273,8 +283,12 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
             J[:, :ng] = -range_rows(d, dP) / data.r_sigma[:, None]
             out_j.append(J)
     if data.n_lines:
-        P, V, dP, dV = kinematics(data, th[:ng], data.f_times)
-        rdot, ddot = range_rate_rows(P - data.f_obs, V - data.f_obs_vel, dP, dV)
+        P, V, dP, dV = kin(data.f_times)
+        d, w = P - data.f_obs, V - data.f_obs_vel
+        if jacobian:
+            rdot, ddot = range_rate_rows(d, w, dP, dV)
+        else:
+            rdot = np.sum(d * w, axis=-1) / np.hypot(d[:, 0], d[:, 1])
         a = 1.0 - rdot / data.c
         for p in range(data.n_lines):
             fp = th[ng + p]

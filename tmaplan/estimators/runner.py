@@ -388,7 +388,7 @@ def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -
     return np.asarray(res.position_std, float)
 
 
-def _crlb_position(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
+def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
     """Position and range std of the batch CRLB at the truth, per step [m]."""
     from tmaplan.estimators.mle import fisher_information
 
@@ -556,7 +556,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLECon
         brng = np.random.default_rng(children[runs])
         if name == "mle" or isinstance(estimator, MLEConfig):
             cfg = estimator if isinstance(estimator, MLEConfig) else MLEConfig()
-            (b, br), kind = _crlb_position(scenario, cfg), "crlb"
+            (b, br), kind = _crlb_bounds(scenario, cfg), "crlb"
         elif bound == "prior":
             b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
             br = np.full(K + 1, np.nan)

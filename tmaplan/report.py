@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.plotting import new_figure, save_figure
+from tmaplan.scenario import dump
 
 if TYPE_CHECKING:
     from tmaplan.experiments import CampaignResult
@@ -24,15 +25,14 @@ def _bounds(result: CampaignResult) -> dict[str, np.ndarray]:
         from tmaplan.bounds.closed_form import closed_form_pcrb
         from tmaplan.models.observer import ObserverTrack
         from tmaplan.models.target import initial_velocity
-        from tmaplan.scenario import loads
     except ImportError:  # pragma: no cover - bounds not installed
         return {}
-    scenario = loads(result.spec.scenario_toml)
+    scenario = result.spec.scenario
     out = {}
     dt = scenario.time.dt
     for name in result.policies:
         ex = result.examples[name]
-        pos = np.asarray(ex["observer"], float)
+        pos = np.asarray(ex.observer, float)
         vbar = np.vstack([initial_velocity(scenario.observer)[None],
                           np.diff(pos, axis=0) / dt])
         heading = np.arctan2(vbar[:, 0], vbar[:, 1])
@@ -43,7 +43,7 @@ def _bounds(result: CampaignResult) -> dict[str, np.ndarray]:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # side-assumption notes: the bound is a guide
                 res = closed_form_pcrb(scenario, observer=track,
-                                       ping_steps=[int(k) for k in ex["ping_steps"]])
+                                       ping_steps=[int(k) for k in ex.ping_steps])
             out[name] = np.asarray(res.position_std)
         except (ArithmeticError, ValueError, RuntimeError):  # decoration only, never fatal
             continue
@@ -95,14 +95,14 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
     fig, axes = new_figure(size=(7.0, 6.0))
     ax = axes[0, 0]
     first = result.examples[result.policies[0]]
-    tgt = np.asarray(first["target"]) / 1000
+    tgt = np.asarray(first.target) / 1000
     ax.plot(tgt[:, 0], tgt[:, 1], color="k", lw=2, label="target (run 0)")
     ax.plot(tgt[0, 0], tgt[0, 1], "ko")
     for i, name in enumerate(result.policies):
         ex = result.examples[name]
-        obs = np.asarray(ex["observer"]) / 1000
+        obs = np.asarray(ex.observer) / 1000
         ax.plot(obs[:, 0], obs[:, 1], color=f"C{i % 10}", label=name)
-        pk = np.asarray(ex["ping_steps"], int)
+        pk = np.asarray(ex.ping_steps, int)
         if pk.size:
             ax.plot(obs[pk, 0], obs[pk, 1], "*", color=f"C{i % 10}", ms=9)
     ax.plot(0, 0, "o", color="0.3")
@@ -215,7 +215,7 @@ every policy in a run (paired comparison). Localised = relative range error belo
 <h2>Figures</h2>
 {''.join(imgs)}
 <h2>Scenario</h2>
-<pre>{html.escape(spec.scenario_toml)}</pre>
+<pre>{html.escape(dump(spec.scenario))}</pre>
 </body></html>
 """
     path = out / "report.html"

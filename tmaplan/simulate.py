@@ -1,16 +1,23 @@
-"""Simulation: truth, observer track and noisy measurements for a scenario."""
+"""Simulation: truth, observer track and noisy measurements for a scenario.
+
+The one place where measurements are generated: :func:`measure` for a whole run (open loop),
+:func:`measure_step` for one step of a closed loop (the observer track is not known in
+advance), both through :func:`reading`. The filters consume :class:`Measurement` records
+(:func:`measurement_batches` groups a run's measurements by step).
+"""
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, Literal
 
 import numpy as np
 
 from tmaplan.geometry import wrap_angle, wrap_half_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.sensors import bearing, doppler_frequency, range_
-from tmaplan.models.target import target_track
+from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import (
     BearingSensor,
     FrequencySensor,
@@ -19,7 +26,52 @@ from tmaplan.scenario import (
     measurement_steps,
 )
 
-__all__ = ["MeasurementSet", "Simulation", "measure", "simulate"]
+__all__ = [
+    "CommonNoise",
+    "Measurement",
+    "MeasurementSet",
+    "Simulation",
+    "draw_common_noise",
+    "draw_truth",
+    "measure",
+    "measure_step",
+    "measurement_batches",
+    "reading",
+    "simulate",
+]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Measurement:
+    """One scalar (or multi-line) measurement at the current step, as a filter consumes it.
+
+    Attributes
+    ----------
+    kind : {"bearing", "range", "frequency"}
+    value : float or ndarray, shape (P,)
+        Bearing [rad] (from North, clockwise), range [m] or frequencies [Hz] (one per line).
+    sigma : float or ndarray, shape (P,)
+        Noise std in the same unit.
+    ambiguity : {"none", "pi"}
+        Bearings only: known modulo π.
+    c : float
+        Sound speed [m/s] (frequency only).
+    velocity_offset : ndarray, shape (2,)
+        Frequency only: observer instantaneous minus mean velocity [m/s] at this step, so that
+        the Doppler uses the instantaneous relative velocity ``X[2:] − offset``.
+    ping : bool
+        Range only: an active ping, so informative against the belief that a particle filter
+        assimilates it by progressive correction
+        (:func:`tmaplan.estimators.particle_filter.update`).
+    """
+
+    kind: Literal["bearing", "range", "frequency"]
+    value: float | np.ndarray
+    sigma: float | np.ndarray
+    ambiguity: Literal["none", "pi"] = "none"
+    c: float = 1500.0
+    velocity_offset: np.ndarray | None = None
+    ping: bool = False
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -106,6 +158,39 @@ class Simulation:
         }
 
 
+def reading(sensor: Any, X: np.ndarray, z: np.ndarray | None
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Noise-free and noisy values of one sensor (the one measurement model of the package).
+
+    Parameters
+    ----------
+    sensor : BearingSensor, RangeSensor or FrequencySensor
+    X : ndarray, shape (n, 4)
+        Relative states with the observer's *instantaneous* velocity [m, m/s].
+    z : ndarray, shape (n,) or (n, P), or None
+        Standard normal draws (None: noise-free); the noise is ``σ·z``.
+
+    Returns
+    -------
+    truth, values : ndarray, shape (n,) or (n, P)
+        Bearings [rad] wrapped to (−π, π] ((−π/2, π/2] for ``ambiguity = "pi"``), ranges [m]
+        or frequencies [Hz].
+    """
+    if isinstance(sensor, BearingSensor):
+        wrap = wrap_half_angle if sensor.ambiguity == "pi" else wrap_angle
+        truth = wrap(bearing(X))
+        values = truth if z is None else wrap(truth + sensor.sigma * z)
+    elif isinstance(sensor, RangeSensor):
+        truth = range_(X)
+        values = truth if z is None else truth + sensor.sigma * z
+    elif isinstance(sensor, FrequencySensor):
+        truth = doppler_frequency(X, np.asarray(sensor.f0), sensor.c)
+        values = truth if z is None else truth + z * np.asarray(sensor.sigma)
+    else:  # pragma: no cover - the scenario schema admits no other kind
+        raise TypeError(f"unknown sensor {sensor!r}")
+    return truth, np.asarray(values, float)
+
+
 def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
             rng: np.random.Generator | None) -> tuple[MeasurementSet, ...]:
     """Noisy measurements of every sensor for a given truth and observer track.
@@ -128,31 +213,17 @@ def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
     out = []
     for i, sensor in enumerate(scenario.sensors):
         steps = measurement_steps(sensor, scenario.time)
-        Xk = rel_inst[steps]
+        shape = (steps.size, len(sensor.f0)) if isinstance(sensor, FrequencySensor) \
+            else (steps.size,)
+        z = rng.standard_normal(shape) if rng is not None else None
+        truth, values = reading(sensor, rel_inst[steps], z)
         rel = None
         if isinstance(sensor, BearingSensor):
-            truth = bearing(Xk)
-            sigma = np.asarray(sensor.sigma)
-            noise = rng.normal(0.0, sensor.sigma, truth.shape) if rng is not None else 0.0
-            wrap = wrap_half_angle if sensor.ambiguity == "pi" else wrap_angle
-            truth = wrap(truth)
-            values = wrap(truth + noise)
-            rel = wrap_angle(wrap_angle(truth + noise) - obs.heading[steps])
-        elif isinstance(sensor, RangeSensor):
-            truth = range_(Xk)
-            sigma = np.asarray(sensor.sigma)
-            noise = rng.normal(0.0, sensor.sigma, truth.shape) if rng is not None else 0.0
-            values = truth + noise
-        elif isinstance(sensor, FrequencySensor):
-            truth = doppler_frequency(Xk, np.asarray(sensor.f0), sensor.c)
-            sigma = np.asarray(sensor.sigma)
-            noise = rng.normal(0.0, 1.0, truth.shape) * sigma if rng is not None else 0.0
-            values = truth + noise
-        else:  # pragma: no cover - the scenario schema admits no other kind
-            raise TypeError(f"unknown sensor {sensor!r}")
+            noisy = truth if z is None else wrap_angle(truth + sensor.sigma * z)
+            rel = wrap_angle(noisy - obs.heading[steps])
         out.append(MeasurementSet(sensor=i, kind=sensor.kind, steps=steps, times=times[steps],
-                                  values=np.asarray(values, float), truth=truth, relative=rel,
-                                  sigma=sigma))
+                                  values=values, truth=truth, relative=rel,
+                                  sigma=np.asarray(sensor.sigma)))
     return tuple(out)
 
 
@@ -183,3 +254,124 @@ def simulate(scenario: Scenario, rng: np.random.Generator | None, *,
     meas = measure(scenario, tgt, obs, rng)
     return Simulation(scenario=scenario, times=scenario.times, target=tgt, observer=obs,
                       relative=tgt - obs.state, measurements=meas)
+
+
+def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool = True
+               ) -> np.ndarray:
+    """True absolute target track of a closed-loop run, shape (K + 1, 4).
+
+    With ``from_prior`` the initial state is drawn from the scenario's prior (one draw), then
+    propagated with the NCV model of intensity ``scenario.target.q``; otherwise the scenario's
+    own initial state is used.
+    """
+    from tmaplan.models.prior import sample_prior, true_initial_state
+
+    x0 = (sample_prior(scenario, 1, rng)[0] if from_prior and scenario.prior is not None
+          else true_initial_state(scenario))
+    K, dt = scenario.n_steps, scenario.time.dt
+    F, Q = ncv_matrices(dt, scenario.target.q)
+    L = np.linalg.cholesky(Q + 1e-30 * np.eye(4)) if scenario.target.q > 0 else np.zeros((4, 4))
+    w = rng.standard_normal((K, 4)) @ L.T
+    x = np.empty((K + 1, 4))
+    x[0] = x0
+    for k in range(K):  # recursion over time
+        x[k + 1] = F @ x[k] + w[k]
+    return x
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CommonNoise:
+    """Standard normals of a closed-loop run, drawn before it starts (common random numbers).
+
+    One draw per step and sensor whether or not the sensor measures, and one per ping slot, so
+    that runs of different policies see the same noise and a ping's noise does not depend on
+    when the other pings happened.
+
+    Attributes
+    ----------
+    bearing : ndarray, shape (K + 1, max(1, n_bearing_sensors))
+    range : ndarray, shape (K + 1, max(1, n_passive_range_sensors))
+    ping : ndarray, shape (K + 1,)
+    """
+
+    bearing: np.ndarray
+    range: np.ndarray
+    ping: np.ndarray
+
+
+def _closed_loop_sensors(scenario: Scenario) -> tuple[list[Any], list[Any], list[Any]]:
+    """Bearing sensors, passive range sensors and active (ping) range sensors."""
+    bs = [s for s in scenario.sensors if isinstance(s, BearingSensor)]
+    rs = [s for s in scenario.sensors if isinstance(s, RangeSensor) and not s.active]
+    ps = [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
+    return bs, rs, ps
+
+
+def draw_common_noise(scenario: Scenario, rng: np.random.Generator) -> CommonNoise:
+    """Draw the :class:`CommonNoise` of one closed-loop run (bearings, ranges, pings, in order)."""
+    bs, rs, _ = _closed_loop_sensors(scenario)
+    K = scenario.n_steps
+    return CommonNoise(bearing=rng.standard_normal((K + 1, max(len(bs), 1))),
+                       range=rng.standard_normal((K + 1, max(len(rs), 1))),
+                       ping=rng.standard_normal(K + 1))
+
+
+def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, *,
+                 ping: bool = False) -> list[Measurement]:
+    """Measurements of step ``k`` in a closed loop (bearings, passive ranges, an active ping).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Frequency sensors are not simulated in the closed loop; a ping uses the first active
+        range sensor's σ (no ping without one).
+    k : int
+        Grid step.
+    X : ndarray, shape (4,)
+        True relative state with the observer's instantaneous velocity [m, m/s].
+    noise : CommonNoise
+    ping : bool
+        The own ship pings at this step.
+
+    Returns
+    -------
+    list of Measurement
+        Pings carry ``ping=True``.
+    """
+    bs, rs, ps = _closed_loop_sensors(scenario)
+    out = []
+    X = np.asarray(X, float)[None]
+    for j, s in enumerate(bs):
+        if k in measurement_steps(s, scenario.time):
+            v = reading(s, X, noise.bearing[k, j:j + 1])[1]
+            out.append(Measurement(kind="bearing", value=float(v[0]), sigma=s.sigma,
+                                   ambiguity=s.ambiguity))
+    for j, s in enumerate(rs):
+        if k in measurement_steps(s, scenario.time):
+            v = reading(s, X, noise.range[k, j:j + 1])[1]
+            out.append(Measurement(kind="range", value=float(v[0]), sigma=s.sigma))
+    if ping and ps:
+        v = reading(ps[0], X, noise.ping[k:k + 1])[1]
+        out.append(Measurement(kind="range", value=float(v[0]), sigma=ps[0].sigma, ping=True))
+    return out
+
+
+def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSet],
+                        observer: ObserverTrack) -> dict[int, list[Measurement]]:
+    """Group a run's measurement sets into per-step :class:`Measurement` lists."""
+    out: dict[int, list[Measurement]] = {}
+    offset = observer.velocity - observer.mean_velocity
+    for ms in measurements:
+        sensor = scenario.sensors[ms.sensor]
+        for i, k in enumerate(np.asarray(ms.steps, int)):
+            if ms.kind == "bearing":
+                m = Measurement(kind="bearing", value=float(ms.values[i]),
+                                sigma=float(ms.sigma), ambiguity=sensor.ambiguity)
+            elif ms.kind == "range":
+                m = Measurement(kind="range", value=float(ms.values[i]), sigma=float(ms.sigma))
+            else:
+                m = Measurement(kind="frequency", value=np.asarray(ms.values[i], float),
+                                sigma=np.asarray(ms.sigma, float), c=float(sensor.c),
+                                velocity_offset=offset[k])
+            out.setdefault(int(k), []).append(m)
+    return out

@@ -10,7 +10,7 @@ from typing import Any
 
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.report import efficiency, write_report
-from tmaplan.scenario import dump, load
+from tmaplan.scenario import load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
 
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run or resume the campaign, write figures and ``report.html``."""
     scenario = load(args.problem)
     policies = tuple(p.strip() for p in args.policies.split(",") if p.strip())
-    spec = CampaignSpec(scenario_toml=dump(scenario), policies=policies, runs=args.runs,
+    spec = CampaignSpec(scenario=scenario, policies=policies, runs=args.runs,
                         seed=args.seed, n_particles=args.particles, truth=args.truth,
                         accuracy=args.accuracy)
     quiet = args.json == "-"

@@ -26,7 +26,7 @@ from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedul
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
 from tmaplan.report import efficiency, write_report
-from tmaplan.scenario import dump, load_problem
+from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
     _say(args, f"[3/3] comparing {len(DEMO_POLICIES)} policies over {args.runs} paired runs "
                f"({args.particles} particles, {args.workers} workers) ...")
-    spec = CampaignSpec(scenario_toml=dump(scenario), policies=DEMO_POLICIES, runs=args.runs,
+    spec = CampaignSpec(scenario=scenario, policies=DEMO_POLICIES, runs=args.runs,
                         seed=args.seed, n_particles=args.particles)
     result = run_campaign(spec, out_dir=out, workers=args.workers,
                           progress=args.json != "-" and sys.stderr.isatty())

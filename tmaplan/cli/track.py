@@ -13,7 +13,8 @@ from tmaplan.errors import ScenarioError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
-from tmaplan.estimators.runner import ESTIMATORS, monte_carlo
+from tmaplan.estimators.runner import ESTIMATORS
+from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import Scenario, load
 
 HELP = "run an estimator over Monte Carlo runs against its bound"

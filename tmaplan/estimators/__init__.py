@@ -1,10 +1,15 @@
 """Estimators: particle filter (+ bearings-only initialisation), batch ML, range-only filter.
 
-Entry points: :func:`run` (one estimator on one run → :class:`Track`) and :func:`monte_carlo`.
+Interfaces: :class:`Filter` (recursive filters, driven by the one loop :func:`drive`) and
+:class:`Estimator` (what :func:`run` runs). Entry points: :func:`run` (one estimator on one
+run → :class:`Track`) and :func:`monte_carlo` (:mod:`tmaplan.evaluation.tracking`).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+from tmaplan.estimators.filter import Filter, FilterRun, FilterState, drive
 from tmaplan.estimators.gvm_moments import (
     GvM2,
     dirac_mixture,
@@ -40,60 +45,72 @@ from tmaplan.estimators.particle_filter import (
 )
 from tmaplan.estimators.range_only import (
     RangeOnlyConfig,
+    RangeOnlyFilter,
     RangeOnlyState,
+    from_gaussian,
     range_only_predict,
     range_only_update,
-    single_point_prior,
-)
-from tmaplan.estimators.range_only_gm import (
-    MixtureConfig,
-    RangeOnlyMixture,
-    mixture_from_gaussian,
-    mixture_predict,
-    mixture_update,
     reduce_mixture,
+    single_point_prior,
 )
 from tmaplan.estimators.runner import (
     ESTIMATORS,
-    MonteCarloResult,
+    Estimator,
+    FilterEstimator,
+    MLEEstimator,
     Track,
-    cartesian_pcrb,
-    measurement_batches,
-    monte_carlo,
+    estimator_for,
     run,
     run_prior,
 )
+from tmaplan.estimators.truth_bound import cartesian_pcrb
+from tmaplan.simulate import measurement_batches
+
+
+def __getattr__(name: str) -> Any:
+    # The Monte Carlo evaluation sits in the evaluation layer above (it imports this package).
+    if name in ("monte_carlo", "MonteCarloResult"):
+        from tmaplan.evaluation import tracking
+
+        return getattr(tracking, name)
+    raise AttributeError(f"module 'tmaplan.estimators' has no attribute {name!r}")
+
 
 __all__ = [
     "ESTIMATORS",
     "BearingsInit",
     "DegeneracyWarning",
+    "Estimator",
+    "Filter",
+    "FilterEstimator",
+    "FilterRun",
+    "FilterState",
     "GvM2",
     "MLEConfig",
+    "MLEEstimator",
     "MLEResult",
     "Measurement",
-    "MixtureConfig",
     "MonteCarloResult",
     "PFConfig",
     "PFState",
     "ParticleFilter",
     "RMPFit",
     "RangeOnlyConfig",
-    "RangeOnlyMixture",
+    "RangeOnlyFilter",
     "RangeOnlyState",
     "TMAData",
     "Track",
     "acceptance_threshold",
     "cartesian_pcrb",
     "dirac_mixture",
+    "drive",
+    "estimator_for",
     "fisher_information",
     "fit_rmp",
+    "from_gaussian",
     "gvm2_from_gaussian",
     "initialise_from_bearings",
     "measurement_batches",
-    "mixture_from_gaussian",
-    "mixture_predict",
-    "mixture_update",
     "mle",
     "moments_grid",
     "moments_series",

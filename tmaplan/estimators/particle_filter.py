@@ -19,7 +19,9 @@ Measurements:
 
 * bearings, full circle or known modulo π (3-term wrapped Gaussian of file 000 eq. 71 via
   :func:`tmaplan.models.sensors.bearing_loglik`: both modes keep their weight);
-* range pings (Gaussian, noise after the norm);
+* ranges (Gaussian, noise after the norm); an active ping (``Measurement.ping``), far more
+  informative than the cloud's spread, is assimilated by progressive correction (Oudjane &
+  Musso): see :func:`update`;
 * frequency lines ``f_p (1 − Ṙ/c)`` (file 002 eq. 3). **Choice:** the unknown tones f_p are
   *marginalised analytically* (Rao–Blackwellised): each particle carries a Gaussian posterior
   (mean, variance) per line, updated by a scalar Kalman filter since the measurement is linear in
@@ -45,7 +47,7 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 from scipy.special import logsumexp
@@ -64,6 +66,7 @@ from tmaplan.estimators._pf_kernels import (
     _weighted_cov,
     systematic_resample,
 )
+from tmaplan.simulate import Measurement
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -85,34 +88,6 @@ _KERNELS = (_normals_f32, _systematic)
 
 class DegeneracyWarning(RuntimeWarning):
     """The particle weights collapsed; the filter recovered by roughening."""
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class Measurement:
-    """One scalar (or multi-line) measurement at the current step.
-
-    Attributes
-    ----------
-    kind : {"bearing", "range", "frequency"}
-    value : float or ndarray, shape (P,)
-        Bearing [rad] (from North, clockwise), range [m] or frequencies [Hz] (one per line).
-    sigma : float or ndarray, shape (P,)
-        Noise std in the same unit.
-    ambiguity : {"none", "pi"}
-        Bearings only: known modulo π.
-    c : float
-        Sound speed [m/s] (frequency only).
-    velocity_offset : ndarray, shape (2,)
-        Frequency only: observer instantaneous minus mean velocity [m/s] at this step, so that
-        the Doppler uses the instantaneous relative velocity ``X[2:] − offset``.
-    """
-
-    kind: Literal["bearing", "range", "frequency"]
-    value: float | np.ndarray
-    sigma: float | np.ndarray
-    ambiguity: Literal["none", "pi"] = "none"
-    c: float = 1500.0
-    velocity_offset: np.ndarray | None = None
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -323,6 +298,14 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
            config: PFConfig) -> PFState:
     """Weight the cloud by the measurements of this step, then resample if ESS is low.
 
+    Pings (``Measurement.ping``) are assimilated after the other measurements, one at a time,
+    by progressive correction: a 50 m ping against a cloud spread over kilometres would leave
+    one particle standing, so its likelihood is split into stages ``L = Π L^{α_i}`` with
+    Gaussian stage precisions ``α_i/σ²`` growing geometrically (stage std shrinking by 2) from
+    about half the cloud's RMS range offset from the measurement, with resampling and
+    regularisation between stages (Oudjane & Musso's progressive correction). The stage
+    precisions sum to ``1/σ²``, so the posterior is unchanged in expectation.
+
     Parameters
     ----------
     state : PFState
@@ -335,8 +318,30 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
     -------
     PFState
         New state; ``ess`` is computed before resampling, ``resampled`` and ``degenerate``
-        tell what happened.
+        tell what happened (in the last stage).
     """
+    state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
+    for m in measurements:
+        if m.ping:
+            r = np.hypot(state.particles[:, 0], state.particles[:, 1])
+            # spread of the cloud about the measurement (a confident but wrong cloud is wide)
+            spread = float(np.sqrt(max(state.weights @ (r - float(m.value)) ** 2, 0.0)))
+            total = 1.0 / float(m.sigma) ** 2
+            p = 1.0 / max(spread / 2.0, float(m.sigma)) ** 2
+            precisions: list[float] = []
+            while sum(precisions) + p < total:
+                precisions.append(p)
+                p *= 4.0  # stage std halves
+            precisions.append(total - sum(precisions))
+            for prec in precisions:
+                stage = Measurement(kind="range", value=m.value, sigma=float(1.0 / np.sqrt(prec)))
+                state = _assimilate(state, [stage], rng, config)
+    return state
+
+
+def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.random.Generator,
+                config: PFConfig) -> PFState:
+    """Bayes update by all ``measurements`` at once (the body of :func:`update`)."""
     if not measurements:
         return dataclasses.replace(state, resampled=False, degenerate=False)
     X = state.particles
@@ -487,15 +492,26 @@ def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.nd
 
 
 class ParticleFilter:
-    """A :class:`PFConfig` with initialisers and bound :func:`predict` / :func:`update`.
+    """A :class:`PFConfig` with initialisers and bound :func:`predict` / :func:`update`;
+    implements :class:`tmaplan.estimators.filter.Filter`.
 
     Parameters
     ----------
     config : PFConfig
     """
 
+    name: ClassVar[str] = "pf"
+
     def __init__(self, config: PFConfig) -> None:
         self.config = config
+
+    def init(self, scenario: Scenario, rng: np.random.Generator) -> PFState:
+        """N particles from the scenario's prior (:meth:`from_prior`)."""
+        return self.from_prior(scenario, rng)
+
+    def diagnostic(self, state: PFState) -> float:
+        """Effective sample size after the last update."""
+        return float(state.ess)
 
     def from_particles(self, particles: np.ndarray, *, step: int = 0,
                        log_weights: np.ndarray | None = None) -> PFState:

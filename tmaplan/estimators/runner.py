@@ -1,12 +1,13 @@
-"""Common runner of the estimators and their Monte Carlo evaluation against a bound.
+"""Running one estimator on one set of measurements: the estimator interface and :func:`run`.
 
-``run(estimator, scenario, measurements) -> Track`` runs one estimator on one set of
-measurements; ``monte_carlo(scenario, estimator, runs=..., seed=...)`` repeats it over runs
-seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares the RMSE
-with the bound: for the filters the PCRB along the runs' true trajectories, averaged over the
-runs (:func:`tmaplan.estimators.truth_bound.truth_pcrb`, BENCHMARK_SCENARIOS §B2; option
-``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb``,
-see :func:`_pcrb_position`), the CRLB of the batch estimate for the MLE.
+An estimator (:class:`Estimator`) declares its ``name``, the sensor kinds it ``applies_to`` and
+the ``bound`` it is judged against, and ``estimate`` s a :class:`Track` from a scenario, its
+measurements and the observer track. Implementations: :class:`FilterEstimator` (a recursive
+:class:`tmaplan.estimators.filter.Filter` driven by :func:`tmaplan.estimators.filter.drive`:
+the particle filter from the prior or from bearings only, the range-only filter) and
+:class:`MLEEstimator`. :func:`run` accepts a name of :data:`ESTIMATORS`, an estimator or a
+filter / MLE configuration; the Monte Carlo evaluation is
+:func:`tmaplan.evaluation.tracking.monte_carlo`.
 
 Priors. The papers centre their priors on the truth; following Ristic et al. (BENCHMARK B2)
 the *centre* of the prior is itself random per run: :func:`run_prior` draws the prior bearing
@@ -21,46 +22,29 @@ import dataclasses
 import time as _time
 import warnings
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.estimators.filter import Filter, drive
 from tmaplan.estimators.init_bearings import initialise_from_bearings
 from tmaplan.estimators.mle import MLEConfig, mle, state_track, tma_data
-from tmaplan.estimators.particle_filter import (
-    DegeneracyWarning,
-    Measurement,
-    ParticleFilter,
-    PFConfig,
-)
-from tmaplan.estimators.range_only import (
-    RangeOnlyConfig,
-    RangeOnlyState,
-    range_only_predict,
-    range_only_update,
-)
-from tmaplan.estimators.range_only_gm import (
-    RangeOnlyMixture,
-    mixture_from_gaussian,
-    mixture_predict,
-    mixture_update,
-)
-from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_bounds
+from tmaplan.estimators.particle_filter import DegeneracyWarning, ParticleFilter, PFConfig
+from tmaplan.estimators.range_only import RangeOnlyConfig, RangeOnlyFilter
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
-from tmaplan.simulate import MeasurementSet, Simulation, simulate
+from tmaplan.simulate import Measurement, MeasurementSet, Simulation, measurement_batches
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = [
     "ESTIMATORS",
-    "MonteCarloResult",
+    "Estimator",
+    "FilterEstimator",
+    "MLEEstimator",
     "Track",
-    "cartesian_pcrb",
-    "measurement_batches",
-    "monte_carlo",
+    "estimator_for",
     "run",
     "run_prior",
 ]
@@ -111,29 +95,8 @@ class Track:
 
 
 # --------------------------------------------------------------------------------------------
-# Measurements and priors
+# Priors
 # --------------------------------------------------------------------------------------------
-
-
-def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSet],
-                        observer: ObserverTrack) -> dict[int, list[Measurement]]:
-    """Group measurement sets into per-step :class:`Measurement` lists for the filters."""
-    out: dict[int, list[Measurement]] = {}
-    offset = observer.velocity - observer.mean_velocity
-    for ms in measurements:
-        sensor = scenario.sensors[ms.sensor]
-        for i, k in enumerate(np.asarray(ms.steps, int)):
-            if ms.kind == "bearing":
-                m = Measurement(kind="bearing", value=float(ms.values[i]),
-                                sigma=float(ms.sigma), ambiguity=sensor.ambiguity)
-            elif ms.kind == "range":
-                m = Measurement(kind="range", value=float(ms.values[i]), sigma=float(ms.sigma))
-            else:
-                m = Measurement(kind="frequency", value=np.asarray(ms.values[i], float),
-                                sigma=np.asarray(ms.sigma, float), c=float(sensor.c),
-                                velocity_offset=offset[k])
-            out.setdefault(int(k), []).append(m)
-    return out
 
 
 def run_prior(scenario: Scenario, rng: np.random.Generator,
@@ -191,136 +154,208 @@ def _observer_of(scenario: Scenario, measurements: Any, observer: ObserverTrack 
 
 
 # --------------------------------------------------------------------------------------------
-# Runners
+# Estimators
 # --------------------------------------------------------------------------------------------
 
 
-def _run_pf(scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
-            rng: np.random.Generator, config: PFConfig, init: str,
-            r_min: float, r_max: float) -> Track:
-    K = scenario.n_steps
-    pf = ParticleFilter(config)
-    batches = measurement_batches(scenario, meas, obs)
-    dv = obs.velocity_increments
-    est = np.full((K + 1, 4), np.nan)
-    cov = np.full((K + 1, 4, 4), np.nan)
-    ess = np.full(K + 1, np.nan)
-    details = None
-    recovered = False
-    if init == "bearings":
-        b = [m for m in meas if m.kind == "bearing"]
-        if not b:
-            raise ScenarioError("sensors", "a bearing sensor for the bearings-only "
-                                "initialisation", None, source=scenario.name)
-        steps, z = b[0].steps, b[0].values
-        sensor = scenario.sensors[b[0].sensor]
-        # The batch must not straddle an observer manoeuvre (eq. 13 assumes none).
-        moving = np.nonzero(np.any(np.abs(dv) > 1e-9, axis=1))[0]
-        first_man = int(moving[0]) if moving.size else K
-        n_ok = int(np.searchsorted(steps, first_man, side="right"))
-        init_res = initialise_from_bearings(
-            scenario.times[steps[:n_ok]], z[:n_ok], float(b[0].sigma), r_min=r_min,
-            r_max=r_max, n_particles=config.n_particles, rng=rng, q=config.q,
-            dt=config.dt * float(np.median(np.diff(steps))) if steps.size > 1 else None,
-            ambiguity=sensor.ambiguity)
-        details = init_res
-        k_c, k_e = int(steps[init_res.centre_index]), int(steps[init_res.end_index])
-        state = pf.from_particles(init_res.particles, step=k_c)
-        est[k_c], cov[k_c], ess[k_c] = state.mean, state.cov, state.ess
-        # Catch up to the batch end without re-assimilating bearings already in the batch.
-        for k in range(k_c, k_e):
-            state = pf.predict(state, dv[k], rng)
-            extra = [m for m in batches.get(k + 1, []) if m.kind != "bearing"]
-            if extra:
-                state = pf.update(state, extra, rng)
-            est[k + 1], cov[k + 1], ess[k + 1] = state.mean, state.cov, state.ess
-        start = k_e
-        first = k_c
-    else:
-        sc = run_prior(scenario, rng, meas)
-        state = pf.from_particles(relative_prior_samples(sc, config.n_particles, rng), step=0)
+@runtime_checkable
+class Estimator(Protocol):
+    """What :func:`run` and the Monte Carlo evaluation need of an estimator."""
+
+    #: The bound it is compared with: "pcrb" (filters) or "crlb" (batch estimates).
+    bound: ClassVar[Literal["pcrb", "crlb"]]
+
+    @property
+    def name(self) -> str:
+        """Name in :data:`ESTIMATORS` (CLI ``--estimator``)."""
+        ...  # pragma: no cover
+
+    @property
+    def applies_to(self) -> frozenset[str]:
+        """Sensor kinds the estimator uses; the scenario needs at least one of them."""
+        ...  # pragma: no cover
+
+    def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
+                 observer: ObserverTrack, rng: np.random.Generator) -> Track:
+        """One estimate of the relative track."""
+        ...  # pragma: no cover
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class FilterEstimator:
+    """A recursive filter run over the time grid (:func:`tmaplan.estimators.filter.drive`).
+
+    Attributes
+    ----------
+    filter : Filter
+        :class:`~tmaplan.estimators.particle_filter.ParticleFilter` or
+        :class:`~tmaplan.estimators.range_only.RangeOnlyFilter`.
+    init : {"prior", "bearings"}
+        "prior": from the run's prior (:func:`run_prior`); "bearings": the particle filter from
+        the bearings-only batch initialisation (file 001).
+    r_min, r_max : float
+        Range interval of the bearings-only initialisation [m] (file 001 L291).
+    """
+
+    filter: Filter[Any]
+    init: Literal["prior", "bearings"] = "prior"
+    r_min: float = 1000.0
+    r_max: float = 40000.0
+    bound: ClassVar[Literal["pcrb", "crlb"]] = "pcrb"
+
+    @property
+    def name(self) -> str:
+        """"pf", "pf-bearings" or "range-only"."""
+        return f"{self.filter.name}-bearings" if self.init == "bearings" else self.filter.name
+
+    @property
+    def applies_to(self) -> frozenset[str]:
+        """Bearings for the bearings-only start; ranges for the range-only filter."""
+        if self.init == "bearings":
+            return frozenset({"bearing"})
+        return frozenset({"range"}) if isinstance(self.filter, RangeOnlyFilter) \
+            else frozenset({"bearing", "range", "frequency"})
+
+    def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
+                 observer: ObserverTrack, rng: np.random.Generator) -> Track:
+        """Filter the run; NaN before the first estimate."""
+        batches = measurement_batches(scenario, measurements, observer)
+        dv = observer.velocity_increments
+        details: Any = None
+        k_end = 0
         with warnings.catch_warnings(record=True) as wlist:
             warnings.simplefilter("always", DegeneracyWarning)
-            state = pf.update(state, batches.get(0, []), rng)
-        recovered |= bool(wlist)
-        est[0], cov[0], ess[0] = state.mean, state.cov, state.ess
-        start = 0
-        first = 0
-    with warnings.catch_warnings(record=True) as wlist:
-        warnings.simplefilter("always", DegeneracyWarning)
-        for k in range(start, K):
-            state = pf.predict(state, dv[k], rng)
-            state = pf.update(state, batches.get(k + 1, []), rng)
-            est[k + 1], cov[k + 1], ess[k + 1] = state.mean, state.cov, state.ess
-    recovered |= bool(wlist)
-    if not np.isfinite(est[first:]).all():
-        return Track(estimator="pf", times=scenario.times, estimates=est, covariances=cov,
-                     ess=ess, seconds=0.0, status="failed", message="non-finite estimate",
-                     first_step=first, details=details)
-    return Track(estimator="pf-bearings" if init == "bearings" else "pf", times=scenario.times,
-                 estimates=est, covariances=cov, ess=ess, seconds=0.0,
-                 status="recovered" if recovered else "ok",
-                 message=f"{len(wlist)} degeneracy recoveries" if recovered else "",
-                 first_step=first, details=details)
+            if self.init == "bearings":
+                state, k_end, details = self._from_bearings(scenario, measurements, dv, rng)
+            else:
+                state = self.filter.init(run_prior(scenario, rng, measurements), rng)
+                state = self.filter.update(state, batches.get(0, []), rng)
+
+            def step(k: int, _: Any) -> tuple[np.ndarray, list[Measurement]]:
+                # Before the end of the initialisation batch its bearings are already in.
+                ms = batches.get(k + 1, [])
+                return dv[k], ms if k >= k_end else [m for m in ms if m.kind != "bearing"]
+
+            first = int(state.step)
+            fr = drive(self.filter, state, scenario.n_steps, step, rng)
+        ok = bool(np.isfinite(fr.estimates[first:]).all())
+        n_warn = len(wlist)
+        status = "failed" if not ok else ("recovered" if n_warn else "ok")
+        message = ("non-finite estimate" if not ok else
+                   f"{n_warn} degeneracy recoveries" if n_warn else "")
+        if isinstance(self.filter, RangeOnlyFilter):
+            message, details = f"mode {self.filter.config.mode}", fr.state
+        return Track(estimator=self.name, times=scenario.times, estimates=fr.estimates,
+                     covariances=fr.covariances, ess=fr.diagnostics, seconds=0.0,
+                     status=status, message=message, first_step=first, details=details)
+
+    def _from_bearings(self, scenario: Scenario, meas: Sequence[MeasurementSet],
+                       dv: np.ndarray, rng: np.random.Generator) -> tuple[Any, int, Any]:
+        """Particle cloud of the bearings-only initialisation, its batch end and details."""
+        if not isinstance(self.filter, ParticleFilter):
+            raise ScenarioError("init", "'prior' for a filter other than the particle filter",
+                                self.init)
+        b = [m for m in meas if m.kind == "bearing"]
+        steps, z = b[0].steps, b[0].values
+        config = self.filter.config
+        # The batch must not straddle an observer manoeuvre (eq. 13 assumes none).
+        moving = np.nonzero(np.any(np.abs(dv) > 1e-9, axis=1))[0]
+        first_man = int(moving[0]) if moving.size else scenario.n_steps
+        n_ok = int(np.searchsorted(steps, first_man, side="right"))
+        res = initialise_from_bearings(
+            scenario.times[steps[:n_ok]], z[:n_ok], float(b[0].sigma), r_min=self.r_min,
+            r_max=self.r_max, n_particles=config.n_particles, rng=rng, q=config.q,
+            dt=config.dt * float(np.median(np.diff(steps))) if steps.size > 1 else None,
+            ambiguity=scenario.sensors[b[0].sensor].ambiguity)
+        state = self.filter.from_particles(res.particles, step=int(steps[res.centre_index]))
+        return state, int(steps[res.end_index]), res
 
 
-def _run_range_only(scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
-                    rng: np.random.Generator, config: RangeOnlyConfig) -> Track:
-    K = scenario.n_steps
-    sc = run_prior(scenario, rng, meas)
-    mean, P = prior_relative_moments(sc, 20_000, rng)
-    ranges: dict[int, tuple[float, float]] = {}
-    for ms in meas:
-        if ms.kind == "range":
-            for i, k in enumerate(ms.steps):
-                ranges[int(k)] = (float(ms.values[i]), float(ms.sigma))
-    dv = obs.velocity_increments
-    est = np.full((K + 1, 4), np.nan)
-    cov = np.full((K + 1, 4, 4), np.nan)
-    mixture = config.mode == "mixture"
-    n_comp = np.zeros(K + 1)
-    if mixture:
-        mcfg = config.mixture()
-        gm: RangeOnlyMixture = mixture_from_gaussian(mean, P)
-        for k in range(K + 1):
-            if k > 0:
-                gm = mixture_predict(gm, dv[k - 1], mcfg)
-            if k in ranges:
-                gm = mixture_update(gm, *ranges[k], mcfg)
-            est[k], cov[k], n_comp[k] = gm.mean, gm.cov, gm.n_components
-        final: Any = gm
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MLEEstimator:
+    """The batch maximum-likelihood estimate (:func:`tmaplan.estimators.mle.mle`)."""
+
+    config: MLEConfig = dataclasses.field(default_factory=MLEConfig)
+    bound: ClassVar[Literal["pcrb", "crlb"]] = "crlb"
+
+    @property
+    def name(self) -> str:
+        """"mle"."""
+        return "mle"
+
+    @property
+    def applies_to(self) -> frozenset[str]:
+        """Bearings (frequency lines are optional)."""
+        return frozenset({"bearing"})
+
+    def estimate(self, scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
+                 rng: np.random.Generator) -> Track:
+        """The MLE and its track, with the delta-method CRLB-at-estimate covariances."""
+        config = self.config
+        model = None if config.model == "auto" else config.model
+        data = tma_data(scenario, meas, obs, model=model, frequencies=config.frequencies)
+        res = mle(data, config)
+        S, C = state_track(data, res.params, res.covariance, scenario.times)
+        rel = S - obs.state
+        status = "ok" if res.success else ("rejected" if res.status == "converged" else "failed")
+        return Track(estimator="mle", times=scenario.times, estimates=rel,
+                     covariances=C if C is not None else np.full((rel.shape[0], 4, 4), np.nan),
+                     ess=None, seconds=0.0, status=status,
+                     message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}",
+                     first_step=0, details=res)
+
+
+#: Estimator per name, given the scenario, the PF size, the filter's q and the range
+#: interval of the bearings-only initialisation.
+_NAMED: dict[str, Callable[[Scenario, int, float, float, float], Estimator]] = {
+    "pf": lambda sc, n, q, lo, hi: FilterEstimator(
+        filter=ParticleFilter(PFConfig(n_particles=n, dt=sc.time.dt, q=q))),
+    "pf-bearings": lambda sc, n, q, lo, hi: FilterEstimator(
+        filter=ParticleFilter(PFConfig(n_particles=n, dt=sc.time.dt, q=q)), init="bearings",
+        r_min=lo, r_max=hi),
+    "mle": lambda sc, n, q, lo, hi: MLEEstimator(),
+    "range-only": lambda sc, n, q, lo, hi: FilterEstimator(
+        filter=RangeOnlyFilter(RangeOnlyConfig(dt=sc.time.dt, q=q))),
+}
+#: Estimator of a configuration, by the configuration's type.
+_CONFIGURED: dict[type, Callable[[Any], Estimator]] = {
+    PFConfig: lambda c: FilterEstimator(filter=ParticleFilter(c)),
+    RangeOnlyConfig: lambda c: FilterEstimator(filter=RangeOnlyFilter(c)),
+    MLEConfig: lambda c: MLEEstimator(config=c),
+}
+
+
+def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
+                  | RangeOnlyConfig, scenario: Scenario, *, n_particles: int = 10_000,
+                  q: float | None = None, r_min: float = 1000.0, r_max: float = 40000.0
+                  ) -> Estimator:
+    """The :class:`Estimator` for a name of :data:`ESTIMATORS`, a configuration or itself.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown name, or a scenario without a sensor the estimator applies to.
+    """
+    qf = float(scenario.target.q if q is None else q)
+    if isinstance(estimator, str):
+        if estimator not in _NAMED:
+            raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
+        est = _NAMED[estimator](scenario, n_particles, qf, r_min, r_max)
+    elif type(estimator) in _CONFIGURED:
+        est = _CONFIGURED[type(estimator)](estimator)
+    elif isinstance(estimator, Estimator):
+        est = estimator
     else:
-        st = RangeOnlyState(step=0, mean=mean, cov=P)
-        for k in range(K + 1):
-            if k > 0:
-                st = range_only_predict(st, dv[k - 1], config)
-            if k in ranges:
-                st = range_only_update(st, *ranges[k], config)
-            est[k], cov[k] = st.mean, st.cov
-        final = st
-    ok = np.isfinite(est).all()
-    return Track(estimator="range-only", times=scenario.times, estimates=est, covariances=cov,
-                 ess=n_comp if mixture else None, seconds=0.0,
-                 status="ok" if ok else "failed",
-                 message=f"mode {config.mode}", details=final)
+        raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}, a configuration "
+                            "or an Estimator", type(estimator).__name__)
+    if not any(s.kind in est.applies_to for s in scenario.sensors):
+        raise ScenarioError("sensors", f"a {' or '.join(sorted(est.applies_to))} sensor for "
+                            f"the {est.name} estimator", None, source=scenario.name)
+    return est
 
 
-def _run_mle(scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
-             config: MLEConfig) -> Track:
-    model = None if config.model == "auto" else config.model
-    data = tma_data(scenario, meas, obs, model=model, frequencies=config.frequencies)
-    res = mle(data, config)
-    S, C = state_track(data, res.params, res.covariance, scenario.times)
-    rel = S - obs.state
-    status = "ok" if res.success else ("rejected" if res.status == "converged" else "failed")
-    return Track(estimator="mle", times=scenario.times, estimates=rel,
-                 covariances=C if C is not None else np.full((rel.shape[0], 4, 4), np.nan),
-                 ess=None, seconds=0.0, status=status,
-                 message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}",
-                 first_step=0, details=res)
-
-
-def run(estimator: EstimatorName | PFConfig | MLEConfig | RangeOnlyConfig, scenario: Scenario,
+def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyConfig,
+        scenario: Scenario,
         measurements: Simulation | Sequence[MeasurementSet], *,
         rng: np.random.Generator | None = None, observer: ObserverTrack | None = None,
         n_particles: int = 10_000, q: float | None = None, r_min: float = 1000.0,
@@ -329,9 +364,9 @@ def run(estimator: EstimatorName | PFConfig | MLEConfig | RangeOnlyConfig, scena
 
     Parameters
     ----------
-    estimator : {"pf", "pf-bearings", "mle", "range-only"} or a config
+    estimator : {"pf", "pf-bearings", "mle", "range-only"}, an Estimator or a config
         "pf": particle filter from the prior; "pf-bearings": from bearings only (file 001).
-        A :class:`PFConfig` runs the prior-initialised PF with it.
+        A :class:`PFConfig` runs the prior-initialised PF with it (:func:`estimator_for`).
     scenario : Scenario
     measurements : Simulation or sequence of MeasurementSet
     rng : numpy.random.Generator, optional
@@ -350,234 +385,8 @@ def run(estimator: EstimatorName | PFConfig | MLEConfig | RangeOnlyConfig, scena
     Track
     """
     meas, obs = _observer_of(scenario, measurements, observer)
-    rng = rng if rng is not None else np.random.default_rng()
-    qf = float(scenario.target.q if q is None else q)
+    est = estimator_for(estimator, scenario, n_particles=n_particles, q=q, r_min=r_min,
+                        r_max=r_max)
     t0 = _time.perf_counter()
-    if isinstance(estimator, PFConfig):
-        tr = _run_pf(scenario, meas, obs, rng, estimator, "prior", r_min, r_max)
-    elif isinstance(estimator, MLEConfig):
-        tr = _run_mle(scenario, meas, obs, estimator)
-    elif isinstance(estimator, RangeOnlyConfig):
-        tr = _run_range_only(scenario, meas, obs, rng, estimator)
-    elif estimator in ("pf", "pf-bearings"):
-        cfg = PFConfig(n_particles=n_particles, dt=scenario.time.dt, q=qf)
-        tr = _run_pf(scenario, meas, obs, rng, cfg,
-                     "bearings" if estimator == "pf-bearings" else "prior", r_min, r_max)
-    elif estimator == "mle":
-        tr = _run_mle(scenario, meas, obs, MLEConfig())
-    elif estimator == "range-only":
-        tr = _run_range_only(scenario, meas, obs, rng,
-                             RangeOnlyConfig(dt=scenario.time.dt, q=qf))
-    else:
-        raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
+    tr = est.estimate(scenario, meas, obs, rng if rng is not None else np.random.default_rng())
     return dataclasses.replace(tr, seconds=_time.perf_counter() - t0)
-
-
-# --------------------------------------------------------------------------------------------
-# Bounds
-# --------------------------------------------------------------------------------------------
-
-
-def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -> np.ndarray:
-    """Prior-averaged Cartesian PCRB position std (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`)."""
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # side-assumption notes concern the LPC bound only
-        res = monte_carlo_pcrb(scenario, samples=samples, rng=rng, coords="cartesian")
-    return np.asarray(res.position_std, float)
-
-
-def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Position and range std of the batch CRLB at the truth, per step [m]."""
-    from tmaplan.estimators.mle import fisher_information
-
-    sim = simulate(scenario, None)
-    model = None if config.model == "auto" else config.model
-    data = tma_data(scenario, sim.measurements, sim.observer, model=model,
-                    frequencies=config.frequencies)
-    t = scenario.target
-    if data.model == "constant-turn":
-        geom = np.array([*t.centre, t.radius, t.phase, t.omega], float)
-    else:
-        # cv / multi-leg: truth = initial position and one velocity per leg
-        vel = [sim.target[0, 2:]] + [sim.target[np.searchsorted(scenario.times, s), 2:]
-                                     for s in data.leg_starts]
-        geom = np.concatenate([sim.target[0, :2], *vel])
-    f0 = []
-    if data.n_lines:
-        fs = next(s for s in scenario.sensors if s.kind == "frequency")
-        f0 = list(fs.f0[: data.n_lines])
-    p = np.concatenate([geom, f0])
-    C = np.linalg.inv(fisher_information(data, p))
-    S, Cs = state_track(data, p, C, scenario.times)
-    assert Cs is not None
-    rel = S[:, :2] - sim.observer.position
-    u = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
-    return (np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2)),
-            np.sqrt(np.einsum("ki,kij,kj->k", u, Cs[:, :2, :2], u)))
-
-
-# --------------------------------------------------------------------------------------------
-# Monte Carlo
-# --------------------------------------------------------------------------------------------
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class MonteCarloResult:
-    """Monte Carlo evaluation of an estimator (DESIGN §4 ``track`` fields).
-
-    Attributes
-    ----------
-    problem, estimator : str
-    runs, seed : int
-    times : ndarray, shape (K + 1,)
-        [s].
-    rmse_position, rmse_range : ndarray, shape (K + 1,)
-        Over the runs that were not rejected or failed [m]; NaN where no estimate.
-    bound_position : ndarray, shape (K + 1,)
-        PCRB (filters: along the runs' truths, or prior-averaged, see ``bound_kind``) or CRLB
-        (MLE) position std [m].
-    bound_range : ndarray, shape (K + 1,)
-        Range std of the same bound (delta method along the true line of sight) [m]; NaN for
-        the prior-averaged bound.
-    bound_kind : str
-        "truth", "prior", "crlb" or "none".
-    divergence_rate : float
-        Fraction of runs rejected, failed, or ending with a position error > 5× the bound.
-    nees : ndarray, shape (K + 1,)
-        Average normalised estimation error squared (4-D) over the used runs.
-    position_errors : ndarray, shape (runs, K + 1)
-        [m].
-    statuses : tuple of str
-    seconds : float
-        Total wall time [s].
-    ambiguous_runs : int
-        MLE: runs whose estimate has a statistically indistinguishable distinct alternative
-        (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`); 0 for the filters.
-    """
-
-    problem: str
-    estimator: str
-    runs: int
-    seed: int
-    times: np.ndarray
-    rmse_position: np.ndarray
-    rmse_range: np.ndarray
-    bound_position: np.ndarray
-    bound_range: np.ndarray
-    bound_kind: str
-    divergence_rate: float
-    nees: np.ndarray
-    position_errors: np.ndarray
-    statuses: tuple[str, ...]
-    seconds: float
-    ambiguous_runs: int = 0
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict (SI units)."""
-        return {"problem": self.problem, "estimator": self.estimator, "runs": self.runs,
-                "seed": self.seed, "times": self.times, "rmse_position": self.rmse_position,
-                "rmse_range": self.rmse_range, "bound_position": self.bound_position,
-                "bound_range": self.bound_range,
-                "bound_kind": self.bound_kind, "divergence_rate": self.divergence_rate,
-                "nees": self.nees,
-                "rejected": sum(s in ("rejected", "failed") for s in self.statuses),
-                "ambiguous_runs": self.ambiguous_runs,
-                "seconds": self.seconds}
-
-
-def monte_carlo(scenario: Scenario, estimator: EstimatorName | PFConfig | MLEConfig
-                | RangeOnlyConfig, *, runs: int, seed: int = 0, n_particles: int = 10_000,
-                bound: bool | Literal["truth", "prior"] = True, bound_samples: int = 2000,
-                progress: Callable[[int, int], None] | None = None,
-                **run_kwargs: Any) -> MonteCarloResult:
-    """Monte Carlo runs of one estimator: truth + measurements + estimate per run.
-
-    Parameters
-    ----------
-    scenario : Scenario
-    estimator : str or config
-        As for :func:`run`.
-    runs : int
-    seed : int
-        Root of ``numpy.random.SeedSequence(seed)``; child i seeds run i (simulation and
-        estimator share the child's generator, in that order).
-    n_particles : int
-    bound : bool or {"truth", "prior"}
-        Compute the bound (False: NaN). Filters: True / "truth" is the PCRB along each run's
-        true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
-        runs (BENCHMARK §B2, Ristic's bound); "prior" is the PCRB averaged over trajectories
-        drawn from the prior (optimistic before an unobservable geometry becomes observable).
-        The MLE always uses the CRLB at the truth.
-    bound_samples : int
-        Monte Carlo samples of the prior-averaged PCRB.
-    progress : callable(done, total), optional
-    **run_kwargs
-        Passed to :func:`run`.
-
-    Returns
-    -------
-    MonteCarloResult
-    """
-    if runs < 1:
-        raise ScenarioError("runs", ">= 1", runs)
-    t0 = _time.perf_counter()
-    K = scenario.n_steps
-    err_pos = np.full((runs, K + 1), np.nan)
-    err_rng = np.full((runs, K + 1), np.nan)
-    nees = np.full((runs, K + 1), np.nan)
-    statuses = []
-    ambiguous = 0
-    truths = np.zeros((runs, K + 1, 4))
-    children = np.random.SeedSequence(seed).spawn(runs + 1)
-    for i in range(runs):
-        rng = np.random.default_rng(children[i])
-        sim = simulate(scenario, rng)
-        truths[i] = sim.relative
-        tr = run(estimator, scenario, sim, rng=rng, n_particles=n_particles, **run_kwargs)
-        statuses.append(tr.status)
-        ambiguous += bool(getattr(tr.details, "ambiguous", False))
-        e = tr.estimates - sim.relative
-        err_pos[i] = np.hypot(e[:, 0], e[:, 1])
-        err_rng[i] = np.hypot(tr.estimates[:, 0], tr.estimates[:, 1]) - np.hypot(
-            sim.relative[:, 0], sim.relative[:, 1])
-        with np.errstate(invalid="ignore"):
-            try:
-                sol = np.linalg.solve(tr.covariances, e[..., None])[..., 0]
-                nees[i] = np.einsum("ki,ki->k", e, sol)
-            except (np.linalg.LinAlgError, ValueError):
-                pass
-        if progress is not None:
-            progress(i + 1, runs)
-    name = estimator if isinstance(estimator, str) else type(estimator).__name__
-    kind = "none"
-    if bound:
-        brng = np.random.default_rng(children[runs])
-        if name == "mle" or isinstance(estimator, MLEConfig):
-            cfg = estimator if isinstance(estimator, MLEConfig) else MLEConfig()
-            (b, br), kind = _crlb_bounds(scenario, cfg), "crlb"
-        elif bound == "prior":
-            b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
-            br = np.full(K + 1, np.nan)
-        elif bound is True or bound == "truth":
-            (b, br), kind = truth_bounds(scenario, truths), "truth"
-        else:
-            raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
-    else:
-        b = br = np.full(K + 1, np.nan)
-    used = np.array([s not in ("rejected", "failed") for s in statuses])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        rmse_p = np.sqrt(np.nanmean(err_pos[used] ** 2, axis=0)) if used.any() \
-            else np.full(K + 1, np.nan)
-        rmse_r = np.sqrt(np.nanmean(err_rng[used] ** 2, axis=0)) if used.any() \
-            else np.full(K + 1, np.nan)
-        mean_nees = np.nanmean(nees[used], axis=0) if used.any() else np.full(K + 1, np.nan)
-    final_bad = ~used | ~(err_pos[:, -1] <= 5.0 * b[-1]) if bound else ~used
-    return MonteCarloResult(problem=scenario.name, estimator=str(name), runs=runs, seed=seed,
-                            times=scenario.times, rmse_position=rmse_p, rmse_range=rmse_r,
-                            bound_position=b, bound_range=br, bound_kind=kind,
-                            divergence_rate=float(np.mean(final_bad)),
-                            nees=mean_nees, position_errors=err_pos, statuses=tuple(statuses),
-                            seconds=_time.perf_counter() - t0, ambiguous_runs=ambiguous)

@@ -1,6 +1,8 @@
-"""Tactical policies behind one interface: ``act(belief, t) -> Action``.
+"""Tactical policies behind one interface (:class:`Policy`): ``controller(scenario).act(belief,
+t) -> Action``.
 
-A policy is a frozen dataclass (its parameters). For one closed-loop run it makes a
+A policy is a frozen dataclass (its parameters) satisfying :class:`Policy` (manoeuvres also
+:class:`ManoeuvrePolicy`). For one closed-loop run it makes a
 :class:`Controller` (``policy.controller(scenario)``), the only place where per-run state lives
 (the current plan, pings used, the last re-plan time). Manoeuvre policies command a turn rate
 over the next step; ping policies decide whether to ping at the next step; :class:`Combined`
@@ -15,9 +17,23 @@ relative range uncertainty calls for it).
 
 from __future__ import annotations
 
-from tmaplan.policies._base import CLOSED_LOOP_OBJECTIVE, Action, BeliefView, Controller
+from tmaplan.policies._base import (
+    CLOSED_LOOP_OBJECTIVE,
+    Action,
+    BeliefView,
+    Controller,
+    ManoeuvrePolicy,
+    Policy,
+)
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
-from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
+from tmaplan.policies.manoeuvres import (
+    Planned,
+    Receding,
+    SingleTurn,
+    Straight,
+    Zigzag,
+    offline_plan,
+)
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
 
 __all__ = [
@@ -27,8 +43,10 @@ __all__ = [
     "BeliefView",
     "Combined",
     "Controller",
+    "ManoeuvrePolicy",
     "NoPing",
     "Planned",
+    "Policy",
     "Receding",
     "ScheduledPings",
     "SingleTurn",
@@ -37,5 +55,6 @@ __all__ = [
     "Zigzag",
     "best_single_turn",
     "best_zigzag",
+    "offline_plan",
     "parse_policy",
 ]

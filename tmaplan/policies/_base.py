@@ -1,10 +1,11 @@
-"""Common pieces of the policies: the action, the belief a controller sees, turn helpers."""
+"""Common pieces of the policies: the interfaces, the action, the belief a controller sees,
+turn helpers."""
 
 from __future__ import annotations
 
 import dataclasses
 import logging
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -12,9 +13,11 @@ from tmaplan.errors import ScenarioError
 from tmaplan.geometry import wrap_angle
 
 if TYPE_CHECKING:
+    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller"]
+__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "ManoeuvrePolicy",
+           "Policy"]
 
 log = logging.getLogger("tmaplan.policies")
 
@@ -90,11 +93,35 @@ class BeliefView:
         return m, float(np.sqrt(max(self.weights @ (r - m) ** 2, 0.0)))
 
 
+@runtime_checkable
 class Controller(Protocol):
-    """Per-run decision maker made by a policy."""
+    """Per-run decision maker made by a policy (the only place where per-run state lives)."""
 
     def act(self, belief: BeliefView, t: float) -> Action:
         """Decide the action at time ``t`` [s] from the belief."""
+        ...  # pragma: no cover
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """A tactical policy: frozen parameters that make one :class:`Controller` per run."""
+
+    @property
+    def name(self) -> str:
+        """CLI name (``straight``, ``uniform``, ``planned+scheduled``, ...)."""
+        ...  # pragma: no cover
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A fresh controller for one closed-loop run."""
+        ...  # pragma: no cover
+
+
+@runtime_checkable
+class ManoeuvrePolicy(Policy, Protocol):
+    """A policy that steers the own ship and knows the track it nominally flies."""
+
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
+        """The own-ship track flown without feedback (used to schedule pings offline)."""
         ...  # pragma: no cover
 
 

@@ -6,9 +6,30 @@ import dataclasses
 from typing import TYPE_CHECKING, Any
 
 from tmaplan.errors import PlanningError
-from tmaplan.policies._base import CLOSED_LOOP_OBJECTIVE, Action, BeliefView, Controller
-from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
-from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
+from tmaplan.policies._base import (
+    CLOSED_LOOP_OBJECTIVE,
+    Action,
+    BeliefView,
+    Controller,
+    ManoeuvrePolicy,
+    Policy,
+)
+from tmaplan.policies.manoeuvres import (
+    Planned,
+    Receding,
+    SingleTurn,
+    Straight,
+    Zigzag,
+    offline_plan,
+)
+from tmaplan.policies.pings import (
+    AdaptivePings,
+    NoPing,
+    ScheduledPings,
+    UniformPings,
+    _budget,
+    _offline_schedule,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -25,8 +46,8 @@ __all__ = ["Combined", "best_single_turn", "best_zigzag", "parse_policy"]
 class Combined:
     """A manoeuvre policy and a ping policy acting together."""
 
-    manoeuvre: Any
-    ping: Any = dataclasses.field(default_factory=NoPing)
+    manoeuvre: ManoeuvrePolicy
+    ping: Policy = dataclasses.field(default_factory=NoPing)
 
     @property
     def name(self) -> str:
@@ -37,6 +58,19 @@ class Combined:
     def controller(self, scenario: Scenario) -> Controller:
         """Controller taking the turn rate of one and the ping of the other."""
         return _Both(self.manoeuvre.controller(scenario), self.ping.controller(scenario))
+
+    def resolve(self, scenario: Scenario) -> Combined:
+        """The same policy with its offline parts computed (the heading plan of
+        :class:`Planned`, the schedule of :class:`ScheduledPings` along the track the manoeuvre
+        nominally flies), so that the controllers of all runs share them."""
+        man, ping = self.manoeuvre, self.ping
+        if isinstance(man, Planned) and man.plan is None:
+            man = dataclasses.replace(man, plan=offline_plan(scenario, man.objective))
+        if isinstance(ping, ScheduledPings) and ping.steps is None:
+            steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
+                                      ping.objective, man.nominal_track(scenario))
+            ping = dataclasses.replace(ping, steps=tuple(int(s) for s in steps))
+        return Combined(manoeuvre=man, ping=ping)
 
 
 class _Both:
@@ -51,13 +85,11 @@ class _Both:
         return Action(turn_rate=self.m.act(belief, t).turn_rate, ping=self.p.act(belief, t).ping)
 
 
-_BASELINE_CACHE: dict[str, dict[str, Any]] = {}
+_BASELINE_CACHE: dict[Scenario, dict[str, Any]] = {}
 
 
 def _best_baselines(scenario: Scenario) -> dict[str, Any]:
-    from tmaplan.scenario import dump
-
-    key = dump(scenario)
+    key = scenario
     if key not in _BASELINE_CACHE:
         from tmaplan.planning.baselines import evaluate_baselines
 
@@ -106,7 +138,7 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
                             f"in {sorted(_MANOEUVRES)} and PING in {sorted(_PINGS)}")
     name = parts[0]
     if name == "straight":
-        man: Any = Straight()
+        man: ManoeuvrePolicy = Straight()
     elif name == "single-turn":
         man = best_single_turn(scenario)
     elif name == "zigzag":
@@ -115,7 +147,7 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         man = Planned()
     else:
         man = Receding()
-    ping: Any = NoPing()
+    ping: Policy = NoPing()
     if len(parts) == 2:
         ping = {"no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
                 "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",

@@ -21,9 +21,10 @@ from tmaplan.policies._base import (
 )
 
 if TYPE_CHECKING:
+    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["Planned", "Receding", "SingleTurn", "Straight", "Zigzag"]
+__all__ = ["Planned", "Receding", "SingleTurn", "Straight", "Zigzag", "offline_plan"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -41,7 +42,7 @@ class Straight:
         """A controller that never turns."""
         return _Const()
 
-    def nominal_track(self, scenario: Scenario) -> Any:
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import straight_track
 
@@ -68,7 +69,7 @@ class SingleTurn:
         c0 = _initial_course(scenario)
         return _CourseSchedule([(scenario.time.t0, c0), (self.time, c0 + self.angle)], u_max, dt)
 
-    def nominal_track(self, scenario: Scenario) -> Any:
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import single_turn_track
 
@@ -100,7 +101,7 @@ class Zigzag:
             sign = -sign
         return _CourseSchedule(sched, u_max, dt)
 
-    def nominal_track(self, scenario: Scenario) -> Any:
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import zigzag_track
 
@@ -139,22 +140,22 @@ class Planned:
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller replaying the plan's turn rates."""
-        plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
+        plan = self.plan if self.plan is not None else offline_plan(scenario, self.objective)
         return _TurnRatePlayback(plan, scenario)
 
-    def nominal_track(self, scenario: Scenario) -> Any:
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The planned own-ship track (used to schedule pings offline)."""
-        plan = self.plan if self.plan is not None else _offline_plan(scenario, self.objective)
+        plan = self.plan if self.plan is not None else offline_plan(scenario, self.objective)
         return plan.observer
 
 
-_PLAN_CACHE: dict[tuple[str, str | None], Any] = {}
+_PLAN_CACHE: dict[tuple[Scenario, str | None], Any] = {}
 
 
-def _offline_plan(scenario: Scenario, objective: str | None) -> Any:
-    from tmaplan.scenario import dump
-
-    key = (dump(scenario), objective)
+def offline_plan(scenario: Scenario, objective: str | None) -> Any:
+    """The heading plan from the prior (``tmaplan.planning.plan_heading``), cached per
+    scenario and objective."""
+    key = (scenario, objective)
     if key not in _PLAN_CACHE:
         from tmaplan.planning import plan_heading
 
@@ -211,18 +212,16 @@ class Receding:
         """A controller owning a planner built once for the whole run."""
         return _RecedingController(self, scenario)
 
-    def nominal_track(self, scenario: Scenario) -> Any:
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The offline plan from the prior: the receding controller's first plan."""
-        return _offline_plan(scenario, self.objective).observer
+        return offline_plan(scenario, self.objective).observer
 
 
-_PLANNER_CACHE: dict[tuple[str, str | None, float | None], Any] = {}
+_PLANNER_CACHE: dict[tuple[Scenario, str | None, float | None], Any] = {}
 
 
 def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
-    from tmaplan.scenario import dump
-
-    key = (dump(scenario), objective, horizon)
+    key = (scenario, objective, horizon)
     if key not in _PLANNER_CACHE:
         from tmaplan.planning import HeadingPlanner
 

@@ -1,17 +1,16 @@
 """Per-run and per-campaign metrics of localisation performance.
 
-Per run (from a :class:`tmaplan.closed_loop.ClosedLoopRun`): position and range error over
-time, target course and speed error, the time to a range accuracy (relative range error below
-a threshold *and staying there*), divergence and pings used. Across runs: RMSE over time,
-summary statistics and paired differences with confidence intervals (common random numbers make
-the differences paired).
+Per run (from a :class:`tmaplan.evaluation.closed_loop.ClosedLoopRun`): position and range
+error over time, target course and speed error, the time to a range accuracy (relative range
+error below a threshold *and staying there*), divergence and pings used. Across runs: RMSE over
+time, summary statistics and paired differences with confidence intervals (common random
+numbers make the differences paired).
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -20,10 +19,47 @@ from tmaplan.geometry import wrap_angle
 
 __all__ = [
     "PairedDifference",
+    "RunMetrics",
     "paired_difference",
     "run_metrics",
     "time_to_accuracy",
 ]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class RunMetrics:
+    """Error metrics of one run.
+
+    Attributes
+    ----------
+    position_error, range_error : ndarray, shape (K + 1,)
+        [m].
+    rel_range_error : ndarray, shape (K + 1,)
+        |r̂ − r| / r.
+    course_error : ndarray, shape (K + 1,)
+        Target course error [rad].
+    speed_error : ndarray, shape (K + 1,)
+        Target speed error [m/s].
+    time_to_accuracy : float
+        [s] since t0 (inf if never, see :func:`time_to_accuracy`).
+    diverged : bool
+    pings_used : int
+    final_position_error, final_range_error : float
+        [m].
+    final_rel_range_error : float
+    """
+
+    position_error: np.ndarray
+    range_error: np.ndarray
+    rel_range_error: np.ndarray
+    course_error: np.ndarray
+    speed_error: np.ndarray
+    time_to_accuracy: float
+    diverged: bool
+    pings_used: int
+    final_position_error: float
+    final_range_error: float
+    final_rel_range_error: float
 
 
 def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float) -> float:
@@ -53,7 +89,7 @@ def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float)
 
 def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
                 observer_velocity: np.ndarray, *, accuracy: float = 0.1,
-                divergence: float = 0.5, n_pings: int = 0) -> dict[str, Any]:
+                divergence: float = 0.5, n_pings: int = 0) -> RunMetrics:
     """Error metrics of one run.
 
     Parameters
@@ -73,11 +109,7 @@ def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
 
     Returns
     -------
-    dict
-        ``position_error (K+1,)`` [m], ``range_error (K+1,)`` [m], ``rel_range_error (K+1,)``,
-        ``course_error (K+1,)`` [rad], ``speed_error (K+1,)`` [m/s], ``time_to_accuracy`` [s]
-        (inf if never), ``diverged`` (bool), ``pings_used``, ``final_position_error``,
-        ``final_range_error``, ``final_rel_range_error``.
+    RunMetrics
     """
     pos_err = np.hypot(*(estimate[:, :2] - truth[:, :2]).T)
     r_true = np.hypot(*truth[:, :2].T)
@@ -90,19 +122,13 @@ def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
                                    - np.arctan2(v_true[:, 0], v_true[:, 1])))
     speed_err = np.abs(np.hypot(*v_est.T) - np.hypot(*v_true.T))
     finite = bool(np.all(np.isfinite(estimate)))
-    return {
-        "position_error": pos_err,
-        "range_error": rng_err,
-        "rel_range_error": rel,
-        "course_error": course_err,
-        "speed_error": speed_err,
-        "time_to_accuracy": time_to_accuracy(times, rel, accuracy) if finite else float("inf"),
-        "diverged": (not finite) or bool(rel[-1] > divergence),
-        "pings_used": int(n_pings),
-        "final_position_error": float(pos_err[-1]),
-        "final_range_error": float(rng_err[-1]),
-        "final_rel_range_error": float(rel[-1]),
-    }
+    return RunMetrics(
+        position_error=pos_err, range_error=rng_err, rel_range_error=rel,
+        course_error=course_err, speed_error=speed_err,
+        time_to_accuracy=time_to_accuracy(times, rel, accuracy) if finite else float("inf"),
+        diverged=(not finite) or bool(rel[-1] > divergence), pings_used=int(n_pings),
+        final_position_error=float(pos_err[-1]), final_range_error=float(rng_err[-1]),
+        final_rel_range_error=float(rel[-1]))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -1,0 +1,378 @@
+"""Monte Carlo comparison of policies with common random numbers.
+
+A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
+its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter),
+and every policy re-creates them from the same seeds, so differences between policies are
+paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
+run, so serial, process-pool and Dask backends with any worker count give bit-identical
+results.
+
+Runs (:class:`tmaplan.evaluation.records.RunRecord`) are written to
+``<out>/campaign-<key>/runs/run_XXXXX.npz`` as they finish (atomically); re-running the same
+campaign loads them and computes only the missing runs. The key hashes the scenario's content
+(:func:`tmaplan.evaluation.records.scenario_hash`), the other settings, the run-file format and
+the tmaplan version.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from tmaplan.errors import PlanningError
+from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
+from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
+from tmaplan.policies import Policy, parse_policy
+from tmaplan.scenario import Scenario, dump
+from tmaplan.simulate import draw_truth
+
+__all__ = [
+    "CampaignResult",
+    "CampaignSpec",
+    "resolve_policies",
+    "run_campaign",
+    "run_one",
+]
+
+Backend = Literal["serial", "processes", "dask"]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CampaignSpec:
+    """Everything that defines a campaign (and its cache key).
+
+    Attributes
+    ----------
+    scenario : Scenario
+    policies : tuple of str
+        Policy specs, ``manoeuvre[+ping]`` (:func:`tmaplan.policies.parse_policy`).
+    runs : int
+        Number of Monte Carlo runs.
+    seed : int
+        Root seed.
+    n_particles : int
+        Particle-filter size.
+    truth : {"prior", "scenario"}
+        Draw each run's target initial state from the prior, or use the scenario's.
+    accuracy : float
+        Relative range error that counts as localised.
+    """
+
+    scenario: Scenario
+    policies: tuple[str, ...]
+    runs: int
+    seed: int = 0
+    n_particles: int = 3000
+    truth: Literal["prior", "scenario"] = "prior"
+    accuracy: float = 0.1
+
+    def key(self) -> str:
+        """Hash of everything but ``runs`` (extending a campaign reuses its runs), plus the
+        run-file format and the tmaplan version, so that runs stored by another release are
+        never reused."""
+        return hashlib.sha256(json.dumps(self._meta(), sort_keys=True).encode()).hexdigest()[:16]
+
+    def _meta(self) -> dict[str, Any]:
+        from tmaplan import __version__
+
+        return {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
+                "policies": list(self.policies), "seed": self.seed,
+                "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
+                "format": FORMAT, "tmaplan_version": __version__}
+
+
+def resolve_policies(scenario: Scenario, specs: Sequence[str]) -> dict[str, Policy]:
+    """Parse policy specs and precompute what is shared by all runs (offline plans,
+    schedules, the best single turn: :meth:`tmaplan.policies.Combined.resolve`), so workers do
+    not recompute it.
+
+    Returns
+    -------
+    dict
+        Policy name -> policy object (picklable).
+    """
+    out: dict[str, Policy] = {}
+    for spec in specs:
+        if spec in out:
+            raise PlanningError(f"policy {spec!r} given twice")
+        out[spec] = parse_policy(spec, scenario).resolve(scenario)
+    return out
+
+
+def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
+    return np.random.SeedSequence(seed, spawn_key=(run,)).spawn(3)
+
+
+def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
+    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all)."""
+    from threadpoolctl import threadpool_limits
+
+    scenario = spec.scenario
+    s_truth, s_noise, s_filter = _run_seeds(spec.seed, run)
+    out: dict[str, PolicyRun] = {}
+    with threadpool_limits(limits=1):
+        target = draw_truth(scenario, np.random.default_rng(s_truth),
+                            from_prior=spec.truth == "prior")
+        for name, pol in policies.items():
+            res = run_closed_loop(scenario, pol, target,
+                                  noise_rng=np.random.default_rng(s_noise),
+                                  filter_rng=np.random.default_rng(s_filter),
+                                  n_particles=spec.n_particles)
+            out[name] = PolicyRun(
+                metrics=run_metrics(res.times, res.truth, res.estimate,
+                                    res.observer.mean_velocity, accuracy=spec.accuracy,
+                                    n_pings=len(res.ping_steps)),
+                observer=res.observer.position, target=res.target[:, :2],
+                estimate=res.estimate[:, :2] + res.observer.position,
+                ping_steps=res.ping_steps,
+                replan_seconds=np.array([e["seconds"] for e in res.replans]),
+                replan_failures=sum(not e["success"] for e in res.replans))
+    return RunRecord(run=run, policies=out)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CampaignResult:
+    """Aggregated results of a campaign.
+
+    Attributes
+    ----------
+    spec : CampaignSpec
+    times : ndarray, shape (K + 1,)
+        [s].
+    policies : tuple of str
+    summary : dict
+        Per policy: ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
+        ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
+        ``time_to_accuracy`` (median [s], inf if most runs never get there),
+        ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
+        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_rel_range_error``
+        (per run), ``replan_seconds`` (mean per re-plan), ``replan_failures``.
+    differences : tuple of PairedDifference
+        All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
+        ``final_range_error``.
+    examples : dict
+        Run 0's record per policy (tracks: observer, target, estimate positions, pings).
+    directory : Path or None
+        Where runs are stored.
+    computed_runs, loaded_runs : tuple of int
+        Which runs were computed now and which were loaded from disk.
+    seconds : float
+    """
+
+    spec: CampaignSpec
+    times: np.ndarray
+    policies: tuple[str, ...]
+    summary: dict[str, dict[str, Any]]
+    differences: tuple[PairedDifference, ...]
+    examples: dict[str, PolicyRun]
+    directory: Path | None
+    computed_runs: tuple[int, ...]
+    loaded_runs: tuple[int, ...]
+    seconds: float
+
+    def to_json(self) -> dict[str, Any]:
+        """DESIGN §4 payload (SI units)."""
+        pol = {}
+        for name in self.policies:
+            s = self.summary[name]
+            pol[name] = {
+                "rmse_position": s["rmse_position"].tolist(),
+                "rmse_range": s["rmse_range"].tolist(),
+                "rmse_course": s["rmse_course"].tolist(),
+                "rmse_speed": s["rmse_speed"].tolist(),
+                "time_to_accuracy": s["time_to_accuracy"],
+                "time_to_accuracy_runs": s["time_to_accuracy_runs"].tolist(),
+                "reached_fraction": s["reached_fraction"],
+                "divergence_rate": s["divergence_rate"],
+                "pings_used": s["pings_used"],
+                "final_range_rmse": s["final_range_rmse"],
+                "replan_seconds": s["replan_seconds"],
+            }
+        return {
+            "policies": pol,
+            "times": self.times.tolist(),
+            "runs": self.spec.runs,
+            "seed": self.spec.seed,
+            "particles": self.spec.n_particles,
+            "accuracy": self.spec.accuracy,
+            "differences": [dataclasses.asdict(d) for d in self.differences],
+            "computed_runs": len(self.computed_runs),
+            "loaded_runs": len(self.loaded_runs),
+        }
+
+
+def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
+               ) -> tuple[dict[str, dict[str, Any]], tuple[PairedDifference, ...]]:
+    summary: dict[str, dict[str, Any]] = {}
+    tta: dict[str, np.ndarray] = {}
+    fre: dict[str, np.ndarray] = {}
+    for name in spec.policies:
+        ms = [r.policies[name].metrics for r in runs]
+
+        def rms(field: str, ms: list[Any] = ms) -> np.ndarray:
+            return np.sqrt(np.mean(np.stack([getattr(m, field) for m in ms]) ** 2, axis=0))
+
+        t = np.array([m.time_to_accuracy for m in ms])
+        fin = np.array([m.final_range_error for m in ms])
+        rs = np.concatenate([r.policies[name].replan_seconds for r in runs])
+        tta[name], fre[name] = t, fin
+        summary[name] = {
+            "rmse_position": rms("position_error"),
+            "rmse_range": rms("range_error"),
+            "rmse_course": rms("course_error"),
+            "rmse_speed": rms("speed_error"),
+            "time_to_accuracy": float(np.median(t)),
+            "time_to_accuracy_runs": t,
+            "reached_fraction": float(np.mean(np.isfinite(t))),
+            "divergence_rate": float(np.mean([m.diverged for m in ms])),
+            "pings_used": float(np.mean([m.pings_used for m in ms])),
+            "final_range_rmse": float(np.sqrt(np.mean(fin**2))),
+            "final_rel_range_error": np.array([m.final_rel_range_error for m in ms]),
+            "replan_seconds": float(rs.mean()) if rs.size else 0.0,
+            "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
+        }
+    censor = float(times[-1] - times[0] + (times[1] - times[0]))
+    diffs = []
+    names = list(spec.policies)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            diffs.append(paired_difference(tta, a, b, "time_to_accuracy", censor=censor))
+            diffs.append(paired_difference(fre, a, b, "final_range_error"))
+    return summary, tuple(diffs)
+
+
+def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
+                  fn: Callable[..., RunRecord], spec: CampaignSpec,
+                  policies: Mapping[str, Policy], todo: list[int]
+                  ) -> Iterable[tuple[int, RunRecord]]:
+    if backend == "serial" or not todo:
+        for i in todo:
+            yield i, fn(spec, policies, i)
+    elif backend == "processes":
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as ex:
+            futs = {ex.submit(fn, spec, policies, i): i for i in todo}
+            for f in as_completed(futs):
+                yield futs[f], f.result()
+    elif backend == "dask":
+        from dask.distributed import Client, LocalCluster
+        from dask.distributed import as_completed as d_as_completed
+
+        cluster = None
+        if scheduler is None:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(scheduler)
+        try:
+            futs = [client.submit(fn, spec, policies, i, pure=False, key=f"run-{spec.key()}-{i}")
+                    for i in todo]
+            index = {f.key: i for f, i in zip(futs, todo)}
+            for f in d_as_completed(futs):
+                yield index[f.key], f.result()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    else:
+        raise PlanningError(f"unknown backend {backend!r}: expected serial, processes or dask")
+
+
+def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, workers: int = 1,
+                 backend: Backend | None = None, scheduler: str | None = None,
+                 progress: bool = False, policies: Mapping[str, Policy] | None = None,
+                 max_new_runs: int | None = None) -> CampaignResult:
+    """Run (or resume) a campaign.
+
+    Parameters
+    ----------
+    spec : CampaignSpec
+    out_dir : path, optional
+        Store runs under ``out_dir/campaign-<key>/`` and resume from there.
+    workers : int
+        Worker processes (backend "processes" or a local Dask cluster).
+    backend : {"serial", "processes", "dask"}, optional
+        Default: "dask" if ``scheduler`` is given, "processes" if ``workers > 1``, else
+        "serial".
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    progress : bool
+        Show a progress bar (rich) on the terminal.
+    policies : dict, optional
+        Pre-resolved policies (default: :func:`resolve_policies`).
+    max_new_runs : int, optional
+        Stop after computing this many new runs (used to test interruption and resume).
+
+    Returns
+    -------
+    CampaignResult
+    """
+    t0 = time.perf_counter()
+    if spec.runs < 1:
+        raise PlanningError(f"runs must be >= 1, received {spec.runs}")
+    if spec.n_particles < 2:
+        raise PlanningError(f"particles must be >= 2, received {spec.n_particles}")
+    if workers < 1:
+        raise PlanningError(f"workers must be >= 1, received {workers}")
+    if not 0 < spec.accuracy < 1:
+        raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
+    scenario = spec.scenario
+    backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
+    pols = policies if policies is not None else resolve_policies(scenario, spec.policies)
+    directory = None
+    results: dict[int, RunRecord] = {}
+    if out_dir is not None:
+        directory = Path(out_dir) / f"campaign-{spec.key()}"
+        (directory / "runs").mkdir(parents=True, exist_ok=True)
+        (directory / "spec.json").write_text(json.dumps(spec._meta(), indent=1))
+        (directory / "scenario.toml").write_text(dump(scenario))
+        for i in range(spec.runs):
+            p = directory / "runs" / f"run_{i:05d}.npz"
+            if p.exists():
+                d = RunRecord.load(p, tuple(spec.policies))
+                if d is not None and d.run == i:
+                    results[i] = d
+    loaded = tuple(sorted(results))
+    todo = [i for i in range(spec.runs) if i not in results]
+    if max_new_runs is not None:
+        todo = todo[:max_new_runs]
+    computed = []
+    bar = None
+    if progress:
+        from rich.progress import Progress
+
+        bar = Progress(transient=True)
+        bar.start()
+        task = bar.add_task("Monte Carlo runs", total=len(todo))
+    try:
+        for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo):
+            results[i] = data
+            computed.append(i)
+            if directory is not None:
+                data.save(directory / "runs" / f"run_{i:05d}.npz")
+            if bar is not None:
+                bar.advance(task)
+    finally:
+        if bar is not None:
+            bar.stop()
+    done = sorted(results)
+    if len(done) < spec.runs:
+        raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "
+                            f"(re-run to resume{' from ' + str(directory) if directory else ''})")
+    ordered = [results[i] for i in range(spec.runs)]
+    summary, diffs = _aggregate(spec, ordered, scenario.times)
+    examples = {name: ordered[0].policies[name] for name in spec.policies}
+    return CampaignResult(spec=spec, times=scenario.times, policies=tuple(spec.policies),
+                          summary=summary, differences=diffs, examples=examples,
+                          directory=directory, computed_runs=tuple(sorted(computed)),
+                          loaded_runs=loaded, seconds=time.perf_counter() - t0)

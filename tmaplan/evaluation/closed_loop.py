@@ -1,0 +1,141 @@
+"""One closed-loop run: a policy steers the own ship and pings on the particle filter's belief.
+
+At each step k the controller sees a :class:`tmaplan.policies.BeliefView` (never the truth)
+and returns a turn rate over (t_k, t_{k+1}] and whether to ping at k + 1. The own ship moves on
+the exact arc, the sensors measure at k + 1 (:func:`tmaplan.simulate.measure_step`), the filter
+predicts with the observer's velocity increment and updates (:func:`tmaplan.estimators.filter
+.drive`, the loop every estimator run uses). The run's randomness comes from three generators
+(truth, measurement noise, filter), so that different policies in the same run see the *same
+truth and the same noise* (common random numbers, :class:`tmaplan.simulate.CommonNoise`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import numpy as np
+
+from tmaplan.estimators.filter import drive
+from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig, PFState
+from tmaplan.geometry import course_speed, wrap_angle
+from tmaplan.models.observer import ObserverTrack, arc_displacement
+from tmaplan.models.target import initial_velocity
+from tmaplan.policies import BeliefView, Policy
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import Measurement, draw_common_noise, measure_step
+
+__all__ = ["ClosedLoopRun", "run_closed_loop"]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ClosedLoopRun:
+    """Result of one closed-loop run.
+
+    Attributes
+    ----------
+    times : ndarray, shape (K + 1,)
+        [s].
+    truth : ndarray, shape (K + 1, 4)
+        True relative state [m, m/s] (observer mean velocity convention).
+    target : ndarray, shape (K + 1, 4)
+        True absolute target state.
+    observer : ObserverTrack
+    estimate : ndarray, shape (K + 1, 4)
+        Posterior mean of the relative state.
+    covariance : ndarray, shape (K + 1, 4, 4)
+        Posterior covariance.
+    ping_steps : ndarray, shape (n_pings,)
+        Steps at which the own ship pinged.
+    turn_rate : ndarray, shape (K,)
+        Applied turn rate per step [rad/s].
+    replans : tuple of dict
+        Re-planning log (time, status, seconds) of a receding controller.
+    seconds : float
+        Wall time of the run.
+    """
+
+    times: np.ndarray
+    truth: np.ndarray
+    target: np.ndarray
+    observer: ObserverTrack
+    estimate: np.ndarray
+    covariance: np.ndarray
+    ping_steps: np.ndarray
+    turn_rate: np.ndarray
+    replans: tuple[dict[str, Any], ...]
+    seconds: float
+
+
+def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
+                    noise_rng: np.random.Generator, filter_rng: np.random.Generator,
+                    n_particles: int = 5000, filter_q: float | None = None) -> ClosedLoopRun:
+    """Simulate one run of ``policy`` against the true target track ``target``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Needs a bearing sensor, a prior and (for manoeuvres) ``observer.turn_rate_max``; pings
+        use the first active range sensor's σ.
+    policy : Policy
+    target : ndarray, shape (K + 1, 4)
+        True absolute target track (see :func:`tmaplan.simulate.draw_truth`).
+    noise_rng, filter_rng : numpy.random.Generator
+        Measurement noise and particle-filter randomness.
+    n_particles : int
+    filter_q : float, optional
+        Filter process-noise intensity [m²/s³] (default: the scenario's, floored at 1e-8).
+
+    Returns
+    -------
+    ClosedLoopRun
+    """
+    t_start = time.perf_counter()
+    K, dt, times = scenario.n_steps, scenario.time.dt, scenario.times
+    noise = draw_common_noise(scenario, noise_rng)
+    v0 = initial_velocity(scenario.observer)
+    heading, speed = (float(x) for x in course_speed(v0))
+    pos = np.asarray(scenario.observer.position, float).copy()
+    u_max = scenario.observer.turn_rate_max
+    positions = np.empty((K + 1, 2))
+    vel_inst = np.empty((K + 1, 2))
+    vbar = np.empty((K + 1, 2))
+    headings = np.empty(K + 1)
+    positions[0], vel_inst[0], vbar[0], headings[0] = pos, v0, v0, heading
+
+    q = scenario.target.q if filter_q is None else filter_q
+    pf = ParticleFilter(PFConfig(n_particles=n_particles, dt=dt, q=max(q, 1e-8)))
+    ctrl = policy.controller(scenario)
+    pings: list[int] = []
+    rates = np.zeros(K)
+
+    def step(k: int, state: PFState) -> tuple[np.ndarray, list[Measurement]]:
+        nonlocal heading, pos
+        belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
+                            particles=state.particles, weights=state.weights,
+                            pings_used=len(pings))
+        act = ctrl.act(belief, float(times[k]))
+        u = float(act.turn_rate)
+        if u_max is not None:
+            u = float(np.clip(u, -u_max, u_max))
+        rates[k] = u
+        disp = arc_displacement(np.array(heading), np.array(u), np.array(speed), dt)
+        pos = pos + disp
+        heading = heading + u * dt
+        vbar[k + 1] = disp / dt
+        vel_inst[k + 1] = speed * np.array([np.sin(heading), np.cos(heading)])
+        positions[k + 1], headings[k + 1] = pos, heading
+        meas = measure_step(scenario, k + 1, target[k + 1] - np.concatenate([pos, vel_inst[k + 1]]),
+                            noise, ping=bool(act.ping))
+        pings.extend([k + 1] if any(m.ping for m in meas) else [])
+        return vbar[k + 1] - vbar[k], meas
+
+    fr = drive(pf, pf.init(scenario, filter_rng), K, step, filter_rng)
+    obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
+                        heading=wrap_angle(headings), speed=np.full(K + 1, speed))
+    return ClosedLoopRun(times=times, truth=target - obs.state, target=target, observer=obs,
+                         estimate=fr.estimates, covariance=fr.covariances,
+                         ping_steps=np.asarray(pings, dtype=int), turn_rate=rates,
+                         replans=tuple(getattr(ctrl, "log", [])),
+                         seconds=time.perf_counter() - t_start)

@@ -1,0 +1,244 @@
+"""Monte Carlo evaluation of an estimator against its bound (the `track` verb).
+
+``monte_carlo(scenario, estimator, runs=..., seed=...)`` repeats :func:`tmaplan.estimators.run`
+over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares
+the RMSE with the estimator's bound (:attr:`tmaplan.estimators.runner.Estimator.bound`): for the
+filters the PCRB along the runs' true trajectories, averaged over the runs
+(:func:`tmaplan.estimators.truth_bound.truth_pcrb`, BENCHMARK_SCENARIOS §B2; option
+``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb``, see
+:func:`_pcrb_position`), the CRLB of the batch estimate for the MLE (:func:`_crlb_bounds`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time as _time
+import warnings
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from tmaplan.errors import ScenarioError
+from tmaplan.estimators.mle import MLEConfig, state_track, tma_data
+from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.estimators.range_only import RangeOnlyConfig
+from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
+from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.simulate import simulate
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+
+__all__ = ["MonteCarloResult", "monte_carlo"]
+
+
+# --------------------------------------------------------------------------------------------
+# Bounds
+# --------------------------------------------------------------------------------------------
+
+
+def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -> np.ndarray:
+    """Prior-averaged Cartesian PCRB position std (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`)."""
+    from tmaplan.bounds.pcrb import monte_carlo_pcrb
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # side-assumption notes concern the LPC bound only
+        res = monte_carlo_pcrb(scenario, samples=samples, rng=rng, coords="cartesian")
+    return np.asarray(res.position_std, float)
+
+
+def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Position and range std of the batch CRLB at the truth, per step [m]."""
+    from tmaplan.estimators.mle import fisher_information
+
+    sim = simulate(scenario, None)
+    model = None if config.model == "auto" else config.model
+    data = tma_data(scenario, sim.measurements, sim.observer, model=model,
+                    frequencies=config.frequencies)
+    t = scenario.target
+    if data.model == "constant-turn":
+        geom = np.array([*t.centre, t.radius, t.phase, t.omega], float)
+    else:
+        # cv / multi-leg: truth = initial position and one velocity per leg
+        vel = [sim.target[0, 2:]] + [sim.target[np.searchsorted(scenario.times, s), 2:]
+                                     for s in data.leg_starts]
+        geom = np.concatenate([sim.target[0, :2], *vel])
+    f0 = []
+    if data.n_lines:
+        fs = next(s for s in scenario.sensors if s.kind == "frequency")
+        f0 = list(fs.f0[: data.n_lines])
+    p = np.concatenate([geom, f0])
+    C = np.linalg.inv(fisher_information(data, p))
+    S, Cs = state_track(data, p, C, scenario.times)
+    assert Cs is not None
+    rel = S[:, :2] - sim.observer.position
+    u = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
+    return (np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2)),
+            np.sqrt(np.einsum("ki,kij,kj->k", u, Cs[:, :2, :2], u)))
+
+
+# --------------------------------------------------------------------------------------------
+# Monte Carlo
+# --------------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MonteCarloResult:
+    """Monte Carlo evaluation of an estimator (DESIGN §4 ``track`` fields).
+
+    Attributes
+    ----------
+    problem, estimator : str
+    runs, seed : int
+    times : ndarray, shape (K + 1,)
+        [s].
+    rmse_position, rmse_range : ndarray, shape (K + 1,)
+        Over the runs that were not rejected or failed [m]; NaN where no estimate.
+    bound_position : ndarray, shape (K + 1,)
+        PCRB (filters: along the runs' truths, or prior-averaged, see ``bound_kind``) or CRLB
+        (MLE) position std [m].
+    bound_range : ndarray, shape (K + 1,)
+        Range std of the same bound (delta method along the true line of sight) [m]; NaN for
+        the prior-averaged bound.
+    bound_kind : str
+        "truth", "prior", "crlb" or "none".
+    divergence_rate : float
+        Fraction of runs rejected, failed, or ending with a position error > 5× the bound.
+    nees : ndarray, shape (K + 1,)
+        Average normalised estimation error squared (4-D) over the used runs.
+    position_errors : ndarray, shape (runs, K + 1)
+        [m].
+    statuses : tuple of str
+    seconds : float
+        Total wall time [s].
+    ambiguous_runs : int
+        MLE: runs whose estimate has a statistically indistinguishable distinct alternative
+        (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`); 0 for the filters.
+    """
+
+    problem: str
+    estimator: str
+    runs: int
+    seed: int
+    times: np.ndarray
+    rmse_position: np.ndarray
+    rmse_range: np.ndarray
+    bound_position: np.ndarray
+    bound_range: np.ndarray
+    bound_kind: str
+    divergence_rate: float
+    nees: np.ndarray
+    position_errors: np.ndarray
+    statuses: tuple[str, ...]
+    seconds: float
+    ambiguous_runs: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict (SI units)."""
+        return {"problem": self.problem, "estimator": self.estimator, "runs": self.runs,
+                "seed": self.seed, "times": self.times, "rmse_position": self.rmse_position,
+                "rmse_range": self.rmse_range, "bound_position": self.bound_position,
+                "bound_range": self.bound_range,
+                "bound_kind": self.bound_kind, "divergence_rate": self.divergence_rate,
+                "nees": self.nees,
+                "rejected": sum(s in ("rejected", "failed") for s in self.statuses),
+                "ambiguous_runs": self.ambiguous_runs,
+                "seconds": self.seconds}
+
+
+def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFConfig | MLEConfig
+                | RangeOnlyConfig, *, runs: int, seed: int = 0, n_particles: int = 10_000,
+                bound: bool | Literal["truth", "prior"] = True, bound_samples: int = 2000,
+                progress: Callable[[int, int], None] | None = None,
+                **run_kwargs: Any) -> MonteCarloResult:
+    """Monte Carlo runs of one estimator: truth + measurements + estimate per run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    estimator : str, Estimator or config
+        As for :func:`tmaplan.estimators.run`.
+    runs : int
+    seed : int
+        Root of ``numpy.random.SeedSequence(seed)``; child i seeds run i (simulation and
+        estimator share the child's generator, in that order).
+    n_particles : int
+    bound : bool or {"truth", "prior"}
+        Compute the bound (False: NaN). Filters: True / "truth" is the PCRB along each run's
+        true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
+        runs (BENCHMARK §B2, Ristic's bound); "prior" is the PCRB averaged over trajectories
+        drawn from the prior (optimistic before an unobservable geometry becomes observable).
+        The MLE always uses the CRLB at the truth.
+    bound_samples : int
+        Monte Carlo samples of the prior-averaged PCRB.
+    progress : callable(done, total), optional
+    **run_kwargs
+        Passed to :func:`tmaplan.estimators.run` (``q``, ``r_min``, ``r_max``, ``observer``).
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    if runs < 1:
+        raise ScenarioError("runs", ">= 1", runs)
+    est = estimator_for(estimator, scenario, n_particles=n_particles,
+                        **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
+    t0 = _time.perf_counter()
+    K = scenario.n_steps
+    err_pos = np.full((runs, K + 1), np.nan)
+    err_rng = np.full((runs, K + 1), np.nan)
+    nees = np.full((runs, K + 1), np.nan)
+    statuses = []
+    ambiguous = 0
+    truths = np.zeros((runs, K + 1, 4))
+    children = np.random.SeedSequence(seed).spawn(runs + 1)
+    for i in range(runs):
+        rng = np.random.default_rng(children[i])
+        sim = simulate(scenario, rng)
+        truths[i] = sim.relative
+        tr = run(est, scenario, sim, rng=rng, **run_kwargs)
+        statuses.append(tr.status)
+        ambiguous += bool(getattr(tr.details, "ambiguous", False))
+        e = tr.estimates - sim.relative
+        err_pos[i] = np.hypot(e[:, 0], e[:, 1])
+        err_rng[i] = np.hypot(tr.estimates[:, 0], tr.estimates[:, 1]) - np.hypot(
+            sim.relative[:, 0], sim.relative[:, 1])
+        with np.errstate(invalid="ignore"):
+            try:
+                sol = np.linalg.solve(tr.covariances, e[..., None])[..., 0]
+                nees[i] = np.einsum("ki,ki->k", e, sol)
+            except (np.linalg.LinAlgError, ValueError):
+                pass
+        if progress is not None:
+            progress(i + 1, runs)
+    kind = "none"
+    if bound:
+        brng = np.random.default_rng(children[runs])
+        if est.bound == "crlb":
+            cfg = getattr(est, "config", MLEConfig())
+            (b, br), kind = _crlb_bounds(scenario, cfg), "crlb"
+        elif bound == "prior":
+            b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
+            br = np.full(K + 1, np.nan)
+        elif bound is True or bound == "truth":
+            (b, br), kind = truth_bounds(scenario, truths), "truth"
+        else:
+            raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
+    else:
+        b = br = np.full(K + 1, np.nan)
+    used = np.array([s not in ("rejected", "failed") for s in statuses])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        rmse_p = np.sqrt(np.nanmean(err_pos[used] ** 2, axis=0)) if used.any() \
+            else np.full(K + 1, np.nan)
+        rmse_r = np.sqrt(np.nanmean(err_rng[used] ** 2, axis=0)) if used.any() \
+            else np.full(K + 1, np.nan)
+        mean_nees = np.nanmean(nees[used], axis=0) if used.any() else np.full(K + 1, np.nan)
+    final_bad = ~used | ~(err_pos[:, -1] <= 5.0 * b[-1]) if bound else ~used
+    return MonteCarloResult(problem=scenario.name, estimator=est.name, runs=runs, seed=seed,
+                            times=scenario.times, rmse_position=rmse_p, rmse_range=rmse_r,
+                            bound_position=b, bound_range=br, bound_kind=kind,
+                            divergence_rate=float(np.mean(final_bad)),
+                            nees=mean_nees, position_errors=err_pos, statuses=tuple(statuses),
+                            seconds=_time.perf_counter() - t0, ambiguous_runs=ambiguous)

@@ -20,10 +20,10 @@ from IPython.display import Image, display
 
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.report import comparison_figures
-from tmaplan.scenario import dump, load_problem
+from tmaplan.scenario import load_problem
 
 scenario = load_problem("default")
-spec = CampaignSpec(scenario_toml=dump(scenario), runs=4, seed=7, n_particles=3000,
+spec = CampaignSpec(scenario=scenario, runs=4, seed=7, n_particles=3000,
                     policies=("straight", "single-turn", "zigzag", "straight+uniform"))
 result = run_campaign(spec)"""),
     ("md", "## Summary per policy"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import subprocess
@@ -10,11 +11,12 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import PlanningError
+from tmaplan.evaluation.metrics import paired_difference, time_to_accuracy
+from tmaplan.evaluation.records import RunRecord, scenario_hash
 from tmaplan.experiments import CampaignSpec, run_campaign, run_one
-from tmaplan.metrics import paired_difference, time_to_accuracy
 from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
 from tmaplan.report import write_report
-from tmaplan.scenario import dump, load_problem
+from tmaplan.scenario import dump, load_problem, loads
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
@@ -25,7 +27,7 @@ def scenario():
 
 
 def _spec(scenario, runs=3, policies=("straight", "zigzag+uniform")):
-    return CampaignSpec(scenario_toml=dump(scenario), policies=policies, runs=runs, seed=11,
+    return CampaignSpec(scenario=scenario, policies=policies, runs=runs, seed=11,
                         n_particles=300)
 
 
@@ -52,25 +54,43 @@ def test_common_random_numbers(scenario):
     spec = _spec(scenario, policies=("straight", "zigzag"))
     pols = {"straight": Combined(manoeuvre=Straight()),
             "zigzag": Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.7))}
-    a = run_one(spec, pols, 0)
-    b = run_one(spec, pols, 0)
+    a = run_one(spec, pols, 0).to_arrays()
+    b = run_one(spec, pols, 0).to_arrays()
     for k in a:
         assert np.array_equal(a[k], b[k]), k
     # same truth for every policy in a run, a different truth in another run
     assert np.array_equal(a["straight/target"], a["zigzag/target"])
     c = run_one(spec, pols, 1)
-    assert not np.array_equal(a["straight/target"], c["straight/target"])
+    assert not np.array_equal(a["straight/target"], c.policies["straight"].target)
     # the manoeuvre changes the track (so the comparison is not vacuous)
     assert not np.array_equal(a["straight/observer"], a["zigzag/observer"])
+
+
+def test_run_record_round_trips_and_scenario_hash_is_content(scenario, tmp_path):
+    spec = _spec(scenario, policies=("x",))
+    rec = run_one(spec, {"x": Combined(manoeuvre=Straight(), ping=UniformPings(budget=2))}, 0)
+    rec.save(tmp_path / "r.npz")
+    back = RunRecord.load(tmp_path / "r.npz", ("x",))
+    assert back is not None and back.run == 0
+    a, b = rec.to_arrays(), back.to_arrays()
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    assert back.policies["x"].metrics.pings_used == 2
+    assert RunRecord.load(tmp_path / "r.npz", ("y",)) is None  # another campaign's file
+    # the hash is the content: equal after a TOML round trip, different after any change
+    assert scenario_hash(loads(dump(scenario))) == scenario_hash(scenario)
+    moved = scenario.replace(observer=dataclasses.replace(scenario.observer,
+                                                          position=(1.0, 0.0)))
+    assert scenario_hash(moved) != scenario_hash(scenario)
+    assert _spec(moved).key() != _spec(scenario).key()
 
 
 def test_policies_respect_limits_and_budget(scenario):
     spec = _spec(scenario, policies=("x",))
     pol = Combined(manoeuvre=SingleTurn(angle=np.radians(120), time=600.0),
                    ping=UniformPings(budget=3))
-    out = run_one(spec, {"x": pol}, 0)
-    assert out["x/pings_used"] == 3 and len(out["x/ping_steps"]) == 3
-    obs = out["x/observer"]
+    out = run_one(spec, {"x": pol}, 0).policies["x"]
+    assert out.metrics.pings_used == 3 and len(out.ping_steps) == 3
+    obs = out.observer
     v = np.diff(obs, axis=0) / scenario.time.dt
     speed = np.hypot(*v.T)
     assert np.allclose(speed, scenario.observer.speed, rtol=1e-3)  # chord ≈ arc at 0.5°/s
@@ -158,3 +178,26 @@ def test_compare_rejects_bad_input_with_one_line(args, message, tmp_path, capsys
     assert main(base + args) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
+
+
+def test_every_policy_satisfies_the_policy_protocol(scenario):
+    from tmaplan.policies import (
+        AdaptivePings,
+        Controller,
+        ManoeuvrePolicy,
+        NoPing,
+        Planned,
+        Policy,
+        Receding,
+        ScheduledPings,
+    )
+
+    manoeuvres = [Straight(), SingleTurn(angle=1.0, time=600.0),
+                  Zigzag(leg_duration=300.0, angle=0.5), Planned(), Receding()]
+    pings = [NoPing(), UniformPings(budget=2), ScheduledPings(steps=(3, 9)), AdaptivePings()]
+    for m in manoeuvres:
+        assert isinstance(m, ManoeuvrePolicy), m
+    for p in pings + [Combined(manoeuvre=Straight(), ping=UniformPings(budget=2))]:
+        assert isinstance(p, Policy) and not isinstance(p, ManoeuvrePolicy), p
+        assert isinstance(p.controller(scenario), Controller)
+    assert Combined(manoeuvre=Straight(), ping=UniformPings()).name == "straight+uniform"

@@ -60,10 +60,11 @@ def test_plan_is_invariant_under_rotation_and_translation(default):
 
 
 def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
-    from tmaplan.closed_loop import draw_truth, run_closed_loop
+    from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.planning.heading import HeadingPlanner as HP
     from tmaplan.policies import Combined, Receding
     from tmaplan.policies.manoeuvres import _PLANNER_CACHE
+    from tmaplan.simulate import draw_truth
 
     _PLANNER_CACHE.clear()
     calls = {"n": 0}

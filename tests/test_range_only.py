@@ -7,14 +7,11 @@ import pytest
 from scipy.integrate import quad
 
 from tmaplan.estimators import (
-    MixtureConfig,
     RangeOnlyConfig,
-    RangeOnlyMixture,
     RangeOnlyState,
     dirac_mixture,
+    from_gaussian,
     gvm2_from_gaussian,
-    mixture_from_gaussian,
-    mixture_update,
     moments_grid,
     moments_series,
     monte_carlo,
@@ -105,9 +102,9 @@ def test_moment_update_equals_monte_carlo_posterior() -> None:
     x = np.array([3000.0, 4000.0, 1.0, -1.0])
     P = np.diag([400.0**2, 300.0**2, 1.0, 1.0])
     P[0, 2] = P[2, 0] = 100.0
-    st = RangeOnlyState(step=0, mean=x, cov=P)
+    st = from_gaussian(x, P)
     s = 20.0
-    post = range_only_update(st, 5100.0, s, RangeOnlyConfig(dt=1.0, q=0.0))
+    post = range_only_update(st, 5100.0, s, RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
     n = 400_000
     Xs = x + rng.standard_normal((n, 4)) @ np.linalg.cholesky(P).T
     # Eq. (6) model: y = pos + v, v ~ N(0, s²I), r = ‖y‖: p(r|x) = Rice.
@@ -127,8 +124,8 @@ def test_dirac_exact_collapse_equals_moment_update() -> None:
     # Dirac points match c1 and c2.
     x = np.array([3000.0, 4000.0, 1.0, -1.0])
     P = np.diag([300.0**2, 300.0**2, 1.0, 1.0])
-    st = RangeOnlyState(step=0, mean=x, cov=P)
-    a = range_only_update(st, 5050.0, 20.0, RangeOnlyConfig(dt=1.0, q=0.0))
+    st = from_gaussian(x, P)
+    a = range_only_update(st, 5050.0, 20.0, RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
     b = range_only_update(st, 5050.0, 20.0, RangeOnlyConfig(dt=1.0, q=0.0, mode="dirac",
                                                             n_moments=3, n_points=6))
     np.testing.assert_allclose(b.mean, a.mean, atol=0.5)
@@ -165,9 +162,9 @@ def test_mixture_collapse_equals_moment_update(case: str) -> None:
         P[:2, :2] = J @ np.diag([10.0**2, np.deg2rad(1.0) ** 2]) @ J.T + 72.0 * np.eye(2)
         x = np.array([7071.0, 7071.0, -3.0, -2.0])
         r, s = 9985.0, 10.0
-    cfg = MixtureConfig(dt=1.0, q=0.0)
-    gm = mixture_update(mixture_from_gaussian(x, P), r, s, cfg)
-    ref = range_only_update(RangeOnlyState(step=0, mean=x, cov=P), r, s,
+    cfg = RangeOnlyConfig(dt=1.0, q=0.0)
+    gm = range_only_update(from_gaussian(x, P), r, s, cfg)
+    ref = range_only_update(from_gaussian(x, P), r, s,
                             RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
     assert gm.n_components > 1  # it did split
     np.testing.assert_allclose(gm.mean, ref.mean, rtol=0, atol=1e-6 * np.sqrt(P[0, 0]))
@@ -181,7 +178,7 @@ def test_mixture_range_likelihood_matches_monte_carlo() -> None:
     P = np.diag([100.0**2, 60.0**2, 1.0, 1.0])
     P[0, 1] = P[1, 0] = 2000.0
     s, r = 20.0, 520.0
-    gm = mixture_update(mixture_from_gaussian(x, P), r, s, MixtureConfig(dt=1.0, q=0.0))
+    gm = range_only_update(from_gaussian(x, P), r, s, RangeOnlyConfig(dt=1.0, q=0.0))
     rng = np.random.default_rng(7)
     V = P[:2, :2] + s * s * np.eye(2)
     y = rng.multivariate_normal(x[:2], V, 2_000_000)
@@ -199,7 +196,7 @@ def test_mixture_keeps_both_modes_of_a_ring_posterior() -> None:
     x = np.array([150.0, 300.0, 0.0, 0.0])
     P = np.diag([1000.0**2, 100.0**2, 1.0, 1.0])
     s, r = 10.0, 800.0
-    gm = mixture_update(mixture_from_gaussian(x, P), r, s, MixtureConfig(dt=1.0, q=0.0))
+    gm = range_only_update(from_gaussian(x, P), r, s, RangeOnlyConfig(dt=1.0, q=0.0))
     rng = np.random.default_rng(3)
     X = x + rng.standard_normal((1_000_000, 4)) * np.sqrt(np.diag(P))
     w = rice.pdf(r, np.hypot(X[:, 0], X[:, 1]) / s, scale=s)
@@ -213,7 +210,7 @@ def test_mixture_keeps_both_modes_of_a_ring_posterior() -> None:
     assert 0.1 < p_right < 0.9  # genuinely bimodal
     assert abs(gm_right - p_right) < 0.02
     assert abs(gm_far - p_far) < 0.02
-    g = range_only_update(RangeOnlyState(step=0, mean=x, cov=P), r, s,
+    g = range_only_update(from_gaussian(x, P), r, s,
                           RangeOnlyConfig(dt=1.0, q=0.0, mode="moments"))
     sg = np.sqrt(g.cov[0, 0])
     single_far = norm.sf(500.0, g.mean[0], sg) + norm.cdf(-500.0, g.mean[0], sg)
@@ -224,10 +221,10 @@ def test_mixture_update_is_rotation_invariant() -> None:
     x = np.array([3000.0, 1000.0, 1.0, -2.0])
     P = np.diag([800.0**2, 300.0**2, 9.0, 4.0])
     P[0, 3] = P[3, 0] = 200.0
-    cfg = MixtureConfig(dt=1.0, q=0.0)
-    a = mixture_update(mixture_from_gaussian(x, P), 3300.0, 15.0, cfg)
+    cfg = RangeOnlyConfig(dt=1.0, q=0.0)
+    a = range_only_update(from_gaussian(x, P), 3300.0, 15.0, cfg)
     T = _rot4(2.3)
-    b = mixture_update(mixture_from_gaussian(T @ x, T @ P @ T.T), 3300.0, 15.0, cfg)
+    b = range_only_update(from_gaussian(T @ x, T @ P @ T.T), 3300.0, 15.0, cfg)
     np.testing.assert_allclose(b.mean, T @ a.mean, atol=1e-6)
     np.testing.assert_allclose(b.cov, T @ a.cov @ T.T, rtol=1e-6, atol=1e-6)
     assert np.exp(a.log_likelihood) == pytest.approx(np.exp(b.log_likelihood), rel=1e-8)
@@ -241,7 +238,7 @@ def test_reduce_mixture_preserves_moments_and_keeps_separated_modes() -> None:
     A = rng.normal(0, 10, (C, 4, 4))
     covs = A @ np.swapaxes(A, 1, 2) + np.eye(4)
     w = rng.random(C)
-    mix = RangeOnlyMixture(step=0, weights=w / w.sum(), means=means, covs=covs)
+    mix = RangeOnlyState(step=0, weights=w / w.sum(), means=means, covs=covs)
     red = reduce_mixture(mix, 2)
     np.testing.assert_allclose(red.mean, mix.mean, atol=1e-9 * np.abs(mix.mean).max())
     np.testing.assert_allclose(red.cov, mix.cov, rtol=1e-9, atol=1e-9 * mix.cov.max())

@@ -12,17 +12,20 @@ import numpy as np
 from tmaplan.bounds.closed_form import closed_form_pcrb
 from tmaplan.bounds.crlb import CRLBResult, crlb
 from tmaplan.bounds.pcrb import PCRBResult, monte_carlo_pcrb
-from tmaplan.closed_loop import ClosedLoopRun, draw_truth, run_closed_loop
 from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.estimators import Filter, RangeOnlyConfig, RangeOnlyFilter, RangeOnlyState, Track
+from tmaplan.estimators import run as run_estimator
 from tmaplan.estimators.particle_filter import Measurement, ParticleFilter, PFConfig, PFState
-from tmaplan.experiments import CampaignResult, CampaignSpec, run_campaign
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, run_closed_loop
+from tmaplan.evaluation.metrics import PairedDifference, paired_difference
+from tmaplan.evaluation.records import RunRecord
+from tmaplan.experiments import CampaignResult, CampaignSpec, run_campaign, run_one
 from tmaplan.geometry import cart_to_lpc, jacobian_cart_wrt_lpc, lpc_to_cart, wrap_angle
-from tmaplan.metrics import PairedDifference, paired_difference
 from tmaplan.models.observer import ObserverTrack, observer_track, turn_rate_track
 from tmaplan.models.prior import sample_prior
-from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings
+from tmaplan.policies import Combined, Policy, SingleTurn, Straight, UniformPings
 from tmaplan.scenario import Scenario, dump, load, loads
-from tmaplan.simulate import Simulation, simulate
+from tmaplan.simulate import Simulation, draw_truth, simulate
 from tmaplan.units import to_si
 
 
@@ -49,10 +52,16 @@ def typed_usage() -> None:
     st: PFState = pf.from_prior(s, rng)
     st = pf.update(pf.predict(st, None, rng), [Measurement(kind="bearing", value=0.1,
                                                             sigma=0.01)], rng)
-    pol = Combined(manoeuvre=SingleTurn(angle=1.0, time=600.0), ping=UniformPings(budget=2))
+    filters: list[Filter[PFState] | Filter[RangeOnlyState]] = [
+        pf, RangeOnlyFilter(RangeOnlyConfig(dt=dt, q=1e-5))]
+    tr: Track = run_estimator(RangeOnlyConfig(dt=dt, q=1e-5), s, sim, rng=rng)
+    pol: Policy = Combined(manoeuvre=SingleTurn(angle=1.0, time=600.0),
+                           ping=UniformPings(budget=2))
     run: ClosedLoopRun = run_closed_loop(s, pol, draw_truth(s, rng), noise_rng=rng,
                                          filter_rng=rng, n_particles=100)
-    spec = CampaignSpec(scenario_toml=dump(s), policies=("straight",), runs=2)
+    spec = CampaignSpec(scenario=s, policies=("straight",), runs=2)
     out: CampaignResult = run_campaign(spec, workers=1)
+    rec: RunRecord = run_one(spec, {"straight": pol}, 0)
     d: PairedDifference = paired_difference({"a": np.zeros(3), "b": np.ones(3)}, "a", "b", "m")
-    _ = (a, track2, prior, rsd, cf, mc, st, run, out, d, Straight(), PlanningError, ScenarioError)
+    _ = (a, track2, prior, rsd, cf, mc, st, run, out, d, Straight(), PlanningError, ScenarioError,
+         filters, tr, rec)

@@ -197,7 +197,7 @@ def test_every_policy_satisfies_the_policy_protocol(scenario):
     pings = [NoPing(), UniformPings(budget=2), ScheduledPings(steps=(3, 9)), AdaptivePings()]
     for m in manoeuvres:
         assert isinstance(m, ManoeuvrePolicy), m
-    for p in pings + [Combined(manoeuvre=Straight(), ping=UniformPings(budget=2))]:
+    for p in [*pings, Combined(manoeuvre=Straight(), ping=UniformPings(budget=2))]:
         assert isinstance(p, Policy) and not isinstance(p, ManoeuvrePolicy), p
         assert isinstance(p.controller(scenario), Controller)
     assert Combined(manoeuvre=Straight(), ping=UniformPings()).name == "straight+uniform"

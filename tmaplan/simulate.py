@@ -364,10 +364,10 @@ def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSe
     for ms in measurements:
         sensor = scenario.sensors[ms.sensor]
         for i, k in enumerate(np.asarray(ms.steps, int)):
-            if ms.kind == "bearing":
+            if isinstance(sensor, BearingSensor):
                 m = Measurement(kind="bearing", value=float(ms.values[i]),
                                 sigma=float(ms.sigma), ambiguity=sensor.ambiguity)
-            elif ms.kind == "range":
+            elif isinstance(sensor, RangeSensor):
                 m = Measurement(kind="range", value=float(ms.values[i]), sigma=float(ms.sigma))
             else:
                 m = Measurement(kind="frequency", value=np.asarray(ms.values[i], float),

@@ -266,7 +266,7 @@ class FilterEstimator:
             scenario.times[steps[:n_ok]], z[:n_ok], float(b[0].sigma), r_min=self.r_min,
             r_max=self.r_max, n_particles=config.n_particles, rng=rng, q=config.q,
             dt=config.dt * float(np.median(np.diff(steps))) if steps.size > 1 else None,
-            ambiguity=scenario.sensors[b[0].sensor].ambiguity)
+            ambiguity=getattr(scenario.sensors[b[0].sensor], "ambiguity", "none"))
         state = self.filter.from_particles(res.particles, step=int(steps[res.centre_index]))
         return state, int(steps[res.end_index]), res
 

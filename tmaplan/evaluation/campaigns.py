@@ -275,11 +275,11 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
         else:
             client = Client(scheduler)
         try:
-            futs = [client.submit(fn, spec, policies, i, pure=False, key=f"run-{spec.key()}-{i}")
-                    for i in todo]
-            index = {f.key: i for f, i in zip(futs, todo)}
-            for f in d_as_completed(futs):
-                yield index[f.key], f.result()
+            dfuts = [client.submit(fn, spec, policies, i, pure=False,
+                                   key=f"run-{spec.key()}-{i}") for i in todo]
+            index = {f.key: i for f, i in zip(dfuts, todo)}
+            for df in d_as_completed(dfuts):
+                yield index[df.key], df.result()
         finally:
             client.close()
             if cluster is not None:

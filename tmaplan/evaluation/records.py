@@ -112,8 +112,9 @@ class RunRecord:
                 "final_rel_range_error": float}
         pols = {}
         for n in policies:
-            m = RunMetrics(**{f: conv[f](d[f"{n}/{f}"]) if f in conv else d[f"{n}/{f}"]
-                              for f in _METRIC_FIELDS})
+            kw: dict[str, Any] = {f: conv[f](d[f"{n}/{f}"]) if f in conv else d[f"{n}/{f}"]
+                                  for f in _METRIC_FIELDS}
+            m = RunMetrics(**kw)
             pols[n] = PolicyRun(metrics=m, observer=d[f"{n}/observer"], target=d[f"{n}/target"],
                                 estimate=d[f"{n}/estimate"], ping_steps=d[f"{n}/ping_steps"],
                                 replan_seconds=d[f"{n}/replan_seconds"],
@@ -125,8 +126,9 @@ class RunRecord:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         os.close(fd)
+        arrays: dict[str, Any] = self.to_arrays()
         with open(tmp, "wb") as fh:
-            np.savez(fh, **self.to_arrays())
+            np.savez(fh, **arrays)
         os.replace(tmp, path)
 
     @classmethod

@@ -149,9 +149,11 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         man = Receding()
     ping: Policy = NoPing()
     if len(parts) == 2:
-        ping = {"no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
-                "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",
-                                                     name="scheduled-terminal"),
-                "adaptive": AdaptivePings()}[parts[1]]
+        pings: dict[str, Policy] = {
+            "no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
+            "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",
+                                                 name="scheduled-terminal"),
+            "adaptive": AdaptivePings()}
+        ping = pings[parts[1]]
     return Combined(manoeuvre=man, ping=ping)
 

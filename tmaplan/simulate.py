@@ -281,16 +281,13 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class CommonNoise:
-    """Standard normals of a closed-loop run, drawn before it starts (common random numbers).
-
-    One draw per step and sensor whether or not the sensor measures, and one per ping slot, so
-    that runs of different policies see the same noise and a ping's noise does not depend on
-    when the other pings happened.
+    """Standard normals of a closed-loop run, drawn before it starts (common random numbers):
+    one per step and sensor whether or not the sensor measures, one per ping slot, so that all
+    policies see the same noise and a ping's noise does not depend on the other pings.
 
     Attributes
     ----------
-    bearing : ndarray, shape (K + 1, max(1, n_bearing_sensors))
-    range : ndarray, shape (K + 1, max(1, n_passive_range_sensors))
+    bearing, range : ndarray, shape (K + 1, max(1, number of bearing / passive range sensors))
     ping : ndarray, shape (K + 1,)
     """
 
@@ -316,43 +313,44 @@ def draw_common_noise(scenario: Scenario, rng: np.random.Generator) -> CommonNoi
                        ping=rng.standard_normal(K + 1))
 
 
+def _measurement(sensor: Any, value: Any, offset: np.ndarray | None = None,
+                 ping: bool = False) -> Measurement:
+    """The :class:`Measurement` of one reading of ``sensor``."""
+    if isinstance(sensor, BearingSensor):
+        return Measurement(kind="bearing", value=float(value), sigma=float(sensor.sigma),
+                           ambiguity=sensor.ambiguity)
+    if isinstance(sensor, RangeSensor):
+        return Measurement(kind="range", value=float(value), sigma=float(sensor.sigma),
+                           ping=ping)
+    return Measurement(kind="frequency", value=np.asarray(value, float),
+                       sigma=np.asarray(sensor.sigma, float), c=float(sensor.c),
+                       velocity_offset=offset)
+
+
 def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, *,
                  ping: bool = False) -> list[Measurement]:
-    """Measurements of step ``k`` in a closed loop (bearings, passive ranges, an active ping).
+    """Measurements of step ``k`` in a closed loop: bearings, passive ranges and, if ``ping``,
+    an active ping (first active range sensor; ``Measurement.ping`` set). Frequency sensors
+    are not simulated in the closed loop.
 
     Parameters
     ----------
     scenario : Scenario
-        Frequency sensors are not simulated in the closed loop; a ping uses the first active
-        range sensor's σ (no ping without one).
     k : int
         Grid step.
     X : ndarray, shape (4,)
         True relative state with the observer's instantaneous velocity [m, m/s].
     noise : CommonNoise
     ping : bool
-        The own ship pings at this step.
-
-    Returns
-    -------
-    list of Measurement
-        Pings carry ``ping=True``.
     """
     bs, rs, ps = _closed_loop_sensors(scenario)
-    out = []
     X = np.asarray(X, float)[None]
-    for j, s in enumerate(bs):
-        if k in measurement_steps(s, scenario.time):
-            v = reading(s, X, noise.bearing[k, j:j + 1])[1]
-            out.append(Measurement(kind="bearing", value=float(v[0]), sigma=s.sigma,
-                                   ambiguity=s.ambiguity))
-    for j, s in enumerate(rs):
-        if k in measurement_steps(s, scenario.time):
-            v = reading(s, X, noise.range[k, j:j + 1])[1]
-            out.append(Measurement(kind="range", value=float(v[0]), sigma=s.sigma))
+    due = [(s, noise.bearing[k, j:j + 1]) for j, s in enumerate(bs)] + [
+        (s, noise.range[k, j:j + 1]) for j, s in enumerate(rs)]
+    out = [_measurement(s, reading(s, X, z)[1][0]) for s, z in due
+           if k in measurement_steps(s, scenario.time)]
     if ping and ps:
-        v = reading(ps[0], X, noise.ping[k:k + 1])[1]
-        out.append(Measurement(kind="range", value=float(v[0]), sigma=ps[0].sigma, ping=True))
+        out.append(_measurement(ps[0], reading(ps[0], X, noise.ping[k:k + 1])[1][0], ping=True))
     return out
 
 
@@ -362,16 +360,7 @@ def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSe
     out: dict[int, list[Measurement]] = {}
     offset = observer.velocity - observer.mean_velocity
     for ms in measurements:
-        sensor = scenario.sensors[ms.sensor]
         for i, k in enumerate(np.asarray(ms.steps, int)):
-            if isinstance(sensor, BearingSensor):
-                m = Measurement(kind="bearing", value=float(ms.values[i]),
-                                sigma=float(ms.sigma), ambiguity=sensor.ambiguity)
-            elif isinstance(sensor, RangeSensor):
-                m = Measurement(kind="range", value=float(ms.values[i]), sigma=float(ms.sigma))
-            else:
-                m = Measurement(kind="frequency", value=np.asarray(ms.values[i], float),
-                                sigma=np.asarray(ms.sigma, float), c=float(sensor.c),
-                                velocity_offset=offset[k])
+            m = _measurement(scenario.sensors[ms.sensor], ms.values[i], offset[k])
             out.setdefault(int(k), []).append(m)
     return out

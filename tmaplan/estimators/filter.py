@@ -32,22 +32,16 @@ __all__ = ["Filter", "FilterRun", "FilterState", "drive"]
 
 @runtime_checkable
 class FilterState(Protocol):
-    """Posterior at one grid step."""
+    """Posterior at grid step ``step``: ``mean`` (4,) [m, m, m/s, m/s], ``cov`` (4, 4)."""
 
     @property
-    def step(self) -> int:
-        """Grid step k."""
-        ...  # pragma: no cover
+    def step(self) -> int: ...
 
     @property
-    def mean(self) -> np.ndarray:
-        """Posterior mean of X, shape (4,) [m, m, m/s, m/s]."""
-        ...  # pragma: no cover
+    def mean(self) -> np.ndarray: ...
 
     @property
-    def cov(self) -> np.ndarray:
-        """Posterior covariance of X, shape (4, 4)."""
-        ...  # pragma: no cover
+    def cov(self) -> np.ndarray: ...
 
 
 S = TypeVar("S", bound=FilterState)
@@ -58,23 +52,21 @@ class Filter(Protocol[S]):
     """A recursive Bayesian filter of the relative state (see the module docstring)."""
 
     name: ClassVar[str]
+    #: Sensor kinds ("bearing", "range", "frequency") the filter assimilates.
+    applies_to: ClassVar[frozenset[str]]
 
     def init(self, scenario: Scenario, rng: np.random.Generator) -> S:
         """State at step 0 from ``scenario.prior`` (never the truth)."""
-        ...  # pragma: no cover
 
     def predict(self, state: S, dv: np.ndarray | None, rng: np.random.Generator) -> S:
         """One step ahead with the observer velocity increment Δv_k [m/s], shape (2,)."""
-        ...  # pragma: no cover
 
     def update(self, state: S, measurements: Sequence[Measurement],
                rng: np.random.Generator) -> S:
         """Assimilate the measurements of ``state.step`` (an empty list changes nothing)."""
-        ...  # pragma: no cover
 
     def diagnostic(self, state: S) -> float:
         """One number describing the state's health (ESS, number of components)."""
-        ...  # pragma: no cover
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

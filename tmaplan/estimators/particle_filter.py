@@ -501,6 +501,8 @@ class ParticleFilter:
     """
 
     name: ClassVar[str] = "pf"
+    #: Sensor kinds it assimilates.
+    applies_to: ClassVar[frozenset[str]] = frozenset({"bearing", "range", "frequency"})
 
     def __init__(self, config: PFConfig) -> None:
         self.config = config

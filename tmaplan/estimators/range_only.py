@@ -513,6 +513,8 @@ class RangeOnlyFilter:
     """
 
     name: ClassVar[str] = "range-only"
+    #: Sensor kinds it assimilates.
+    applies_to: ClassVar[frozenset[str]] = frozenset({"range"})
 
     def __init__(self, config: RangeOnlyConfig) -> None:
         self.config = config

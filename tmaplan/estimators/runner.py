@@ -68,8 +68,8 @@ class Track:
     covariances : ndarray, shape (K + 1, 4, 4)
         Posterior (filters) or delta-method CRLB-at-estimate (MLE) covariances.
     ess : ndarray or None, shape (K + 1,)
-        Particle filter: effective sample size after each update; range-only mixture: the
-        number of mixture components after each scan.
+        Filters: :meth:`~tmaplan.estimators.filter.Filter.diagnostic` per step (particle
+        filter: effective sample size; range-only filter: number of mixture components).
     seconds : float
         Wall time [s].
     status : str
@@ -79,7 +79,8 @@ class Track:
     first_step : int
         First step with an estimate.
     details : Any
-        Estimator-specific result (MLEResult, BearingsInit) or None.
+        Estimator-specific result: MLEResult, BearingsInit (``pf-bearings``) or the filter's
+        last state.
     """
 
     estimator: str
@@ -168,17 +169,14 @@ class Estimator(Protocol):
     @property
     def name(self) -> str:
         """Name in :data:`ESTIMATORS` (CLI ``--estimator``)."""
-        ...  # pragma: no cover
 
     @property
     def applies_to(self) -> frozenset[str]:
         """Sensor kinds the estimator uses; the scenario needs at least one of them."""
-        ...  # pragma: no cover
 
     def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
                  observer: ObserverTrack, rng: np.random.Generator) -> Track:
         """One estimate of the relative track."""
-        ...  # pragma: no cover
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -210,11 +208,8 @@ class FilterEstimator:
 
     @property
     def applies_to(self) -> frozenset[str]:
-        """Bearings for the bearings-only start; ranges for the range-only filter."""
-        if self.init == "bearings":
-            return frozenset({"bearing"})
-        return frozenset({"range"}) if isinstance(self.filter, RangeOnlyFilter) \
-            else frozenset({"bearing", "range", "frequency"})
+        """The filter's sensor kinds; bearings for the bearings-only start."""
+        return frozenset({"bearing"}) if self.init == "bearings" else self.filter.applies_to
 
     def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
                  observer: ObserverTrack, rng: np.random.Generator) -> Track:
@@ -240,14 +235,12 @@ class FilterEstimator:
             fr = drive(self.filter, state, scenario.n_steps, step, rng)
         ok = bool(np.isfinite(fr.estimates[first:]).all())
         n_warn = len(wlist)
-        status = "failed" if not ok else ("recovered" if n_warn else "ok")
-        message = ("non-finite estimate" if not ok else
-                   f"{n_warn} degeneracy recoveries" if n_warn else "")
-        if isinstance(self.filter, RangeOnlyFilter):
-            message, details = f"mode {self.filter.config.mode}", fr.state
         return Track(estimator=self.name, times=scenario.times, estimates=fr.estimates,
                      covariances=fr.covariances, ess=fr.diagnostics, seconds=0.0,
-                     status=status, message=message, first_step=first, details=details)
+                     status="failed" if not ok else ("recovered" if n_warn else "ok"),
+                     message="non-finite estimate" if not ok else
+                     f"{n_warn} degeneracy recoveries" if n_warn else "",
+                     first_step=first, details=details if details is not None else fr.state)
 
     def _from_bearings(self, scenario: Scenario, meas: Sequence[MeasurementSet],
                        dv: np.ndarray, rng: np.random.Generator) -> tuple[Any, int, Any]:

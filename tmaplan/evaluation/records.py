@@ -25,7 +25,6 @@ __all__ = ["FORMAT", "PolicyRun", "RunRecord", "scenario_hash"]
 
 #: Version of the run-file format (part of the campaign cache key).
 FORMAT = 2
-_METRIC_FIELDS = tuple(f.name for f in dataclasses.fields(RunMetrics))
 
 
 def scenario_hash(scenario: Any) -> str:
@@ -76,6 +75,15 @@ class PolicyRun:
     replan_failures: int
 
 
+def _types(cls: type) -> dict[str, Any]:
+    kinds = {"float": float, "bool": bool, "int": int}
+    return {f.name: kinds.get(str(f.type), np.ndarray) for f in dataclasses.fields(cls)}
+
+
+_METRICS = _types(RunMetrics)
+_TRACKS = {k: v for k, v in _types(PolicyRun).items() if k != "metrics"}
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class RunRecord:
     """Every policy on one Monte Carlo run (common random numbers).
@@ -95,11 +103,8 @@ class RunRecord:
         """Flat arrays of the run file (``<policy>/<field>``)."""
         out: dict[str, np.ndarray] = {"format": np.array(FORMAT), "run": np.array(self.run)}
         for name, pr in self.policies.items():
-            for f in _METRIC_FIELDS:
-                out[f"{name}/{f}"] = np.asarray(getattr(pr.metrics, f))
-            for f in ("observer", "target", "estimate", "ping_steps", "replan_seconds",
-                      "replan_failures"):
-                out[f"{name}/{f}"] = np.asarray(getattr(pr, f))
+            for obj, fields in ((pr.metrics, _METRICS), (pr, _TRACKS)):
+                out.update({f"{name}/{f}": np.asarray(getattr(obj, f)) for f in fields})
         return out
 
     @classmethod
@@ -107,18 +112,14 @@ class RunRecord:
         """Inverse of :meth:`to_arrays` (KeyError / ValueError on a foreign file)."""
         if int(d["format"]) != FORMAT:
             raise ValueError(f"run file format {int(d['format'])}, expected {FORMAT}")
-        conv = {"time_to_accuracy": float, "diverged": bool, "pings_used": int,
-                "final_position_error": float, "final_range_error": float,
-                "final_rel_range_error": float}
-        pols = {}
-        for n in policies:
-            kw: dict[str, Any] = {f: conv[f](d[f"{n}/{f}"]) if f in conv else d[f"{n}/{f}"]
-                                  for f in _METRIC_FIELDS}
-            m = RunMetrics(**kw)
-            pols[n] = PolicyRun(metrics=m, observer=d[f"{n}/observer"], target=d[f"{n}/target"],
-                                estimate=d[f"{n}/estimate"], ping_steps=d[f"{n}/ping_steps"],
-                                replan_seconds=d[f"{n}/replan_seconds"],
-                                replan_failures=int(d[f"{n}/replan_failures"]))
+
+        def get(n: str, fields: dict[str, Any]) -> dict[str, Any]:
+            # scalars back to their Python types (0-d arrays on disk)
+            return {f: d[f"{n}/{f}"] if t is np.ndarray else t(d[f"{n}/{f}"])
+                    for f, t in fields.items()}
+
+        pols = {n: PolicyRun(metrics=RunMetrics(**get(n, _METRICS)), **get(n, _TRACKS))
+                for n in policies}
         return cls(run=int(d["run"]), policies=pols)
 
     def save(self, path: Path) -> None:

@@ -26,14 +26,7 @@ from tmaplan.policies._base import (
     Policy,
 )
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
-from tmaplan.policies.manoeuvres import (
-    Planned,
-    Receding,
-    SingleTurn,
-    Straight,
-    Zigzag,
-    offline_plan,
-)
+from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
 
 __all__ = [
@@ -55,6 +48,5 @@ __all__ = [
     "Zigzag",
     "best_single_turn",
     "best_zigzag",
-    "offline_plan",
     "parse_policy",
 ]

@@ -99,7 +99,6 @@ class Controller(Protocol):
 
     def act(self, belief: BeliefView, t: float) -> Action:
         """Decide the action at time ``t`` [s] from the belief."""
-        ...  # pragma: no cover
 
 
 @runtime_checkable
@@ -109,11 +108,9 @@ class Policy(Protocol):
     @property
     def name(self) -> str:
         """CLI name (``straight``, ``uniform``, ``planned+scheduled``, ...)."""
-        ...  # pragma: no cover
 
     def controller(self, scenario: Scenario) -> Controller:
         """A fresh controller for one closed-loop run."""
-        ...  # pragma: no cover
 
 
 @runtime_checkable
@@ -122,7 +119,6 @@ class ManoeuvrePolicy(Policy, Protocol):
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown without feedback (used to schedule pings offline)."""
-        ...  # pragma: no cover
 
 
 # --------------------------------------------------------------------------------------------

@@ -231,8 +231,8 @@ class PFState:
 
 
 def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
-            config: PFConfig, *, steps: int = 1) -> PFState:
-    """Propagate the cloud ``steps`` grid steps: ``X ← F X − H Δv + w``.
+            config: PFConfig) -> PFState:
+    """Propagate the cloud one grid step: ``X ← F X − H Δv + w``.
 
     Contiguous row operations on the (4, N) layout: ``pos += dt·vel`` and the NCV noise per
     axis from the cached 2×2 Cholesky factor of Q (``w_pos = l11 z1``,
@@ -241,57 +241,49 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
     Parameters
     ----------
     state : PFState
-    dv : ndarray, shape (2,) or (steps, 2), optional
-        Observer velocity increments Δv_k = v̄_{k+1} − v̄_k [m/s]
+    dv : ndarray, shape (2,), optional
+        Observer velocity increment Δv_k = v̄_{k+1} − v̄_k [m/s]
         (:attr:`tmaplan.models.observer.ObserverTrack.velocity_increments`); None = 0.
     rng : numpy.random.Generator
     config : PFConfig
-    steps : int
-        Number of steps.
 
     Returns
     -------
     PFState
-        At ``state.step + steps``, same weights.
+        At ``state.step + 1``, same weights.
     """
     l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
     dt = float(config.dt)
     A = _rows(state.particles)
-    n = A.shape[1]
-    dvs = np.zeros((steps, 2)) if dv is None else np.asarray(dv, float).reshape(-1, 2)
-    if dvs.shape[0] == 1 and steps > 1:
-        dvs = np.vstack([dvs, np.zeros((steps - 1, 2))])
-    Z = np.empty((4, n)) if config.q > 0 else None
-    for s in range(steps):
-        An = np.empty_like(A)
-        pos, vel = An[:2], An[2:]
-        np.multiply(A[2:], dt, out=pos)
-        pos += A[:2]
-        if Z is not None:
-            # NCV noise per axis from the 2×2 Cholesky factor of Q (block structure):
-            # w_pos = l11 z1, w_vel = l21 z1 + l22 z2, rows of Z = [z1x, z1y, z2x, z2y].
-            if config.noise == "float32":
-                _normals_f32(rng, Z)
-            else:
-                rng.standard_normal(out=Z)
-            np.multiply(Z[:2], l21, out=vel)
-            Z[2:] *= l22
-            vel += Z[2:]
-            vel += A[2:]
-            Z[:2] *= l11
-            pos += Z[:2]
+    d = np.zeros(2) if dv is None else np.asarray(dv, float).reshape(2)
+    An = np.empty_like(A)
+    pos, vel = An[:2], An[2:]
+    np.multiply(A[2:], dt, out=pos)
+    pos += A[:2]
+    if config.q > 0:
+        # NCV noise per axis from the 2×2 Cholesky factor of Q (block structure):
+        # w_pos = l11 z1, w_vel = l21 z1 + l22 z2, rows of Z = [z1x, z1y, z2x, z2y].
+        Z = np.empty((4, A.shape[1]))
+        if config.noise == "float32":
+            _normals_f32(rng, Z)
         else:
-            vel[...] = A[2:]
-        d = dvs[s] if s < dvs.shape[0] else np.zeros(2)
-        if d[0] != 0.0 or d[1] != 0.0:
-            pos -= (dt * d)[:, None]
-            vel -= d[:, None]
-        A = An
-    one = steps == 1 and config.variant == "resample-move"
-    return PFState(step=state.step + steps, particles=A.T, log_weights=state.log_weights,
+            rng.standard_normal(out=Z)
+        np.multiply(Z[:2], l21, out=vel)
+        Z[2:] *= l22
+        vel += Z[2:]
+        vel += A[2:]
+        Z[:2] *= l11
+        pos += Z[:2]
+    else:
+        vel[...] = A[2:]
+    if d[0] != 0.0 or d[1] != 0.0:
+        pos -= (dt * d)[:, None]
+        vel -= d[:, None]
+    move = config.variant == "resample-move"
+    return PFState(step=state.step + 1, particles=An.T, log_weights=state.log_weights,
                    freq_mean=state.freq_mean, freq_var=state.freq_var, ess=state.ess,
-                   parent=state.particles if one else None,
-                   parent_dv=dvs[0].copy() if one else None)
+                   parent=state.particles if move else None,
+                   parent_dv=d.copy() if move else None)
 
 
 def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.Generator,
@@ -546,10 +538,10 @@ class ParticleFilter:
         A = np.asarray(mean, float)[:, None] + L @ Z
         return self.from_particles(A.T, step=step)
 
-    def predict(self, state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
-                *, steps: int = 1) -> PFState:
+    def predict(self, state: PFState, dv: np.ndarray | None, rng: np.random.Generator
+                ) -> PFState:
         """See :func:`predict`."""
-        return predict(state, dv, rng, self.config, steps=steps)
+        return predict(state, dv, rng, self.config)
 
     def update(self, state: PFState, measurements: Sequence[Measurement],
                rng: np.random.Generator) -> PFState:

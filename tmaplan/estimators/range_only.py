@@ -1,13 +1,13 @@
-"""Range-only Gaussian filter with GvM2 azimuth moments (file 004, Sharma et al. 2024, §VI).
+"""Range-only filter with GvM2 azimuth moments (file 004, Sharma et al. 2024, §VI), three modes.
 
-State: the relative ``X = [r_x, r_y, v_x, v_y]`` with a Gaussian ``N(x̂, P)``. Prediction is the
+One filter (:class:`RangeOnlyFilter`), one state type: the posterior of the relative
+``X = [r_x, r_y, v_x, v_y]`` is a Gaussian mixture (:class:`RangeOnlyState`); the moment and
+Dirac modes keep one component ``N(x̂, P)``, the paper's single Gaussian. Prediction is the
 NCV model with the observer increment, ``x̂⁻ = F x̂ − H Δv`` (file 004 eq. 2/56 written with
-DESIGN §1's Δv), ``P⁻ = F P F' + Q``. The range update uses the linear-position view of eq. (9):
-given the azimuth θ, ``y = r·b(θ)``, ``b = [cos θ, sin θ]`` is a linear measurement of the
-position with noise σ_r²I (eq. 6 model), so with ``V = H P⁻ H' + σ_r² I``, ``K = P⁻ H' V⁻¹``:
-
-One filter, one state type: the posterior is a Gaussian mixture (:class:`RangeOnlyState`);
-the moment and Dirac modes keep one component, which is the paper's single Gaussian.
+DESIGN §1's Δv), ``P⁻ = F P F' + Q``, per component. The range update uses the linear-position
+view of eq. (9): given the azimuth θ, ``y = r·b(θ)``, ``b = [cos θ, sin θ]`` is a linear
+measurement of the position with noise σ_r²I (eq. 6 model), so with ``V = H P⁻ H' + σ_r² I``,
+``K = P⁻ H' V⁻¹``:
 
 * ``mode="mixture"`` (default): a Gaussian mixture kept across scans, every component split
   into azimuth sectors each updated with eqs. (12)–(13) restricted to its sector, weighted by
@@ -29,8 +29,9 @@ the moment and Dirac modes keep one component, which is the paper's single Gauss
 
 Moments come from the max-shifted grid/FFT engine by default (``moments="grid"``); the
 paper's Bessel series (``moments="series"``, N terms) is unreliable at the concentrations of
-tracking (NOTES_004 §2.5) and kept for comparison. Initialisation is the paper's single-point
-one (one range and one azimuth, file 004 L389, L396): position from polar coordinates with
+tracking (NOTES_004 §2.5) and kept for comparison. :meth:`RangeOnlyFilter.init` moment-matches
+the scenario's prior; :func:`single_point_prior` is the paper's initialisation (one range and
+one azimuth, file 004 L389, L396): position from polar coordinates with
 ``P_pos = J diag(σ_r², σ_β²) J'`` and a velocity prior given by the caller (the paper does not
 specify it, NOTES_004 §4.2).
 

@@ -9,3 +9,5 @@ estimator over Monte Carlo runs against its bound, ``tmaplan.estimators.monte_ca
 hash) and :mod:`~tmaplan.evaluation.metrics`. Truth and measurements come from
 :mod:`tmaplan.simulate` only.
 """
+
+__all__: list[str] = []

@@ -103,7 +103,7 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     U = np.random.default_rng(2).uniform(size=(4, K + 1))
     rb_np = model.evaluate_schedules(U)
     f = model.casadi_function()
-    v = model.inputs.observer.mean_velocity
+    v = model.observer.mean_velocity
     for s in range(U.shape[0]):
         var_c, rb_c = (np.asarray(x) for x in f(v, U[s][:, None]))
         np.testing.assert_allclose(rb_np[s], rb_c.ravel(), rtol=1e-10)
@@ -126,7 +126,7 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     k, h = 200, 1e-3
     vals = []
     for sgn in (1, -1):
-        obs = model.inputs.observer
+        obs = model.observer
         mv = obs.mean_velocity.copy()
         mv[k:, 0] += sgn * h  # only increments matter: shift from step k on
         vals.append(float(ca.sum1(f(mv, U[0])[1])) / (K + 1))
@@ -211,7 +211,7 @@ def _rotate(sc, phi):
 
 
 def test_rotation_and_translation_invariance(monkeypatch):
-    import tmaplan.bounds._pcrb_setup as setup
+    import tmaplan.bounds.inputs as setup
 
     sc = _short("brehard2005-s1", 1200.0)
     base = _quiet(closed_form_pcrb, sc, prior_samples=20_000)
@@ -357,7 +357,7 @@ def test_without_compiler_falls_back_to_reference(monkeypatch):
     _fresh_jit_caches(monkeypatch)
     monkeypatch.setenv("TMAPLAN_JIT", "0")
     assert not lt.jit_enabled()
-    assert lt.compiled_step_functions(base.inputs.A, base.inputs.Q) is None
+    assert lt.compiled_step_functions(base.A, base.Q) is None
     assert lt.schedule_kernel() is None
     m = _quiet(closed_form_model, sc, prior_samples=3000)  # auto: the casadi VM
     np.testing.assert_array_equal(m.aux, base.aux)

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from tmaplan.bounds._pcrb_setup import PCRBInputs, prepare
+from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart, wrap_angle, wrap_half_angle
 from tmaplan.models.prior import relative_prior_samples

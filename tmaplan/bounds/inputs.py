@@ -1,9 +1,10 @@
-"""Inputs shared by the Monte Carlo and the closed-form PCRB: dynamics, sensors, prior.
+"""Inputs shared by every PCRB (Monte Carlo, closed form, truth-conditional) and the planners.
 
 Everything a PCRB needs from a :class:`~tmaplan.scenario.Scenario` is resolved here once:
-the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing
-information per step, the ping weights per step, and the prior of the relative initial state
-(moments and the LPC information ``J₀`` of file 000 eq. 56).
+the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing and
+range information per step (:func:`information_rates`, the one per-step sensor-information
+function), the ping weights per step, and the prior of the relative initial state (moments and
+the LPC information ``J₀`` of brehard2005 eq. 56, :func:`lpc_prior_information`, the one J₀).
 """
 
 from __future__ import annotations
@@ -20,12 +21,19 @@ from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state
 from tmaplan.models.target import ncv_matrices
-from tmaplan.scenario import BearingSensor, FrequencySensor, RangeSensor, measurement_steps
+from tmaplan.scenario import (
+    BearingSensor,
+    FrequencySensor,
+    RangeSensor,
+    TimeGrid,
+    measurement_steps,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["PCRBInputs", "lpc_prior", "prepare", "resolve_ping_steps"]
+__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "information_rates", "lpc_prior",
+           "lpc_prior_information", "prepare", "resolve_ping_steps"]
 
 #: Prior samples closer than this to the observer count as "mass at zero range" [m].
 MIN_PRIOR_RANGE = 1.0
@@ -114,16 +122,11 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     """
     K = scenario.time.n_steps
     sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
-    weight = np.zeros(K + 1)
     sigma = float(sensors[0].sigma) if sensors else None
     if ping_steps is None:
-        all_steps = []
-        for s in sensors:
-            st = measurement_steps(s, scenario.time)
-            weight[st] += 1.0 / float(s.sigma) ** 2
-            all_steps.append(st)
-        steps = np.unique(np.concatenate(all_steps)) if all_steps else np.zeros(0, int)
-        return steps.astype(int), weight, sigma
+        weight = information_rates(scenario)[1]
+        return np.flatnonzero(weight > 0), weight, sigma
+    weight = np.zeros(K + 1)
     steps = np.asarray(list(ping_steps), dtype=int).reshape(-1)
     if steps.size and sigma is None:
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
@@ -155,34 +158,88 @@ def _check_prior_range_support(scenario: Scenario) -> None:
             p.range_min, source=scenario.name)
 
 
-def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """LPC covariance of prior samples (file 000 eq. 56) and its inverse J₀.
+def information_rates(scenario: Scenario, *, t_start: float | None = None,
+                      n_steps: int | None = None, include_start: bool = True,
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Bearing and range information Σ 1/σ² per step, summed over the sensors measuring there.
 
-    Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer product about the sample
-    mean (NOTES_000 §2.8). The bearing is centred on its circular mean before averaging, so a
-    prior straddling β = ±π is handled.
+    The one per-step sensor-information function of the bounds and the planners (the Fisher
+    information of one bearing is 1/σ_β², brehard2005 eq. 47; of one range ping on ln r,
+    ``E r²/σ_r²``, eq. 51, is formed by the callers from these 1/σ_r²).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    t_start : float, optional
+        Time of step 0 [s] on the scenario grid (default ``scenario.time.t0``); the grid is
+        extended past the scenario horizon when ``t_start + n_steps·dt`` needs it (plans).
+    n_steps : int, optional
+        K (default the scenario's).
+    include_start : bool
+        False: step 0 gets no information (a planner's belief at ``t_start`` already holds
+        that measurement).
+
+    Returns
+    -------
+    bearing : ndarray, shape (K + 1,)
+        [rad⁻²].
+    range : ndarray, shape (K + 1,)
+        [m⁻²].
+    """
+    grid = scenario.time
+    k0 = 0 if t_start is None else round((t_start - grid.t0) / grid.dt)
+    K = grid.n_steps if n_steps is None else int(n_steps)
+    if k0 + K > grid.n_steps:
+        grid = TimeGrid(dt=grid.dt, horizon=grid.dt * max(k0 + K, 1), t0=grid.t0)
+    info = {"bearing": np.zeros(K + 1), "range": np.zeros(K + 1)}
+    for s in scenario.sensors:
+        if isinstance(s, BearingSensor | RangeSensor):
+            st = measurement_steps(s, grid) - k0
+            st = st[(st >= (0 if include_start else 1)) & (st <= K)]
+            np.add.at(info[s.kind], st, 1.0 / float(s.sigma) ** 2)
+    return info["bearing"], info["range"]
+
+
+def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None,
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """LPC covariance of (weighted) samples of X₀ and its inverse J₀ (brehard2005 eq. 56).
+
+    The one prior information of the closed-form PCRB, for the scenario's prior and for a
+    planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer
+    product about the sample mean (NOTES_000 §2.8). The bearing is centred on its circular
+    mean before averaging, so a prior straddling β = ±π is handled. The covariance is the
+    unbiased weighted estimate (``numpy.cov`` with ``aweights``; n − 1 for equal weights).
+
+    Parameters
+    ----------
+    samples : ndarray, shape (n, 4)
+        Relative states [m, m, m/s, m/s], all at non-zero range.
+    weights : ndarray, shape (n,), optional
+        Non-negative weights (None: equal).
+
+    Returns
+    -------
+    cov : ndarray, shape (4, 4)
+        LPC covariance [rad², 1, rad²/s², 1/s²].
+    J0 : ndarray, shape (4, 4)
+        Its inverse (symmetric).
 
     Raises
     ------
-    ScenarioError
-        If a sample is at (near) zero range.
     ObservabilityError
         If the covariance is not positive definite (J₀ would not exist).
     """
-    r = np.hypot(X0[:, 0], X0[:, 1])
-    if r.min() < MIN_PRIOR_RANGE:
-        raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
-                            "observer (ln r and 1/r diverge at zero range)",
-                            f"a sample at range {r.min():.3g} m", source=source)
-    Y = cart_to_lpc(X0)
-    bm = np.angle(np.mean(np.exp(1j * Y[:, 0])))
+    Y = cart_to_lpc(np.asarray(samples, float))
+    w = None if weights is None else np.asarray(weights, float)
+    z = np.exp(1j * Y[:, 0])
+    bm = np.angle(np.mean(z) if w is None else np.sum(w * z))
     Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
-    cov = np.cov(Y, rowvar=False)
+    cov = np.cov(Y, rowvar=False, aweights=w)
     var = np.diag(cov)
-    msg = ("prior information J0 (inverse LPC prior covariance, file 000 eq. 56) is not "
+    msg = ("prior information J0 (inverse LPC prior covariance, brehard2005 eq. 56) is not "
            f"positive definite: LPC prior variances {var.tolist()} (a zero std in the prior?)")
     # a degenerate prior component leaves only round-off variance: judge on the correlation
-    if np.any(var <= 1e-24):
+    if not np.all(np.isfinite(cov)) or np.any(var <= 1e-24):
         raise ObservabilityError(msg)
     d = np.sqrt(var)
     if np.linalg.eigvalsh(cov / np.outer(d, d)).min() < 1e-10:
@@ -192,7 +249,26 @@ def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np
         np.linalg.cholesky(J0)
     except np.linalg.LinAlgError as exc:
         raise ObservabilityError(msg) from exc
-    return cov, J0
+    return cov, 0.5 * (J0 + J0.T)
+
+
+def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lpc_prior_information` of a scenario's prior samples, which must all lie at
+    least :data:`MIN_PRIOR_RANGE` from the observer.
+
+    Raises
+    ------
+    ScenarioError
+        If a sample is at (near) zero range.
+    ObservabilityError
+        See :func:`lpc_prior_information`.
+    """
+    r = np.hypot(X0[:, 0], X0[:, 1])
+    if r.min() < MIN_PRIOR_RANGE:
+        raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
+                            "observer (ln r and 1/r diverge at zero range)",
+                            f"a sample at range {r.min():.3g} m", source=source)
+    return lpc_prior_information(X0)
 
 
 def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
@@ -232,20 +308,17 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
     dv = obs.velocity_increments
     c = -np.hstack([grid.dt * dv, dv])
 
-    bearing_info = np.zeros(K + 1)
+    bearing_info = information_rates(scenario)[0]
     bearing_sensors: list[tuple[Any, np.ndarray]] = []
     freq: list[tuple[Any, np.ndarray]] = []
     ambiguity = "none"
     for s in scenario.sensors:
+        st = measurement_steps(s, grid)
         if isinstance(s, BearingSensor):
-            st = measurement_steps(s, grid)
-            st = st[st <= K]
-            bearing_info[st] += 1.0 / float(s.sigma) ** 2
-            bearing_sensors.append((s, st))
+            bearing_sensors.append((s, st[st <= K]))
             if s.ambiguity == "pi":
                 ambiguity = "pi"
         elif isinstance(s, FrequencySensor):
-            st = measurement_steps(s, grid)
             freq.append((s, st[st <= K]))
     steps, weight, sigma = resolve_ping_steps(scenario, ping_steps)
 

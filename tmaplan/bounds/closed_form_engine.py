@@ -49,13 +49,16 @@ __all__ = [
     "ClosedFormEngine",
     "StepInformation",
     "lpc_pcrb_graph",
-    "position_bound_graph",
+    "lpc_position_bound_graph",
+    "pack_symmetric",
 ]
 
 _REDUCE = (None, "mean", "terminal")
 
 
-def _pack(M: np.ndarray) -> np.ndarray:
+def pack_symmetric(M: np.ndarray) -> np.ndarray:
+    """The 10 upper-triangle entries (row-major) of symmetric (..., 4, 4) -> (10, ...): the
+    packing of the engine's moments, information and of :func:`lpc_pcrb_graph`'s inputs."""
     return np.array([M[..., i, j] for i, j in SYM_INDEX])
 
 
@@ -200,7 +203,8 @@ class ClosedFormEngine:
         A, Q = ncv_matrices(float(dt), float(q))
         dv = observer.velocity_increments
         c = -np.hstack([dt * dv, dv])
-        x0 = np.concatenate([np.asarray(mean, float), _pack(np.asarray(second_moment, float))])
+        x0 = np.concatenate([np.asarray(mean, float),
+                             pack_symmetric(np.asarray(second_moment, float))])
         moment_fn, _ = _numeric_step_functions(A, Q, backend)
         xs, aux = _call(_accumulated(moment_fn, K), [x0, c.T])
         moments = np.hstack([x0[:, None], xs])
@@ -279,7 +283,7 @@ class ClosedFormEngine:
         _, riccati_fn = _numeric_step_functions(self.A, self.Q, backend)
         J0 = np.array(self._start_entries(float(u[0]), scale))
         jn, varn, piv = _call(_accumulated(riccati_fn, K), [
-            _pack(J0), self.aux, self.bearing_info[1:][None, :], (u[1:] * scale)[None, :]])
+            pack_symmetric(J0), self.aux, self.bearing_info[1:][None, :], (u[1:] * scale)[None, :]])
         var0, d0 = inverse_diagonal(J0.tolist())
         if min(d0) <= 0 or np.any(piv <= 0):
             raise ObservabilityError("closed-form PCRB: J_0 or J_t + D11 is not positive "
@@ -419,7 +423,7 @@ class ClosedFormEngine:
         """
         import casadi as ca
 
-        g = _information_graph(self.A, self.Q, j0=ca.DM(_pack(self.prior_information)),
+        g = _information_graph(self.A, self.Q, j0=ca.DM(pack_symmetric(self.prior_information)),
                                aux=ca.DM(self.aux), er2=ca.DM(self.er2),
                                bearing=ca.DM(self.bearing_info), ping=u,
                                ping_scale=0.0 if self.ping_sigma is None
@@ -440,7 +444,7 @@ class ClosedFormEngine:
         v = ca.MX.sym("v_obs", K + 1, 2)
         u = ca.MX.sym("u", K + 1, 1)
         g = lpc_pcrb_graph(self.A, self.Q, self.dt, v_obs=v, x0=ca.DM(self.x0),
-                           j0=ca.DM(_pack(self.prior_information)),
+                           j0=ca.DM(pack_symmetric(self.prior_information)),
                            bearing=ca.DM(self.bearing_info), ping=u,
                            ping_scale=0.0 if self.ping_sigma is None
                            else 1.0 / self.ping_sigma**2)
@@ -516,7 +520,7 @@ def lpc_pcrb_graph(A: np.ndarray, Q: np.ndarray, dt: float, *, v_obs: Any, x0: A
 _POSVAR: dict[str, Any] = {}
 
 
-def position_bound_graph(graph: dict[str, Any]) -> Any:
+def lpc_position_bound_graph(graph: dict[str, Any]) -> Any:
     """``sqrt(tr P_pos)`` per step ((K+1)×1) [m] of a :func:`lpc_pcrb_graph` dict.
 
     ``tr E[J_X J⁻¹ J_Xᵀ]_pos = Σ_kl S[k,l] tr(E_k J⁻¹ E_lᵀ)_pos`` (the symbolic counterpart of

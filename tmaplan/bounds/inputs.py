@@ -208,7 +208,7 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
     planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer
     product about the sample mean (NOTES_000 §2.8). The bearing is centred on its circular
     mean before averaging, so a prior straddling β = ±π is handled. The covariance is the
-    unbiased weighted estimate (``numpy.cov`` with ``aweights``; n − 1 for equal weights).
+    weighted sample covariance normalised by Σw (n for equal weights, as the belief's ``cov``).
 
     Parameters
     ----------
@@ -234,7 +234,7 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
     z = np.exp(1j * Y[:, 0])
     bm = np.angle(np.mean(z) if w is None else np.sum(w * z))
     Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
-    cov = np.cov(Y, rowvar=False, aweights=w)
+    cov = np.cov(Y, rowvar=False, aweights=w, bias=True)
     var = np.diag(cov)
     msg = ("prior information J0 (inverse LPC prior covariance, brehard2005 eq. 56) is not "
            f"positive definite: LPC prior variances {var.tolist()} (a zero std in the prior?)")

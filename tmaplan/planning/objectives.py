@@ -9,9 +9,9 @@ cannot drift apart.
 * ``range-bound``: the closed-form LPC PCRB (file 000, corrected, NOTES_000 §2.9) range bound
   ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (DESIGN §4, file 000 eq. 58) at the
   last step (``reduce="terminal"``, the heading default) or averaged over the horizon
-  (``reduce="mean"``) [m]. The recursion is :func:`tmaplan.bounds._lpc_terms.step_functions`
-  (the one implementation of :mod:`tmaplan.bounds.closed_form`), re-wired here so that the
-  prior moments and J₀ are casadi *parameters* (build once, re-solve for a new belief).
+  (``reduce="mean"``) [m]: :func:`tmaplan.bounds.closed_form_engine.lpc_pcrb_graph` (the one
+  closed-form engine) with the prior moments and J₀ as casadi *parameters* (build once,
+  re-solve for a new belief).
 * ``position-bound``: ``sqrt(tr P_pos)`` [m], the square root of the trace of the Cartesian
   position PCRB, ``tr E[J_X J⁻¹ J_Xᵀ]_pos = Σ_kl S[k,l] tr(E_k J⁻¹ E_lᵀ)_pos`` (``J_X = ∂X/∂Y``
   is linear in X, NOTES_000 §2.9), terminal or mean.
@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 
+from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.models.target import ncv_matrices
 
@@ -38,7 +39,6 @@ from tmaplan.models.target import ncv_matrices
 from tmaplan.planning._objective_graphs import (
     ParamLayout,
     PlanContext,
-    bearing_information,
     closed_form_graph,
     logdet_graph,
     ping_sigma,
@@ -53,13 +53,16 @@ if TYPE_CHECKING:
 
 __all__ = [
     "OBJECTIVE_NAMES",
+    "PING_OBJECTIVES",
     "Objective",
     "ObjectiveEvaluator",
+    "ObjectiveName",
     "ParamLayout",
+    "PingObjectiveName",
     "PlanContext",
-    "bearing_information",
     "logdet",
     "make_objective",
+    "plan_bearing_information",
     "position_bound",
     "range_bound",
     "relative_range_bound",
@@ -68,11 +71,24 @@ __all__ = [
     "turn_penalty",
 ]
 
-#: Names accepted by :func:`make_objective`.
-OBJECTIVE_NAMES = ("logdet", "range-bound", "position-bound", "mean-range-bound",
-                   "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
-                   "relative-range-bound", "mean-relative-range-bound",
-                   "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy")
+#: Names accepted by :func:`make_objective` (heading objectives; the scenario's
+#: ``planning.objective`` and ``tmaplan plan --objective``).
+ObjectiveName = Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
+                        "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
+                        "relative-range-bound", "mean-relative-range-bound",
+                        "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy"]
+OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
+#: Objectives of the ping scheduler (:func:`tmaplan.planning.schedule_pings`,
+#: ``tmaplan schedule --objective``): closed-form bounds of a fixed track.
+PingObjectiveName = Literal["mean-range-bound", "terminal-range-bound", "mean-position-bound"]
+PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
+
+
+def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²], 0 at step 0 (the
+    belief at ``t_start`` holds it): :func:`tmaplan.bounds.inputs.information_rates`."""
+    return information_rates(scenario, t_start=t_start, n_steps=n_steps,
+                             include_start=False)[0]
 
 
 # --------------------------------------------------------------------------------------------
@@ -253,7 +269,7 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "mean-relative-range-crlb": lambda: relative_range_crlb("mean", max(samples, 16)),
         "time-to-accuracy": lambda: time_to_accuracy(0.1, max(samples, 16)),
     }
-    if name not in table:
+    if name not in OBJECTIVE_NAMES:
         raise ScenarioError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)
     return table[name]()
 
@@ -303,7 +319,7 @@ class ObjectiveEvaluator:
         val = self.objective.expression(ctx)
         rb = closed_form_graph(ctx)["range_bound"]
         self._fn = ca.Function("plan_objective", [v, dsp, ur, p], [val, rb])
-        self._bearing = bearing_information(scenario, self.belief.t, K)
+        self._bearing = plan_bearing_information(scenario, self.belief.t, K)
         self._p0 = self.layout.vector(self.belief, self._bearing)
 
     def parameters(self, ping: np.ndarray | None = None) -> np.ndarray:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -33,17 +34,24 @@ class NoPing:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class UniformPings:
-    """``budget`` pings evenly spaced over the horizon: steps ``round((i + ½)·K/budget)``."""
+    """``budget`` evenly spaced pings: :func:`tmaplan.planning.uniform_ping_steps` on the
+    scenario's grid, outside ``planning.ping_forbidden`` and ``planning.ping_min_spacing``
+    apart (the scheduler's ``uniform_steps``)."""
 
     budget: int | None = None
     name: str = "uniform"
 
     def controller(self, scenario: Scenario) -> Controller:
         """Controller pinging at evenly spaced steps."""
-        b = _budget(scenario, self.budget)
-        K = scenario.n_steps
-        steps = np.unique(np.clip(np.round((np.arange(b) + 0.5) * K / max(b, 1)), 1, K))
-        return _StepPings(steps.astype(int))
+        from tmaplan.planning import ping_candidates, uniform_ping_steps
+
+        pl = scenario.planning
+        times = np.asarray(scenario.time.times)
+        cand = ping_candidates(times, forbidden=pl.ping_forbidden if pl else ())
+        gap = max(1, math.ceil((pl.ping_min_spacing if pl else 0.0) / scenario.time.dt - 1e-9))
+        steps = uniform_ping_steps(times, _budget(scenario, self.budget), candidates=cand,
+                                   gap=gap)
+        return _StepPings(np.asarray(steps, dtype=int))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -46,7 +46,7 @@ from tmaplan.estimators.range_only_gm import (
     mixture_predict,
     mixture_update,
 )
-from tmaplan.estimators.truth_bound import cartesian_pcrb, truth_bounds
+from tmaplan.estimators.truth_bound import truth_bounds
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
 from tmaplan.simulate import MeasurementSet, Simulation, simulate
@@ -58,7 +58,6 @@ __all__ = [
     "ESTIMATORS",
     "MonteCarloResult",
     "Track",
-    "cartesian_pcrb",
     "measurement_batches",
     "monte_carlo",
     "run",

@@ -404,3 +404,50 @@ def test_kernel_emitter_rejects_unknown_operations():
         lt._emit_body(f)
     body = lt._emit_body(lt._schedule_step_sx())
     assert sum(" / " in line for line in body) > 0 and not any("sin" in s for s in body)
+
+
+def test_information_terms_reproduce_the_engine_recursion():
+    # the public per-step information-form matrices (for convex relaxations) rebuild the
+    # engine's own recursion, J_{t+1} = D22 + B + u M − D12ᵀ(J_t + D11)⁻¹D12, to 1e-9
+    sc = _short("brehard2005-s2", 1800.0)  # includes the 1500 s manoeuvre
+    eng = _quiet(closed_form_model, sc, prior_samples=5000)
+    terms = eng.information_terms()
+    K = eng.n_steps
+    assert terms.D11.shape == terms.D12.shape == terms.D22.shape == (K, 4, 4)
+    assert terms.B.shape == terms.M.shape == (K + 1, 4, 4) and terms.prior.shape == (4, 4)
+    np.testing.assert_array_equal(terms.D11, terms.D11.transpose(0, 2, 1))
+    np.testing.assert_array_equal(terms.D22, terms.D22.transpose(0, 2, 1))
+    np.testing.assert_allclose(terms.M[:, 1, 1], eng.er2 / eng.ping_sigma**2, rtol=1e-15)
+    np.testing.assert_array_equal(terms.B[:, 0, 0], eng.bearing_info)
+    u = np.random.default_rng(3).uniform(size=K + 1)
+    var, info, _ = eng.evaluate(u)
+    J = terms.prior + terms.B[0] + u[0] * terms.M[0]
+    for t in range(K + 1):
+        if t:
+            J = (terms.D22[t - 1] + terms.B[t] + u[t] * terms.M[t]
+                 - terms.D12[t - 1].T @ np.linalg.solve(J + terms.D11[t - 1], terms.D12[t - 1]))
+        np.testing.assert_allclose(J, info[t], rtol=1e-9, atol=1e-9 * np.abs(info[t]).max())
+    rb = np.sqrt(terms.er2 * var[:, 1])
+    np.testing.assert_allclose(rb, eng.evaluate_schedules(u[None])[0], rtol=1e-9)
+
+
+def test_engine_from_belief_is_the_bound_engine():
+    # the planners' constructor (a belief) and `tmaplan bound`'s (the scenario prior) build
+    # the same engine from the same samples: one J0, one set of moments
+    from tmaplan.bounds.closed_form import ClosedFormEngine
+    from tmaplan.bounds.inputs import information_rates, prepare
+    from tmaplan.models.prior import relative_prior_samples
+    from tmaplan.planning import Belief
+
+    sc = _short("brehard2005-s1", 600.0)
+    ref = _quiet(closed_form_model, sc, prior_samples=3000)
+    inp = prepare(sc, prior_samples=3000)
+    X0 = relative_prior_samples(sc, 3000, np.random.default_rng(sc.prior.seed),
+                                inp.observer.state[0])
+    eng = ClosedFormEngine.from_belief(Belief.from_samples(X0), inp.observer, dt=sc.time.dt,
+                                       q=sc.target.q, bearing_info=information_rates(sc)[0],
+                                       ping_sigma=ref.ping_sigma)
+    np.testing.assert_allclose(eng.prior_information, ref.prior_information, rtol=1e-12)
+    np.testing.assert_allclose(eng.moments, ref.moments, rtol=1e-9, atol=1e-12)
+    u = np.zeros((1, ref.n_steps + 1))
+    np.testing.assert_allclose(eng.evaluate_schedules(u), ref.evaluate_schedules(u), rtol=1e-6)

@@ -199,3 +199,22 @@ def test_infeasible_and_failed_requests(default, prior):
         bad.solve(prior)
     res = bad.solve(prior, raise_on_failure=False)
     assert not res.success and "Maximum_Iterations" in res.status
+
+
+def test_objective_names_are_one_list(default):
+    # issue 12: the objective names are listed once (tmaplan.planning.objectives); the
+    # scenario's planning.objective, `plan --objective` and the scheduler use that list
+    import dataclasses
+
+    from tmaplan.errors import ScenarioError
+    from tmaplan.planning import OBJECTIVE_NAMES, PING_OBJECTIVES, make_objective
+    from tmaplan.scenario import from_dict, to_dict
+
+    for name in OBJECTIVE_NAMES:
+        assert make_objective(name).terms
+        assert dataclasses.replace(default.planning, objective=name).objective == name
+    assert set(PING_OBJECTIVES) <= set(OBJECTIVE_NAMES)
+    d = to_dict(default)
+    d["planning"]["objective"] = "fastest"
+    with pytest.raises(ScenarioError, match=r"planning\.objective.*'logdet'"):
+        from_dict(d)

@@ -154,3 +154,40 @@ def test_evaluator_is_the_engine_compiled_and_numpy():
         per = ev.per_step(U)
         np.testing.assert_allclose(per.mean(1) if reduce == "mean" else per[:, -1], ref,
                                    rtol=1e-12)
+
+
+def test_uniform_ping_steps_rule():
+    # centres of `budget` equal sub-intervals: (i + ½)·K/budget, snapped to candidates
+    from tmaplan.planning import uniform_ping_steps
+
+    t = 6.0 * np.arange(451)
+    assert uniform_ping_steps(t, 4) == [56, 169, 281, 394]
+    assert uniform_ping_steps(t, 0) == []
+    # a forbidden stretch: 168.75 moves to the nearest allowed step, 149
+    cand = [c for c in range(1, 451) if not 150 <= c <= 190]
+    assert uniform_ping_steps(t, 4, candidates=cand) == [56, 149, 281, 394]
+    # spacing: no two pings closer than `gap` steps; a target without a free step is dropped
+    assert uniform_ping_steps(t, 3, candidates=[10, 11, 12], gap=2) == [10, 12]
+
+
+@pytest.mark.parametrize("forbidden", [(), ((300.0, 700.0),)])
+def test_scheduler_uniform_reference_is_what_the_uniform_policy_flies(default, prior,
+                                                                      forbidden):
+    # issue 12: the uniform schedule `schedule` reports is, step for step, the one the
+    # `uniform` ping policy flies in a closed-loop run (also around a forbidden window)
+    import dataclasses
+
+    from tmaplan.closed_loop import draw_truth, run_closed_loop
+    from tmaplan.policies import UniformPings
+
+    sc = default.replace(planning=dataclasses.replace(default.planning,
+                                                      ping_forbidden=forbidden))
+    res = schedule_pings(sc, budget=4, method="greedy", belief=prior, gap_reference="none")
+    run = run_closed_loop(sc, UniformPings(budget=4), draw_truth(sc, np.random.default_rng(1)),
+                          noise_rng=np.random.default_rng(2),
+                          filter_rng=np.random.default_rng(3), n_particles=200)
+    assert res.uniform_steps.size == 4
+    np.testing.assert_array_equal(run.ping_steps, res.uniform_steps)
+    ev = PingEvaluator(sc, observer_track(sc.observer, sc.time), prior, "mean-range-bound")
+    assert res.uniform_objective == ev.value(run.ping_steps.tolist())
+    assert not any(a <= sc.times[k] <= b for k in run.ping_steps for a, b in forbidden)

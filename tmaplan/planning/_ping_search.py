@@ -80,7 +80,8 @@ def ping_candidates(times: np.ndarray, candidate_steps: Sequence[int] | None = N
 
 
 def uniform_ping_steps(times: np.ndarray, budget: int, *,
-                       candidates: Sequence[int] | None = None, gap: int = 1) -> list[int]:
+                       candidates: Sequence[int] | np.ndarray | None = None,
+                       gap: int = 1) -> list[int]:
     """The evenly spaced reference schedule: ``budget`` pings at the centres of ``budget`` equal
     sub-intervals of the horizon.
 

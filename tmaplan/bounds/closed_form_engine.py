@@ -71,18 +71,14 @@ def _unpack_np(v: np.ndarray) -> np.ndarray:
 
 
 class BeliefMoments(Protocol):
-    """What the engine reads from a belief (e.g. :class:`tmaplan.planning.Belief`)."""
+    """What the engine reads from a belief (:class:`tmaplan.planning.Belief`): ``mean``
+    ``E X`` (4,), ``second_moment`` ``E X Xᵀ`` (4, 4), ``lpc_information()`` J₀ (4, 4)."""
 
     @property
-    def mean(self) -> np.ndarray:
-        """``E X`` (4,) [m, m, m/s, m/s]."""
-
+    def mean(self) -> np.ndarray: ...
     @property
-    def second_moment(self) -> np.ndarray:
-        """``E X Xᵀ`` (4, 4)."""
-
-    def lpc_information(self) -> np.ndarray:
-        """LPC prior information J₀ (4, 4) (brehard2005 eq. 56)."""
+    def second_moment(self) -> np.ndarray: ...
+    def lpc_information(self) -> np.ndarray: ...
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -173,29 +169,12 @@ class ClosedFormEngine:
               prior_information: np.ndarray, observer: ObserverTrack, dt: float, q: float,
               bearing_info: np.ndarray, ping_sigma: float | None,
               backend: str = "auto") -> ClosedFormEngine:
-        """Engine from the moments of X₀, J₀, an observer track and the sensor information.
-
-        Parameters
-        ----------
-        mean : ndarray, shape (4,)
-            ``E X₀`` [m, m, m/s, m/s].
-        second_moment : ndarray, shape (4, 4)
-            ``E X₀X₀ᵀ``.
-        prior_information : ndarray, shape (4, 4)
-            LPC J₀.
-        observer : ObserverTrack
-            K + 1 instants; only the velocity increments enter (``c_t = −H Δv_t``, DESIGN §1).
-        dt : float
-            [s].
-        q : float
-            NCV process-noise intensity [m²/s³], > 0.
-        bearing_info : ndarray, shape (K + 1,)
-            Σ 1/σ_β² per step [rad⁻²] (:func:`tmaplan.bounds.inputs.information_rates`).
-        ping_sigma : float or None
-            σ_r of a ping [m].
-        backend : {"auto", "compiled", "casadi"}
-            How the moment recursion is evaluated.
-        """
+        """Engine from the moments of X₀ (``E X₀`` (4,) [m, m/s], ``E X₀X₀ᵀ`` (4, 4)), the LPC
+        J₀ (4, 4), an observer track (K + 1 instants; only its velocity increments enter,
+        ``c_t = −H Δv_t``, DESIGN §1), dt [s], the NCV intensity q > 0 [m²/s³], the bearing
+        information per step (K + 1,) [rad⁻²] (:func:`tmaplan.bounds.inputs.information_rates`)
+        and σ_r of a ping [m]; ``backend`` ("auto", "compiled", "casadi") evaluates the moment
+        recursion."""
         K = observer.position.shape[0] - 1
         bearing_info = np.asarray(bearing_info, float)
         if bearing_info.shape != (K + 1,):

@@ -218,25 +218,11 @@ def fim_bearings_generic(rx: Any, ry: Any, tau: Any, information: Any, *,
     ``g = [r_y, −r_x, τ r_y, −τ r_x]`` (file 003 eq. 65 with ``cos β/r = r_y/r²``, ``sin β/r =
     r_x/r²``), i.e. :func:`fim_bearings` when ``info = 1/σ²`` and ``total`` sums the steps.
 
-    Parameters
-    ----------
-    rx, ry : ndarray or casadi matrix, shape (n, ...)
-        Relative position components [m] per step (axis 0) and e.g. belief sample.
-    tau : ndarray or casadi matrix, broadcastable
-        Times since the reference time [s].
-    information : float, ndarray or casadi matrix, broadcastable
-        Bearing information 1/σ² per step [rad⁻²].
-    total : callable, optional
-        Reduction over the steps (default: sum over axis 0; ``casadi.cumsum`` gives the FIM
-        of the steps up to each step).
-    min_range : float
-        Floor on the range in the weight 1/r⁴ [m] (a sample the observer sails through would
-        otherwise give an infinite information).
-
-    Returns
-    -------
-    list of list
-        ``F[i][j]``, entries of the reduced shape.
+    ``rx, ry`` [m] (steps along axis 0, e.g. belief samples along axis 1), ``tau`` [s] and
+    ``information`` [rad⁻²] broadcast together (numpy arrays or casadi matrices); ``total``
+    reduces over the steps (default the sum; ``casadi.cumsum``: the FIM of the steps up to
+    each step); ``min_range`` [m] floors r in 1/r⁴ (a sample the observer sails through would
+    otherwise give an infinite information). Returns the nested entries ``F[i][j]``.
     """
     cas = _is_casadi(rx) or _is_casadi(ry) or _is_casadi(tau)
     r2 = rx * rx + ry * ry

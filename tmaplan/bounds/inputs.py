@@ -32,8 +32,8 @@ from tmaplan.scenario import (
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "information_rates", "lpc_prior",
-           "lpc_prior_information", "prepare", "resolve_ping_steps"]
+__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "information_rates", "lpc_prior_information",
+           "prepare", "resolve_ping_steps"]
 
 #: Prior samples closer than this to the observer count as "mass at zero range" [m].
 MIN_PRIOR_RANGE = 1.0
@@ -58,8 +58,6 @@ class PCRBInputs:
         Σ 1/σ_β² over the bearing sensors measuring at each step [rad⁻²].
     ambiguity : {"none", "pi"}
         "pi" if any bearing sensor is π-ambiguous (file 000 eq. 4).
-    bearing_sensors : tuple of (BearingSensor, ndarray)
-        Each bearing sensor with its steps.
     ping_steps : ndarray of int
         Steps with a range ping.
     ping_weight : ndarray, shape (K + 1,)
@@ -79,8 +77,6 @@ class PCRBInputs:
     cov_lpc0 : ndarray, shape (4, 4), or None
         Covariance of the LPC initial state (file 000 eq. 56, bearing centred on its circular
         mean).
-    min_prior_range : float
-        Smallest prior sample range [m].
     prior_subsample : ndarray, shape (n_sub, 4)
         The first ≤ 500 prior samples of X₀ (for the side-assumption diagnostic).
     """
@@ -93,7 +89,6 @@ class PCRBInputs:
     c: np.ndarray
     bearing_info: np.ndarray
     ambiguity: str
-    bearing_sensors: tuple[tuple[BearingSensor, np.ndarray], ...]
     ping_steps: np.ndarray
     ping_weight: np.ndarray
     range_sigma: float | None
@@ -103,7 +98,6 @@ class PCRBInputs:
     S0: np.ndarray
     cov_cart0: np.ndarray
     cov_lpc0: np.ndarray | None
-    min_prior_range: float
     prior_subsample: np.ndarray
 
     @property
@@ -161,30 +155,13 @@ def _check_prior_range_support(scenario: Scenario) -> None:
 def information_rates(scenario: Scenario, *, t_start: float | None = None,
                       n_steps: int | None = None, include_start: bool = True,
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Bearing and range information Σ 1/σ² per step, summed over the sensors measuring there.
+    """Bearing [rad⁻²] and range [m⁻²] information Σ 1/σ² per step k = 0..K, shape (K + 1,).
 
-    The one per-step sensor-information function of the bounds and the planners (the Fisher
-    information of one bearing is 1/σ_β², brehard2005 eq. 47; of one range ping on ln r,
-    ``E r²/σ_r²``, eq. 51, is formed by the callers from these 1/σ_r²).
-
-    Parameters
-    ----------
-    scenario : Scenario
-    t_start : float, optional
-        Time of step 0 [s] on the scenario grid (default ``scenario.time.t0``); the grid is
-        extended past the scenario horizon when ``t_start + n_steps·dt`` needs it (plans).
-    n_steps : int, optional
-        K (default the scenario's).
-    include_start : bool
-        False: step 0 gets no information (a planner's belief at ``t_start`` already holds
-        that measurement).
-
-    Returns
-    -------
-    bearing : ndarray, shape (K + 1,)
-        [rad⁻²].
-    range : ndarray, shape (K + 1,)
-        [m⁻²].
+    The one per-step sensor-information function of the bounds and the planners (one bearing:
+    1/σ_β², brehard2005 eq. 47; a range ping on ln r: ``E r²/σ_r²``, eq. 51). Step 0 is at
+    ``t_start`` (default ``scenario.time.t0``; the grid is extended past the horizon if a plan
+    needs it), K = ``n_steps`` (default the scenario's); ``include_start=False`` leaves step 0
+    empty (a planner's belief at ``t_start`` already holds that measurement).
     """
     grid = scenario.time
     k0 = 0 if t_start is None else round((t_start - grid.t0) / grid.dt)
@@ -202,32 +179,14 @@ def information_rates(scenario: Scenario, *, t_start: float | None = None,
 
 def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None,
                           ) -> tuple[np.ndarray, np.ndarray]:
-    """LPC covariance of (weighted) samples of X₀ and its inverse J₀ (brehard2005 eq. 56).
+    """LPC covariance (4, 4) of weighted samples (n, 4) of X₀ and its inverse J₀ (eq. 56).
 
-    The one prior information of the closed-form PCRB, for the scenario's prior and for a
-    planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer
-    product about the sample mean (NOTES_000 §2.8). The bearing is centred on its circular
-    mean before averaging, so a prior straddling β = ±π is handled. The covariance is the
-    weighted sample covariance normalised by Σw (n for equal weights, as the belief's ``cov``).
-
-    Parameters
-    ----------
-    samples : ndarray, shape (n, 4)
-        Relative states [m, m, m/s, m/s], all at non-zero range.
-    weights : ndarray, shape (n,), optional
-        Non-negative weights (None: equal).
-
-    Returns
-    -------
-    cov : ndarray, shape (4, 4)
-        LPC covariance [rad², 1, rad²/s², 1/s²].
-    J0 : ndarray, shape (4, 4)
-        Its inverse (symmetric).
-
-    Raises
-    ------
-    ObservabilityError
-        If the covariance is not positive definite (J₀ would not exist).
+    The one prior information of the closed-form PCRB (brehard2005 eq. 56), for a scenario's
+    prior and a planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is
+    the outer product about the mean (NOTES_000 §2.8), normalised by Σw (n for equal weights,
+    as :attr:`Belief.cov`). The bearing is centred on its circular mean first (a prior
+    straddling β = ±π is handled). Samples [m, m/s] must be at non-zero range; raises
+    :class:`ObservabilityError` if the covariance is not positive definite.
     """
     Y = cart_to_lpc(np.asarray(samples, float))
     w = None if weights is None else np.asarray(weights, float)
@@ -250,25 +209,6 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
     except np.linalg.LinAlgError as exc:
         raise ObservabilityError(msg) from exc
     return cov, 0.5 * (J0 + J0.T)
-
-
-def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`lpc_prior_information` of a scenario's prior samples, which must all lie at
-    least :data:`MIN_PRIOR_RANGE` from the observer.
-
-    Raises
-    ------
-    ScenarioError
-        If a sample is at (near) zero range.
-    ObservabilityError
-        See :func:`lpc_prior_information`.
-    """
-    r = np.hypot(X0[:, 0], X0[:, 1])
-    if r.min() < MIN_PRIOR_RANGE:
-        raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
-                            "observer (ln r and 1/r diverge at zero range)",
-                            f"a sample at range {r.min():.3g} m", source=source)
-    return lpc_prior_information(X0)
 
 
 def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
@@ -309,15 +249,12 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
     c = -np.hstack([grid.dt * dv, dv])
 
     bearing_info = information_rates(scenario)[0]
-    bearing_sensors: list[tuple[Any, np.ndarray]] = []
     freq: list[tuple[Any, np.ndarray]] = []
     ambiguity = "none"
     for s in scenario.sensors:
         st = measurement_steps(s, grid)
-        if isinstance(s, BearingSensor):
-            bearing_sensors.append((s, st[st <= K]))
-            if s.ambiguity == "pi":
-                ambiguity = "pi"
+        if isinstance(s, BearingSensor) and s.ambiguity == "pi":
+            ambiguity = "pi"
         elif isinstance(s, FrequencySensor):
             freq.append((s, st[st <= K]))
     steps, weight, sigma = resolve_ping_steps(scenario, ping_steps)
@@ -329,13 +266,19 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
         raise ScenarioError("prior_samples", ">= 10", n, source=scenario.name)
     rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
     X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
-    cov_lpc = lpc_prior(X0, source=scenario.name)[0] if lpc else None
+    cov_lpc = None
+    if lpc:
+        r = np.hypot(X0[:, 0], X0[:, 1])
+        if r.min() < MIN_PRIOR_RANGE:
+            raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
+                                "observer (ln r and 1/r diverge at zero range)",
+                                f"a sample at range {r.min():.3g} m", source=scenario.name)
+        cov_lpc = lpc_prior_information(X0)[0]
     m0 = X0.mean(axis=0)
     S0 = X0.T @ X0 / n
     return PCRBInputs(
         times=np.asarray(grid.times), dt=float(grid.dt), A=A, Q=Q, observer=obs, c=c,
-        bearing_info=bearing_info, ambiguity=ambiguity, bearing_sensors=tuple(bearing_sensors),
+        bearing_info=bearing_info, ambiguity=ambiguity,
         ping_steps=steps, ping_weight=weight, range_sigma=sigma, frequency_sensors=tuple(freq),
         prior_samples=n, m0=m0, S0=S0, cov_cart0=np.cov(X0, rowvar=False), cov_lpc0=cov_lpc,
-        min_prior_range=float(np.hypot(X0[:, 0], X0[:, 1]).min()),
         prior_subsample=X0[:500].copy())

@@ -266,26 +266,12 @@ def frequency_score(z: np.ndarray, X: np.ndarray, f0: np.ndarray, sigma: np.ndar
 def conditional_information(X: np.ndarray, bearing: float, range_: float,
                             coords: Coords = "cartesian", *, average: bool = False
                             ) -> np.ndarray:
-    """Conditional Fisher information ``E[s sᵀ | X]`` of a bearing and a range ping at X.
+    """Conditional Fisher information ``E[s sᵀ | X] = b ∇β∇βᵀ + w ∇r∇rᵀ``, (..., 4, 4).
 
-    ``bearing·∇β ∇βᵀ + range_·∇r ∇rᵀ`` (the expectation over the measurement noise is
-    analytic; the π-ambiguous bearing up to the overlap of the wrapped components, file 000
-    eq. 84).
-
-    Parameters
-    ----------
-    X : ndarray, shape (..., 4)
-        Relative states [m, m, m/s, m/s].
-    bearing, range_ : float
-        Σ 1/σ_β² [rad⁻²] and Σ 1/σ_r² [m⁻²] of the measurements
-        (:func:`tmaplan.bounds.inputs.information_rates`).
-    coords : {"cartesian", "lpc"}
-    average : bool
-        True: the mean over the samples X (N, 4), shape (4, 4).
-
-    Returns
-    -------
-    ndarray, shape (..., 4, 4), or (4, 4) if ``average``
+    At relative states X (..., 4) [m, m/s] for bearing and range information b = ``bearing``
+    [rad⁻²], w = ``range_`` [m⁻²] (:func:`tmaplan.bounds.inputs.information_rates`); the
+    π-ambiguous bearing up to the overlap of its wrapped components (brehard2005 eq. 84).
+    ``average``: the mean (4, 4) over samples X (N, 4).
     """
     def outer(g: np.ndarray) -> np.ndarray:
         return g.T @ g / g.shape[0] if average else g[..., :, None] * g[..., None, :]

@@ -30,6 +30,7 @@ from tmaplan.errors import PlanningError
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
+    from tmaplan.scenario import Scenario
 
 __all__ = [
     "_exact",
@@ -47,25 +48,18 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Feasibility helpers
 # --------------------------------------------------------------------------------------------
-def ping_candidates(times: np.ndarray, candidate_steps: Sequence[int] | None = None,
-                    forbidden: Sequence[tuple[float, float]] = ()) -> np.ndarray:
-    """Steps that may carry a ping: ``candidate_steps`` (default 1..K) outside the forbidden
-    time windows.
+def ping_candidates(scenario: Scenario, times: np.ndarray, *,
+                    candidate_steps: Sequence[int] | None = None,
+                    forbidden: Sequence[tuple[float, float]] = (),
+                    min_spacing: float | None = None) -> tuple[np.ndarray, int, float]:
+    """The ping constraints of a scenario on a track with step times ``times`` (K + 1,) [s].
 
-    Parameters
-    ----------
-    times : ndarray, shape (K + 1,)
-        Times of the track's steps [s].
-    candidate_steps : sequence of int, optional
-        Allowed steps in [0, K].
-    forbidden : sequence of (start, end)
-        Closed time windows [s] without pings (counter-detection).
-
-    Returns
-    -------
-    ndarray of int
-        Sorted candidate steps.
+    Returns the sorted candidate steps (``candidate_steps`` in [0, K], default 1..K, outside
+    the closed time windows ``forbidden`` and ``planning.ping_forbidden`` [s]), the minimum
+    gap between pings [steps] ``ceil(spacing/dt)`` and the spacing [s] (``min_spacing``,
+    default ``planning.ping_min_spacing``).
     """
+    pl = scenario.planning
     times = np.asarray(times, float)
     K = times.shape[0] - 1
     cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
@@ -73,10 +67,12 @@ def ping_candidates(times: np.ndarray, candidate_steps: Sequence[int] | None = N
     if cand.size and (cand.min() < 0 or cand.max() > K):
         raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
                             f"[{cand.min()}, {cand.max()}]")
-    for a, b in forbidden:
+    for a, b in [*forbidden, *(pl.ping_forbidden if pl is not None else ())]:
         t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
-    return cand
+    spacing = float(min_spacing if min_spacing is not None else
+                    (pl.ping_min_spacing if pl is not None else 0.0))
+    return cand, max(1, math.ceil(spacing / float(scenario.time.dt) - 1e-9)), spacing
 
 
 def uniform_ping_steps(times: np.ndarray, budget: int, *,
@@ -91,24 +87,11 @@ def uniform_ping_steps(times: np.ndarray, budget: int, *,
     nearest candidate step (ties: the earlier) not within ``gap`` steps of an earlier choice;
     a target with no such candidate is dropped.
 
-    Parameters
-    ----------
-    times : ndarray, shape (K + 1,)
-        Times of the track's steps [s] (only K is used).
-    budget : int
-        Number of pings.
-    candidates : sequence of int, optional
-        Allowed steps (default :func:`ping_candidates` ``(times)``, i.e. 1..K).
-    gap : int
-        Minimum distance between pings [steps] (``ceil(min_spacing/dt)``).
-
-    Returns
-    -------
-    list of int
-        Sorted ping steps (at most ``budget``).
+    ``times`` (K + 1,) [s] gives K; ``candidates`` (default 1..K) and ``gap`` [steps] are
+    :func:`ping_candidates`'. Returns the sorted steps.
     """
     K = np.asarray(times).shape[0] - 1
-    cand = ping_candidates(times) if candidates is None else np.asarray(candidates, int)
+    cand = np.arange(1, K + 1) if candidates is None else np.asarray(candidates, int)
     out: list[int] = []
     for i in range(max(int(budget), 0)):
         target = (i + 0.5) * K / budget

@@ -248,12 +248,8 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                                                                scenario.time)
     bel = belief if belief is not None else Belief.from_prior(scenario)
     ev = PingEvaluator(scenario, obs, bel, objective)
-    pl = scenario.planning
-    spacing = float(min_spacing if min_spacing is not None else
-                    (pl.ping_min_spacing if pl is not None else 0.0))
-    gap = max(1, math.ceil(spacing / ev.dt - 1e-9))
-    windows = list(forbidden) + (list(pl.ping_forbidden) if pl is not None else [])
-    cand = ping_candidates(ev.times, candidate_steps, windows)
+    cand, gap, spacing = ping_candidates(scenario, ev.times, candidate_steps=candidate_steps,
+                                         forbidden=forbidden, min_spacing=min_spacing)
     if budget > cand.size:
         raise PlanningError(f"budget K = {budget} pings is larger than the {cand.size} "
                             f"candidate ping steps in the horizon ({ev.K} steps)")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,9 +33,8 @@ class NoPing:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class UniformPings:
-    """``budget`` evenly spaced pings: :func:`tmaplan.planning.uniform_ping_steps` on the
-    scenario's grid, outside ``planning.ping_forbidden`` and ``planning.ping_min_spacing``
-    apart (the scheduler's ``uniform_steps``)."""
+    """``budget`` evenly spaced pings: :func:`tmaplan.planning.uniform_ping_steps` under the
+    scenario's ping constraints (the scheduler's ``uniform_steps``)."""
 
     budget: int | None = None
     name: str = "uniform"
@@ -45,10 +43,8 @@ class UniformPings:
         """Controller pinging at evenly spaced steps."""
         from tmaplan.planning import ping_candidates, uniform_ping_steps
 
-        pl = scenario.planning
         times = np.asarray(scenario.time.times)
-        cand = ping_candidates(times, forbidden=pl.ping_forbidden if pl else ())
-        gap = max(1, math.ceil((pl.ping_min_spacing if pl else 0.0) / scenario.time.dt - 1e-9))
+        cand, gap, _ = ping_candidates(scenario, times)
         steps = uniform_ping_steps(times, _budget(scenario, self.budget), candidates=cand,
                                    gap=gap)
         return _StepPings(np.asarray(steps, dtype=int))

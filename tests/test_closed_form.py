@@ -429,25 +429,3 @@ def test_information_terms_reproduce_the_engine_recursion():
         np.testing.assert_allclose(J, info[t], rtol=1e-9, atol=1e-9 * np.abs(info[t]).max())
     rb = np.sqrt(terms.er2 * var[:, 1])
     np.testing.assert_allclose(rb, eng.evaluate_schedules(u[None])[0], rtol=1e-9)
-
-
-def test_engine_from_belief_is_the_bound_engine():
-    # the planners' constructor (a belief) and `tmaplan bound`'s (the scenario prior) build
-    # the same engine from the same samples: one J0, one set of moments
-    from tmaplan.bounds.closed_form import ClosedFormEngine
-    from tmaplan.bounds.inputs import information_rates, prepare
-    from tmaplan.models.prior import relative_prior_samples
-    from tmaplan.planning import Belief
-
-    sc = _short("brehard2005-s1", 600.0)
-    ref = _quiet(closed_form_model, sc, prior_samples=3000)
-    inp = prepare(sc, prior_samples=3000)
-    X0 = relative_prior_samples(sc, 3000, np.random.default_rng(sc.prior.seed),
-                                inp.observer.state[0])
-    eng = ClosedFormEngine.from_belief(Belief.from_samples(X0), inp.observer, dt=sc.time.dt,
-                                       q=sc.target.q, bearing_info=information_rates(sc)[0],
-                                       ping_sigma=ref.ping_sigma)
-    np.testing.assert_allclose(eng.prior_information, ref.prior_information, rtol=1e-12)
-    np.testing.assert_allclose(eng.moments, ref.moments, rtol=1e-9, atol=1e-12)
-    u = np.zeros((1, ref.n_steps + 1))
-    np.testing.assert_allclose(eng.evaluate_schedules(u), ref.evaluate_schedules(u), rtol=1e-6)

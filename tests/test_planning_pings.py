@@ -10,8 +10,7 @@ import pytest
 
 from tmaplan.errors import PlanningError
 from tmaplan.models.observer import observer_track
-from tmaplan.planning import Belief, PingEvaluator, plan_joint, schedule_pings
-from tmaplan.scenario import load_problem
+from tmaplan.planning import PingEvaluator, plan_joint, schedule_pings
 
 CAND = list(range(4, 161, 4))  # 40 candidate steps
 
@@ -133,27 +132,6 @@ def test_joint_plan_improves_on_separate(default, prior):
     sep = schedule_pings(default, budget=2, belief=prior, gap_reference="none")
     assert joint.objective < sep.objective
     assert joint.pings.steps.size == 2
-
-
-def test_evaluator_is_the_engine_compiled_and_numpy():
-    # the scheduler's objective is the one closed-form engine: its compiled C schedule kernel
-    # (tmaplan.bounds._jit) and its numpy reference loop agree to 1e-12
-    from tmaplan.models.observer import observer_track
-    from tmaplan.planning import PingEvaluator
-
-    s = load_problem("default")
-    b = Belief.from_prior(s)
-    obs = observer_track(s.observer, s.time)
-    rng = np.random.default_rng(0)
-    for obj, reduce in (("mean-range-bound", "mean"), ("terminal-range-bound", "terminal")):
-        ev = PingEvaluator(s, obs, b, obj)
-        U = (rng.uniform(size=(130, ev.K + 1)) < 0.03).astype(float)
-        U[:20] = rng.uniform(size=(20, ev.K + 1))
-        ref = ev.engine.evaluate_schedules(U, reduce=reduce, backend="numpy")
-        np.testing.assert_allclose(ev.evaluate(U), ref, rtol=1e-12)
-        per = ev.per_step(U)
-        np.testing.assert_allclose(per.mean(1) if reduce == "mean" else per[:, -1], ref,
-                                   rtol=1e-12)
 
 
 def test_uniform_ping_steps_rule():

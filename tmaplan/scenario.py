@@ -429,8 +429,7 @@ Sensor = Annotated[BearingSensor | RangeSensor | FrequencySensor, Field(discrimi
 
 
 def _objective_name(name: str) -> str:
-    # the one list lives in tmaplan.planning.objectives (imported late: planning imports this)
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES
+    from tmaplan.planning.objectives import OBJECTIVE_NAMES  # the one list (planning imports us)
 
     if name not in OBJECTIVE_NAMES:
         raise ValueError(f"one of {', '.join(repr(n) for n in OBJECTIVE_NAMES)}")

@@ -53,9 +53,6 @@ __all__ = [
     "pack_symmetric",
 ]
 
-_REDUCE = (None, "mean", "terminal")
-
-
 def pack_symmetric(M: np.ndarray) -> np.ndarray:
     """The 10 upper-triangle entries (row-major) of symmetric (..., 4, 4) -> (10, ...): the
     packing of the engine's moments, information and of :func:`lpc_pcrb_graph`'s inputs."""
@@ -210,18 +207,16 @@ class ClosedFormEngine:
         return self.times.shape[0] - 1
 
     @property
-    def x0(self) -> np.ndarray:
-        """``[m₀, pack_sym(S₀)]`` (14,)."""
-        return self.moments[:, 0]
+    def ping_scale(self) -> float:
+        """1/σ_r² of a ping [m⁻²] (0 without a range sensor)."""
+        return 0.0 if self.ping_sigma is None else 1.0 / self.ping_sigma**2
 
     def _ping_scale(self, u: np.ndarray) -> float:
-        """1/σ_r² [m⁻²] if any ping is requested (0 otherwise)."""
-        if not np.any(u):
-            return 0.0
-        if self.ping_sigma is None:
+        """:attr:`ping_scale` if any ping is requested (0 otherwise)."""
+        if np.any(u) and self.ping_sigma is None:
             raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
                                 "no range sensor")
-        return 1.0 / self.ping_sigma**2
+        return self.ping_scale if np.any(u) else 0.0
 
     def _start_entries(self, u0: Any, scale: float) -> list[list[Any]]:
         """``J_0 = J_prior + B_0 + u_0 M_0`` as nested entries (u0 a number or an array)."""
@@ -274,41 +269,22 @@ class ClosedFormEngine:
     # ------------------------------------------------------------- batched schedules
     def evaluate_schedules(self, u: np.ndarray, *, reduce: str | None = None,
                            quantity: str = "range", backend: str = "auto") -> np.ndarray:
-        """Bound of many ping schedules at once (batched over schedules).
+        """Bound [m] of ping schedules ``u`` (S, K + 1), batched over schedules.
 
-        Runs :func:`tmaplan.bounds._lpc_terms.tichavsky_step` on entries of shape (S,): with
-        numpy, or (range bound) as the C kernel emitted from its ``SX`` graph, SIMD-vectorised
-        over schedules.
-
-        Parameters
-        ----------
-        u : ndarray, shape (S, K + 1)
-            Ping weights per schedule and step.
-        reduce : {None, "mean", "terminal"}
-            None: per step (S, K + 1); "mean": mean over the K + 1 steps (DESIGN §4);
-            "terminal": the last step.
-        quantity : {"range", "position"}
-            "range": eq. 58's ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``; "position": ``sqrt(tr P_pos)``
-            of the Cartesian position bound ``E[J_X J_k⁻¹ J_Xᵀ]_pos`` (numpy only) [m].
-        backend : {"auto", "compiled", "numpy"}
-            "compiled": the C kernel (an error if there is no compiler); "numpy": the
-            reference loop over steps; "auto": compiled when available (range only).
-
-        Returns
-        -------
-        ndarray, shape (S, K + 1) or (S,)
-            [m].
-
-        Raises
-        ------
-        ObservabilityError
-            If some ``J_t + D11`` is not positive definite.
+        :func:`tmaplan.bounds._lpc_terms.tichavsky_step` on entries of shape (S,): with numpy
+        (``backend="numpy"``), or as the C kernel emitted from its ``SX`` graph, SIMD over
+        schedules (``"compiled"``: an error without a compiler; ``"auto"``: when available).
+        ``quantity``: "range", eq. 58's ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, or "position",
+        ``sqrt(tr P_pos)`` of the Cartesian bound ``E[J_X J_k⁻¹ J_Xᵀ]_pos`` (numpy only).
+        ``reduce``: None, per step (S, K + 1); "mean" over the K + 1 steps (DESIGN §4);
+        "terminal", the last step (S,). Raises :class:`ObservabilityError` if some
+        ``J_t + D11`` is not positive definite.
         """
         u = np.atleast_2d(np.asarray(u, float))
         K = self.n_steps
         if u.shape[1] != K + 1:
             raise ScenarioError("u", f"shape (S, {K + 1})", u.shape)
-        if reduce not in _REDUCE:
+        if reduce not in (None, "mean", "terminal"):
             raise ScenarioError("reduce", "None, 'mean' or 'terminal'", reduce)
         if quantity not in ("range", "position"):
             raise ScenarioError("quantity", "'range' or 'position'", quantity)
@@ -389,8 +365,7 @@ class ClosedFormEngine:
         B = np.zeros((K + 1, 4, 4))
         B[:, 0, 0] = self.bearing_info
         M = np.zeros((K + 1, 4, 4))
-        if self.ping_sigma is not None:
-            M[:, 1, 1] = self.er2 / self.ping_sigma**2
+        M[:, 1, 1] = self.er2 * self.ping_scale
         return StepInformation(prior=self.prior_information.copy(), D11=d11, D12=d12, D22=d22,
                                B=B, M=M, er2=self.er2.copy())
 
@@ -405,8 +380,7 @@ class ClosedFormEngine:
         g = _information_graph(self.A, self.Q, j0=ca.DM(pack_symmetric(self.prior_information)),
                                aux=ca.DM(self.aux), er2=ca.DM(self.er2),
                                bearing=ca.DM(self.bearing_info), ping=u,
-                               ping_scale=0.0 if self.ping_sigma is None
-                               else 1.0 / self.ping_sigma**2)
+                               ping_scale=self.ping_scale)
         g["X"] = ca.DM(self.moments)
         return g
 
@@ -422,11 +396,10 @@ class ClosedFormEngine:
         K = self.n_steps
         v = ca.MX.sym("v_obs", K + 1, 2)
         u = ca.MX.sym("u", K + 1, 1)
-        g = lpc_pcrb_graph(self.A, self.Q, self.dt, v_obs=v, x0=ca.DM(self.x0),
+        g = lpc_pcrb_graph(self.A, self.Q, self.dt, v_obs=v, x0=ca.DM(self.moments[:, 0]),
                            j0=ca.DM(pack_symmetric(self.prior_information)),
                            bearing=ca.DM(self.bearing_info), ping=u,
-                           ping_scale=0.0 if self.ping_sigma is None
-                           else 1.0 / self.ping_sigma**2)
+                           ping_scale=self.ping_scale)
         return ca.Function("closed_form_pcrb_lpc", [v, u], [g["var"], g["range_bound"]],
                            ["v_obs", "u"], ["var", "range_bound"])
 
@@ -456,31 +429,13 @@ def lpc_pcrb_graph(A: np.ndarray, Q: np.ndarray, dt: float, *, v_obs: Any, x0: A
     """The closed-form LPC PCRB over a horizon as casadi expressions of all its inputs.
 
     The same step functions as :class:`ClosedFormEngine`, wired with the belief as casadi
-    inputs, so a planner's NLP is built once and re-solved for a new belief.
+    inputs, so a planner's NLP is built once and re-solved for a new belief. Inputs (casadi):
+    ``v_obs`` (K+1)×2 observer mean velocities [m/s] (only increments enter, ``c_t = −H Δv_t``),
+    ``x0`` 14×1 ``[E X₀, pack_symmetric(E X₀X₀ᵀ)]``, ``j0`` 10×1 packed J₀, ``bearing`` (K+1)×1
+    [rad⁻²] and ``ping`` (K+1)×1 weights u_k; ``ping_scale`` 1/σ_r² [m⁻²], ``dt`` [s].
 
-    Parameters
-    ----------
-    A, Q : ndarray, shape (4, 4)
-    dt : float
-        [s].
-    v_obs : casadi (K+1)×2
-        Observer mean velocities per step [m/s] (only increments enter, ``c_t = −H Δv_t``).
-    x0 : casadi 14×1
-        ``[E X₀, pack_sym(E X₀X₀ᵀ)]``.
-    j0 : casadi 10×1
-        Packed LPC prior information J₀.
-    bearing : casadi (K+1)×1
-        Σ 1/σ_β² per step [rad⁻²].
-    ping : casadi (K+1)×1
-        Ping weights u_k.
-    ping_scale : float
-        1/σ_r² [m⁻²].
-
-    Returns
-    -------
-    dict
-        ``range_bound`` (K+1)×1 [m], ``var`` (K+1)×4 diagonal of J_k⁻¹, ``J`` 10×(K+1) packed
-        information, ``X`` 14×(K+1) moments, ``er2`` (K+1)×1 [m²].
+    Returns a dict: ``range_bound`` (K+1)×1 [m], ``var`` (K+1)×4 diagonal of J_k⁻¹, ``J``
+    10×(K+1) packed information, ``X`` 14×(K+1) moments, ``er2`` (K+1)×1 [m²].
     """
     import casadi as ca
 

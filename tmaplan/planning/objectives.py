@@ -133,19 +133,28 @@ class Objective:
         return tot
 
 
-def range_bound(reduce: str = "terminal") -> Objective:
-    """Closed-form PCRB range bound [m], ``reduce`` "terminal" or "mean" over the horizon."""
+def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanContext], Any],
+                samples: int = 1) -> Objective:
+    """Objective of a per-step quantity (K+1, n) averaged over its n columns, at the last step
+    (``reduce="terminal"``, named ``names[0]``) or averaged over the steps ("mean")."""
     if reduce not in ("terminal", "mean"):
         raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
 
     def term(ctx: PlanContext) -> Any:
         import casadi as ca
 
-        rb = closed_form_graph(ctx)["range_bound"]
-        return rb[-1] if reduce == "terminal" else ca.sum1(rb) / rb.shape[0]
+        x = per_step(ctx)
+        if reduce == "terminal":
+            return ca.sum2(x[-1, :]) / x.shape[1]
+        return ca.sum1(ca.sum2(x)) / (x.shape[0] * x.shape[1])
 
-    return Objective("range-bound" if reduce == "terminal" else "mean-range-bound",
-                     ((1.0, term),))
+    return Objective(names[reduce == "mean"], ((1.0, term),), samples)
+
+
+def range_bound(reduce: str = "terminal") -> Objective:
+    """Closed-form PCRB range bound [m], ``reduce`` "terminal" or "mean" over the horizon."""
+    return _over_steps(reduce, ("range-bound", "mean-range-bound"),
+                       lambda ctx: closed_form_graph(ctx)["range_bound"])
 
 
 def relative_range_bound(reduce: str = "mean") -> Objective:
@@ -155,38 +164,20 @@ def relative_range_bound(reduce: str = "mean") -> Objective:
     own sake, so it tracks the *relative* range accuracy that a time-to-accuracy metric
     measures. ``reduce`` "mean" (over the horizon: rewards early localisation) or "terminal".
     """
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
+    import casadi as ca
 
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        rel = ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0))
-        return rel[-1] if reduce == "terminal" else ca.sum1(rel) / rel.shape[0]
-
-    return Objective("relative-range-bound" if reduce == "terminal"
-                     else "mean-relative-range-bound", ((1.0, term),))
+    return _over_steps(reduce, ("relative-range-bound", "mean-relative-range-bound"),
+                       lambda ctx: ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0)))
 
 
 def relative_range_crlb(reduce: str = "mean", samples: int = 16) -> Objective:
     """Relative range std σ_r/r of the batch bearings CRLB with prior information, averaged
     over ``samples`` belief samples and (``reduce="mean"``) over the horizon, which rewards
     localising early; ``"terminal"``: at the last step (dimensionless, minimised)."""
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
     if int(samples) < 1:
         raise ScenarioError("samples", ">= 1", samples)
-
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        rel = relative_range_crlb_graph(ctx)
-        if reduce == "terminal":
-            return ca.sum2(rel[-1, :]) / rel.shape[1]
-        return ca.sum1(ca.sum2(rel)) / (rel.shape[0] * rel.shape[1])
-
-    return Objective("relative-range-crlb" if reduce == "terminal"
-                     else "mean-relative-range-crlb", ((1.0, term),), int(samples))
+    return _over_steps(reduce, ("relative-range-crlb", "mean-relative-range-crlb"),
+                       relative_range_crlb_graph, int(samples))
 
 
 def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.2) -> Objective:
@@ -214,17 +205,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
 
 def position_bound(reduce: str = "terminal") -> Objective:
     """``sqrt(tr P_pos)`` [m] of the closed-form PCRB, terminal or mean."""
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
-
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        pb = position_bound_graph(ctx)
-        return pb[-1] if reduce == "terminal" else ca.sum1(pb) / pb.shape[0]
-
-    return Objective("position-bound" if reduce == "terminal" else "mean-position-bound",
-                     ((1.0, term),))
+    return _over_steps(reduce, ("position-bound", "mean-position-bound"), position_bound_graph)
 
 
 def logdet(samples: int = 1) -> Objective:

@@ -11,7 +11,6 @@ import pytest
 
 from tmaplan.bounds._lpc_terms import lpc_noise_constant, moment_dterm_step, unpack_sym
 from tmaplan.bounds.closed_form import (
-    closed_form_casadi,
     closed_form_model,
     closed_form_pcrb,
     side_density_gaussian,
@@ -134,9 +133,9 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     assert gv[k:, 0].sum() == pytest.approx(fd_v, rel=1e-4)  # O(h²) truncation of the FD
 
 
-def test_closed_form_casadi_entry_point():
+def test_casadi_function_signature():
     sc = _short("brehard2005-s1", 600.0)
-    f = _quiet(closed_form_casadi, sc, prior_samples=5000)
+    f = _quiet(closed_form_model, sc, prior_samples=5000).casadi_function()
     assert f.name_in() == ["v_obs", "u"] and f.name_out() == ["var", "range_bound"]
     assert f.size_in(0) == (101, 2) and f.size_out(0) == (101, 4)
 

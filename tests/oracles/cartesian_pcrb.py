@@ -1,32 +1,19 @@
 """Oracle: an independent, deliberately simple prior-averaged Cartesian PCRB (Tichavský, MC).
 
 Kept in the tests as a cross-check of :func:`tmaplan.bounds.pcrb.monte_carlo_pcrb` (the one
-implementation the package and the runner use): its own per-step sensor information, its own
-measurement information and recursion, nothing shared but the models.
+implementation the package and the runner use): its own measurement information, propagation
+and recursion; shared are the models and the per-step 1/σ² bookkeeping.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from tmaplan.bounds.inputs import information_rates
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import prior_relative_moments, relative_prior_samples
 from tmaplan.models.target import ncv_matrices
-from tmaplan.scenario import Scenario, measurement_steps
-
-
-def _information_rates(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
-    """Per-step bearing and range information 1/σ² (summed over sensors), shape (K + 1,)."""
-    K = scenario.n_steps
-    info_b = np.zeros(K + 1)
-    info_r = np.zeros(K + 1)
-    for s in scenario.sensors:
-        steps = measurement_steps(s, scenario.time)
-        if s.kind == "bearing":
-            np.add.at(info_b, steps, 1.0 / s.sigma**2)
-        elif s.kind == "range":
-            np.add.at(info_r, steps, 1.0 / s.sigma**2)
-    return info_b, info_r
+from tmaplan.scenario import Scenario
 
 
 def _meas_info(X: np.ndarray, ib: float, ir: float) -> np.ndarray:
@@ -61,7 +48,7 @@ def cartesian_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generator
     F, Q = ncv_matrices(scenario.time.dt, scenario.target.q)
     _, P0 = prior_relative_moments(scenario)
     X = relative_prior_samples(scenario, samples, rng)
-    info_b, info_r = _information_rates(scenario)
+    info_b, info_r = information_rates(scenario)
     dv = obs.velocity_increments
     L = np.linalg.cholesky(Q) if scenario.target.q > 0 else np.zeros((4, 4))
     J = np.linalg.inv(P0)

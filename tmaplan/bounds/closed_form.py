@@ -30,7 +30,6 @@ if TYPE_CHECKING:
 __all__ = [
     "ClosedFormEngine",
     "StepInformation",
-    "closed_form_casadi",
     "closed_form_model",
     "closed_form_pcrb",
     "side_assumption_density",
@@ -207,15 +206,3 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
         return dens, np.pi * dens
     dens = side_density_gaussian(np.pi, means, cv).mean(axis=1)
     return dens, 2 * np.pi * dens
-
-
-def closed_form_casadi(scenario: Scenario, *, observer: ObserverTrack | None = None,
-                       prior_samples: int | None = None,
-                       rng: np.random.Generator | None = None) -> Any:
-    """casadi Function of the closed-form LPC PCRB (:meth:`ClosedFormEngine.casadi_function`).
-
-    ``(v_obs (K+1)×2 [m/s], u (K+1)×1 in [0, 1]) -> (var (K+1)×4, range_bound (K+1)×1 [m])``.
-    The prior moments and J₀ come from ``scenario`` (and ``observer``'s initial state).
-    """
-    return closed_form_model(scenario, ping_steps=[], observer=observer,
-                             prior_samples=prior_samples, rng=rng).casadi_function()

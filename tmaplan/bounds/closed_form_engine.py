@@ -313,8 +313,11 @@ class ClosedFormEngine:
             else:
                 P = np.linalg.inv(np.stack([np.stack(r, axis=-1) for r in J], axis=-2))
                 rb[:, k] = np.sqrt(np.maximum(np.einsum("ij,sij->s", W[k], P), 0.0))
-        if reduce == "mean":
-            return rb.mean(axis=1)
+        if reduce == "mean":  # summed step by step as in the C kernel: identical results
+            acc = 0.0 + rb[:, 0]
+            for k in range(1, K + 1):
+                acc += rb[:, k]
+            return acc / (K + 1)
         return rb[:, -1] if reduce == "terminal" else rb
 
     def _schedules_compiled(self, kernel: Any, u: np.ndarray, J: list[list[Any]],

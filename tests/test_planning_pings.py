@@ -169,3 +169,11 @@ def test_scheduler_uniform_reference_is_what_the_uniform_policy_flies(default, p
     ev = PingEvaluator(sc, observer_track(sc.observer, sc.time), prior, "mean-range-bound")
     assert res.uniform_objective == ev.value(run.ping_steps.tolist())
     assert not any(a <= sc.times[k] <= b for k in run.ping_steps for a, b in forbidden)
+
+
+def test_uniform_policy_steps_unchanged_on_default(default):
+    # the uniform policy flew round((i + ½)·K/budget) (numpy rounding, half to even) before the
+    # rule became one function; the default problem's steps are unchanged: [22, 68, 112, 158]
+    from tmaplan.planning import uniform_ping_steps
+
+    assert uniform_ping_steps(default.times, 4) == [22, 68, 112, 158]

@@ -83,9 +83,9 @@ def uniform_ping_steps(times: np.ndarray, budget: int, *,
 
     The one definition of "uniform pings" (the scheduler's ``uniform_objective`` and the
     ``uniform`` ping policy): with K steps, the targets are the steps ``(i + ½)·K/budget``,
-    i = 0..budget − 1 (K = 450, budget = 4: 56.25, 168.75, 281.25, 393.75); each is moved to the
-    nearest candidate step (ties: the earlier) not within ``gap`` steps of an earlier choice;
-    a target with no such candidate is dropped.
+    i = 0..budget − 1, rounded half to even (K = 450, budget = 4: 56, 169, 281, 394); each is
+    moved to the nearest candidate step (ties: the earlier) not within ``gap`` steps of an
+    earlier choice; a target with no such candidate is dropped.
 
     ``times`` (K + 1,) [s] gives K; ``candidates`` (default 1..K) and ``gap`` [steps] are
     :func:`ping_candidates`'. Returns the sorted steps.
@@ -94,7 +94,7 @@ def uniform_ping_steps(times: np.ndarray, budget: int, *,
     cand = np.arange(1, K + 1) if candidates is None else np.asarray(candidates, int)
     out: list[int] = []
     for i in range(max(int(budget), 0)):
-        target = (i + 0.5) * K / budget
+        target = float(np.round((i + 0.5) * K / budget))
         free = [int(c) for c in cand if all(abs(int(c) - x) >= max(gap, 1) for x in out)]
         if free:
             out.append(min(free, key=lambda c: (abs(c - target), c)))

@@ -68,14 +68,18 @@ def _unpack_np(v: np.ndarray) -> np.ndarray:
 
 
 class BeliefMoments(Protocol):
-    """What the engine reads from a belief (:class:`tmaplan.planning.Belief`): ``mean``
-    ``E X`` (4,), ``second_moment`` ``E X Xᵀ`` (4, 4), ``lpc_information()`` J₀ (4, 4)."""
+    """What the engine reads from a belief (:class:`tmaplan.planning.Belief`)."""
 
     @property
-    def mean(self) -> np.ndarray: ...
+    def mean(self) -> np.ndarray:
+        """``E X`` (4,) [m, m, m/s, m/s]."""
+
     @property
-    def second_moment(self) -> np.ndarray: ...
-    def lpc_information(self) -> np.ndarray: ...
+    def second_moment(self) -> np.ndarray:
+        """``E X Xᵀ`` (4, 4)."""
+
+    def lpc_information(self) -> np.ndarray:
+        """LPC prior information J₀ (4, 4) (brehard2005 eq. 56)."""
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -122,7 +126,8 @@ class ClosedFormEngine:
 
     The moments and D-terms depend only on the belief and the observer (NOTES_000 §4.2 (i));
     a ping schedule u enters only through ``u_k·E r_k²/σ_r²`` on ln r. Build with
-    :meth:`from_belief` (planners) or :func:`closed_form_model` (a scenario's prior).
+    :meth:`from_belief` (planners) or :func:`tmaplan.bounds.closed_form.closed_form_model`
+    (a scenario's prior).
 
     Attributes
     ----------

@@ -26,13 +26,8 @@ import warnings
 import numpy as np
 
 from tmaplan.bounds import _jit, _lpc_terms
-from tmaplan.bounds.closed_form import (
-    _accumulated,
-    _call,
-    _numeric_step_functions,
-    closed_form_model,
-    closed_form_pcrb,
-)
+from tmaplan.bounds.closed_form import ClosedFormEngine, closed_form_model, closed_form_pcrb
+from tmaplan.bounds.inputs import prepare
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
 from tmaplan.scenario import load_problem
 
@@ -77,12 +72,13 @@ def main() -> None:
     sc = load_problem("brehard2005-s1")
     jit = _jit.jit_enabled()
     model = closed_form_model(sc)
-    inp = model.inputs
+    inp = prepare(sc)
 
     def core(backend: str) -> None:  # moments + D-terms + recursion for one observer track
-        mf, _ = _numeric_step_functions(inp.A, inp.Q, backend)
-        _call(_accumulated(mf, model.n_steps), [model.x0, inp.c.T])
-        model.evaluate(backend=backend)
+        ClosedFormEngine.build(
+            mean=inp.m0, second_moment=inp.S0, prior_information=model.prior_information,
+            observer=inp.observer, dt=inp.dt, q=sc.target.q, bearing_info=inp.bearing_info,
+            ping_sigma=inp.range_sigma, backend=backend).evaluate(backend=backend)
 
     backend = "auto"
     core(backend)

@@ -94,7 +94,7 @@ sched_cells = [
         "from tmaplan.models.observer import observer_track\nfrom tmaplan.planning import PingEvaluator\n"
         "ev = PingEvaluator(sc, observer_track(sc.observer, sc.time), belief, 'mean-range-bound')\n"
         "t = ev.times / 60\n"
-        "curves = ev.per_step(ev.schedules([[], [60, 120, 180], res['exact'].steps]))\n"
+        "curves = ev.per_step(ev.schedules([[], res['exact'].uniform_steps, res['exact'].steps]))\n"
         "fig, ax = plt.subplots(figsize=(8, 4.5))\n"
         "for c, lab in zip(curves, ['no pings', 'uniform', 'exact']):\n"
         "    ax.semilogy(t, c, label=lab)\n"

@@ -11,7 +11,6 @@ import pytest
 
 from tmaplan.bounds._lpc_terms import lpc_noise_constant, moment_dterm_step, unpack_sym
 from tmaplan.bounds.closed_form import (
-    closed_form_casadi,
     closed_form_model,
     closed_form_pcrb,
     side_density_gaussian,
@@ -103,7 +102,7 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     U = np.random.default_rng(2).uniform(size=(4, K + 1))
     rb_np = model.evaluate_schedules(U)
     f = model.casadi_function()
-    v = model.inputs.observer.mean_velocity
+    v = model.observer.mean_velocity
     for s in range(U.shape[0]):
         var_c, rb_c = (np.asarray(x) for x in f(v, U[s][:, None]))
         np.testing.assert_allclose(rb_np[s], rb_c.ravel(), rtol=1e-10)
@@ -126,7 +125,7 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     k, h = 200, 1e-3
     vals = []
     for sgn in (1, -1):
-        obs = model.inputs.observer
+        obs = model.observer
         mv = obs.mean_velocity.copy()
         mv[k:, 0] += sgn * h  # only increments matter: shift from step k on
         vals.append(float(ca.sum1(f(mv, U[0])[1])) / (K + 1))
@@ -134,9 +133,9 @@ def test_numpy_batched_and_casadi_agree_with_derivatives():
     assert gv[k:, 0].sum() == pytest.approx(fd_v, rel=1e-4)  # O(h²) truncation of the FD
 
 
-def test_closed_form_casadi_entry_point():
+def test_casadi_function_signature():
     sc = _short("brehard2005-s1", 600.0)
-    f = _quiet(closed_form_casadi, sc, prior_samples=5000)
+    f = _quiet(closed_form_model, sc, prior_samples=5000).casadi_function()
     assert f.name_in() == ["v_obs", "u"] and f.name_out() == ["var", "range_bound"]
     assert f.size_in(0) == (101, 2) and f.size_out(0) == (101, 4)
 
@@ -211,7 +210,7 @@ def _rotate(sc, phi):
 
 
 def test_rotation_and_translation_invariance(monkeypatch):
-    import tmaplan.bounds._pcrb_setup as setup
+    import tmaplan.bounds.inputs as setup
 
     sc = _short("brehard2005-s1", 1200.0)
     base = _quiet(closed_form_pcrb, sc, prior_samples=20_000)
@@ -357,7 +356,7 @@ def test_without_compiler_falls_back_to_reference(monkeypatch):
     _fresh_jit_caches(monkeypatch)
     monkeypatch.setenv("TMAPLAN_JIT", "0")
     assert not lt.jit_enabled()
-    assert lt.compiled_step_functions(base.inputs.A, base.inputs.Q) is None
+    assert lt.compiled_step_functions(base.A, base.Q) is None
     assert lt.schedule_kernel() is None
     m = _quiet(closed_form_model, sc, prior_samples=3000)  # auto: the casadi VM
     np.testing.assert_array_equal(m.aux, base.aux)
@@ -404,3 +403,28 @@ def test_kernel_emitter_rejects_unknown_operations():
         lt._emit_body(f)
     body = lt._emit_body(lt._schedule_step_sx())
     assert sum(" / " in line for line in body) > 0 and not any("sin" in s for s in body)
+
+
+def test_information_terms_reproduce_the_engine_recursion():
+    # the public per-step information-form matrices (for convex relaxations) rebuild the
+    # engine's own recursion, J_{t+1} = D22 + B + u M − D12ᵀ(J_t + D11)⁻¹D12, to 1e-9
+    sc = _short("brehard2005-s2", 1800.0)  # includes the 1500 s manoeuvre
+    eng = _quiet(closed_form_model, sc, prior_samples=5000)
+    terms = eng.information_terms()
+    K = eng.n_steps
+    assert terms.D11.shape == terms.D12.shape == terms.D22.shape == (K, 4, 4)
+    assert terms.B.shape == terms.M.shape == (K + 1, 4, 4) and terms.prior.shape == (4, 4)
+    np.testing.assert_array_equal(terms.D11, terms.D11.transpose(0, 2, 1))
+    np.testing.assert_array_equal(terms.D22, terms.D22.transpose(0, 2, 1))
+    np.testing.assert_allclose(terms.M[:, 1, 1], eng.er2 / eng.ping_sigma**2, rtol=1e-15)
+    np.testing.assert_array_equal(terms.B[:, 0, 0], eng.bearing_info)
+    u = np.random.default_rng(3).uniform(size=K + 1)
+    var, info, _ = eng.evaluate(u)
+    J = terms.prior + terms.B[0] + u[0] * terms.M[0]
+    for t in range(K + 1):
+        if t:
+            J = (terms.D22[t - 1] + terms.B[t] + u[t] * terms.M[t]
+                 - terms.D12[t - 1].T @ np.linalg.solve(J + terms.D11[t - 1], terms.D12[t - 1]))
+        np.testing.assert_allclose(J, info[t], rtol=1e-9, atol=1e-9 * np.abs(info[t]).max())
+    rb = np.sqrt(terms.er2 * var[:, 1])
+    np.testing.assert_allclose(rb, eng.evaluate_schedules(u[None])[0], rtol=1e-9)

@@ -6,10 +6,11 @@ import json
 
 import numpy as np
 import pytest
+from oracles.cartesian_pcrb import cartesian_pcrb
 
 from tmaplan.cli import main
 from tmaplan.errors import ScenarioError
-from tmaplan.estimators import Track, cartesian_pcrb, monte_carlo, run
+from tmaplan.estimators import Track, monte_carlo, run
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
 

@@ -16,10 +16,11 @@ from tmaplan.bounds.fimdet import (
     exact_det_piecewise,
     fim_bearings,
     fim_bearings_generic,
+    inverse_quadratic_generic,
     logdet_bearing_rate_approx,
     logdet_fim_bearings,
     logdet_fim_from_bearings,
-    logdet_fim_generic,
+    logdet_generic,
     nardone_aidala,
     quartic_coefficients,
     single_leg_det,
@@ -72,13 +73,20 @@ def test_generic_numpy_and_casadi_agree():
     t, rel = _manoeuvre_geometry()
     tau = t - t.mean()
     F = fim_bearings(rel, t, 0.01, t_ref=t.mean())
-    Fg = fim_bearings_generic(rel[:, 0], rel[:, 1], tau, 0.01)
+    Fg = np.array(fim_bearings_generic(rel[:, 0], rel[:, 1], tau, 1e4))
     np.testing.assert_allclose(Fg, F, rtol=1e-12)
     ld = logdet_fim_bearings(rel, t, 0.01)
-    assert logdet_fim_generic(rel[:, 0], rel[:, 1], tau, 0.01) == pytest.approx(ld, rel=1e-9)
+    assert logdet_generic(fim_bearings_generic(rel[:, 0], rel[:, 1], tau, 1e4)) == \
+        pytest.approx(ld, rel=1e-9)
+    g = np.array([1.0, -2.0, 300.0, 50.0])
+    assert inverse_quadratic_generic(Fg.tolist(), g) == pytest.approx(g @ np.linalg.solve(F, g),
+                                                                      rel=1e-8)
+    # casadi, in scaled units (km, 900 s): log det F = log det F' − 8 log L + 4 log T
     x = casadi.SX.sym("x", t.size)
     y = casadi.SX.sym("y", t.size)
-    expr = logdet_fim_generic(x, y, tau, 0.01, length_scale=1e4, time_scale=900.0)
+    L, T = 1e4, 900.0
+    expr = logdet_generic(fim_bearings_generic(x / L, y / L, casadi.DM(tau / T), 1e4)) \
+        - 8 * np.log(L) + 4 * np.log(T)
     f = casadi.Function("f", [x, y], [expr, casadi.gradient(expr, x)])
     val, grad = f(rel[:, 0], rel[:, 1])
     assert float(val) == pytest.approx(ld, rel=1e-9)

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tmaplan.bounds._pcrb_setup import prepare
+from tmaplan.bounds.inputs import prepare
 from tmaplan.bounds.pcrb import (
     PCRBResult,
     bearing_score,

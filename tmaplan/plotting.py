@@ -146,11 +146,10 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     path : path
         PNG file.
     """
-    from tmaplan.planning.pings import PingEvaluator, _uniform_steps
+    from tmaplan.planning import PingEvaluator
 
     ev = PingEvaluator(scenario, obs, belief, res.objective_name)
-    uni = _uniform_steps(np.arange(1, ev.K + 1), res.budget, ev.K) if res.budget else []
-    curves = ev.per_step(ev.schedules([[], uni]))
+    curves = ev.per_step(ev.schedules([[], res.uniform_steps.tolist()]))
     fig, axes = new_figure(1, 1, size=(8.0, 5.0))
     ax = axes[0, 0]
     t = (obs.times - obs.times[0]) / 60.0

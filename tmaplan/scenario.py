@@ -17,7 +17,7 @@ from collections.abc import Callable
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
 from tmaplan.units import to_si
@@ -428,6 +428,14 @@ class FrequencySensor:
 Sensor = Annotated[BearingSensor | RangeSensor | FrequencySensor, Field(discriminator="kind")]
 
 
+def _objective_name(name: str) -> str:
+    from tmaplan.planning.objectives import OBJECTIVE_NAMES  # the one list (planning imports us)
+
+    if name not in OBJECTIVE_NAMES:
+        raise ValueError(f"one of {', '.join(repr(n) for n in OBJECTIVE_NAMES)}")
+    return name
+
+
 @_frozen
 class Planning:
     """Optional planning settings.
@@ -456,11 +464,7 @@ class Planning:
     """
 
     horizon: PositiveTime | None = None
-    objective: Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
-                       "terminal-range-bound", "mean-position-bound",
-                       "terminal-position-bound", "relative-range-bound",
-                       "mean-relative-range-bound", "relative-range-crlb",
-                       "mean-relative-range-crlb", "time-to-accuracy"] = "range-bound"
+    objective: Annotated[str, AfterValidator(_objective_name)] = "range-bound"
     ping_budget: NonNegInt = 0
     ping_sigma: PositiveLength | None = None
     ping_min_spacing: NonNegTime = 0.0

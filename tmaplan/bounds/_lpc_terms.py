@@ -43,6 +43,7 @@ __all__ = [
     "aux_to_dterms",
     "basis",
     "inverse_diagonal",
+    "ldl",
     "lpc_noise_constant",
     "moment_dterm_step",
     "pack_sym",
@@ -240,7 +241,7 @@ def _tensor_cached(A: np.ndarray, Q: np.ndarray, which: str) -> np.ndarray:
     return _TENSORS[key]
 
 
-def _ldl(M: Mat) -> tuple[Mat, list[Entry]]:
+def ldl(M: Mat) -> tuple[Mat, list[Entry]]:
     """LDLᵀ factorisation of a symmetric 4×4 nested list (unit lower L, diagonal d)."""
     L: Mat = [[None] * 4 for _ in range(4)]
     Ld: Mat = [[None] * 4 for _ in range(4)]  # L[i][k]·d[k]
@@ -283,7 +284,7 @@ def tichavsky_step(J: Mat, D11: Mat, D12: Mat, D22: Mat, bearing_info: Entry,
         LDLᵀ pivots of ``J_t + D11`` (all > 0 iff it is positive definite).
     """
     M = [[J[i][j] + D11[i][j] for j in range(4)] for i in range(4)]
-    L, d = _ldl(M)
+    L, d = ldl(M)
     # T = L⁻¹ D12 (forward substitution, column by column)
     T: Mat = [[None] * 4 for _ in range(4)]
     for col in range(4):
@@ -316,7 +317,7 @@ def inverse_diagonal(J: Mat) -> tuple[list[Entry], list[Entry]]:
     d : list of 4 entries
         LDLᵀ pivots of J (all > 0 iff J is positive definite).
     """
-    L, d = _ldl(J)
+    L, d = ldl(J)
     # columns of L⁻¹ (unit lower triangular)
     Li: Mat = [[None] * 4 for _ in range(4)]
     for j in range(4):

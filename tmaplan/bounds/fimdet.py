@@ -4,9 +4,10 @@ Exact values
     :func:`fim_bearings`, :func:`logdet_fim_bearings` — FIM of the relative constant-velocity
     state ``X = [r_x, r_y, v_x, v_y]`` at a reference time from bearings (file 003 eq. 64–65,
     L700–L706), ``log det`` by a column-scaled QR of the whitened Jacobian (never a raw det).
-    :func:`fim_bearings_generic` / :func:`logdet_fim_generic` build the same 4×4 FIM with
-    only ``+ − * /`` so that they evaluate on numpy arrays *and* casadi SX/MX symbols (for the
-    planner). :func:`logdet_fim_from_bearings` takes measured bearings and (assumed) ranges.
+    :func:`fim_bearings_generic`, :func:`logdet_generic` and :func:`inverse_quadratic_generic`
+    build the same 4×4 FIM with only ``+ − * /`` so that they evaluate on numpy arrays *and*
+    casadi SX/MX symbols (the planner's ``logdet`` and relative-range objectives).
+    :func:`logdet_fim_from_bearings` takes measured bearings and (assumed) ranges.
 
 File 003's identities and bearing-rate approximations (constant range, unit sampling period,
 ``(σr)^8 det F`` normalisation; rates in rad per sample)
@@ -28,12 +29,12 @@ Corrections of printed equations (NOTES_003 §3, §5.4): eq. (71) prints ``2θ̇
 from __future__ import annotations
 
 import itertools
-import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
+from tmaplan.bounds._lpc_terms import ldl
 from tmaplan.errors import ObservabilityError, ScenarioError
 
 __all__ = [
@@ -46,10 +47,11 @@ __all__ = [
     "exact_det_piecewise",
     "fim_bearings",
     "fim_bearings_generic",
+    "inverse_quadratic_generic",
     "logdet_bearing_rate_approx",
     "logdet_fim_bearings",
     "logdet_fim_from_bearings",
-    "logdet_fim_generic",
+    "logdet_generic",
     "model_a_phases",
     "nardone_aidala",
     "quartic_coefficients",
@@ -206,74 +208,58 @@ def _is_casadi(x: Any) -> bool:
     return type(x).__module__.split(".")[0] == "casadi"
 
 
-def fim_bearings_generic(rx: Any, ry: Any, tau: Any, sigma: Any) -> Any:
-    """4×4 bearing FIM built from ``+ − * /`` only: works on numpy arrays and casadi symbols.
+def fim_bearings_generic(rx: Any, ry: Any, tau: Any, information: Any, *,
+                         total: Callable[[Any], Any] | None = None,
+                         min_range: float = 0.0) -> list[list[Any]]:
+    """Bearing FIM of the relative CV state as 4×4 nested entries, from ``+ − * /`` only.
 
-    Entry (i, j) is ``Σ_k g_i g_j /(σ² r_k⁴)`` with ``g = [r_y, −r_x, τ r_y, −τ r_x]`` (file
-    003 eq. 65 with ``cos β/r = r_y/r²`` and ``sin β/r = r_x/r²``), i.e. identical to
-    :func:`fim_bearings`.
+    The one generic form, for numpy arrays and casadi symbols alike (the planner's ``logdet``
+    and relative-range objectives): entry (i, j) is ``total(info·g_i g_j / r⁴)`` with
+    ``g = [r_y, −r_x, τ r_y, −τ r_x]`` (file 003 eq. 65 with ``cos β/r = r_y/r²``, ``sin β/r =
+    r_x/r²``), i.e. :func:`fim_bearings` when ``info = 1/σ²`` and ``total`` sums the steps.
 
-    Parameters
-    ----------
-    rx, ry : ndarray, shape (n,), or casadi SX/MX/DM column (n, 1)
-        Relative position components [m].
-    tau : ndarray, shape (n,), or casadi column
-        Times since the reference time [s].
-    sigma : float, ndarray or casadi column
-        Bearing std [rad].
-
-    Returns
-    -------
-    ndarray, shape (4, 4), or casadi matrix 4×4
+    ``rx, ry`` [m] (steps along axis 0, e.g. belief samples along axis 1), ``tau`` [s] and
+    ``information`` [rad⁻²] broadcast together (numpy arrays or casadi matrices); ``total``
+    reduces over the steps (default the sum; ``casadi.cumsum``: the FIM of the steps up to
+    each step); ``min_range`` [m] floors r in 1/r⁴ (a sample the observer sails through would
+    otherwise give an infinite information). Returns the nested entries ``F[i][j]``.
     """
-    if _is_casadi(rx) or _is_casadi(ry) or _is_casadi(tau):
-        import casadi as ca
-
-        def conv(v: Any) -> Any:
-            return v if _is_casadi(v) else ca.DM(np.asarray(v, dtype=float).reshape(-1, 1)) \
-                if np.ndim(v) else v
-
-        rx, ry, tau, sigma = conv(rx), conv(ry), conv(tau), conv(sigma)
-
-        def total(v: Any) -> Any:
-            return ca.sum1(v)
-    else:
-        rx, ry, tau = (np.asarray(v, dtype=float) for v in (rx, ry, tau))
-
-        def total(v: Any) -> Any:
-            return np.sum(v, axis=-1)
+    cas = _is_casadi(rx) or _is_casadi(ry) or _is_casadi(tau)
     r2 = rx * rx + ry * ry
-    w = 1.0 / (sigma * sigma * r2 * r2)
+    if cas:
+        import casadi as ca
+
+        total = ca.sum1 if total is None else total
+        r2 = ca.fmax(r2, min_range**2) if min_range > 0.0 else r2
+    else:
+        total = (lambda v: np.sum(v, axis=0)) if total is None else total
+        r2 = np.maximum(r2, min_range**2) if min_range > 0.0 else r2
+    w = information / (r2 * r2)
     g = (ry, -rx, tau * ry, -tau * rx)
-    ent = [[total(g[i] * g[j] * w) for j in range(4)] for i in range(4)]
-    if _is_casadi(ent[0][0]):
+    return [[total(g[i] * g[j] * w) for j in range(4)] for i in range(4)]
+
+
+def logdet_generic(F: list[list[Any]]) -> Any:
+    """``log det F`` of a positive-definite 4×4 nested-entry matrix (sum of log LDLᵀ pivots),
+    for numpy arrays or casadi symbols (:func:`fim_bearings_generic`)."""
+    _, d = ldl(F)
+    if any(_is_casadi(x) for x in d):
         import casadi as ca
 
-        return ca.blockcat(ent)
-    return np.stack([np.stack(row, axis=-1) for row in ent], axis=-2)
+        return ca.log(d[0]) + ca.log(d[1]) + ca.log(d[2]) + ca.log(d[3])
+    return np.log(d[0]) + np.log(d[1]) + np.log(d[2]) + np.log(d[3])
 
 
-def logdet_fim_generic(rx: Any, ry: Any, tau: Any, sigma: Any, *, length_scale: float = 1.0,
-                       time_scale: float = 1.0) -> Any:
-    """``log det`` of :func:`fim_bearings_generic`, for numpy or casadi inputs.
-
-    The FIM is formed in scaled units (lengths / ``length_scale``, times / ``time_scale``) so
-    that casadi's symbolic ``det`` stays well scaled; the result is converted back to SI:
-    ``log det F = log det F' − 8 log L + 4 log T``.
-
-    Returns
-    -------
-    float, ndarray or casadi expression
-    """
-    L, T = float(length_scale), float(time_scale)
-    F = fim_bearings_generic(rx / L, ry / L, tau / T, sigma)
-    offset = -8.0 * math.log(L) + 4.0 * math.log(T)
-    if _is_casadi(F):
-        import casadi as ca
-
-        return ca.log(ca.det(F)) + offset
-    sign, ld = np.linalg.slogdet(F)
-    return np.where(sign > 0, ld, -np.inf) + offset
+def inverse_quadratic_generic(F: list[list[Any]], g: Sequence[Any]) -> Any:
+    """``gᵀ F⁻¹ g`` for a positive-definite 4×4 nested-entry matrix (LDLᵀ solve on entries)."""
+    L, d = ldl(F)
+    y: list[Any] = []
+    for i in range(4):  # forward substitution L y = g
+        acc = g[i]
+        for k in range(i):
+            acc = acc - L[i][k] * y[k]
+        y.append(acc)
+    return y[0] * y[0] / d[0] + y[1] * y[1] / d[1] + y[2] * y[2] / d[2] + y[3] * y[3] / d[3]
 
 
 # --------------------------------------------------------------------------------------------

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from tmaplan.bounds._pcrb_setup import PCRBInputs, prepare
+from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart, wrap_angle, wrap_half_angle
 from tmaplan.models.prior import relative_prior_samples
@@ -50,6 +50,7 @@ __all__ = [
     "SideAssumptionWarning",
     "bearing_score",
     "cartesian_transition_scores",
+    "conditional_information",
     "frequency_score",
     "lpc_transition_scores",
     "measurement_information",
@@ -262,6 +263,27 @@ def frequency_score(z: np.ndarray, X: np.ndarray, f0: np.ndarray, sigma: np.ndar
     return s[..., None] * _range_rate_grad(X, coords)
 
 
+def conditional_information(X: np.ndarray, bearing: float, range_: float,
+                            coords: Coords = "cartesian", *, average: bool = False
+                            ) -> np.ndarray:
+    """Conditional Fisher information ``E[s sᵀ | X] = b ∇β∇βᵀ + w ∇r∇rᵀ``, (..., 4, 4).
+
+    At relative states X (..., 4) [m, m/s] for bearing and range information b = ``bearing``
+    [rad⁻²], w = ``range_`` [m⁻²] (:func:`tmaplan.bounds.inputs.information_rates`); the
+    π-ambiguous bearing up to the overlap of its wrapped components (brehard2005 eq. 84).
+    ``average``: the mean (4, 4) over samples X (N, 4).
+    """
+    def outer(g: np.ndarray) -> np.ndarray:
+        return g.T @ g / g.shape[0] if average else g[..., :, None] * g[..., None, :]
+
+    info = np.zeros((4, 4) if average else (*X.shape[:-1], 4, 4))
+    if bearing:
+        info += bearing * outer(_bearing_grad(X, coords))
+    if range_:
+        info += range_ * outer(_range_grad(X, coords))
+    return info
+
+
 def measurement_information(X: np.ndarray, step: int, inputs: PCRBInputs,
                             coords: Coords, ping_weight: float | None = None) -> np.ndarray:
     """Average conditional Fisher information of the measurements at ``step`` (4, 4).
@@ -269,15 +291,8 @@ def measurement_information(X: np.ndarray, step: int, inputs: PCRBInputs,
     ``E_X[E[s sᵀ | X]]`` over the samples ``X`` (N, 4) of the relative state.
     """
     N = X.shape[0]
-    info = np.zeros((4, 4))
-    b = inputs.bearing_info[step]
-    if b:
-        g = _bearing_grad(X, coords)
-        info += b * (g.T @ g) / N
     w = inputs.ping_weight[step] if ping_weight is None else ping_weight
-    if w:
-        g = _range_grad(X, coords)
-        info += w * (g.T @ g) / N
+    info = conditional_information(X, inputs.bearing_info[step], w, coords, average=True)
     for sensor, steps in inputs.frequency_sensors:
         if step in steps:
             f0, sig = np.asarray(sensor.f0, float), np.asarray(sensor.sigma, float)

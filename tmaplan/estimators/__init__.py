@@ -63,7 +63,6 @@ from tmaplan.estimators.runner import (
     run,
     run_prior,
 )
-from tmaplan.estimators.truth_bound import cartesian_pcrb
 from tmaplan.simulate import measurement_batches
 
 
@@ -101,7 +100,6 @@ __all__ = [
     "TMAData",
     "Track",
     "acceptance_threshold",
-    "cartesian_pcrb",
     "dirac_mixture",
     "drive",
     "estimator_for",

@@ -21,6 +21,8 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner, plan_heading
 from tmaplan.planning.joint import JointPlan, plan_joint
 from tmaplan.planning.objectives import (
+    OBJECTIVE_NAMES,
+    PING_OBJECTIVES,
     Objective,
     ObjectiveEvaluator,
     logdet,
@@ -29,9 +31,17 @@ from tmaplan.planning.objectives import (
     range_bound,
     turn_penalty,
 )
-from tmaplan.planning.pings import PingEvaluator, PingSchedule, schedule_pings
+from tmaplan.planning.pings import (
+    PingEvaluator,
+    PingSchedule,
+    ping_candidates,
+    schedule_pings,
+    uniform_ping_steps,
+)
 
 __all__ = [
+    "OBJECTIVE_NAMES",
+    "PING_OBJECTIVES",
     "Baseline",
     "BearingRatePlan",
     "Belief",
@@ -47,6 +57,7 @@ __all__ = [
     "evaluate_baselines",
     "logdet",
     "make_objective",
+    "ping_candidates",
     "plan_heading",
     "plan_joint",
     "position_bound",
@@ -55,5 +66,6 @@ __all__ = [
     "single_turn_track",
     "straight_track",
     "turn_penalty",
+    "uniform_ping_steps",
     "zigzag_track",
 ]

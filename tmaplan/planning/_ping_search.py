@@ -10,11 +10,10 @@ hands it to the helpers here:
 * ``exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
   bound "all remaining candidates pinged" (NOTES_000 §4.2);
 * ``relaxed``: the u_k ∈ [0, 1] NLP (casadi + IPOPT) and its roundings;
-* ``greedy``, the local swaps that polish every method, and the evenly spaced reference
-  schedule.
+* ``greedy`` and the local swaps that polish every method;
+* :func:`uniform_ping_steps`, the one definition of the evenly spaced reference schedule.
 
-The helpers are private to :mod:`tmaplan.planning.pings`, which re-exports the ones used
-elsewhere.
+The helpers are private to :mod:`tmaplan.planning.pings`, which re-exports the public ones.
 """
 
 from __future__ import annotations
@@ -31,9 +30,9 @@ from tmaplan.errors import PlanningError
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
+    from tmaplan.scenario import Scenario
 
 __all__ = [
-    "_candidates",
     "_exact",
     "_greedy",
     "_local_swaps",
@@ -41,26 +40,65 @@ __all__ = [
     "_relaxed",
     "_round",
     "_spacing_ok",
-    "_uniform_steps",
+    "ping_candidates",
+    "uniform_ping_steps",
 ]
 
 
 # --------------------------------------------------------------------------------------------
 # Feasibility helpers
 # --------------------------------------------------------------------------------------------
-def _candidates(ev: PingEvaluator, candidate_steps: Sequence[int] | None,
-                forbidden: Sequence[tuple[float, float]]) -> np.ndarray:
-    K = ev.K
+def ping_candidates(scenario: Scenario, times: np.ndarray, *,
+                    candidate_steps: Sequence[int] | None = None,
+                    forbidden: Sequence[tuple[float, float]] = (),
+                    min_spacing: float | None = None) -> tuple[np.ndarray, int, float]:
+    """The ping constraints of a scenario on a track with step times ``times`` (K + 1,) [s].
+
+    Returns the sorted candidate steps (``candidate_steps`` in [0, K], default 1..K, outside
+    the closed time windows ``forbidden`` and ``planning.ping_forbidden`` [s]), the minimum
+    gap between pings [steps] ``ceil(spacing/dt)`` and the spacing [s] (``min_spacing``,
+    default ``planning.ping_min_spacing``).
+    """
+    pl = scenario.planning
+    times = np.asarray(times, float)
+    K = times.shape[0] - 1
     cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
         np.asarray(list(candidate_steps), int))
     if cand.size and (cand.min() < 0 or cand.max() > K):
         raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
                             f"[{cand.min()}, {cand.max()}]")
-    t = ev.times[cand]
-    for a, b in forbidden:
+    for a, b in [*forbidden, *(pl.ping_forbidden if pl is not None else ())]:
+        t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
-        t = ev.times[cand]
-    return cand
+    spacing = float(min_spacing if min_spacing is not None else
+                    (pl.ping_min_spacing if pl is not None else 0.0))
+    return cand, max(1, math.ceil(spacing / float(scenario.time.dt) - 1e-9)), spacing
+
+
+def uniform_ping_steps(times: np.ndarray, budget: int, *,
+                       candidates: Sequence[int] | np.ndarray | None = None,
+                       gap: int = 1) -> list[int]:
+    """The evenly spaced reference schedule: ``budget`` pings at the centres of ``budget`` equal
+    sub-intervals of the horizon.
+
+    The one definition of "uniform pings" (the scheduler's ``uniform_objective`` and the
+    ``uniform`` ping policy): with K steps, the targets are the steps ``(i + ½)·K/budget``,
+    i = 0..budget − 1, rounded half to even (K = 450, budget = 4: 56, 169, 281, 394); each is
+    moved to the nearest candidate step (ties: the earlier) not within ``gap`` steps of an
+    earlier choice; a target with no such candidate is dropped.
+
+    ``times`` (K + 1,) [s] gives K; ``candidates`` (default 1..K) and ``gap`` [steps] are
+    :func:`ping_candidates`'. Returns the sorted steps.
+    """
+    K = np.asarray(times).shape[0] - 1
+    cand = np.arange(1, K + 1) if candidates is None else np.asarray(candidates, int)
+    out: list[int] = []
+    for i in range(max(int(budget), 0)):
+        target = float(np.round((i + 0.5) * K / budget))
+        free = [int(c) for c in cand if all(abs(int(c) - x) >= max(gap, 1) for x in out)]
+        if free:
+            out.append(min(free, key=lambda c: (abs(c - target), c)))
+    return sorted(out)
 
 
 def _spacing_ok(steps: Sequence[int], gap: int) -> bool:
@@ -188,16 +226,6 @@ def _relaxed(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
     st = str(solver.stats()["return_status"])
     u = np.clip(np.asarray(sol["x"]).reshape(-1), 0, 1)
     return u, float(sol["f"]) * abs(f0), st
-
-
-def _uniform_steps(cand: np.ndarray, budget: int, K: int) -> list[int]:
-    targets = [round((i + 1) * K / budget) for i in range(budget)]
-    out: list[int] = []
-    for t in targets:
-        free = [int(c) for c in cand if int(c) not in out]
-        if free:
-            out.append(min(free, key=lambda c: abs(c - t)))
-    return sorted(out)
 
 
 def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],

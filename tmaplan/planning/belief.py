@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
-from tmaplan.geometry import cart_to_lpc, wrap_angle
+from tmaplan.bounds.inputs import lpc_prior_information
+from tmaplan.errors import ObservabilityError, PlanningError
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -170,7 +170,9 @@ class Belief:
         return self.draw(n, np.random.default_rng(20240601))
 
     def lpc_information(self) -> np.ndarray:
-        """LPC prior information ``J₀`` (4, 4) of file 000 eq. 56 (weighted samples).
+        """LPC prior information ``J₀`` (4, 4) of brehard2005 eq. 56 (weighted samples), by
+        :func:`tmaplan.bounds.inputs.lpc_prior_information` (samples within
+        :data:`MIN_RANGE` of the observer are dropped).
 
         Raises
         ------
@@ -185,26 +187,15 @@ class Belief:
             w = None
         keep = np.hypot(X[:, 0], X[:, 1]) > MIN_RANGE
         X = X[keep]
-        if w is None:
-            w = np.full(X.shape[0], 1.0 / max(X.shape[0], 1))
-        else:
+        if w is not None:
             w = w[keep]
             if w.sum() <= 0:
                 raise PlanningError("belief: all the mass is at zero range")
-            w = w / w.sum()
-        Y = cart_to_lpc(X)
-        bm = np.angle(np.sum(w * np.exp(1j * Y[:, 0])))
-        Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
-        mu = w @ Y
-        d = Y - mu
-        cov = (d * w[:, None]).T @ d
         try:
-            J0 = np.linalg.inv(0.5 * (cov + cov.T))
-            np.linalg.cholesky(J0)
-        except np.linalg.LinAlgError as exc:
-            raise PlanningError("belief: the LPC covariance of the belief is singular (a zero "
-                                "std in the prior?)") from exc
-        return 0.5 * (J0 + J0.T)
+            return lpc_prior_information(X, w)[1]
+        except ObservabilityError as exc:
+            raise PlanningError(f"belief: the LPC covariance of the belief is singular ({exc})"
+                                ) from exc
 
     def cartesian_information(self) -> np.ndarray:
         """``Cov(X)⁻¹`` (4, 4) [1/m², ...]."""

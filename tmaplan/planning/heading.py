@@ -37,10 +37,10 @@ from tmaplan.planning.objectives import (
     Objective,
     ParamLayout,
     PlanContext,
-    bearing_information,
     closed_form_graph,
     make_objective,
     ping_sigma,
+    plan_bearing_information,
 )
 
 if TYPE_CHECKING:
@@ -448,7 +448,7 @@ class HeadingPlanner:
                 raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
                                     "has no range sensor")
             ping[st[(st >= 0) & (st <= self.K)]] = 1.0
-        bearing = bearing_information(self.scenario, belief.t, self.K)
+        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
         pvec = self.layout.vector(belief, bearing, ping)
         lbw, ubw, lbg, ubg = self._bounds(heading0)
         if warm_start is not None:

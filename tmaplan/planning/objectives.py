@@ -9,9 +9,9 @@ cannot drift apart.
 * ``range-bound``: the closed-form LPC PCRB (file 000, corrected, NOTES_000 §2.9) range bound
   ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (DESIGN §4, file 000 eq. 58) at the
   last step (``reduce="terminal"``, the heading default) or averaged over the horizon
-  (``reduce="mean"``) [m]. The recursion is :func:`tmaplan.bounds._lpc_terms.step_functions`
-  (the one implementation of :mod:`tmaplan.bounds.closed_form`), re-wired here so that the
-  prior moments and J₀ are casadi *parameters* (build once, re-solve for a new belief).
+  (``reduce="mean"``) [m]: :func:`tmaplan.bounds.closed_form_engine.lpc_pcrb_graph` (the one
+  closed-form engine) with the prior moments and J₀ as casadi *parameters* (build once,
+  re-solve for a new belief).
 * ``position-bound``: ``sqrt(tr P_pos)`` [m], the square root of the trace of the Cartesian
   position PCRB, ``tr E[J_X J⁻¹ J_Xᵀ]_pos = Σ_kl S[k,l] tr(E_k J⁻¹ E_lᵀ)_pos`` (``J_X = ∂X/∂Y``
   is linear in X, NOTES_000 §2.9), terminal or mean.
@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 
+from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.models.target import ncv_matrices
 
@@ -38,7 +39,6 @@ from tmaplan.models.target import ncv_matrices
 from tmaplan.planning._objective_graphs import (
     ParamLayout,
     PlanContext,
-    bearing_information,
     closed_form_graph,
     logdet_graph,
     ping_sigma,
@@ -53,13 +53,16 @@ if TYPE_CHECKING:
 
 __all__ = [
     "OBJECTIVE_NAMES",
+    "PING_OBJECTIVES",
     "Objective",
     "ObjectiveEvaluator",
+    "ObjectiveName",
     "ParamLayout",
+    "PingObjectiveName",
     "PlanContext",
-    "bearing_information",
     "logdet",
     "make_objective",
+    "plan_bearing_information",
     "position_bound",
     "range_bound",
     "relative_range_bound",
@@ -68,11 +71,24 @@ __all__ = [
     "turn_penalty",
 ]
 
-#: Names accepted by :func:`make_objective`.
-OBJECTIVE_NAMES = ("logdet", "range-bound", "position-bound", "mean-range-bound",
-                   "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
-                   "relative-range-bound", "mean-relative-range-bound",
-                   "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy")
+#: Names accepted by :func:`make_objective` (heading objectives; the scenario's
+#: ``planning.objective`` and ``tmaplan plan --objective``).
+ObjectiveName = Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
+                        "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
+                        "relative-range-bound", "mean-relative-range-bound",
+                        "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy"]
+OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
+#: Objectives of the ping scheduler (:func:`tmaplan.planning.schedule_pings`,
+#: ``tmaplan schedule --objective``): closed-form bounds of a fixed track.
+PingObjectiveName = Literal["mean-range-bound", "terminal-range-bound", "mean-position-bound"]
+PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
+
+
+def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²], 0 at step 0 (the
+    belief at ``t_start`` holds it): :func:`tmaplan.bounds.inputs.information_rates`."""
+    return information_rates(scenario, t_start=t_start, n_steps=n_steps,
+                             include_start=False)[0]
 
 
 # --------------------------------------------------------------------------------------------
@@ -117,19 +133,28 @@ class Objective:
         return tot
 
 
-def range_bound(reduce: str = "terminal") -> Objective:
-    """Closed-form PCRB range bound [m], ``reduce`` "terminal" or "mean" over the horizon."""
+def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanContext], Any],
+                samples: int = 1) -> Objective:
+    """Objective of a per-step quantity (K+1, n) averaged over its n columns, at the last step
+    (``reduce="terminal"``, named ``names[0]``) or averaged over the steps ("mean")."""
     if reduce not in ("terminal", "mean"):
         raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
 
     def term(ctx: PlanContext) -> Any:
         import casadi as ca
 
-        rb = closed_form_graph(ctx)["range_bound"]
-        return rb[-1] if reduce == "terminal" else ca.sum1(rb) / rb.shape[0]
+        x = per_step(ctx)
+        if reduce == "terminal":
+            return ca.sum2(x[-1, :]) / x.shape[1]
+        return ca.sum1(ca.sum2(x)) / (x.shape[0] * x.shape[1])
 
-    return Objective("range-bound" if reduce == "terminal" else "mean-range-bound",
-                     ((1.0, term),))
+    return Objective(names[reduce == "mean"], ((1.0, term),), samples)
+
+
+def range_bound(reduce: str = "terminal") -> Objective:
+    """Closed-form PCRB range bound [m], ``reduce`` "terminal" or "mean" over the horizon."""
+    return _over_steps(reduce, ("range-bound", "mean-range-bound"),
+                       lambda ctx: closed_form_graph(ctx)["range_bound"])
 
 
 def relative_range_bound(reduce: str = "mean") -> Objective:
@@ -139,38 +164,20 @@ def relative_range_bound(reduce: str = "mean") -> Objective:
     own sake, so it tracks the *relative* range accuracy that a time-to-accuracy metric
     measures. ``reduce`` "mean" (over the horizon: rewards early localisation) or "terminal".
     """
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
+    import casadi as ca
 
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        rel = ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0))
-        return rel[-1] if reduce == "terminal" else ca.sum1(rel) / rel.shape[0]
-
-    return Objective("relative-range-bound" if reduce == "terminal"
-                     else "mean-relative-range-bound", ((1.0, term),))
+    return _over_steps(reduce, ("relative-range-bound", "mean-relative-range-bound"),
+                       lambda ctx: ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0)))
 
 
 def relative_range_crlb(reduce: str = "mean", samples: int = 16) -> Objective:
     """Relative range std σ_r/r of the batch bearings CRLB with prior information, averaged
     over ``samples`` belief samples and (``reduce="mean"``) over the horizon, which rewards
     localising early; ``"terminal"``: at the last step (dimensionless, minimised)."""
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
     if int(samples) < 1:
         raise ScenarioError("samples", ">= 1", samples)
-
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        rel = relative_range_crlb_graph(ctx)
-        if reduce == "terminal":
-            return ca.sum2(rel[-1, :]) / rel.shape[1]
-        return ca.sum1(ca.sum2(rel)) / (rel.shape[0] * rel.shape[1])
-
-    return Objective("relative-range-crlb" if reduce == "terminal"
-                     else "mean-relative-range-crlb", ((1.0, term),), int(samples))
+    return _over_steps(reduce, ("relative-range-crlb", "mean-relative-range-crlb"),
+                       relative_range_crlb_graph, int(samples))
 
 
 def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.2) -> Objective:
@@ -198,17 +205,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
 
 def position_bound(reduce: str = "terminal") -> Objective:
     """``sqrt(tr P_pos)`` [m] of the closed-form PCRB, terminal or mean."""
-    if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
-
-    def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        pb = position_bound_graph(ctx)
-        return pb[-1] if reduce == "terminal" else ca.sum1(pb) / pb.shape[0]
-
-    return Objective("position-bound" if reduce == "terminal" else "mean-position-bound",
-                     ((1.0, term),))
+    return _over_steps(reduce, ("position-bound", "mean-position-bound"), position_bound_graph)
 
 
 def logdet(samples: int = 1) -> Objective:
@@ -253,7 +250,7 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "mean-relative-range-crlb": lambda: relative_range_crlb("mean", max(samples, 16)),
         "time-to-accuracy": lambda: time_to_accuracy(0.1, max(samples, 16)),
     }
-    if name not in table:
+    if name not in OBJECTIVE_NAMES:
         raise ScenarioError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)
     return table[name]()
 
@@ -303,7 +300,7 @@ class ObjectiveEvaluator:
         val = self.objective.expression(ctx)
         rb = closed_form_graph(ctx)["range_bound"]
         self._fn = ca.Function("plan_objective", [v, dsp, ur, p], [val, rb])
-        self._bearing = bearing_information(scenario, self.belief.t, K)
+        self._bearing = plan_bearing_information(scenario, self.belief.t, K)
         self._p0 = self.layout.vector(self.belief, self._bearing)
 
     def parameters(self, ping: np.ndarray | None = None) -> np.ndarray:

@@ -30,39 +30,36 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.bounds._lpc_terms import (
-    SYM_INDEX,
-    aux_to_dterms,
-    basis,
-    inverse_diagonal,
-    step_functions,
-    tichavsky_step,
-)
+from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
 from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.target import ncv_matrices
 
-# The search methods (feasibility, exact, relaxed, greedy, local swaps) live in their own
-# module; ``_uniform_steps`` is re-exported here for the plots.
+# The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
+# reference schedule live in their own module.
 from tmaplan.planning._ping_search import (
-    _candidates,
     _exact,
     _greedy,
     _local_swaps,
     _max_pings,
     _relaxed,
     _round,
-    _uniform_steps,
+    ping_candidates,
+    uniform_ping_steps,
 )
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.objectives import bearing_information, ping_sigma
+from tmaplan.planning.objectives import (
+    PING_OBJECTIVES,
+    PingObjectiveName,
+    ping_sigma,
+    plan_bearing_information,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "schedule_pings"]
+__all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "ping_candidates",
+           "schedule_pings", "uniform_ping_steps"]
 
-PING_OBJECTIVES = ("mean-range-bound", "terminal-range-bound", "mean-position-bound")
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
 
 
@@ -79,7 +76,7 @@ class PingSchedule:
     objective : float
         Objective with these pings [m].
     no_ping_objective, uniform_objective : float
-        Without pings, and with ``budget`` evenly spaced pings [m].
+        Without pings, and with the ``budget`` evenly spaced pings ``uniform_steps`` [m].
     lower_bound : float
         Proven lower bound on the optimum [m] (nan if none is known).
     gap : float
@@ -95,6 +92,9 @@ class PingSchedule:
     method : str
     objective_name : str
     budget : int
+    uniform_steps : ndarray of int
+        The evenly spaced reference schedule (:func:`uniform_ping_steps`), the one the
+        ``uniform`` ping policy flies.
     """
 
     steps: np.ndarray
@@ -111,13 +111,14 @@ class PingSchedule:
     method: str
     objective_name: str
     budget: int
+    uniform_steps: np.ndarray = dataclasses.field(
+        default_factory=lambda: np.zeros(0, dtype=int))
 
 
 class PingEvaluator:
-    """Batched closed-form PCRB objective of ping schedules on a fixed observer track.
-
-    The recursion is :func:`tmaplan.bounds._lpc_terms.tichavsky_step` (the one implementation
-    of the closed form) on entries of shape (S,), one entry per schedule.
+    """A ping-scheduling objective on a fixed observer track: the closed-form engine
+    (:class:`tmaplan.bounds.closed_form_engine.ClosedFormEngine`) of the belief and track,
+    reduced to one number per schedule.
 
     Parameters
     ----------
@@ -138,110 +139,25 @@ class PingEvaluator:
         if sig is None:
             raise PlanningError(f"{scenario.name}: no range sensor to ping with (add a "
                                 "[[sensors]] kind = 'range' or planning.ping_sigma)")
-        self.sigma = sig
-        self.scale = 1.0 / sig**2
-        dt = float(scenario.time.dt)
         K = observer.position.shape[0] - 1
-        self.K, self.dt = K, dt
-        self.times = observer.times
-        A, Q = ncv_matrices(dt, float(scenario.target.q))
-        moment_fn, riccati_fn = step_functions(A, Q)
-        self._riccati = riccati_fn
-        dv = observer.velocity_increments
-        c = -np.hstack([dt * dv, dv])
-        S0 = belief.second_moment
-        x0 = np.concatenate([belief.mean, [S0[i, j] for i, j in SYM_INDEX]])
-        xs, aux = (np.asarray(o) for o in moment_fn.mapaccum(K)(x0, c.T))
-        self.aux = aux
-        self.moments = np.hstack([x0[:, None], xs])
-        self.er2 = self.moments[4] + self.moments[8]
-        self.J0 = belief.lpc_information()
-        self.bearing = bearing_information(scenario, belief.t, K)
-        self._pw = self.scale * self.er2
-        self._dterms = [aux_to_dterms(aux[:, k].tolist()) for k in range(K)]
-        if objective == "mean-position-bound":
-            E = basis()[:, :2, :]
-            T = np.einsum("kai,laj->klij", E, E)
-            Sk = np.zeros((K + 1, 4, 4))
-            for n, (i, j) in enumerate(SYM_INDEX):
-                Sk[:, i, j] = Sk[:, j, i] = self.moments[4 + n]
-            self._W = np.einsum("nkl,klij->nij", Sk, T)
+        self.engine = ClosedFormEngine.from_belief(
+            belief, observer, dt=float(scenario.time.dt), q=float(scenario.target.q),
+            bearing_info=plan_bearing_information(scenario, belief.t, K), ping_sigma=sig)
+        self.K, self.dt, self.times = K, float(scenario.time.dt), observer.times
+        self._quantity = "position" if objective == "mean-position-bound" else "range"
+        self._reduce = "terminal" if objective == "terminal-range-bound" else "mean"
 
-    # ------------------------------------------------------------------------ numeric
     def per_step(self, U: np.ndarray) -> np.ndarray:
         """Bound per step (S, K+1) [m]: range bound, or sqrt(tr P_pos) (position objective)."""
-        U = np.atleast_2d(np.asarray(U, float))
-        S, K = U.shape[0], self.K
-        if U.shape[1] != K + 1:
-            raise ScenarioError("u", f"shape (S, {K + 1})", U.shape)
-        J = [[float(x) + np.zeros(S) for x in row] for row in self.J0.tolist()]
-        J[1][1] = J[1][1] + U[:, 0] * self._pw[0]
-        out = np.empty((S, K + 1))
-        pos = self.objective == "mean-position-bound"
-        pw = U * self._pw[None, :]
-        b = self.bearing.tolist()
-        for k in range(K + 1):  # loop over time steps; schedules are batched
-            if k > 0:
-                D11, D12, D22 = self._dterms[k - 1]
-                J, piv = tichavsky_step(J, D11, D12, D22, b[k], pw[:, k])
-                if np.any(piv[3] <= 0):
-                    raise PlanningError("closed-form PCRB: J_t + D11 is not positive definite")
-            if pos:
-                M = np.stack([np.stack(r, axis=-1) for r in J], axis=-2)
-                P = np.linalg.inv(M)
-                out[:, k] = np.sqrt(np.maximum(np.einsum("ij,sij->s", self._W[k], P), 0))
-            else:
-                var, _ = inverse_diagonal(J)
-                out[:, k] = np.sqrt(self.er2[k] * var[1])
-        return out
-
-    def _evaluate_compiled(self, U: np.ndarray) -> np.ndarray | None:
-        """Range objectives through the compiled C schedule kernel of
-        :mod:`tmaplan.bounds._jit` (same generic step; None if no compiler)."""
-        from tmaplan.bounds._jit import schedule_kernel
-        from tmaplan.bounds._lpc_terms import SYM_INDEX
-
-        if self.objective == "mean-position-bound":
-            return None
-        kernel = schedule_kernel()
-        if kernel is None:
-            return None
-        K, S = self.K, U.shape[0]
-        u = np.ascontiguousarray(U, dtype=float)
-        J = [[float(x) + np.zeros(S) for x in row] for row in self.J0.tolist()]
-        J[1][1] = J[1][1] + u[:, 0] * self._pw[0]
-        var0, _ = inverse_diagonal(J)
-        val0 = np.sqrt(self.er2[0] * var0[1])
-        acc = np.array(np.broadcast_to(0.0 + val0, (S,)))
-        last = acc.copy()
-        j0 = np.empty((10, S))
-        for n, (i, k) in enumerate(SYM_INDEX):
-            j0[n] = J[i][k]
-        if "_aux_rows" not in self.__dict__:
-            self._aux_rows = np.ascontiguousarray(self.aux.T, dtype=float)
-        b = np.ascontiguousarray(self.bearing[1:], float)
-        pw = np.ascontiguousarray(self._pw[1:], float)
-        er2 = np.ascontiguousarray(self.er2[1:], float)
-        kernel(K, S, j0.ctypes.data, self._aux_rows.ctypes.data, b.ctypes.data, pw.ctypes.data,
-               er2.ctypes.data, u.ctypes.data, K + 1, acc.ctypes.data, last.ctypes.data, None)
-        if not (np.all(np.isfinite(acc)) and np.all(np.isfinite(last))):
-            return None  # let the reference path raise its clear error
-        return (last if K > 0 else acc) if self.objective == "terminal-range-bound" \
-            else acc / (K + 1)
+        return self.engine.evaluate_schedules(U, quantity=self._quantity)
 
     def evaluate(self, U: np.ndarray, chunk: int = 4096) -> np.ndarray:
-        """Objective (S,) [m] of schedules U (S, K+1) (weights in [0, 1])."""
+        """Objective (S,) [m] of schedules U (S, K+1) (weights in [0, 1]), ``chunk`` at a time."""
         U = np.atleast_2d(np.asarray(U, float))
-        if U.shape[0] and U.shape[1] == self.K + 1:
-            fast = self._evaluate_compiled(U)
-            if fast is not None:
-                return fast
-        res = []
-        for s in range(0, U.shape[0], chunk):
-            pb = self.per_step(U[s:s + chunk])
-            res.append(pb[:, -1] if self.objective == "terminal-range-bound"
-                       else pb.mean(axis=1))
-        return np.concatenate(res) if res else np.zeros(0)
+        return np.concatenate([np.zeros(0)] + [
+            self.engine.evaluate_schedules(U[s:s + chunk], reduce=self._reduce,
+                                           quantity=self._quantity)
+            for s in range(0, U.shape[0], chunk)])
 
     def schedules(self, sets: Sequence[Sequence[int]]) -> np.ndarray:
         """0/1 matrix (S, K+1) of ping-step sets."""
@@ -254,7 +170,6 @@ class PingEvaluator:
         """Objective of one schedule."""
         return float(self.evaluate(self.schedules([steps]))[0])
 
-    # ---------------------------------------------------------------------- symbolic
     def casadi_objective(self, u: Any) -> Any:
         """casadi expression of the objective of relaxed weights ``u`` ((K+1)×1 MX).
 
@@ -263,35 +178,16 @@ class PingEvaluator:
         """
         import casadi as ca
 
-        K = self.K
-        J0 = [[ca.MX(float(x)) for x in row] for row in self.J0.tolist()]
-        J0[1][1] = J0[1][1] + u[0] * float(self._pw[0])
-        j0 = ca.vertcat(*[J0[i][j] for i, j in SYM_INDEX])
-        acc = self._riccati.mapaccum("ping_riccati", K)
-        jn, varn, _ = acc(j0, ca.DM(self.aux), ca.DM(self.bearing[1:][None, :]),
-                          (u[1:] * self.scale).T)
-        var0, _ = inverse_diagonal(J0)
+        g = self.engine.schedule_graph(u)
         if self.objective == "terminal-range-bound":
-            return varn[1, -1] * float(self.er2[-1])
-        if self.objective == "mean-range-bound":
-            rb = ca.sqrt(ca.DM(self.er2[1:]).T * varn[1, :])
-            return (ca.sum2(rb) + ca.sqrt(var0[1] * float(self.er2[0]))) / (K + 1)
-        j = ca.SX.sym("j", 10)
-        w = ca.SX.sym("w", 4, 4)
-        Jm = ca.SX(4, 4)
-        for n, (a, b_) in enumerate(SYM_INDEX):
-            Jm[a, b_] = j[n]
-            Jm[b_, a] = j[n]
-        f = ca.Function("posw", [j, w], [ca.sqrt(ca.sum1(ca.sum2(w * ca.inv(Jm))))])
-        Wk = ca.DM(np.hstack([self._W[k] for k in range(K + 1)]))
-        vals = f.map(K + 1)(ca.horzcat(j0, jn), Wk)
-        return ca.sum2(vals) / (K + 1)
+            return g["var"][-1, 1] * g["er2"][-1]
+        pb = g["range_bound"] if self._quantity == "range" else lpc_position_bound_graph(g)
+        return ca.sum1(pb) / (self.K + 1)
 
 
 def schedule_pings(scenario: Scenario, *, budget: int,
                    method: Literal["exact", "relaxed", "greedy"] = "relaxed",
-                   objective: Literal["mean-range-bound", "terminal-range-bound",
-                                      "mean-position-bound"] = "mean-range-bound",
+                   objective: PingObjectiveName = "mean-range-bound",
                    observer: ObserverTrack | None = None, belief: Belief | None = None,
                    min_spacing: float | None = None,
                    forbidden: Sequence[tuple[float, float]] = (),
@@ -352,12 +248,8 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                                                                scenario.time)
     bel = belief if belief is not None else Belief.from_prior(scenario)
     ev = PingEvaluator(scenario, obs, bel, objective)
-    pl = scenario.planning
-    spacing = float(min_spacing if min_spacing is not None else
-                    (pl.ping_min_spacing if pl is not None else 0.0))
-    gap = max(1, math.ceil(spacing / ev.dt - 1e-9))
-    windows = list(forbidden) + (list(pl.ping_forbidden) if pl is not None else [])
-    cand = _candidates(ev, candidate_steps, windows)
+    cand, gap, spacing = ping_candidates(scenario, ev.times, candidate_steps=candidate_steps,
+                                         forbidden=forbidden, min_spacing=min_spacing)
     if budget > cand.size:
         raise PlanningError(f"budget K = {budget} pings is larger than the {cand.size} "
                             f"candidate ping steps in the horizon ({ev.K} steps)")
@@ -365,7 +257,7 @@ def schedule_pings(scenario: Scenario, *, budget: int,
         raise PlanningError(f"budget K = {budget} pings cannot be met with min_spacing "
                             f"{spacing:g} s: at most {_max_pings(cand, gap)} fit")
     no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
-    uni = _uniform_steps(cand, budget, ev.K) if budget else []
+    uni = uniform_ping_steps(ev.times, budget, candidates=cand, gap=gap)
     uniform = float(ev.value(uni))
     lb, ref, status = float("nan"), "none", "ok"
     if budget == 0:
@@ -412,4 +304,5 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                         lower_bound=lb, gap=val - lb if np.isfinite(lb) else float("nan"),
                         gap_reference=ref, bound=bound, status=status,
                         seconds=time.perf_counter() - t_start, method=method,
-                        objective_name=objective, budget=budget)
+                        objective_name=objective, budget=budget,
+                        uniform_steps=np.asarray(uni, dtype=int))

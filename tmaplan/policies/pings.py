@@ -33,17 +33,21 @@ class NoPing:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class UniformPings:
-    """``budget`` pings evenly spaced over the horizon: steps ``round((i + ½)·K/budget)``."""
+    """``budget`` evenly spaced pings: :func:`tmaplan.planning.uniform_ping_steps` under the
+    scenario's ping constraints (the scheduler's ``uniform_steps``)."""
 
     budget: int | None = None
     name: str = "uniform"
 
     def controller(self, scenario: Scenario) -> Controller:
         """Controller pinging at evenly spaced steps."""
-        b = _budget(scenario, self.budget)
-        K = scenario.n_steps
-        steps = np.unique(np.clip(np.round((np.arange(b) + 0.5) * K / max(b, 1)), 1, K))
-        return _StepPings(steps.astype(int))
+        from tmaplan.planning import ping_candidates, uniform_ping_steps
+
+        times = np.asarray(scenario.time.times)
+        cand, gap, _ = ping_candidates(scenario, times)
+        steps = uniform_ping_steps(times, _budget(scenario, self.budget), candidates=cand,
+                                   gap=gap)
+        return _StepPings(np.asarray(steps, dtype=int))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

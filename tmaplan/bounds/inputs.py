@@ -1,9 +1,10 @@
-"""Inputs shared by the Monte Carlo and the closed-form PCRB: dynamics, sensors, prior.
+"""Inputs shared by every PCRB (Monte Carlo, closed form, truth-conditional) and the planners.
 
 Everything a PCRB needs from a :class:`~tmaplan.scenario.Scenario` is resolved here once:
-the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing
-information per step, the ping weights per step, and the prior of the relative initial state
-(moments and the LPC information ``J₀`` of file 000 eq. 56).
+the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing and
+range information per step (:func:`information_rates`, the one per-step sensor-information
+function), the ping weights per step, and the prior of the relative initial state (moments and
+the LPC information ``J₀`` of brehard2005 eq. 56, :func:`lpc_prior_information`, the one J₀).
 """
 
 from __future__ import annotations
@@ -20,12 +21,19 @@ from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state
 from tmaplan.models.target import ncv_matrices
-from tmaplan.scenario import BearingSensor, FrequencySensor, RangeSensor, measurement_steps
+from tmaplan.scenario import (
+    BearingSensor,
+    FrequencySensor,
+    RangeSensor,
+    TimeGrid,
+    measurement_steps,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["PCRBInputs", "lpc_prior", "prepare", "resolve_ping_steps"]
+__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "information_rates", "lpc_prior_information",
+           "prepare", "resolve_ping_steps"]
 
 #: Prior samples closer than this to the observer count as "mass at zero range" [m].
 MIN_PRIOR_RANGE = 1.0
@@ -50,8 +58,6 @@ class PCRBInputs:
         Σ 1/σ_β² over the bearing sensors measuring at each step [rad⁻²].
     ambiguity : {"none", "pi"}
         "pi" if any bearing sensor is π-ambiguous (file 000 eq. 4).
-    bearing_sensors : tuple of (BearingSensor, ndarray)
-        Each bearing sensor with its steps.
     ping_steps : ndarray of int
         Steps with a range ping.
     ping_weight : ndarray, shape (K + 1,)
@@ -71,8 +77,6 @@ class PCRBInputs:
     cov_lpc0 : ndarray, shape (4, 4), or None
         Covariance of the LPC initial state (file 000 eq. 56, bearing centred on its circular
         mean).
-    min_prior_range : float
-        Smallest prior sample range [m].
     prior_subsample : ndarray, shape (n_sub, 4)
         The first ≤ 500 prior samples of X₀ (for the side-assumption diagnostic).
     """
@@ -85,7 +89,6 @@ class PCRBInputs:
     c: np.ndarray
     bearing_info: np.ndarray
     ambiguity: str
-    bearing_sensors: tuple[tuple[BearingSensor, np.ndarray], ...]
     ping_steps: np.ndarray
     ping_weight: np.ndarray
     range_sigma: float | None
@@ -95,7 +98,6 @@ class PCRBInputs:
     S0: np.ndarray
     cov_cart0: np.ndarray
     cov_lpc0: np.ndarray | None
-    min_prior_range: float
     prior_subsample: np.ndarray
 
     @property
@@ -114,16 +116,11 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     """
     K = scenario.time.n_steps
     sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
-    weight = np.zeros(K + 1)
     sigma = float(sensors[0].sigma) if sensors else None
     if ping_steps is None:
-        all_steps = []
-        for s in sensors:
-            st = measurement_steps(s, scenario.time)
-            weight[st] += 1.0 / float(s.sigma) ** 2
-            all_steps.append(st)
-        steps = np.unique(np.concatenate(all_steps)) if all_steps else np.zeros(0, int)
-        return steps.astype(int), weight, sigma
+        weight = information_rates(scenario)[1]
+        return np.flatnonzero(weight > 0), weight, sigma
+    weight = np.zeros(K + 1)
     steps = np.asarray(list(ping_steps), dtype=int).reshape(-1)
     if steps.size and sigma is None:
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
@@ -155,34 +152,53 @@ def _check_prior_range_support(scenario: Scenario) -> None:
             p.range_min, source=scenario.name)
 
 
-def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """LPC covariance of prior samples (file 000 eq. 56) and its inverse J₀.
+def information_rates(scenario: Scenario, *, t_start: float | None = None,
+                      n_steps: int | None = None, include_start: bool = True,
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Bearing [rad⁻²] and range [m⁻²] information Σ 1/σ² per step k = 0..K, shape (K + 1,).
 
-    Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is the outer product about the sample
-    mean (NOTES_000 §2.8). The bearing is centred on its circular mean before averaging, so a
-    prior straddling β = ±π is handled.
-
-    Raises
-    ------
-    ScenarioError
-        If a sample is at (near) zero range.
-    ObservabilityError
-        If the covariance is not positive definite (J₀ would not exist).
+    The one per-step sensor-information function of the bounds and the planners (one bearing:
+    1/σ_β², brehard2005 eq. 47; a range ping on ln r: ``E r²/σ_r²``, eq. 51). Step 0 is at
+    ``t_start`` (default ``scenario.time.t0``; the grid is extended past the horizon if a plan
+    needs it), K = ``n_steps`` (default the scenario's); ``include_start=False`` leaves step 0
+    empty (a planner's belief at ``t_start`` already holds that measurement).
     """
-    r = np.hypot(X0[:, 0], X0[:, 1])
-    if r.min() < MIN_PRIOR_RANGE:
-        raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
-                            "observer (ln r and 1/r diverge at zero range)",
-                            f"a sample at range {r.min():.3g} m", source=source)
-    Y = cart_to_lpc(X0)
-    bm = np.angle(np.mean(np.exp(1j * Y[:, 0])))
+    grid = scenario.time
+    k0 = 0 if t_start is None else round((t_start - grid.t0) / grid.dt)
+    K = grid.n_steps if n_steps is None else int(n_steps)
+    if k0 + K > grid.n_steps:
+        grid = TimeGrid(dt=grid.dt, horizon=grid.dt * max(k0 + K, 1), t0=grid.t0)
+    info = {"bearing": np.zeros(K + 1), "range": np.zeros(K + 1)}
+    for s in scenario.sensors:
+        if isinstance(s, BearingSensor | RangeSensor):
+            st = measurement_steps(s, grid) - k0
+            st = st[(st >= (0 if include_start else 1)) & (st <= K)]
+            np.add.at(info[s.kind], st, 1.0 / float(s.sigma) ** 2)
+    return info["bearing"], info["range"]
+
+
+def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None,
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """LPC covariance (4, 4) of weighted samples (n, 4) of X₀ and its inverse J₀ (eq. 56).
+
+    The one prior information of the closed-form PCRB (brehard2005 eq. 56), for a scenario's
+    prior and a planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is
+    the outer product about the mean (NOTES_000 §2.8), normalised by Σw (n for equal weights,
+    as :attr:`Belief.cov`). The bearing is centred on its circular mean first (a prior
+    straddling β = ±π is handled). Samples [m, m/s] must be at non-zero range; raises
+    :class:`ObservabilityError` if the covariance is not positive definite.
+    """
+    Y = cart_to_lpc(np.asarray(samples, float))
+    w = None if weights is None else np.asarray(weights, float)
+    z = np.exp(1j * Y[:, 0])
+    bm = np.angle(np.mean(z) if w is None else np.sum(w * z))
     Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
-    cov = np.cov(Y, rowvar=False)
+    cov = np.cov(Y, rowvar=False, aweights=w, bias=True)
     var = np.diag(cov)
-    msg = ("prior information J0 (inverse LPC prior covariance, file 000 eq. 56) is not "
+    msg = ("prior information J0 (inverse LPC prior covariance, brehard2005 eq. 56) is not "
            f"positive definite: LPC prior variances {var.tolist()} (a zero std in the prior?)")
     # a degenerate prior component leaves only round-off variance: judge on the correlation
-    if np.any(var <= 1e-24):
+    if not np.all(np.isfinite(cov)) or np.any(var <= 1e-24):
         raise ObservabilityError(msg)
     d = np.sqrt(var)
     if np.linalg.eigvalsh(cov / np.outer(d, d)).min() < 1e-10:
@@ -192,7 +208,7 @@ def lpc_prior(X0: np.ndarray, source: str | None = None) -> tuple[np.ndarray, np
         np.linalg.cholesky(J0)
     except np.linalg.LinAlgError as exc:
         raise ObservabilityError(msg) from exc
-    return cov, J0
+    return cov, 0.5 * (J0 + J0.T)
 
 
 def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
@@ -232,20 +248,14 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
     dv = obs.velocity_increments
     c = -np.hstack([grid.dt * dv, dv])
 
-    bearing_info = np.zeros(K + 1)
-    bearing_sensors: list[tuple[Any, np.ndarray]] = []
+    bearing_info = information_rates(scenario)[0]
     freq: list[tuple[Any, np.ndarray]] = []
     ambiguity = "none"
     for s in scenario.sensors:
-        if isinstance(s, BearingSensor):
-            st = measurement_steps(s, grid)
-            st = st[st <= K]
-            bearing_info[st] += 1.0 / float(s.sigma) ** 2
-            bearing_sensors.append((s, st))
-            if s.ambiguity == "pi":
-                ambiguity = "pi"
+        st = measurement_steps(s, grid)
+        if isinstance(s, BearingSensor) and s.ambiguity == "pi":
+            ambiguity = "pi"
         elif isinstance(s, FrequencySensor):
-            st = measurement_steps(s, grid)
             freq.append((s, st[st <= K]))
     steps, weight, sigma = resolve_ping_steps(scenario, ping_steps)
 
@@ -256,13 +266,19 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
         raise ScenarioError("prior_samples", ">= 10", n, source=scenario.name)
     rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
     X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
-    cov_lpc = lpc_prior(X0, source=scenario.name)[0] if lpc else None
+    cov_lpc = None
+    if lpc:
+        r = np.hypot(X0[:, 0], X0[:, 1])
+        if r.min() < MIN_PRIOR_RANGE:
+            raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
+                                "observer (ln r and 1/r diverge at zero range)",
+                                f"a sample at range {r.min():.3g} m", source=scenario.name)
+        cov_lpc = lpc_prior_information(X0)[0]
     m0 = X0.mean(axis=0)
     S0 = X0.T @ X0 / n
     return PCRBInputs(
         times=np.asarray(grid.times), dt=float(grid.dt), A=A, Q=Q, observer=obs, c=c,
-        bearing_info=bearing_info, ambiguity=ambiguity, bearing_sensors=tuple(bearing_sensors),
+        bearing_info=bearing_info, ambiguity=ambiguity,
         ping_steps=steps, ping_weight=weight, range_sigma=sigma, frequency_sensors=tuple(freq),
         prior_samples=n, m0=m0, S0=S0, cov_cart0=np.cov(X0, rowvar=False), cov_lpc0=cov_lpc,
-        min_prior_range=float(np.hypot(X0[:, 0], X0[:, 1]).min()),
         prior_subsample=X0[:500].copy())

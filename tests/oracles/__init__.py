@@ -1,0 +1,1 @@
+"""Independent implementations kept only as cross-checks of the package."""

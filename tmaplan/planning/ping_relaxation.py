@@ -44,14 +44,15 @@ decreasing norm of ``γ^{-1/2}`` with the concave maps u ↦ ``1/wᵢᵀJ_t(u)�
 Numerics: the textbook LMI ``[[J + D11, D12], [D12ᵀ, …]]`` fails (D-terms ≈ 1e12 against
 J ≈ 1 … 1e10); the rewrite above with every J_t rescaled by the diagonal of a reference
 trajectory (``J_t = S_t Ĵ_t S_t``, a congruence, so the feasible set is unchanged) keeps the data
-O(1). The cvxpy problem is built once per (evaluator, candidates, spacing, objective) with
-Parameters for the per-step bounds on u and the budget (DPP), and re-solved.
+O(1). The cvxpy problem is built once per (evaluator, candidates, spacing) with the budget as
+its Parameter (DPP) and re-solved. (Vector Parameters for per-candidate bounds on u were tried
+for subtree bounds: cvxpy's parameter tensor then grows like n^2.5 — 3.8 GB at 200 steps, out
+of memory at 1000 — so forbidden steps enter through the candidate set instead.)
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from typing import TYPE_CHECKING, Any
 
@@ -188,14 +189,12 @@ class Relaxation:
         s = np.sqrt(np.maximum(np.einsum("tii->ti", Jref), 1e-300))  # (K+1, 4)
         e = np.array([0.0, 1.0, 0.0, 0.0])
         self.u = cp.Variable(n, name="u")
-        self.u_lo = cp.Parameter(n, name="u_lo")
-        self.u_hi = cp.Parameter(n, name="u_hi")
         self.budget = cp.Parameter(nonneg=True, name="budget")
         Jh = [cp.Variable((4, 4), symmetric=True, name=f"J{t}") for t in range(K + 1)]
         uk: list[Any] = [0.0] * (K + 1)  # ping weight expression per step
         for i, st in enumerate(self.cand):
             uk[int(st)] = self.u[i]
-        cons = [self.u >= self.u_lo, self.u <= self.u_hi, cp.sum(self.u) <= self.budget]
+        cons = [self.u >= 0, self.u <= 1, cp.sum(self.u) <= self.budget]
         if self.gap > 1 and n > 1:
             rows = []
             for cst in self.cand:
@@ -257,15 +256,13 @@ class Relaxation:
         assert self.problem.is_dcp(dpp=True)
         self.build_seconds = time.perf_counter() - t0
 
-    def solve(self, budget: float, u_lo: np.ndarray | None = None,
-              u_hi: np.ndarray | None = None) -> RelaxationResult:
-        """Solve with per-candidate bounds (fix pings with ``u_lo = 1``, forbid with
-        ``u_hi = 0``); return a certified bound or the documented fallback."""
+    def solve(self, budget: float) -> RelaxationResult:
+        """Solve for a budget (the DPP parameter); return a certified bound or the documented
+        fallback."""
         t0 = time.perf_counter()
         n = self.cand.size
-        lo = np.zeros(n) if u_lo is None else np.asarray(u_lo, float)
-        hi = np.ones(n) if u_hi is None else np.asarray(u_hi, float)
-        self.u_lo.value, self.u_hi.value, self.budget.value = lo, hi, float(budget)
+        lo, hi = np.zeros(n), np.ones(n)
+        self.budget.value = float(budget)
         notes = []
         for solver, opts in (("CLARABEL", {"tol_gap_rel": 1e-8, "tol_feas": 1e-8,
                                            "max_iter": 500}),
@@ -293,7 +290,7 @@ class Relaxation:
             return RelaxationResult(lower_bound=lb, u=u, value_at_u=fu,
                                     status=f"certified ({solver.lower()})",
                                     seconds=time.perf_counter() - t0)
-        lb = self.fallback_bound(lo, hi)
+        lb = self.fallback_bound()
         return RelaxationResult(lower_bound=lb, u=np.full(n, np.nan), value_at_u=float("nan"),
                                 status="fallback: all candidates pinged (" + "; ".join(notes)
                                 + ")", seconds=time.perf_counter() - t0)
@@ -303,12 +300,10 @@ class Relaxation:
         U[0, self.cand] = u
         return float(self.ev.evaluate(U)[0])
 
-    def fallback_bound(self, lo: np.ndarray | None = None,
-                       hi: np.ndarray | None = None) -> float:
-        """Objective with every allowed candidate pinged: valid by monotonicity of the
-        recursion (more information at every step never raises any term)."""
-        hi = np.ones(self.cand.size) if hi is None else hi
-        return self._value_at((hi > 0).astype(float))
+    def fallback_bound(self) -> float:
+        """Objective with every candidate pinged: valid by monotonicity of the recursion (more
+        information at every step never raises any term)."""
+        return self._value_at(np.ones(self.cand.size))
 
 
 def _sym(X: Any) -> Any:
@@ -330,31 +325,34 @@ def _trajectory(im: InformationMatrices, u: np.ndarray) -> np.ndarray:
     return J
 
 
-_CACHE: dict[tuple[int, bytes, int], Relaxation] = {}
+_CACHE: dict[bytes, Relaxation] = {}
+_CACHE_SIZE = 8
 
 
 def relaxation_for(ev: PingEvaluator, cand: np.ndarray, gap: int) -> Relaxation:
-    """The :class:`Relaxation` of (ev, cand, gap), built once and cached on the evaluator."""
-    key = (id(ev), np.asarray(cand, int).tobytes(), int(gap))
-    cache = ev.__dict__.setdefault("_relaxations", {})
-    if key not in cache:
-        cache[key] = Relaxation(ev, cand, gap)
-    return cache[key]
+    """The :class:`Relaxation` of (ev, cand, gap), built once and cached by content (the
+    evaluator's data, candidates, spacing, objective): re-solving for another budget, or for
+    the same problem from another call, reuses the compiled cvxpy problem."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for a in (ev.J0, ev.aux, ev.moments, ev.bearing, ev._pw, ev.er2, np.asarray(cand, int)):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(f"{ev.objective}|{int(gap)}".encode())
+    key = h.digest()
+    if key not in _CACHE:
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = Relaxation(ev, cand, gap)
+    return _CACHE[key]
 
 
-def relaxation_bound(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
-                     forbid: np.ndarray | None = None) -> RelaxationResult:
-    """Certified lower bound on every schedule of at most ``budget`` pings on ``cand``.
-
-    Parameters
-    ----------
-    forbid : ndarray of bool, shape (n,), optional
-        Candidates that must not be pinged.
-    """
-    rel = relaxation_for(ev, cand, gap)
-    hi = None if forbid is None else (~np.asarray(forbid, bool)).astype(float)
+def relaxation_bound(ev: PingEvaluator, cand: np.ndarray, budget: int,
+                     gap: int) -> RelaxationResult:
+    """Certified lower bound on every schedule of at most ``budget`` pings on ``cand`` with
+    spacing ``gap`` steps (see the module docstring)."""
     if budget <= 0:
         v = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
-        return RelaxationResult(lower_bound=v, u=np.zeros(rel.cand.size), value_at_u=v,
-                                status="exact (no pings)", seconds=0.0)
-    return rel.solve(min(float(budget), float(math.inf)), u_hi=hi)
+        return RelaxationResult(lower_bound=v, u=np.zeros(np.asarray(cand).size),
+                                value_at_u=v, status="exact (no pings)", seconds=0.0)
+    return relaxation_for(ev, cand, gap).solve(float(budget))

@@ -97,7 +97,7 @@ def test_exact_tree_equals_brute_force(short, short_prior, gap):
         ev = _evaluator(short, short_prior, objective)
         cand = np.arange(1, ev.K + 1)
         for budget in (1, 2, 3):
-            steps, best = _brute(ev, cand, budget, gap)
+            _, best = _brute(ev, cand, budget, gap)
             # start from a poor incumbent so that the enumeration has to find the optimum
             res = tree_search(ev, cand, budget, gap, (), ev.value([]), 60.0, workers=1)
             assert res.complete

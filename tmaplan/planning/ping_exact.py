@@ -91,6 +91,16 @@ class _Tree:
         self.D = [(im.D11[t], im.D12[t], im.D22[t]) for t in range(self.K)]
         self.aux = np.ascontiguousarray(ev.aux.T, dtype=float)
         self.kernel = schedule_kernel_of(ev)
+        # global all-candidates-pinged trajectory: J_t of any schedule is below it, so
+        # tail_all[p] = Σ_{t>p} c_t g(J_t^all) bounds every completion after step p
+        _, costs, _ = self.trajectories(np.zeros(1, int), np.asarray(ev.J0, float)[None]
+                                        + self._ping0(), True, keep_states=False)
+        self.tail_all = np.concatenate([np.cumsum(costs[::-1, 0])[::-1], [0.0]])
+
+    def _ping0(self) -> np.ndarray:
+        X = np.zeros((4, 4))
+        X[1, 1] = self.im.ping[0] if self.allowed[0] else 0.0
+        return X
 
     # ------------------------------------------------------------------ packed algebra
     @staticmethod
@@ -150,25 +160,30 @@ class _Tree:
     def leaves(self, p: int, M: np.ndarray, C: float, s: np.ndarray) -> np.ndarray:
         """Objective of "this node (state M (4, 4) at step p, prefix cost C), then one last
         ping at each s" (s = K + 1: no further ping), by the compiled kernel from p."""
+        S = s.size
+        return self.leaves_many(p, np.broadcast_to(M, (S, 4, 4)), np.full(S, C), s)
+
+    def leaves_many(self, p: int, M: np.ndarray, C: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """As :meth:`leaves` with one state M[i] (S, 4, 4) and prefix cost C[i] per schedule."""
         K = self.K
         S = s.size
         n = K - p
         if n == 0:
-            return np.full(S, C)
+            return np.array(C, float)
         if self.kernel is None or self.ev.objective not in ("mean-range-bound",
                                                              "terminal-range-bound"):
-            J = np.broadcast_to(M, (S, 4, 4))
-            acc = np.full(S, C)
+            J = np.array(M)
+            acc = np.array(C, float)
             for k in range(n):
                 t = p + k
                 J = self.step(t, J, (s == t + 1).astype(float))
                 acc += self.c[t + 1] * self.g(t + 1, J)
             return acc
-        j0 = np.ascontiguousarray(np.repeat(self._pack(M[None]), S, axis=1))
+        j0 = np.ascontiguousarray(self._pack(np.asarray(M)))
         u = np.zeros((S, n + 2))
         u[np.arange(S), s - p] = 1.0  # column n + 1 (s = K + 1) is never read
         mean = self.ev.objective == "mean-range-bound"
-        acc = np.full(S, C * (K + 1) if mean else 0.0)
+        acc = np.ascontiguousarray(np.asarray(C, float) * (K + 1) if mean else np.zeros(S))
         last = np.zeros(S)
         b = np.ascontiguousarray(self.im.bearing[p + 1:])
         pw = np.ascontiguousarray(self.im.ping[p + 1:])
@@ -185,6 +200,13 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
     """Enumerate the subtrees of a batch of nodes of equal depth (last pings at steps p)."""
     K, gap = tree.K, tree.gap
     depth = len(steps[0])
+    if depth == budget - 1 and depth > 0:
+        # last ping left: buffer by last-ping step for the block-dominance bound
+        lb = C + tree.tail_all[p]
+        keep = lb < state["best"] * (1 - 1e-12)
+        for i in np.flatnonzero(keep):
+            state["buffer"].setdefault(int(p[i]), []).append((steps[i], M[i], float(C[i])))
+        return
     # valid subtree bound (monotone recursion): every remaining candidate pinged
     if depth < budget:
         _, tail, _ = tree.trajectories(p, M, True, keep_states=False)
@@ -202,11 +224,8 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
         steps = [steps[i] for i in idx]
         p, M, C = p[idx], M[idx], C[idx]
     state["nodes"] += len(steps)
-    if depth >= budget - 1:  # last ping (or none) by the compiled kernel, node by node
+    if depth >= budget - 1:  # budget 1 from the root, or no ping left
         for i in range(len(steps)):
-            if time.perf_counter() > state["deadline"]:
-                state["open"].append(float(np.min(lb[keep][i:])))
-                return
             pi = int(p[i])
             first = pi + (gap if depth > 0 else 1)
             kids = tree.cand[tree.cand >= first] if depth < budget else tree.cand[:0]
@@ -238,6 +257,56 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
                 state)
 
 
+#: Nodes per block of the dominance bound at the last level.
+BLOCK = 16
+
+
+def _flush(tree: _Tree, state: dict[str, Any]) -> None:
+    """Last level: nodes with one ping left, grouped by their last-ping step p.
+
+    Dominance bound (valid by monotonicity): for a block of nodes with states M_i at the same
+    step p, ``R = M_ref + Σ_i (M_i − M_ref)_+`` (PSD parts) satisfies R ⪰ M_i for every i, so
+    every completion of node i costs at least ``C_i + min_s V_s(R)``, where ``V_s(R)`` is the
+    exact cost after p of "last ping at s" from R (one kernel call per block instead of one
+    per node). Nodes whose bound reaches the incumbent are cut; the others are evaluated.
+    """
+    K, gap = tree.K, tree.gap
+    buf = state["buffer"]
+    for n, p in enumerate(sorted(buf)):
+        nodes = buf[p]
+        if time.perf_counter() > state["deadline"]:
+            state["open"].append(min(c + float(tree.tail_all[q]) for q in sorted(buf)[n:]
+                                     for _, _, c in buf[q]))
+            return
+        nodes.sort(key=lambda x: x[0])
+        kids = np.append(tree.cand[tree.cand >= p + gap], K + 1)
+        for a in range(0, len(nodes), BLOCK):
+            blk = nodes[a:a + BLOCK]
+            Ms = np.stack([x[1] for x in blk])
+            Cs = np.array([x[2] for x in blk])
+            if len(blk) > 1:
+                ref = Ms[-1]
+                w, V = np.linalg.eigh(Ms - ref)
+                R = ref + np.einsum("sij,sj,skj->ik", V, np.maximum(w, 0.0), V)
+                tail = float(tree.leaves(p, R, 0.0, kids).min())
+                state["leaves"] += kids.size
+                alive = np.flatnonzero(Cs + tail < state["best"] * (1 - 1e-12))
+            else:
+                alive = np.arange(1)
+            state["nodes"] += alive.size
+            if not alive.size:
+                continue
+            S = alive.size
+            own = np.repeat(alive, kids.size)
+            ss = np.tile(kids, S)
+            vals = tree.leaves_many(p, Ms[own], Cs[own], ss)
+            state["leaves"] += vals.size
+            j = int(np.argmin(vals))
+            st = blk[own[j]][0]
+            _offer(state, float(vals[j]), st + ((int(ss[j]),) if ss[j] <= K else ()))
+        buf[p] = []
+
+
 def _offer(state: dict[str, Any], v: float, steps: tuple[int, ...]) -> None:
     b, bs = state["best"], state["steps"]
     st = tuple(sorted(steps))
@@ -252,7 +321,7 @@ def _run(chunk: list[int]) -> tuple[float, tuple[int, ...], list[float], int, in
     """Subtrees of the first pings in ``chunk`` (−1: the schedule without pings)."""
     tree, budget = _WORK["tree"], _WORK["budget"]
     state: dict[str, Any] = {"best": _WORK["inc_val"], "steps": _WORK["inc_steps"],
-                             "open": [], "leaves": 0, "nodes": 0,
+                             "open": [], "leaves": 0, "nodes": 0, "buffer": {},
                              "deadline": _WORK["deadline"]}
     J0 = np.asarray(tree.ev.J0, float)[None]
     C0 = tree.c[0] * tree.g(0, J0)
@@ -278,6 +347,7 @@ def _run(chunk: list[int]) -> tuple[float, tuple[int, ...], list[float], int, in
             sl = slice(a, a + 16)
             _expand(tree, budget, [(int(s),) for s in firsts[sl]], firsts[sl], Ms[sl], Cs[sl],
                     state)
+        _flush(tree, state)
     return state["best"], state["steps"], state["open"], state["leaves"], state["nodes"]
 
 

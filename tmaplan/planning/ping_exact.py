@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tmaplan.errors import PlanningError
 from tmaplan.planning.ping_relaxation import (
     information_matrices,
     objective_vectors,
@@ -365,6 +366,9 @@ def tree_search(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
     workers : int, optional
         Processes (default: the CPUs available, at most 2 per 100 subtrees).
     """
+    if ev.objective not in ("mean-range-bound", "terminal-range-bound"):
+        raise PlanningError(f"objective: expected a range objective for the tree "
+                            f"enumeration, received {ev.objective!r}")
     t0 = time.perf_counter()
     tree = _Tree(ev, cand, gap)
     firsts = [-1, *[int(c) for c in tree.cand]]

@@ -153,3 +153,16 @@ def test_default_method_never_worse_than_greedy_full_horizon(default, prior):
         assert r.objective <= g.objective
         assert r.lower_bound <= r.objective and r.gap_reference.startswith("relaxation")
         assert r.relaxed_weights.size == 180
+
+
+@pytest.mark.slow
+def test_brehard2005_s1_three_pings_certified():
+    # issue 14 target: 1000 steps, K = 3: no worse than greedy with a certified gap ≤ 1 %
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("brehard2005-s1")
+    b = Belief.from_prior(sc)
+    g = schedule_pings(sc, budget=3, method="greedy", belief=b, gap_reference="none")
+    ex = schedule_pings(sc, budget=3, method="exact", belief=b, time_limit=600.0)
+    assert ex.objective <= g.objective
+    assert ex.lower_bound <= ex.objective and ex.gap <= 0.01

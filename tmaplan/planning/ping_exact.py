@@ -372,7 +372,9 @@ def tree_search(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
     t0 = time.perf_counter()
     tree = _Tree(ev, cand, gap)
     firsts = [-1, *[int(c) for c in tree.cand]]
-    n_workers = workers or min(len(os.sched_getaffinity(0)), 2)
+    cpus = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+            else os.cpu_count() or 1)
+    n_workers = max(1, int(workers or min(cpus, 2)))
     _WORK.update(tree=tree, budget=budget, inc_val=float(inc_val),
                  inc_steps=tuple(sorted(incumbent)), deadline=t0 + time_limit)
     # interleave first pings so that both workers get early (expensive) subtrees

@@ -65,6 +65,10 @@ __all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "schedule_pings"]
 PING_OBJECTIVES = ("mean-range-bound", "terminal-range-bound", "mean-position-bound")
 #: Certified relative gap below which a schedule is reported "optimal".
 OPTIMAL_GAP = 1e-3
+#: A relaxation bound above a schedule's objective by at most this relative amount is the
+#: relaxation being tight (its optimum is integral) up to the conic solver's tolerance
+#: (Clarabel's relative gap tolerance here is 1e-8); anything larger is an error.
+_TIGHT = 1e-6
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -421,6 +425,8 @@ def schedule_pings(scenario: Scenario, *, budget: int,
             elif not (elb <= lb):  # the stronger of two valid bounds (nan-safe)
                 lb, ref = elb, "enumeration (time limit)"
             bound_s += time.perf_counter() - t0
+    if np.isfinite(lb) and val < lb <= val * (1 + _TIGHT):
+        lb = val  # tight relaxation (integral optimum): equal up to the solver's tolerance
     rel_gap = (val - lb) / val if np.isfinite(lb) and val > 0 else float("nan")
     if np.isfinite(rel_gap) and rel_gap < 0:
         # a certified bound above an evaluated schedule is a defect: never report it

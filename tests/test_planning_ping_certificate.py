@@ -92,7 +92,11 @@ def test_failed_solve_is_not_a_certificate(short, short_prior, monkeypatch):
 
 
 @pytest.mark.parametrize("gap", [1, 4])
-def test_exact_tree_equals_brute_force(short, short_prior, gap):
+@pytest.mark.parametrize("max_buffer", [200_000, 7])
+def test_exact_tree_equals_brute_force(short, short_prior, gap, max_buffer, monkeypatch):
+    import tmaplan.planning.ping_exact as pe
+
+    monkeypatch.setattr(pe, "MAX_BUFFER", max_buffer)  # 7: flushes of the last level mid-way
     for objective in ("mean-range-bound", "terminal-range-bound"):
         ev = _evaluator(short, short_prior, objective)
         cand = np.arange(1, ev.K + 1)

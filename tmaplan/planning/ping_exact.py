@@ -207,6 +207,9 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
         keep = lb < state["best"] * (1 - 1e-12)
         for i in np.flatnonzero(keep):
             state["buffer"].setdefault(int(p[i]), []).append((steps[i], M[i], float(C[i])))
+        state["buffered"] += int(keep.sum())
+        if state["buffered"] > MAX_BUFFER:  # bounded memory: flush (smaller blocks, same bound)
+            _flush(tree, state)
         return
     # valid subtree bound (monotone recursion): every remaining candidate pinged
     if depth < budget:
@@ -260,6 +263,8 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
 
 #: Nodes per block of the dominance bound at the last level.
 BLOCK = 16
+#: Buffered last-level nodes per worker before a flush (≈ 200 bytes each).
+MAX_BUFFER = 200_000
 
 
 def _flush(tree: _Tree, state: dict[str, Any]) -> None:
@@ -306,6 +311,8 @@ def _flush(tree: _Tree, state: dict[str, Any]) -> None:
             st = blk[own[j]][0]
             _offer(state, float(vals[j]), st + ((int(ss[j]),) if ss[j] <= K else ()))
         buf[p] = []
+    buf.clear()
+    state["buffered"] = 0
 
 
 def _offer(state: dict[str, Any], v: float, steps: tuple[int, ...]) -> None:
@@ -322,7 +329,7 @@ def _run(chunk: list[int]) -> tuple[float, tuple[int, ...], list[float], int, in
     """Subtrees of the first pings in ``chunk`` (−1: the schedule without pings)."""
     tree, budget = _WORK["tree"], _WORK["budget"]
     state: dict[str, Any] = {"best": _WORK["inc_val"], "steps": _WORK["inc_steps"],
-                             "open": [], "leaves": 0, "nodes": 0, "buffer": {},
+                             "open": [], "leaves": 0, "nodes": 0, "buffer": {}, "buffered": 0,
                              "deadline": _WORK["deadline"]}
     J0 = np.asarray(tree.ev.J0, float)[None]
     C0 = tree.c[0] * tree.g(0, J0)

@@ -31,9 +31,13 @@ def test_schedule_json_stdout(tmp_path, capsys):
                str(tmp_path), "--json", "-"])
     assert rc == 0
     d = json.loads(capsys.readouterr().out)
-    for key in ("ping_times", "objective", "no_ping_objective", "uniform_objective",
-                "solver"):
+    for key in ("ping_times", "objective", "lower_bound", "gap", "no_ping_objective",
+                "uniform_objective", "solver"):
         assert key in d
+    assert {"status", "seconds"} <= set(d["solver"])
+    assert d["lower_bound"] <= d["objective"]
+    assert d["gap"] == pytest.approx((d["objective"] - d["lower_bound"]) / d["objective"])
+    assert d["solver"]["status"] in ("optimal", "feasible")
     assert len(d["ping_times"]) == 3
     assert d["objective"] < d["uniform_objective"] < d["no_ping_objective"]
     assert (tmp_path / "default_schedule.png").exists()

@@ -163,7 +163,10 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     ax.set_xlabel("time [min] (red lines: ping times)")
     ax.set_ylabel("position bound [m]" if "position" in res.objective_name
                   else "range bound [m]")
-    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}")
+    gap = (f"certified gap {100 * res.gap:.2f} %" if np.isfinite(res.gap)
+           else "no certificate")
+    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}, "
+                 f"{res.status} ({gap})")
     ax.legend(fontsize=8)
     save_figure(fig, path)
     return fig

@@ -325,6 +325,13 @@ class ClosedFormEngine:
             return acc / (K + 1)
         return rb[:, -1] if reduce == "terminal" else rb
 
+    @staticmethod
+    def schedule_kernel(backend: str = "auto") -> Any:
+        """The compiled batched schedule kernel of :meth:`evaluate_schedules` (None without a
+        working C compiler, or for ``backend="numpy"``); its C signature is the one called in
+        :meth:`_schedules_compiled`. For searches that restart the recursion mid-horizon."""
+        return _schedule_backend(backend)
+
     def _schedules_compiled(self, kernel: Any, u: np.ndarray, J: list[list[Any]],
                             scale: float, reduce: str | None) -> np.ndarray:
         """:meth:`evaluate_schedules` through the C kernel (step 0 with the generic code)."""

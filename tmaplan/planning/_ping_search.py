@@ -7,9 +7,10 @@ hands it to the helpers here:
 
 * feasibility: candidate steps outside the forbidden windows, minimum spacing, the largest
   number of pings the spacing allows;
-* ``exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
-  bound "all remaining candidates pinged" (NOTES_000 §4.2);
-* ``relaxed``: the u_k ∈ [0, 1] NLP (casadi + IPOPT) and its roundings;
+* ``_exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
+  bound "all remaining candidates pinged" (NOTES_000 §4.2) — used for the position objective,
+  which the compiled kernel of :mod:`tmaplan.planning.ping_exact` does not evaluate;
+* the roundings of the relaxed weights of :mod:`tmaplan.planning.ping_relaxation`;
 * ``greedy`` and the local swaps that polish every method;
 * :func:`uniform_ping_steps`, the one definition of the evenly spaced reference schedule.
 
@@ -37,7 +38,6 @@ __all__ = [
     "_greedy",
     "_local_swaps",
     "_max_pings",
-    "_relaxed",
     "_round",
     "_spacing_ok",
     "ping_candidates",
@@ -192,40 +192,6 @@ def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[
     return chosen
 
 
-def _relaxed(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
-             ) -> tuple[np.ndarray, float, str]:
-    import casadi as ca
-
-    n = cand.size
-    x = ca.MX.sym("u", n)
-    from scipy import sparse
-
-    sel = sparse.csc_matrix((np.ones(n), (cand, np.arange(n))), shape=(ev.K + 1, n))
-    U = ca.mtimes(ca.DM(sel), x)
-    f = ev.casadi_objective(U)
-    from scipy import sparse
-
-    rows = [np.arange(n)]
-    if gap > 1:
-        for c in cand:
-            win = np.flatnonzero((cand >= c) & (cand < c + gap))
-            if win.size > 1:
-                rows.append(win)
-    r_idx = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)])
-    Amat = ca.DM(sparse.csc_matrix((np.ones(r_idx.size), (r_idx, np.concatenate(rows))),
-                                   shape=(len(rows), n)))
-    g = ca.mtimes(Amat, x)
-    ub = np.concatenate([[budget], np.ones(len(rows) - 1)])
-    f0 = float(ca.Function("f0", [x], [f])(np.full(n, budget / n)))
-    solver = ca.nlpsol("ping_relaxed", "ipopt", {"x": x, "f": f / abs(f0), "g": g},
-                       {"print_time": False,
-                        "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 1000,
-                                  "tol": 1e-7, "acceptable_tol": 1e-5, "acceptable_iter": 10,
-                                  "hessian_approximation": "limited-memory"}})
-    sol = solver(x0=np.full(n, budget / n), lbx=0.0, ubx=1.0, lbg=-np.inf, ubg=ub)
-    st = str(solver.stats()["return_status"])
-    u = np.clip(np.asarray(sol["x"]).reshape(-1), 0, 1)
-    return u, float(sol["f"]) * abs(f0), st
 
 
 def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],

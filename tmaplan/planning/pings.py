@@ -8,22 +8,21 @@ objective below (range bound ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, position boun
 ``sqrt(tr P_pos)``), which makes "all remaining candidates pinged" a valid lower bound for
 branch and bound.
 
-Methods
-    ``exact``: exhaustive enumeration on the batched evaluator when the number of schedules is
-    at most ``max_enumerate`` (proven optimum), else best-first branch and bound with the
-    monotone lower bound, a time limit and the reported gap.
-    ``relaxed``: u_k ∈ [0, 1] NLP (casadi + IPOPT, exact gradients through the recursion,
-    Σu ≤ K, Σ_{window} u ≤ 1 for the spacing), then rounding (largest u first, spacing
-    respected) and local swaps. For terminal objectives the relaxed problem is convex
-    (``[J⁻¹]_{ln r}`` is convex and decreasing in J, J_T concave in u), so its optimum is a proven
-    lower bound.
-    ``greedy``: add the best ping one at a time (then the same local swaps).
+Methods (every one reports a certified ``lower_bound`` and the relative ``gap``)
+    ``relaxed`` (default): the convex SDP relaxation of
+    :mod:`tmaplan.planning.ping_relaxation` (cvxpy + Clarabel) gives the certified lower bound
+    and fractional weights; their roundings, the greedy schedule and the evenly spaced one are
+    polished by moves of any ping to any candidate over the whole horizon, and the best is kept
+    (never worse than ``greedy``).
+    ``greedy``: add the best ping one at a time, then local swaps; same certificate.
+    ``exact``: tree enumeration with prefix reuse and valid pruning on all cores
+    (:mod:`tmaplan.planning.ping_exact`), started from the ``relaxed`` schedule. Status
+    ``optimal`` only when the certified relative gap is ≤ 1e-3, else ``time limit``.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal
@@ -41,8 +40,8 @@ from tmaplan.planning._ping_search import (
     _greedy,
     _local_swaps,
     _max_pings,
-    _relaxed,
     _round,
+    _spacing_ok,
     ping_candidates,
     uniform_ping_steps,
 )
@@ -60,7 +59,12 @@ if TYPE_CHECKING:
 __all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "ping_candidates",
            "schedule_pings", "uniform_ping_steps"]
 
-_OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
+#: Certified relative gap below which a schedule is reported "optimal".
+OPTIMAL_GAP = 1e-3
+#: A relaxation bound above a schedule's objective by at most this relative amount is the
+#: relaxation being tight (its optimum is integral) up to the conic solver's tolerance
+#: (Clarabel's relative gap tolerance here is 1e-8); anything larger is an error.
+_TIGHT = 1e-6
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -78,16 +82,18 @@ class PingSchedule:
     no_ping_objective, uniform_objective : float
         Without pings, and with the ``budget`` evenly spaced pings ``uniform_steps`` [m].
     lower_bound : float
-        Proven lower bound on the optimum [m] (nan if none is known).
+        Certified lower bound on the optimum [m] (nan if none was computed).
     gap : float
-        ``objective − reference`` [m]: to the exact optimum when it was computed, else to
-        ``lower_bound`` (nan if neither).
+        Relative gap ``(objective − lower_bound)/objective`` (nan without a bound).
     gap_reference : str
-        "exact", "lower-bound", "relaxation (not proven)" or "none".
+        Where ``lower_bound`` comes from: "relaxation (clarabel|scs)", "enumeration",
+        "enumeration (time limit)", "fallback: all candidates pinged (...)" (the relaxation
+        failed; its reasons), or "none".
     bound : ndarray, shape (K + 1,)
         Range bound per step with the schedule [m].
     status : str
-        "optimal", "gap", solver status, ...
+        "optimal" (certified gap ≤ 1e-3), "feasible" (heuristic, larger gap), "time limit"
+        (``exact`` stopped with the incumbent), "no bound" (``gap_reference="none"``).
     seconds : float
     method : str
     objective_name : str
@@ -95,6 +101,10 @@ class PingSchedule:
     uniform_steps : ndarray of int
         The evenly spaced reference schedule (:func:`uniform_ping_steps`), the one the
         ``uniform`` ping policy flies.
+    bound_seconds : float
+        Of ``seconds``, spent on the certificate [s].
+    relaxed_weights : ndarray, shape (n_candidates,)
+        Optimal weights of the relaxation (empty when it was not solved).
     """
 
     steps: np.ndarray
@@ -113,6 +123,8 @@ class PingSchedule:
     budget: int
     uniform_steps: np.ndarray = dataclasses.field(
         default_factory=lambda: np.zeros(0, dtype=int))
+    bound_seconds: float = 0.0
+    relaxed_weights: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
 
 class PingEvaluator:
@@ -193,7 +205,7 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                    forbidden: Sequence[tuple[float, float]] = (),
                    candidate_steps: Sequence[int] | None = None,
                    max_enumerate: int = 50_000, time_limit: float = 30.0,
-                   max_relaxed: int = 200,
+                   workers: int | None = None,
                    gap_reference: Literal["auto", "exact", "none"] = "auto") -> PingSchedule:
     """Choose at most ``budget`` ping steps (see the module docstring).
 
@@ -217,25 +229,24 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     candidate_steps : sequence of int, optional
         Allowed steps (default 1..K).
     max_enumerate : int
-        ``exact``: enumerate when C(n, K) is at most this, else branch and bound.
+        ``exact`` with ``mean-position-bound`` (no compiled kernel): plain enumeration when
+        C(n, K) is at most this, else best-first branch and bound.
     time_limit : float
-        Branch-and-bound time limit [s] (the gap is reported when it is hit).
-    max_relaxed : int
-        ``relaxed``: at most this many candidates (every stride-th) enter the NLP; rounding
-        and local swaps then use every candidate. The relaxation is then a lower bound of the
-        coarse problem only (so no proven lower bound is reported).
+        ``exact``: time limit of the enumeration [s] (the certified gap is reported).
+    workers : int, optional
+        ``exact``: processes (default: the available cores, at most 2).
     gap_reference : {"auto", "exact", "none"}
-        ``relaxed``/``greedy``: compute the exact optimum to report the gap ("auto": when
-        enumeration is cheap, C(n, K) ≤ 20 000).
+        "auto": certify with the convex relaxation; "exact": ``relaxed``/``greedy`` also run
+        the exact enumeration for their bound; "none": no certificate (fast inner loops,
+        e.g. the alternating joint plan), status "no bound".
 
     Raises
     ------
     PlanningError
         Budget larger than the candidate steps (or than the spacing allows), no range sensor.
-    SolverError
-        The relaxed NLP did not converge.
     """
-    from tmaplan.errors import SolverError
+    from tmaplan.planning.ping_exact import tree_search
+    from tmaplan.planning.ping_relaxation import relaxation_bound
 
     t_start = time.perf_counter()
     budget = int(budget)
@@ -244,6 +255,9 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     if method not in ("exact", "relaxed", "greedy"):
         raise PlanningError(f"method: expected 'exact', 'relaxed' or 'greedy', received "
                             f"{method!r}")
+    if gap_reference not in ("auto", "exact", "none"):
+        raise PlanningError(f"gap_reference: expected 'auto', 'exact' or 'none', received "
+                            f"{gap_reference!r}")
     obs = observer if observer is not None else observer_track(scenario.observer,
                                                                scenario.time)
     bel = belief if belief is not None else Belief.from_prior(scenario)
@@ -259,50 +273,75 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
     uni = uniform_ping_steps(ev.times, budget, candidates=cand, gap=gap)
     uniform = float(ev.value(uni))
-    lb, ref, status = float("nan"), "none", "ok"
+    lb, ref, bound_s = float("nan"), "none", 0.0
+    u_rel = np.zeros(0)
     if budget == 0:
-        steps, val, status = [], no_ping, "optimal"
-        lb, ref = val, "exact"
-    elif method == "greedy":
-        steps = _greedy(ev, cand, budget, gap)
-        steps, val = _local_swaps(ev, steps, cand, gap)
-    elif method == "relaxed":
-        # Relax on at most max_relaxed candidates (every stride-th one); the local swaps
-        # then work on the full candidate set with radii up to the stride.
-        stride = max(1, math.ceil(cand.size / max_relaxed))
-        coarse = cand[::stride]
-        if coarse.size < budget:
-            coarse = cand
-        u, fr, st = _relaxed(ev, coarse, budget, gap)
-        if st not in _OK:
-            raise SolverError("ipopt", st, "relaxed ping scheduling NLP")
-        radius = sorted({1, 2, 4} | {max(1, stride // 2), stride})
-        rounded = _round(u, coarse, budget, gap)
-        rv = ev.evaluate(ev.schedules(rounded))
-        steps, val = _local_swaps(ev, rounded[int(np.argmin(rv))], cand, gap, radius=radius)
-        status = st
-        if objective == "terminal-range-bound" and stride == 1:
-            lb, ref = math.sqrt(max(fr, 0.0)), "lower-bound"
-        else:
-            lb, ref = fr, "relaxation (not proven)"
+        steps, val, lb, ref = [], no_ping, no_ping, "enumeration"
     else:
-        g0 = _greedy(ev, cand, budget, gap) if math.comb(cand.size, budget) > max_enumerate \
-            else []
-        v0 = ev.value(g0) if g0 else float("inf")
-        steps, val, lb, status = _exact(ev, cand, budget, gap, g0, v0, max_enumerate,
-                                        time_limit)
-        ref = "exact" if status == "optimal" else "lower-bound"
-    if method != "exact" and budget and (gap_reference == "exact" or (
-            gap_reference == "auto" and math.comb(cand.size, budget) <= 20_000)):
-        _, ex_val, _, _ = _exact(ev, cand, budget, gap, [], float("inf"), 20_000 if
-                                 gap_reference == "auto" else max_enumerate, time_limit)
-        lb, ref = ex_val, "exact"
+        certify = gap_reference != "none" or method == "exact"
+        if certify:
+            rr = relaxation_bound(ev, cand, budget, gap)
+            lb, ref, bound_s, u_rel = rr.lower_bound, _source(rr.status), rr.seconds, rr.u
+        # greedy + local swaps: the greedy method, and a start of the others
+        g = _greedy(ev, cand, budget, gap)
+        steps, val = _local_swaps(ev, g, cand, gap)
+        if method != "greedy":
+            starts = [steps, uni]
+            if u_rel.size and np.all(np.isfinite(u_rel)):
+                starts += _round(u_rel, cand, budget, gap)
+            whole = range(1, cand.size)  # moves of any ping to any candidate
+            for st in starts:
+                if len(st) != budget or not _spacing_ok(st, gap):
+                    continue
+                s2, v2 = _local_swaps(ev, list(st), cand, gap, max_rounds=4 * budget + 4,
+                                      radius=whole)
+                if v2 < val:
+                    steps, val = s2, v2
+        if method == "exact" or gap_reference == "exact":
+            t0 = time.perf_counter()
+            if objective == "mean-position-bound":
+                st, v, elb, status_e = _exact(ev, cand, budget, gap, steps, val,
+                                              max_enumerate, time_limit)
+                done = status_e == "optimal"
+            else:
+                er = tree_search(ev, cand, budget, gap, tuple(steps), val, time_limit,
+                                 workers=workers)
+                st, elb, done = list(er.steps), er.lower_bound, er.complete
+                v = ev.value(st)
+            if v < val:
+                steps, val = st, v
+            elb = min(elb, val)
+            if done:
+                lb, ref = val, "enumeration"
+            elif not (elb <= lb):  # the stronger of two valid bounds (nan-safe)
+                lb, ref = elb, "enumeration (time limit)"
+            bound_s += time.perf_counter() - t0
+    if np.isfinite(lb) and val < lb <= val * (1 + _TIGHT):
+        lb = val  # tight relaxation (integral optimum): equal up to the solver's tolerance
+    rel_gap = (val - lb) / val if np.isfinite(lb) and val > 0 else float("nan")
+    if np.isfinite(rel_gap) and rel_gap < 0:
+        # a certified bound above an evaluated schedule is a defect: never report it
+        raise PlanningError(f"lower bound {lb:.6g} above the objective {val:.6g} "
+                            f"({ref}): certificate invalid")
+    if not np.isfinite(rel_gap):
+        status = "no bound" if budget else "optimal"
+    elif rel_gap <= OPTIMAL_GAP:
+        status = "optimal"
+    else:
+        status = "time limit" if method == "exact" else "feasible"
     steps_a = np.asarray(sorted(steps), int)
     bound = ev.per_step(ev.schedules([steps_a.tolist()]))[0]
-    return PingSchedule(steps=steps_a, times=ev.times[steps_a], objective=val,
+    return PingSchedule(steps=steps_a, times=ev.times[steps_a], objective=float(val),
                         no_ping_objective=no_ping, uniform_objective=uniform,
-                        lower_bound=lb, gap=val - lb if np.isfinite(lb) else float("nan"),
-                        gap_reference=ref, bound=bound, status=status,
-                        seconds=time.perf_counter() - t_start, method=method,
-                        objective_name=objective, budget=budget,
+                        lower_bound=float(lb), gap=float(rel_gap), gap_reference=ref,
+                        bound=bound, status=status, seconds=time.perf_counter() - t_start,
+                        method=method, objective_name=objective, budget=budget,
+                        bound_seconds=bound_s, relaxed_weights=np.asarray(u_rel, float),
                         uniform_steps=np.asarray(uni, dtype=int))
+
+
+def _source(status: str) -> str:
+    """gap_reference label of a relaxation status."""
+    if status.startswith("certified ("):
+        return "relaxation " + status[len("certified "):]
+    return status

@@ -82,8 +82,9 @@ def _offline_schedule(scenario: Scenario, budget: int, method: str, objective: s
     if key not in _SCHEDULE_CACHE:
         from tmaplan.planning import schedule_pings
 
+        # the policy needs the steps only: no certificate (it costs a conic solve per track)
         sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
-                               observer=track)
+                               observer=track, gap_reference="none")
         _SCHEDULE_CACHE[key] = np.asarray(sched.steps, dtype=int)
     return _SCHEDULE_CACHE[key]
 

@@ -18,10 +18,8 @@ from typing import Any
 import numpy as np
 
 from tmaplan.estimators.particle_filter import Measurement, ParticleFilter, PFConfig
-from tmaplan.geometry import course_speed, wrap_angle
+from tmaplan.geometry import bearing_of, course_speed, range_of, wrap_angle
 from tmaplan.models.observer import ObserverTrack, arc_displacement
-from tmaplan.models.sensors import bearing as bearing_of
-from tmaplan.models.sensors import range_
 from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.policies import BeliefView
 from tmaplan.scenario import BearingSensor, RangeSensor, Scenario, measurement_steps
@@ -211,14 +209,14 @@ def run_closed_loop(scenario: Scenario, policy: Any, target: np.ndarray, *,
                                         ambiguity=s.ambiguity))
         for j, s in enumerate(passive_r):
             if k + 1 in psteps[j]:
-                meas.append(Measurement(kind="range", value=float(range_(rel) + s.sigma
+                meas.append(Measurement(kind="range", value=float(range_of(rel) + s.sigma
                                                                   * e_range[k + 1, j]),
                                         sigma=s.sigma))
         if meas:
             state = pf.update(state, meas, filter_rng)
         if act.ping and ping_sigma is not None:
             pings.append(k + 1)
-            z = float(range_(rel) + ping_sigma * e_ping[k + 1])
+            z = float(range_of(rel) + ping_sigma * e_ping[k + 1])
             state = tempered_range_update(pf, state, z, ping_sigma, filter_rng)
         est[k + 1], cov[k + 1] = state.mean, state.cov
     obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,

@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.geometry import wrap_angle, wrap_half_angle
+from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.sensors import bearing, doppler_frequency, range_
+from tmaplan.models.sensors import doppler_frequency
 from tmaplan.models.target import target_track
 from tmaplan.scenario import (
     BearingSensor,
@@ -131,7 +131,7 @@ def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
         Xk = rel_inst[steps]
         rel = None
         if isinstance(sensor, BearingSensor):
-            truth = bearing(Xk)
+            truth = bearing_of(Xk)
             sigma = np.asarray(sensor.sigma)
             noise = rng.normal(0.0, sensor.sigma, truth.shape) if rng is not None else 0.0
             wrap = wrap_half_angle if sensor.ambiguity == "pi" else wrap_angle
@@ -139,7 +139,7 @@ def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
             values = wrap(truth + noise)
             rel = wrap_angle(wrap_angle(truth + noise) - obs.heading[steps])
         elif isinstance(sensor, RangeSensor):
-            truth = range_(Xk)
+            truth = range_of(Xk)
             sigma = np.asarray(sensor.sigma)
             noise = rng.normal(0.0, sensor.sigma, truth.shape) if rng is not None else 0.0
             values = truth + noise

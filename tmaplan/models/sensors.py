@@ -7,7 +7,6 @@ bearing and range are :func:`tmaplan.geometry.bearing_of` and :func:`tmaplan.geo
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from tmaplan.geometry import Ambiguity, angle_diff, bearing_of, range_of

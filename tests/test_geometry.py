@@ -101,11 +101,25 @@ def _assert_close(actual: np.ndarray, desired: np.ndarray, atol: np.ndarray | fl
 def test_bearing_quadrants(dx: float, dy: float, expected_deg: float) -> None:
     observer = np.array([1000.0, -2000.0])
     target = observer + 3000.0 * np.array([dx, dy])
-    assert g.bearing(dx, dy) == pytest.approx(expected_deg * DEG, abs=1e-15)
+    assert g.bearing_of([dx, dy]) == pytest.approx(expected_deg * DEG, abs=1e-15)
     X = np.array([*(target - observer), 0.0, 0.0])
     assert g.bearing_of(X) == pytest.approx(expected_deg * DEG, abs=1e-15)
     assert g.cart_to_lpc(X)[0] == pytest.approx(expected_deg * DEG, abs=1e-15)
     assert g.cart_to_mp(X)[2] == pytest.approx(expected_deg * DEG, abs=1e-15)
+
+
+def test_bearing_signed_zeros() -> None:
+    """−0.0 is 0: South is +π (atan2 gives −π), North is +0.0, in both ambiguity modes."""
+    X = np.array([[-0.0, -1.0], [0.0, -1.0], [-0.0, 1.0], [0.0, 1.0]])
+    b = g.bearing_of(X)
+    np.testing.assert_array_equal(b, [np.pi, np.pi, 0.0, 0.0])
+    assert not np.any(np.signbit(b))  # no −0.0 and no −π
+    bp = g.bearing_of(X, ambiguity="pi")
+    np.testing.assert_array_equal(bp, [0.0, 0.0, 0.0, 0.0])
+    assert not np.any(np.signbit(bp))
+    course, speed = g.course_speed([-0.0, -2.0])
+    assert course == np.pi and speed == 2.0
+    assert g.cart_to_lpc([-0.0, -5.0, 1.0, 0.0])[0] == np.pi
 
 
 def test_bearing_ambiguity_pi() -> None:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tmaplan.geometry import bearing_of as bearing
 from tmaplan.models.observer import observer_track, turn_rate_track
-from tmaplan.models.sensors import bearing, bearing_loglik, doppler_frequency, range_rate
+from tmaplan.models.sensors import bearing_loglik, doppler_frequency, range_rate
 from tmaplan.models.target import constant_turn_state, ncv_matrices
 from tmaplan.scenario import Observer, ObserverLeg, TimeGrid, load_problem
 

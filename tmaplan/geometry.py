@@ -28,7 +28,6 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "Ambiguity",
     "angle_diff",
-    "bearing",
     "bearing_of",
     "cart_to_lpc",
     "cart_to_mp",
@@ -155,61 +154,52 @@ def angle_diff(a: ArrayLike, b: ArrayLike) -> FloatArray:
     return wrap_angle(np.subtract(a, b, dtype=np.float64))
 
 
-def bearing(dx: ArrayLike, dy: ArrayLike) -> FloatArray:
-    """Bearing from North, clockwise, of the displacement ``(dx, dy)``.
-
-    Parameters
-    ----------
-    dx, dy
-        East and North components [m] (or any common unit), broadcastable shapes.
-
-    Returns
-    -------
-    ndarray or numpy scalar
-        ``atan2(dx, dy)`` [rad] in (−π, π]: 0 = North, π/2 = East, π = South, −π/2 = West.
-        A zero displacement gives 0 (the atan2 convention); signed zeros never give −π.
-    """
-    b = np.arctan2(np.asarray(dx, dtype=np.float64), np.asarray(dy, dtype=np.float64))
-    return _scalar_or_array(np.where(b == -_PI, _PI, b))
-
-
 def bearing_of(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
-    """Bearing of the target seen from the observer, from relative states.
+    """Bearing of the target seen from the observer: the one bearing function of tmaplan.
 
     Parameters
     ----------
     X
-        Relative states ``[r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), shape (..., 4).
-        Only the position part is used, so shape (..., 2) is accepted too.
+        Relative states ``[r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), shape (..., 4), or
+        displacements ``[Δx, Δy]`` (East, North), shape (..., 2); only ``X[..., :2]`` is used.
     ambiguity
-        ``"none"``: full-circle bearing in (−π, π]. ``"pi"``: bearing modulo π in
-        (−π/2, π/2], i.e. ``arctan(r_x/r_y)`` of file 000 eq. 4 (``π/2`` when ``r_y = 0``).
+        ``"none"``: full-circle bearing ``atan2(r_x, r_y)`` in (−π, π] (DESIGN §1).
+        ``"pi"``: bearing modulo π in (−π/2, π/2], i.e. ``arctan(r_x/r_y)`` of file 000
+        eq. 4 (``π/2`` when ``r_y = 0``).
 
     Returns
     -------
     ndarray or numpy scalar
-        Bearings [rad], shape (...).
+        Bearings [rad], shape (...): 0 = North, π/2 = East, π = South, −π/2 = West.
+
+    Notes
+    -----
+    Signed zeros: a displacement with ``r_x = −0.0`` is a displacement with ``r_x = 0``.
+    Due South (``r_x = ±0``, ``r_y < 0``) is ``+π`` (``atan2(−0.0, −1)`` would give −π,
+    outside (−π, π]); due North (``r_x = ±0``, ``r_y > 0``) is ``+0.0``, never ``−0.0``.
+    A zero displacement (observer at the target) gives 0 or π, the atan2 convention.
     """
     _check_ambiguity(ambiguity)
     arr = np.asarray(X, dtype=np.float64)
     if arr.ndim == 0 or arr.shape[-1] not in (2, 4):
         raise ValueError(f"X must have shape (..., 4) or (..., 2), got {arr.shape}")
-    b = np.arctan2(arr[..., 0], arr[..., 1])
+    # + 0.0 turns a −0.0 into +0.0 (IEEE 754); −π, reached only from r_x = −0.0, becomes π.
+    b = np.arctan2(arr[..., 0], arr[..., 1]) + 0.0
     if ambiguity == "pi":
         # Exact shifts by π (Sterbenz), so the result equals arctan(r_x/r_y) to rounding.
-        b = np.where(b > _HALF_PI, b - _PI, np.where(b <= -_HALF_PI, b + _PI, b))
+        b = np.where(b > _HALF_PI, b - _PI, np.where(b <= -_HALF_PI, b + _PI, b)) + 0.0
     else:
         b = np.where(b == -_PI, _PI, b)
     return _scalar_or_array(b)
 
 
 def range_of(X: ArrayLike) -> FloatArray:
-    """Range ``r = sqrt(r_x² + r_y²)`` [m] of relative states.
+    """Range ``r = sqrt(r_x² + r_y²)`` [m] of relative states: the one range function.
 
     Parameters
     ----------
     X
-        Relative states, shape (..., 4) (or positions, shape (..., 2)).
+        Relative states, shape (..., 4), or displacements, shape (..., 2).
 
     Returns
     -------
@@ -252,14 +242,15 @@ def course_speed(v: ArrayLike) -> tuple[FloatArray, FloatArray]:
     Returns
     -------
     course : ndarray or numpy scalar
-        Courses [rad] in (−π, π], shape (...); 0 for a zero velocity.
+        Courses [rad] in (−π, π], shape (...) (:func:`bearing_of` of the velocity, signed
+        zeros included); 0 for a zero velocity.
     speed : ndarray or numpy scalar
         Speeds [m/s], shape (...).
     """
     arr = np.asarray(v, dtype=np.float64)
     if arr.ndim == 0 or arr.shape[-1] != 2:
         raise ValueError(f"v must have shape (..., 2), got {arr.shape}")
-    return bearing(arr[..., 0], arr[..., 1]), _scalar_or_array(np.hypot(arr[..., 0], arr[..., 1]))
+    return bearing_of(arr), range_of(arr)
 
 
 # -------------------------------------------------------------------------------- LPC

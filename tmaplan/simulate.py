@@ -14,9 +14,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tmaplan.geometry import wrap_angle, wrap_half_angle
+from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.sensors import bearing, doppler_frequency, range_
+from tmaplan.models.sensors import doppler_frequency
 from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import (
     BearingSensor,
@@ -178,10 +178,10 @@ def reading(sensor: Any, X: np.ndarray, z: np.ndarray | None
     """
     if isinstance(sensor, BearingSensor):
         wrap = wrap_half_angle if sensor.ambiguity == "pi" else wrap_angle
-        truth = wrap(bearing(X))
+        truth = wrap(bearing_of(X))
         values = truth if z is None else wrap(truth + sensor.sigma * z)
     elif isinstance(sensor, RangeSensor):
-        truth = range_(X)
+        truth = range_of(X)
         values = truth if z is None else truth + sensor.sigma * z
     elif isinstance(sensor, FrequencySensor):
         truth = doppler_frequency(X, np.asarray(sensor.f0), sensor.c)

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
     bearing_rows,
@@ -110,7 +111,7 @@ def _times_positions(times: np.ndarray, pos: np.ndarray, field: str) -> tuple[np
 
 
 def _check_range(d: np.ndarray, t: np.ndarray, field: str) -> None:
-    r = np.hypot(d[:, 0], d[:, 1])
+    r = range_of(d)
     # "at the target": within a millionth of the largest range (1 cm at 10 km)
     if r.size and np.min(r) <= 1e-6 * max(1.0, float(np.max(r))):
         k = int(np.argmin(r))

@@ -38,6 +38,7 @@ from tmaplan.bounds._crlb_fim import (
     fisher_information,
 )
 from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
     constant_turn_model,
@@ -293,7 +294,7 @@ def crlb_from_data(
     final_values[:2] = pos_n[0]
     final_names = ("x_final", "y_final", *names[2:])
     d_n = pos_n[0] - obs_n
-    r_n = float(np.hypot(*d_n))
+    r_n = float(range_of(d_n))
     if r_n <= 0.0:
         raise ObservabilityError("the observer is at the target at the final time")
     g = d_n / r_n

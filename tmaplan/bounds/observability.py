@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.geometry import bearing_of
 from tmaplan.models.tracks import constant_turn_model
 
 if TYPE_CHECKING:
@@ -482,7 +483,7 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
                                 **({} if rtol is None else {"rtol": rtol}))
     truth = target_track(tgt, grid, None)
     rel = truth[steps, :2] - obs.position[steps]
-    bearings = np.arctan2(rel[:, 0], rel[:, 1])
+    bearings = bearing_of(rel)
     dv = np.linalg.norm(np.diff(obs.mean_velocity[1:], axis=0), axis=-1)
     vscale = max(1.0, float(np.max(obs.speed)))
     man = grid.times[1:-1][dv > 1e-9 * vscale]

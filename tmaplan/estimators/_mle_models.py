@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.geometry import wrap_angle, wrap_half_angle
+from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.tracks import (
     TrackModel,
     bearing_rows,
@@ -266,7 +266,7 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
     if data.b_times.size:
         P, _, dP, _ = kin(data.b_times)
         d = P - data.b_obs
-        beta = np.arctan2(d[:, 0], d[:, 1])
+        beta = bearing_of(d)
         wrap = wrap_half_angle if data.ambiguity == "pi" else wrap_angle
         out_r.append(wrap(data.b_values - beta) / data.b_sigma)
         if jacobian:
@@ -276,7 +276,7 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
     if data.r_times.size:
         P, _, dP, _ = kin(data.r_times)
         d = P - data.r_obs
-        R = np.hypot(d[:, 0], d[:, 1])
+        R = range_of(d)
         out_r.append((data.r_values - R) / data.r_sigma)
         if jacobian:
             J = np.zeros((P.shape[0], npar))
@@ -288,7 +288,7 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
         if jacobian:
             rdot, ddot = range_rate_rows(d, w, dP, dV)
         else:
-            rdot = np.sum(d * w, axis=-1) / np.hypot(d[:, 0], d[:, 1])
+            rdot = np.sum(d * w, axis=-1) / range_of(d)
         a = 1.0 - rdot / data.c
         for p in range(data.n_lines):
             fp = th[ng + p]

@@ -61,7 +61,7 @@ from tmaplan.estimators._mle_models import (
     tma_data,
     track_model,
 )
-from tmaplan.geometry import wrap_angle, wrap_half_angle
+from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 
 __all__ = [
     "MLEConfig",
@@ -265,18 +265,18 @@ def _grid_costs(data: TMAData, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray
         if data.b_times.size:
             P = _positions(data, th, data.b_times)
             d = P - data.b_obs
-            beta = np.arctan2(d[..., 0], d[..., 1])
+            beta = bearing_of(d)
             wrap = wrap_half_angle if data.ambiguity == "pi" else wrap_angle
             cost[s:s + chunk] += ((wrap(data.b_values - beta) / data.b_sigma) ** 2).sum(-1)
         if data.r_times.size:
             P = _positions(data, th, data.r_times)
-            R = np.hypot(*(P - data.r_obs).transpose(2, 0, 1))
+            R = range_of(P - data.r_obs)
             cost[s:s + chunk] += (((data.r_values - R) / data.r_sigma) ** 2).sum(-1)
         if data.n_lines:
             P, V = _positions(data, th, data.f_times, velocity=True)
             d = P - data.f_obs
             v = V - data.f_obs_vel
-            a = 1.0 - ((d * v).sum(-1) / np.hypot(d[..., 0], d[..., 1])) / data.c
+            a = 1.0 - ((d * v).sum(-1) / range_of(d)) / data.c
             for p in range(data.n_lines):
                 z = data.f_values[:, p]
                 f = (a * z).sum(-1) / (a * a).sum(-1)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from tmaplan.models.observer import ObserverTrack, observer_track, turn_rate_track
 from tmaplan.models.sensors import (
-    bearing,
     bearing_loglik,
     doppler_frequency,
     range_loglik,
@@ -18,7 +17,6 @@ from tmaplan.models.target import (
 
 __all__ = [
     "ObserverTrack",
-    "bearing",
     "bearing_loglik",
     "constant_turn_state",
     "doppler_frequency",

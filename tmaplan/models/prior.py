@@ -14,7 +14,7 @@ import numpy as np
 from scipy import stats
 
 from tmaplan.errors import ScenarioError
-from tmaplan.geometry import course_speed
+from tmaplan.geometry import bearing_of, course_speed, range_of
 from tmaplan.models.target import constant_turn_state, initial_velocity
 
 if TYPE_CHECKING:
@@ -72,8 +72,8 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
         mean = np.asarray(p.mean, float) if p.mean is not None else truth
         return mean + rng.standard_normal((n, 4)) * np.asarray(p.std, float)
     rel = truth[:2] - obs0
-    true_bearing = float(np.arctan2(rel[0], rel[1]))
-    true_range = float(np.hypot(*rel))
+    true_bearing = float(bearing_of(rel))
+    true_range = float(range_of(rel))
     b_mean = p.bearing_mean if p.bearing_mean is not None else true_bearing
     bearing = b_mean + p.bearing_std * rng.standard_normal(n)
     hi = p.range_max if p.range_max is not None else np.inf

@@ -1,22 +1,19 @@
 """Measurement models, vectorised over particles / samples.
 
 All functions take relative states ``X = target − observer`` of shape (..., 4)
-(``[r_x, r_y, v_x, v_y]``, SI) and broadcast over the leading dimensions.
+(``[r_x, r_y, v_x, v_y]``, SI) and broadcast over the leading dimensions. The noise-free
+bearing and range are :func:`tmaplan.geometry.bearing_of` and :func:`tmaplan.geometry.range_of`.
 """
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
 
-from tmaplan.geometry import angle_diff, wrap_half_angle
+from tmaplan.geometry import Ambiguity, angle_diff, bearing_of, range_of
 
 __all__ = [
-    "bearing",
     "bearing_loglik",
     "doppler_frequency",
-    "range_",
     "range_loglik",
     "range_rate",
 ]
@@ -24,34 +21,10 @@ __all__ = [
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
-def bearing(X: np.ndarray, ambiguity: Literal["none", "pi"] = "none") -> np.ndarray:
-    """Noise-free bearing ``atan2(r_x, r_y)`` [rad], in (−π, π] or (−π/2, π/2] for "pi".
-
-    Parameters
-    ----------
-    X : ndarray, shape (..., 4) or (..., 2)
-        Relative state or position [m].
-    ambiguity : {"none", "pi"}
-
-    Returns
-    -------
-    ndarray, shape (...)
-    """
-    X = np.asarray(X)
-    b = np.arctan2(X[..., 0], X[..., 1])
-    return wrap_half_angle(b) if ambiguity == "pi" else b
-
-
-def range_(X: np.ndarray) -> np.ndarray:
-    """Range ‖r‖ [m], shape (...)."""
-    X = np.asarray(X)
-    return np.hypot(X[..., 0], X[..., 1])
-
-
 def range_rate(X: np.ndarray) -> np.ndarray:
     """Range rate Ṙ = r·v/‖r‖ [m/s] (positive opening), shape (...)."""
     X = np.asarray(X)
-    return (X[..., 0] * X[..., 2] + X[..., 1] * X[..., 3]) / range_(X)
+    return (X[..., 0] * X[..., 2] + X[..., 1] * X[..., 3]) / range_of(X)
 
 
 def doppler_frequency(X: np.ndarray, f0: np.ndarray, c: float = 1500.0) -> np.ndarray:
@@ -77,7 +50,7 @@ def doppler_frequency(X: np.ndarray, f0: np.ndarray, c: float = 1500.0) -> np.nd
 
 
 def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
-                   ambiguity: Literal["none", "pi"] = "none") -> np.ndarray:
+                   ambiguity: Ambiguity = "none") -> np.ndarray:
     """Log-likelihood of a bearing ``z`` for each state.
 
     Unambiguous bearings use the Gaussian of the wrapped residual (valid for σ ≪ π). With the
@@ -97,7 +70,7 @@ def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
     -------
     ndarray, shape (...)
     """
-    b = bearing(X, ambiguity)
+    b = bearing_of(X, ambiguity)
     if ambiguity == "pi":
         d = np.asarray(z) - b
         terms = np.stack([d, d - np.pi, d + np.pi], axis=0)
@@ -110,5 +83,5 @@ def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
 
 def range_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian log-likelihood of a range ``z`` [m] (noise after the norm), shape (...)."""
-    r = np.asarray(z) - range_(X)
+    r = np.asarray(z) - range_of(X)
     return -0.5 * (r / sigma) ** 2 - _LOG_SQRT_2PI - np.log(sigma)

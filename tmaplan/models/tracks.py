@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.geometry import range_of
 
 __all__ = [
     "TrackModel",
@@ -246,14 +247,14 @@ def bearing_rows(d: np.ndarray, dpos: np.ndarray) -> np.ndarray:
 
 def range_rows(d: np.ndarray, dpos: np.ndarray) -> np.ndarray:
     """Rows ``∂R_k/∂θ``, shape (n, dim)."""
-    r = np.hypot(d[:, 0], d[:, 1])
+    r = range_of(d)
     return np.einsum("ni,nij->nj", d / r[:, None], dpos)
 
 
 def range_rate_rows(d: np.ndarray, w: np.ndarray, dpos: np.ndarray,
                     dvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Range rate ``Ṙ_k`` [m/s], shape (n,), and its rows ``∂Ṙ_k/∂θ``, shape (n, dim)."""
-    r = np.hypot(d[:, 0], d[:, 1])
+    r = range_of(d)
     u = d / r[:, None]
     rdot = np.sum(u * w, axis=-1)
     gp = (w - rdot[:, None] * u) / r[:, None]

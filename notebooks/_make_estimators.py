@@ -40,7 +40,7 @@ cells = [
         "print('estimate', r.params.round(4), 'cost', round(r.cost, 6))\n"
         "print('alternatives', [(a.round(4), round(c, 3)) for a, c in r.alternatives])\n"
         "assert r.ambiguous and r.alternatives[0][1] < 0.2"),
-    nbf.v4.new_markdown_cell("## PF vs PCRB (along the runs' truths, BENCHMARK §B2) on "
+    nbf.v4.new_markdown_cell("## PF vs PCRB (along the runs' truths; the ristic2004 benchmark) on "
                              "ristic-bot-moderate"),
     nbf.v4.new_code_cell(
         "sc = load_problem('ristic-bot-moderate')\n"

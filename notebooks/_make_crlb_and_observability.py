@@ -13,7 +13,8 @@ CELLS = [
 Reproduces clavard2013 **Table 1** (clockwise half turn, bearings only) and
 **Table 7** (mutual tracking BO-TMA vs BO-CTTMA), then shows one observable and one
 unobservable geometry with the rank test of lecadre1997 (§III–IV).
-The half-turn geometry (`clavard2013-halfturn-*`) is our reconstruction (see the errata, clavard2013)."""),
+The half-turn geometry (`clavard2013-halfturn-*`) is our reconstruction
+(see the errata, clavard2013)."""),
     ("code", """import numpy as np
 import matplotlib
 matplotlib.use("Agg")

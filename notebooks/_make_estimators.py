@@ -55,7 +55,8 @@ cells = [
         "Near the closest approach both *passing sides* of the observer fit the ranges. The\n"
         "sharma2024 recursion collapses the posterior to one Gaussian after every scan and has to\n"
         "pick a side; the default `range-only` filter keeps a Gaussian mixture over azimuth\n"
-        "sectors (the sharma2024 moment update of §III on each sector, Runnalls merging to 24 components).\n"
+        "sectors (the sharma2024 moment update of §III on each sector, Runnalls merging to 24\n"
+        "components).\n"
         "Same 20 runs for the three filters."),
     nbf.v4.new_code_cell(
         "from tmaplan.estimators import RangeOnlyConfig\n"

@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: test test-slow demo lint typecheck bench clean
+.PHONY: test test-slow demo docs lint typecheck bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 lint: $(STAMP)
-	$(BIN)/ruff check tmaplan tests $(wildcard benchmarks notebooks/*.py)
+	$(BIN)/ruff check tmaplan tests docs $(wildcard benchmarks notebooks/*.py)
 
 typecheck: $(STAMP)
 	$(BIN)/mypy --follow-imports=silent tests/typing/public_api.py
@@ -27,8 +27,18 @@ test-slow: $(STAMP)
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/tmaplan demo --out out
 
+DOCS_STAMP := $(VENV)/.installed-docs
+
+$(DOCS_STAMP): pyproject.toml $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[dev,docs]'
+	touch $(DOCS_STAMP)
+
+# The documentation site (docs/_build/html); every warning is an error.
+docs: $(DOCS_STAMP)
+	MPLBACKEND=Agg $(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(BIN)/python $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out .pytest_cache docs/_build docs/_generated docs/api

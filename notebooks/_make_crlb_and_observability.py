@@ -10,10 +10,11 @@ from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 CELLS = [
     ("md", """# Batch CRLB and observability
 
-Reproduces file 002 (Clavard et al. 2013) **Table 1** (clockwise half turn, bearings only) and
+Reproduces clavard2013 **Table 1** (clockwise half turn, bearings only) and
 **Table 7** (mutual tracking BO-TMA vs BO-CTTMA), then shows one observable and one
-unobservable geometry with file 003's rank test (Le Cadre & Jauffret 1997).
-The half-turn geometry is the reconstruction of NOTES_002 §4.4 (`clavard2013-halfturn-*`)."""),
+unobservable geometry with the rank test of lecadre1997 (§III–IV).
+The half-turn geometry (`clavard2013-halfturn-*`) is our reconstruction
+(see the errata, clavard2013)."""),
     ("code", """import numpy as np
 import matplotlib
 matplotlib.use("Agg")
@@ -63,9 +64,9 @@ for t_n, (p_tma, p_cttma) in paper.items():
 for t_n, (p_tma, p_cttma) in paper.items():
     assert abs(table7[t_n][0] / p_tma - 1) < 0.03
     assert abs(table7[t_n][1] / p_cttma - 1) < 0.03
-# with bearings only, the manoeuvring platform has the advantage (file 002 §V.1)
+# with bearings only, the manoeuvring platform has the advantage (clavard2013 §V.1)
 assert all(tma < cttma for tma, cttma in table7.values())"""),
-    ("md", """## An observable and an unobservable geometry (file 003)
+    ("md", """## An observable and an unobservable geometry (lecadre1997)
 
 A constant-velocity source at (5, 20) km seen by an observer at 5 m/s: straight (rank 3 of 4,
 the range scale is free) versus one turn after 20 samples (Property 1: rank 4 of 4)."""),
@@ -92,7 +93,7 @@ ax.set_xlabel("x (km)"); ax.set_ylabel("y (km)"); ax.legend(); ax.set_title("sam
 plt.close(fig)"""),
     ("code", """# scenario-level verdicts: a constant-turn source is observable from a straight
 # observer
-# (file 002 Result 1); the `default` straight-observer CV problem is not
+# (clavard2013 §II.2.a, Result 1); the `default` straight-observer CV problem is not
 print(observability(load_problem("clavard2013-halfturn-acw"), frequencies=0).verdict)
 print(observability(load_problem("default")).verdict)
 assert observability(load_problem("clavard2013-halfturn-acw"), frequencies=0).observable

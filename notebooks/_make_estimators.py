@@ -14,8 +14,8 @@ cells = [
                          "from tmaplan.scenario import load_problem\n"
                          "from tmaplan.estimators import monte_carlo, MLEConfig"),
     nbf.v4.new_markdown_cell(
-        "## MLE vs CRLB, file 002 half turn (Table 1, bearings only)\n"
-        "The problem's `[estimation]` section searches the clockwise sense only, as file 002's\n"
+        "## MLE vs CRLB, clavard2013 half turn (Table 1, bearings only)\n"
+        "The problem's `[estimation]` section searches the clockwise sense only, as clavard2013's\n"
         "Table 1 shows its search did (see the next section). Final-range RMSE against the\n"
         "CRLB's range std (the paper's RERMSE vs RSD); 40 runs."),
     nbf.v4.new_code_cell(
@@ -40,7 +40,7 @@ cells = [
         "print('estimate', r.params.round(4), 'cost', round(r.cost, 6))\n"
         "print('alternatives', [(a.round(4), round(c, 3)) for a, c in r.alternatives])\n"
         "assert r.ambiguous and r.alternatives[0][1] < 0.2"),
-    nbf.v4.new_markdown_cell("## PF vs PCRB (along the runs' truths, BENCHMARK §B2) on "
+    nbf.v4.new_markdown_cell("## PF vs PCRB (along the runs' truths; the ristic2004 benchmark) on "
                              "ristic-bot-moderate"),
     nbf.v4.new_code_cell(
         "sc = load_problem('ristic-bot-moderate')\n"
@@ -52,10 +52,11 @@ cells = [
         "assert np.all(pf.rmse_position[18:] < 3.0 * pf.bound_position[18:])"),
     nbf.v4.new_markdown_cell(
         "## Range-only filter vs PF on sharma2024-range-only\n"
-        "Near the closest approach both *passing sides* of the observer fit the ranges. File\n"
-        "004's recursion collapses the posterior to one Gaussian after every scan and has to\n"
+        "Near the closest approach both *passing sides* of the observer fit the ranges. The\n"
+        "sharma2024 recursion collapses the posterior to one Gaussian after every scan and has to\n"
         "pick a side; the default `range-only` filter keeps a Gaussian mixture over azimuth\n"
-        "sectors (file 004's moment update on each sector, Runnalls merging to 24 components).\n"
+        "sectors (the sharma2024 moment update of §III on each sector, Runnalls merging to 24\n"
+        "components).\n"
         "Same 20 runs for the three filters."),
     nbf.v4.new_code_cell(
         "from tmaplan.estimators import RangeOnlyConfig\n"
@@ -64,7 +65,7 @@ cells = [
         "paper = monte_carlo(sc, RangeOnlyConfig(dt=sc.time.dt, q=sc.target.q, mode='moments'),\n"
         "                    runs=20, seed=4, bound=False)\n"
         "pfr = monte_carlo(sc, 'pf', runs=20, seed=4, n_particles=10_000, bound=False)\n"
-        "for name, res in [('mixture', ro), ('file 004 single Gaussian', paper), "
+        "for name, res in [('mixture', ro), ('sharma2024 single Gaussian', paper), "
         "('PF 1e4', pfr)]:\n"
         "    plt.plot(res.times / 60, res.rmse_position, label=name)\n"
         "    print(f'{name:>26}: final RMSE {res.rmse_position[-1]:6.0f} m, '\n"

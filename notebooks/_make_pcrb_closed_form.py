@@ -9,8 +9,8 @@ import nbformat as nbf
 
 cells = [
     nbf.v4.new_markdown_cell(
-        "# Closed-form PCRB in log-polar coordinates (file 000, Figs. 6–11)\n\n"
-        "Bréhard & Le Cadre's closed-form PCRB with the corrections of NOTES_000 (information in "
+        "# Closed-form PCRB in log-polar coordinates (brehard2005, Figs. 6–11)\n\n"
+        "The closed-form PCRB of brehard2005 (§4) with the corrections listed in the errata (information in "
         "the Tichavský bracket, true Jacobian, 𝒞 = diag(0, 8, 96, 96), exact moments), compared "
         "with a Monte Carlo Tichavský recursion with exact scores (small sample size here so the "
         "notebook runs fast; the 20 000-sample comparison is a slow test)."),
@@ -69,7 +69,7 @@ cells = [
         "print('final range bound: passive %.0f m, pinging %.0f m' % (cf0.range_bound[-1], cfp.range_bound[-1]))"),
     nbf.v4.new_markdown_cell(
         "## Side assumption\nκ_k = π·p_β(π/2): where it is not small the β bound is not valid "
-        "(file 000 eq. 25–27). Scenario 2 crosses abeam near 2722 s."),
+        "(brehard2005 §3.2, eqs. 25–27). Scenario 2 crosses abeam near 2722 s."),
     nbf.v4.new_code_cell(
         "k1, k2 = np.pi * res['s1'][0].side_density, np.pi * res['s2'][0].side_density\n"
         "plt.figure(figsize=(6, 3)); plt.semilogy(s1.times, k1 + 1e-12, label='s1')\n"

@@ -17,7 +17,7 @@ plan_cells = [
         "# Planning an observer manoeuvre (issue 6)\n\n"
         "On the `default` problem (own ship 6 kn, max turn 0.5 °/s, contact bearing 045° ± 2°, "
         "range 5–25 km), plan the turn-rate sequence that minimises the closed-form PCRB range "
-        "bound at the end of the 45 min horizon (file 000, corrected), and compare it with the "
+        "bound at the end of the 45 min horizon (brehard2005 §4, corrected), and compare it with the "
         "straight course, every single course change of a grid and zig-zags."),
     nbf.v4.new_code_cell(
         "import numpy as np\nimport matplotlib\nmatplotlib.use('Agg')\nimport matplotlib.pyplot as plt\n"
@@ -59,10 +59,10 @@ plan_cells = [
         "warm = planner.solve(belief, warm_start=plan)\n"
         "print(f'warm re-solve: {warm.seconds:.3f} s, {warm.iterations} iterations')"),
     nbf.v4.new_markdown_cell(
-        "## File 003: the bang-bang result in bearing rate\n\n"
+        "## lecadre1997 §VII: the bang-bang result in bearing rate\n\n"
         "Under the long-range hypothesis with the bearing rate as the control, two legs with a "
-        "fixed switch give |θ̇₁| = |θ̇₂| = θ̇max with opposite signs (eq. 87); with a free "
-        "switch time the optimum has a single switch near N/3 or 2N/3 (NOTES_003 §3.7), not the "
+        "fixed switch give |θ̇₁| = |θ̇₂| = θ̇max with opposite signs (lecadre1997 eq. 87); with a free "
+        "switch time the optimum has a single switch near N/3 or 2N/3 (lecadre1997 §VII, see the errata), not the "
         "printed alternating three-leg sequence."),
     nbf.v4.new_code_cell(
         "from tmaplan.planning import bearing_rate_plan\n"

@@ -10,6 +10,7 @@ import os
 import tomllib
 from collections.abc import Mapping
 from functools import cache
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -123,20 +124,35 @@ def loads(text: str, *, source: str | None = None) -> Scenario:
 
 
 def problems_dir() -> Path:
-    """Directory of the built-in problem files (``$TMAPLAN_PROBLEMS`` overrides)."""
+    """Directory of the built-in problem files (``$TMAPLAN_PROBLEMS`` overrides).
+
+    The files are package data of :mod:`tmaplan`, found with :func:`importlib.resources.files`
+    in a source checkout, an editable install and an installed wheel alike (in the repository,
+    ``tmaplan/problems`` is a link to the top-level ``problems/`` folder).
+    """
     env = os.environ.get("TMAPLAN_PROBLEMS")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parent.parent / "problems"
+    return Path(str(resources.files("tmaplan") / "problems"))
 
 
 def list_problems() -> list[dict[str, str]]:
-    """Built-in problems as ``[{name, description}]``, sorted by name."""
+    """Built-in problems as ``[{name, description}]``, sorted by name.
+
+    Raises
+    ------
+    ScenarioError
+        If the problem folder holds no ``.toml`` file (a broken installation).
+    """
+    folder = problems_dir()
     out = []
-    for path in sorted(problems_dir().glob("*.toml")):
+    for path in sorted(folder.glob("*.toml")):
         with path.open("rb") as fh:
             data = tomllib.load(fh)
         out.append({"name": path.stem, "description": str(data.get("description", ""))})
+    if not out:
+        raise ScenarioError("problems", "built-in problem files (*.toml) in the package",
+                            f"none in {folder}")
     return out
 
 

@@ -9,9 +9,9 @@ Exact values
     casadi SX/MX symbols (the planner's ``logdet`` and relative-range objectives).
     :func:`logdet_fim_from_bearings` takes measured bearings and (assumed) ranges.
 
-File 003's identities and bearing-rate approximations (constant range, unit sampling period,
-``(σr)^8 det F`` normalisation; rates in rad per sample)
-    :func:`det4_subset` (general 4-sample identity, NOTES_003 §3.5), :func:`det4_eq68`
+File 003's identities and bearing-rate approximations
+    Constant range, unit sampling period, ``(σr)^8 det F`` normalisation, rates in rad per
+    sample. :func:`det4_subset` (general 4-sample identity, NOTES_003 §3.5), :func:`det4_eq68`
     (eq. 68, expanded form), :func:`det4_second_order` (Property 5, eq. 69),
     :func:`nardone_aidala` (eq. 71/73 with the third derivative restored),
     :func:`single_leg_det` (Result 1, eq. 76, with the corrected ℓ = 8 coefficient 3876),

@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="coordinates (closed form: lpc only; default lpc for the closed "
                              "form, cartesian for Monte Carlo)")
     parser.add_argument("--samples", type=int, default=1000,
-                        help="Monte Carlo samples (default 1000, as file 000 L612)")
+                        help="Monte Carlo samples (default 1000, as brehard2005 §6)")
     pings = parser.add_mutually_exclusive_group()
     pings.add_argument("--ping-every", type=float, metavar="SEC",
                        help="a range ping at the first step at or after each multiple of SEC")

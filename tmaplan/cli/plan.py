@@ -1,4 +1,4 @@
-"""``tmaplan plan P [--objective ...] [--horizon SEC] [--out DIR] --json``: optimal headings."""
+"""``tmaplan plan P [--objective …] [--horizon SEC] [--out DIR] --json``: optimal headings."""
 
 from __future__ import annotations
 

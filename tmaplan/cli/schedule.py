@@ -1,4 +1,4 @@
-"""``tmaplan schedule P --budget K [--method ...] [--objective ...] --json``: ping times."""
+"""``tmaplan schedule P --budget K [--method …] [--objective …] --json``: ping times."""
 
 from __future__ import annotations
 

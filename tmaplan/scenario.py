@@ -202,10 +202,18 @@ class Prior:
     position; range from ``range_distribution`` (``normal``: N(range_mean, range_std²)
     truncated to [range_min, range_max]; ``uniform`` or ``log-uniform`` on
     [range_min, range_max]); velocity either Cartesian normal (``velocity_mean``,
-    ``velocity_std`` per axis) or speed/course (``speed-course``). ``None`` means values are
-    taken from the true initial state (the papers' "prior centred on the truth").
-    ``kind = "gaussian"``: absolute Cartesian N(mean, diag(std²)) with mean/std in
-    [x, y, v_x, v_y] order.
+    ``velocity_std`` > 0 per axis) or speed/course (``speed-course``: ``speed_distribution``
+    and ``course_mode`` are then required). ``kind = "gaussian"``: absolute Cartesian
+    N(mean, diag(std²)) with mean/std in [x, y, v_x, v_y] order.
+
+    A prior never takes the truth silently. A mean left out (``bearing_mean``, ``range_mean``
+    for a normal range, ``velocity_mean`` for a normal velocity, ``speed_mean`` for a normal
+    speed, ``mean`` of a gaussian prior) is the target's true initial value only with
+    ``centred_on_truth = true`` — the papers' "prior centred on the truth" used by bounds
+    (brehard2005, L612) and benchmarks (ristic2004, B2) — and is an error naming the key
+    otherwise; ``course_mode = "true"`` takes the true course explicitly. A velocity prior is
+    required: no defaults stand in for it. :attr:`truth_fields` lists what is taken from the
+    truth; the command line notes it on every run.
 
     Attributes
     ----------
@@ -229,9 +237,10 @@ class Prior:
     speed_distribution : {"normal", "uniform"}
     speed_mean, speed_std, speed_min, speed_max : float
         [m/s]; speed_mean None: true speed.
-    course_mode : {"true", "given", "reciprocal-bearing", "uniform"}
+    course_mode : {"true", "given", "reciprocal-bearing", "uniform"}, optional
         Course mean: the true course, ``course_mean``, the bearing + π (target heading at the
-        observer, Ristic et al. 2004), or uniform on the circle.
+        observer, Ristic et al. 2004), or uniform on the circle. Required for
+        ``speed-course``.
     course_mean, course_std : float, optional
         [rad].
     mean, std : tuple of 4 floats, optional
@@ -240,6 +249,8 @@ class Prior:
         Number of prior samples used where a bound needs prior moments (file 000 eq. 56).
     seed : int
         Seed of those samples, so bounds are reproducible.
+    centred_on_truth : bool
+        Allow omitted means to be the target's true initial values (see above).
     """
 
     kind: Literal["polar", "gaussian"] = "polar"
@@ -258,13 +269,36 @@ class Prior:
     speed_std: NonNegSpeed = 0.0
     speed_min: NonNegSpeed = 0.0
     speed_max: PositiveSpeed | None = None
-    course_mode: Literal["true", "given", "reciprocal-bearing", "uniform"] = "true"
+    course_mode: Literal["true", "given", "reciprocal-bearing", "uniform"] | None = None
     course_mean: Angle | None = None
     course_std: NonNegAngle = 0.0
     mean: tuple[Length, Length, Speed, Speed] | None = None
     std: tuple[NonNegLength, NonNegLength, NonNegSpeed, NonNegSpeed] | None = None
     samples: PositiveInt = 100_000
     seed: NonNegInt = 0
+    centred_on_truth: bool = False
+
+    @property
+    def truth_fields(self) -> tuple[str, ...]:
+        """Names of the fields whose value is the target's true initial value (omitted means,
+        and ``course_mode`` when it is "true"), in file order; empty for a prior that does
+        not use the truth."""
+        if self.kind == "gaussian":
+            return ("mean",) if self.mean is None else ()
+        out = []
+        if self.bearing_mean is None:
+            out.append("bearing_mean")
+        if self.range_distribution == "normal" and self.range_mean is None:
+            out.append("range_mean")
+        if self.velocity_distribution == "normal":
+            if self.velocity_mean is None:
+                out.append("velocity_mean")
+        else:
+            if self.speed_distribution == "normal" and self.speed_mean is None:
+                out.append("speed_mean")
+            if self.course_mode == "true":
+                out.append("course_mode")
+        return tuple(out)
 
 
 @_frozen

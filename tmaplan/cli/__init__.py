@@ -2,8 +2,10 @@
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
 ``add_arguments(parser)`` and ``run(args) -> dict | None``; the returned dict is written as JSON
-to ``--json PATH`` (``-`` for stdout). Errors exit non-zero with one line on stderr (a traceback
-only with ``--debug``).
+to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
+Argument types, limits and the up-front checks that need the scenario live in
+:mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
+with one line on stderr (a traceback only with ``--debug``).
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from tmaplan import __version__
+from tmaplan.cli._args import OneLineParser, UsageError, preflight
 
 __all__ = ["VERBS", "main", "write_json"]
 
@@ -69,10 +74,11 @@ def write_json(payload: Any, path: str) -> None:
 
 
 def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="tmaplan",
         description="Observer-trajectory planning and sensor management for TMA.",
     )
+    parser.add_argument("--version", action="version", version=f"tmaplan {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="verb", metavar="VERB")
     modules: dict[str, Any] = {}
@@ -93,14 +99,31 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``tmaplan`` command. Returns the exit status."""
+    """Entry point of the ``tmaplan`` command. Returns the exit status.
+
+    0 on success, 1 on any error (one line on stderr), 2 without a verb (help), 130 when
+    interrupted.
+    """
     parser, modules = _build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        print(str(exc).replace("\n", " "), file=sys.stderr)
+        return 1
     if not args.verb:
         parser.print_help()
         return 2
     try:
+        problem = None
+        if getattr(args, "problem", None) is not None:
+            from tmaplan.scenario import load
+
+            scenario = load(args.problem)
+            problem = scenario.name
+            preflight(args, scenario)
         payload = modules[args.verb].run(args)
+        if isinstance(payload, dict) and problem is not None:
+            payload.setdefault("problem", problem)
         if args.json is not None and payload is not None:
             write_json(payload, args.json)
     except KeyboardInterrupt:

@@ -1,7 +1,8 @@
 """Command line interface ``tmaplan`` (DESIGN §4).
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
-``add_arguments(parser)`` and ``run(args) -> dict | None``; the returned dict is written as JSON
+``add_arguments(parser)``, ``run(args) -> dict | None`` and, for a verb without a problem
+argument that works on a fixed problem, ``PROBLEM`` (its name); the returned dict is written as JSON
 to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
 Argument types, limits and the up-front checks that need the scenario live in
 :mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
@@ -115,10 +116,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         problem = None
-        if getattr(args, "problem", None) is not None:
+        # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
+        name = getattr(args, "problem", None) or getattr(modules[args.verb], "PROBLEM", None)
+        if name is not None:
             from tmaplan.scenario import load
 
-            scenario = load(args.problem)
+            scenario = load(name)
             problem = scenario.name
             preflight(args, scenario)
         payload = modules[args.verb].run(args)

@@ -275,15 +275,15 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
                               _seconds_text(tc), scenario)
     if args.horizon is None:
         return
-    n = args.horizon / tc
-    if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
-        raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
-                          f"{_seconds_text(tc)}", _seconds_text(args.horizon), scenario)
     k = round(args.horizon / dt)
     if k > MAX_PLAN_STEPS:
         raise _flag_error("--horizon", f"at most {MAX_PLAN_STEPS} steps of dt = {dt:g} s "
                           f"({_seconds_text(MAX_PLAN_STEPS * dt)}, documented limit)",
                           f"{_seconds_text(args.horizon)} = {k} steps", scenario)
+    n = args.horizon / tc
+    if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+        raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
+                          f"{_seconds_text(tc)}", _seconds_text(args.horizon), scenario)
 
 
 def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
@@ -293,6 +293,13 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
     if args.ping_steps is not None and max(args.ping_steps) > scenario.n_steps:
         raise _flag_error("--ping-steps", f"steps within 0..{scenario.n_steps}",
                           max(args.ping_steps), scenario)
+
+
+def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
+    if args.observer_plan is not None:
+        from tmaplan.cli.schedule import read_observer_plan
+
+        read_observer_plan(args.observer_plan, scenario)
 
 
 def _resolution(scenario: Any) -> tuple[float, str]:
@@ -363,17 +370,20 @@ def _truth_note(verb: str, scenario: Any) -> None:
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
-    Prints a one-line note on stderr when the scenario's prior takes values from the truth
-    (``prior.centred_on_truth`` or ``course_mode = "true"``), and raises
+    Raises
     :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
-    below dt or ``--ping-steps`` beyond the horizon; ``track`` estimator/bound combinations
+    below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
+    of this problem on its grid; ``track`` estimator/bound combinations
     that cannot give a number (``--bound prior`` (no range bound; with ``mle``: not used),
     ``range-only`` without ranges, ``mle`` on a target whose process noise drifts more than
     :data:`MLE_DRIFT_RATIO_MAX` times the finest measurement noise over the horizon, the
-    drift being the NCV position std ``sqrt(q T³/3)``).
+    drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line note on
+    stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
+    or ``course_mode = "true"``): every run of such a problem says so.
     """
-    _truth_note(args.verb, scenario)
-    check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track}.get(args.verb)
+    check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
+             "schedule": _check_schedule}.get(args.verb)
     if check is not None:
         check(args, scenario)
+    _truth_note(args.verb, scenario)

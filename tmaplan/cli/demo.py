@@ -38,6 +38,9 @@ from tmaplan.scenario import dump, load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
+#: The problem the demo works on.
+PROBLEM = "default"
+
 #: Policies compared by the demo (manoeuvre[+ping]).
 DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
                  "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
@@ -71,7 +74,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             raise PlanningError(f"{name}: expected >= {low}, received {value}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    scenario = load_problem("default")
+    scenario = load_problem(PROBLEM)
     belief = Belief.from_prior(scenario)
 
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")

@@ -58,6 +58,7 @@ RANGE_CASES = [
     (["crlb", "clavard2013-halfturn-cw", "--frequencies", "-1"], "--frequencies must be >= 0"),
     (["plan", "default", "--objective", "nope"], "invalid choice: 'nope'"),
     (["plan"], "the following arguments are required: problem"),
+    (["plan", "default", "--frob", "2"], "unrecognized arguments: --frob 2 (see 'tmaplan plan"),
 ]
 
 

@@ -74,7 +74,8 @@ def write_json(payload: Any, path: str) -> None:
         Path(path).write_text(text + "\n", encoding="utf-8")
 
 
-def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
+def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
+                             dict[str, argparse.ArgumentParser]]:
     parser = OneLineParser(
         prog="tmaplan",
         description="Observer-trajectory planning and sensor management for TMA.",
@@ -83,6 +84,7 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="verb", metavar="VERB")
     modules: dict[str, Any] = {}
+    parsers: dict[str, argparse.ArgumentParser] = {}
     for verb, modname in VERBS.items():
         try:
             mod = importlib.import_module(f"tmaplan.cli.{modname}")
@@ -96,7 +98,8 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
         p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
         mod.add_arguments(p)
         modules[verb] = mod
-    return parser, modules
+        parsers[verb] = p
+    return parser, modules, parsers
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -105,9 +108,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     0 on success, 1 on any error (one line on stderr), 2 without a verb (help), 130 when
     interrupted.
     """
-    parser, modules = _build_parser()
+    parser, modules, parsers = _build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # reported by the verb's parser, whose --help lists what it takes
+            parsers.get(args.verb, parser).error(f"unrecognized arguments: {' '.join(extra)}")
     except UsageError as exc:
         print(str(exc).replace("\n", " "), file=sys.stderr)
         return 1

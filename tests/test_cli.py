@@ -79,6 +79,6 @@ def test_demo_writes_report(tmp_path):
     d = json.loads(js.read_text())
     from tmaplan.cli.demo import DEMO_POLICIES
 
-    assert set(d["policies"]) == set(DEMO_POLICIES)
+    assert set(d["policies"]) == set(DEMO_POLICIES) and d["problem"] == "default"
     assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
     assert d["schedule"]["objective"] <= d["schedule"]["uniform_objective"]

@@ -48,6 +48,8 @@ RANGE_CASES = [
     (["track", "default", "--particles", "1"], "--particles must be >= 2, received 1"),
     (["track", "default", "--particles", "10000000"], "--particles must be <= 1000000"),
     (["track", "default", "--seed", "-1"], "--seed must be >= 0, received -1"),
+    (["track", "default", "--particles", "1e4", "--runs", "1.5"],  # 1e4 is an integer
+     "--runs must be an integer >= 1, received '1.5'"),
     (["compare", "default", "--accuracy", "0"], "--accuracy must be in (0, 1), received 0.0"),
     (["compare", "default", "--accuracy", "10 %", "--workers", "1000"],
      "--workers must be <= 256"),

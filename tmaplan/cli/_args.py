@@ -123,7 +123,13 @@ def integer(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
         try:
             value = int(text)
         except ValueError:
-            _fail(f"an integer >= {minimum}", repr(text))
+            try:  # "1e4" is an integer too
+                number = float(text)
+            except ValueError:
+                number = math.nan
+            if not (math.isfinite(number) and number.is_integer()):
+                _fail(f"an integer >= {minimum}", repr(text))
+            value = int(number)
         if value < minimum:
             _fail(f">= {minimum}", value)
         if maximum is not None and value > maximum:
@@ -308,13 +314,17 @@ def _resolution(scenario: Any) -> tuple[float, str]:
     from tmaplan.simulate import simulate
 
     rel = simulate(scenario, None).relative
-    r_min = float(np.min(np.hypot(rel[:, 0], rel[:, 1])))
+    r = np.hypot(rel[:, 0], rel[:, 1])
     best = (math.inf, "")
     for sen in scenario.sensors:
+        steps = measurement_steps(sen, scenario.time)
+        if not steps.size:
+            continue
         if sen.kind == "bearing":
+            r_min = float(np.min(r[steps]))
             best = min(best, (sen.sigma * r_min, f"bearing noise {np.degrees(sen.sigma):.3g}° "
                               f"at {r_min / 1e3:.3g} km"))
-        elif sen.kind == "range" and measurement_steps(sen, scenario.time).size:
+        elif sen.kind == "range":
             best = min(best, (sen.sigma, f"range noise {sen.sigma:g} m"))
     return best
 

@@ -170,7 +170,7 @@ def test_truth_centred_prior_is_noted_on_every_run(capsys):
     assert main(["bound", "brehard2005-s1", "--no-figure", "--json", "-"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
-    assert "note: brehard2005-s1: the prior is centred on the target's true initial state" \
+    assert "warning: brehard2005-s1: the prior is centred on the target's true initial state" \
         in err[0]
     assert "prior.bearing_mean, prior.range_mean, prior.velocity_mean" in err[0]
     assert main(["schedule", "default", "--budget", "1", "--method", "greedy", "--no-figure",
@@ -246,9 +246,19 @@ def test_a_scenario_written_from_the_readme_plans_and_compares(tmp_path, capsys)
     out = capsys.readouterr()
     d = json.loads(out.out)
     assert d["problem"] == "my-case" and d["objective"] < d["baselines"]["straight"]
-    assert "note" not in out.err  # the README's prior does not use the truth
+    assert "warning" not in out.err  # the README's prior does not use the truth
     assert main(["compare", str(f), "--policies", "straight,planned+scheduled", "--runs", "2",
                  "--particles", "300", "--out", str(tmp_path / "cmp"), "--json", "-"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["problem"] == "my-case" and set(d["policies"]) == {"straight", "planned+scheduled"}
     assert all(np.isfinite(p["final_range_rmse"]) for p in d["policies"].values())
+
+
+def test_simulate_summary_is_named_in_minutes_and_has_no_prior_warning(capsys):
+    # simulate does not read the prior, so the truth-centred prior of brehard2005-s2 is not
+    # flagged there; its console line names what it counts, times in minutes
+    assert main(["simulate", "brehard2005-s2", "--no-figure"]) == 0
+    out = capsys.readouterr()
+    assert out.err == ""
+    assert "1000 steps of 6 s over 100 min" in out.out
+    assert "1000 bearing (sensors[0])" in out.out

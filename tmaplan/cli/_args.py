@@ -368,11 +368,17 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
                 f"use --estimator {alt}", est, scenario)
 
 
+#: Verbs whose results depend on the prior (the others do not read it).
+_PRIOR_VERBS = frozenset({"bound", "track", "plan", "schedule", "compare", "demo"})
+
+
 def _truth_note(verb: str, scenario: Any) -> None:
+    if verb not in _PRIOR_VERBS:
+        return
     p = scenario.prior
     fields = p.truth_fields if p is not None else ()
     if fields:
-        print(f"tmaplan {verb}: note: {scenario.name}: the prior is centred on the target's "
+        print(f"tmaplan {verb}: warning: {scenario.name}: the prior is centred on the target's "
               f"true initial state ({', '.join('prior.' + f for f in fields)} from the truth)",
               file=sys.stderr)
 
@@ -388,9 +394,9 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     that cannot give a number (``--bound prior`` (no range bound; with ``mle``: not used),
     ``range-only`` without ranges, ``mle`` on a target whose process noise drifts more than
     :data:`MLE_DRIFT_RATIO_MAX` times the finest measurement noise over the horizon, the
-    drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line note on
+    drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line warning on
     stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
-    or ``course_mode = "true"``): every run of such a problem says so.
+    or ``course_mode = "true"``): every run of a verb that uses the prior says so.
     """
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule}.get(args.verb)

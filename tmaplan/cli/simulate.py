@@ -29,6 +29,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     sim = simulate(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
+    if args.json != "-":
+        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])" for m in sim.measurements)
+        r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
+        print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
+              f"{scenario.time.dt:g} s over {scenario.time.horizon / 60:g} min; range "
+              f"{r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km (min {r.min() / 1e3:.2f} km); "
+              f"measurements: {counts or 'none'}")
     if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_geometry.png"
         plot_geometry(sim, path)

@@ -30,7 +30,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     payload = sim.to_json()
     payload["seed"] = args.seed
     if args.json != "-":
-        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])" for m in sim.measurements)
+        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
+                           for m in sim.measurements)
         r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
         print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
               f"{scenario.time.dt:g} s over {scenario.time.horizon / 60:g} min; range "

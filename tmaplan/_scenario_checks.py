@@ -31,7 +31,8 @@ import numpy as np
 from tmaplan.errors import ScenarioError
 from tmaplan.units import KNOT
 
-__all__ = ["BARE_LIMITS", "MAX_SPEED", "check", "check_bare_numbers", "with_units"]
+__all__ = ["BARE_LIMITS", "MAX_SPEED", "check", "check_bare_numbers", "truth_fields",
+           "with_units"]
 
 MAX_SPEED = 150.0
 """Largest plausible platform speed [m/s] (≈ 292 kn)."""
@@ -364,6 +365,27 @@ def _check_speeds(s: Any, source: str | None) -> None:
                        f"{v:.6g} m/s ({v / KNOT:.5g} kn)", source)
 
 
+def truth_fields(p: Any) -> tuple[str, ...]:
+    """Fields of prior ``p`` whose value is the target's true initial value, in file order
+    (see :class:`tmaplan.scenario.Prior`)."""
+    if p.kind == "gaussian":
+        return ("mean",) if p.mean is None else ()
+    out = []
+    if p.bearing_mean is None:
+        out.append("bearing_mean")
+    if p.range_distribution == "normal" and p.range_mean is None:
+        out.append("range_mean")
+    if p.velocity_distribution == "normal":
+        if p.velocity_mean is None:
+            out.append("velocity_mean")
+    else:
+        if p.speed_distribution == "normal" and p.speed_mean is None:
+            out.append("speed_mean")
+        if p.course_mode == "true":
+            out.append("course_mode")
+    return tuple(out)
+
+
 def _check_prior(p: Any, source: str | None) -> None:
     """A prior states its velocity and never takes the truth silently."""
     if p.kind == "polar":
@@ -380,7 +402,7 @@ def _check_prior(p: Any, source: str | None) -> None:
                        "on purpose)", None, source)
     if p.centred_on_truth:
         return
-    for name in p.truth_fields:
+    for name in truth_fields(p):
         if name == "course_mode":  # "true" is itself the explicit choice
             continue
         raise _err(f"prior.{name}", f"a value: without '{name}' the prior would take the "

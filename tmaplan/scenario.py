@@ -206,14 +206,12 @@ class Prior:
     and ``course_mode`` are then required). ``kind = "gaussian"``: absolute Cartesian
     N(mean, diag(std²)) with mean/std in [x, y, v_x, v_y] order.
 
-    A prior never takes the truth silently. A mean left out (``bearing_mean``, ``range_mean``
-    for a normal range, ``velocity_mean`` for a normal velocity, ``speed_mean`` for a normal
-    speed, ``mean`` of a gaussian prior) is the target's true initial value only with
-    ``centred_on_truth = true`` — the papers' "prior centred on the truth" used by bounds
-    (brehard2005, L612) and benchmarks (ristic2004, B2) — and is an error naming the key
-    otherwise; ``course_mode = "true"`` takes the true course explicitly. A velocity prior is
-    required: no defaults stand in for it. :attr:`truth_fields` lists what is taken from the
-    truth; the command line notes it on every run.
+    A prior never takes the truth silently: a mean left out (``bearing_mean``, ``range_mean``,
+    ``velocity_mean``, ``speed_mean`` of normal distributions, a gaussian ``mean``) is the true
+    initial value only with ``centred_on_truth = true`` (the papers' "prior centred on the
+    truth", brehard2005 L612, ristic2004 B2), else an error naming the key; ``course_mode =
+    "true"`` is explicit. A velocity prior is required. :attr:`truth_fields` lists what comes
+    from the truth; the command line warns about it on every run.
 
     Attributes
     ----------
@@ -280,25 +278,11 @@ class Prior:
 
     @property
     def truth_fields(self) -> tuple[str, ...]:
-        """Names of the fields whose value is the target's true initial value (omitted means,
-        and ``course_mode`` when it is "true"), in file order; empty for a prior that does
-        not use the truth."""
-        if self.kind == "gaussian":
-            return ("mean",) if self.mean is None else ()
-        out = []
-        if self.bearing_mean is None:
-            out.append("bearing_mean")
-        if self.range_distribution == "normal" and self.range_mean is None:
-            out.append("range_mean")
-        if self.velocity_distribution == "normal":
-            if self.velocity_mean is None:
-                out.append("velocity_mean")
-        else:
-            if self.speed_distribution == "normal" and self.speed_mean is None:
-                out.append("speed_mean")
-            if self.course_mode == "true":
-                out.append("course_mode")
-        return tuple(out)
+        """Fields whose value is the target's true initial value (omitted means, and
+        ``course_mode`` when "true"), in file order; empty if the prior does not use it."""
+        from tmaplan._scenario_checks import truth_fields
+
+        return truth_fields(self)
 
 
 @_frozen

@@ -333,8 +333,7 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
     from tmaplan.scenario import measurement_steps
 
     est = args.estimator
-    filters = est != "mle"
-    if args.bound == "prior" and not filters:
+    if args.bound == "prior" and est == "mle":
         raise _flag_error("--bound", "'truth' (the default) with --estimator mle: the MLE is "
                           "compared with the batch CRLB at the truth, --bound chooses the "
                           "filters' PCRB", args.bound, scenario)
@@ -386,8 +385,7 @@ def _truth_note(verb: str, scenario: Any) -> None:
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
-    Raises
-    :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
+    Raises :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
     of this problem on its grid; ``track`` estimator/bound combinations

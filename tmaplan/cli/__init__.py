@@ -23,6 +23,7 @@ import numpy as np
 
 from tmaplan import __version__
 from tmaplan.cli._args import OneLineParser, UsageError, preflight
+from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
 
@@ -122,11 +123,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         problem = None
         # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
-        name = getattr(args, "problem", None) or getattr(modules[args.verb], "PROBLEM", None)
-        if name is not None:
-            from tmaplan.scenario import load
-
-            scenario = load(name)
+        fixed = getattr(modules[args.verb], "PROBLEM", None)
+        if getattr(args, "problem", None) is not None or fixed is not None:
+            scenario = load(args.problem) if fixed is None else load_problem(fixed)
             problem = scenario.name
             preflight(args, scenario)
         payload = modules[args.verb].run(args)

@@ -37,7 +37,7 @@ def test_simulate_writes_json_and_figure(tmp_path):
 def test_same_seed_same_json(tmp_path):
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     for p in (a, b):
-        assert main(["simulate", "default", "--seed", "3", "--no-plot", "--json", str(p)]) == 0
+        assert main(["simulate", "default", "--seed", "3", "--no-figure", "--json", str(p)]) == 0
     assert a.read_text() == b.read_text()
 
 
@@ -79,6 +79,6 @@ def test_demo_writes_report(tmp_path):
     d = json.loads(js.read_text())
     from tmaplan.cli.demo import DEMO_POLICIES
 
-    assert set(d["policies"]) == set(DEMO_POLICIES)
+    assert set(d["policies"]) == set(DEMO_POLICIES) and d["problem"] == "default"
     assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
     assert d["schedule"]["objective"] <= d["schedule"]["uniform_objective"]

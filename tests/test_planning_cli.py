@@ -44,7 +44,7 @@ def test_schedule_json_stdout(tmp_path, capsys):
 
 
 def test_schedule_error_is_one_line(capsys):
-    rc = main(["schedule", "default", "--budget", "1000", "--no-plot", "--json", "-"])
+    rc = main(["schedule", "default", "--budget", "1000", "--no-figure", "--json", "-"])
     assert rc == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "budget" in err[0]

@@ -49,6 +49,7 @@ def scenario_dicts(draw):
             "range_std": float(r0 * draw(st.floats(0.05, 0.5))),
             "range_min": "100 m",
             "velocity_std": "2 m/s",
+            "centred_on_truth": True,
             "samples": 2000,
         },
     }

@@ -189,3 +189,129 @@ def test_turn_rate_sequence_length_and_limit():
 def test_bad_toml_is_a_scenario_error():
     with pytest.raises(ScenarioError, match="valid TOML"):
         loads("name = ")
+
+
+# ------------------------------------------------------------------ priors and the truth
+TRUTH_FIELDS = {
+    "brehard2004-mp": ("bearing_mean",),
+    "brehard2005-s1": ("bearing_mean", "range_mean", "velocity_mean"),
+    "brehard2005-s2": ("bearing_mean", "range_mean", "velocity_mean"),
+    "ristic-bot-moderate": ("bearing_mean", "range_mean", "speed_mean"),
+    "ristic-bot-high": ("bearing_mean", "range_mean", "speed_mean"),
+    "sharma2024-range-only": ("bearing_mean", "range_mean"),
+    "default": (),
+    "gordon1993-bot": (),
+}
+
+
+@pytest.mark.parametrize("name", sorted(TRUTH_FIELDS))
+def test_builtin_priors_say_what_they_take_from_the_truth(name):
+    p = load_problem(name).prior
+    assert p.truth_fields == TRUTH_FIELDS[name]
+    assert p.centred_on_truth == bool(TRUTH_FIELDS[name])
+    if p.centred_on_truth:  # without the opt-in the same file is refused, naming the key
+        d = tomllib.loads((problems_dir() / f"{name}.toml").read_text())
+        del d["prior"]["centred_on_truth"]
+        with pytest.raises(ScenarioError, match=rf"prior\.{TRUTH_FIELDS[name][0]}.*"
+                                                 "centred_on_truth = true"):
+            from_dict(d)
+
+
+def _readme_scenario_text() -> str:
+    text = (problems_dir().parent / "README.md").read_text(encoding="utf-8")
+    block = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    assert "[prior]" in block and 'name = "my-case"' in block
+    return block
+
+
+def test_readme_prior_is_complete_and_does_not_use_the_truth():
+    from tmaplan.models.prior import prior_relative_moments
+
+    s = loads(_readme_scenario_text(), source="README")
+    assert s.prior is not None and s.prior.truth_fields == () and not s.prior.centred_on_truth
+    _, cov = prior_relative_moments(s, n=20_000)
+    vel_std = np.sqrt(np.diag(cov)[2:])
+    # speed uniform on [0, 15 kn] with a uniform course: per-axis std sqrt(E s²/2) = 15 kn/√6
+    assert vel_std == pytest.approx(15 * 1852 / 3600 / np.sqrt(6), rel=0.03)
+    assert np.all(np.linalg.eigvalsh(cov) > 0)
+
+
+def test_readme_prior_without_velocity_names_the_keys_to_add():
+    text = _readme_scenario_text()
+    for key in ("velocity_distribution", "speed_distribution", "speed_max", "course_mode"):
+        text = "\n".join(x for x in text.splitlines() if not x.startswith(key))
+    with pytest.raises(ScenarioError) as exc:
+        loads(text, source="README")
+    msg = str(exc.value)
+    assert "prior.velocity_std" in msg
+    for key in ("velocity_mean", "velocity_std", "speed-course", "speed_max", "course_mode"):
+        assert key in msg, msg
+
+
+def test_course_mode_true_is_an_explicit_choice():
+    d = _set(_base(), "prior.course_mode", "true")
+    s = from_dict(d)
+    assert s.prior.truth_fields == ("course_mode",) and not s.prior.centred_on_truth
+
+
+# ------------------------------------------------------------------ plausibility
+@pytest.mark.parametrize(("path", "ok", "refused", "unit"), [
+    ("sensors.0.sigma", 0.2, 0.21, "rad"),
+    ("target.course", -6.28, 6.3, "rad"),
+    ("prior.bearing_std", 1.0, 1.01, "rad"),
+    ("observer.turn_rate_max", 0.1, 0.11, "rad/s"),
+])
+def test_bare_number_limits(path, ok, refused, unit):
+    d = _base()
+    if path == "observer.turn_rate_max":
+        d = _set(d, "observer.speed_max", "6 kn")
+    from_dict(_set(d, path, ok))
+    from_dict(_set(d, path, str(ok)))
+    with pytest.raises(ScenarioError, match=rf"write \"{refused:g} deg"):
+        from_dict(_set(d, path, refused))
+    with pytest.raises(ScenarioError, match="implausible"):
+        from_dict(_set(d, path, str(refused)))  # a unit-less string is a bare number too
+    s = from_dict(_set(d, path, f"{refused} {unit}"))  # an explicit unit is accepted
+    assert loads(dump(s)) == s and f'"{refused!r} {unit}"' in dump(s)
+
+
+def test_dump_writes_units_where_a_bare_number_would_be_refused():
+    d = _base()
+    d["sensors"][0]["sigma"] = "15 deg"
+    d["observer"]["turn_rate_max"] = "10 deg/s"
+    d["observer"]["speed_max"] = "6 kn"
+    d["prior"]["bearing_std"] = "70 deg"
+    s = from_dict(d)
+    text = dump(s)
+    assert loads(text) == s and dump(loads(text)) == text
+    assert f'sigma = "{float(np.radians(15.0))!r} rad"' in text
+    assert 'course_mode = "uniform"' in text  # ordinary values stay bare SI numbers
+
+
+def test_python_values_are_si_and_not_second_guessed():
+    from tmaplan.scenario import BearingSensor
+
+    # the bare-number rule protects files; the Python API is SI by contract
+    assert BearingSensor(sigma=0.5).sigma == 0.5
+    s = load_problem("default")
+    s2 = s.replace(sensors=(BearingSensor(sigma=0.5), s.sensors[1]))
+    assert s2.sensors[0].sigma == 0.5
+
+
+def test_speed_limit_holds_for_every_construction_path():
+    import dataclasses
+
+    s = load_problem("default")
+    with pytest.raises(ScenarioError, match=r"target\.speed.*at most 150 m/s"):
+        s.replace(target=dataclasses.replace(s.target, speed=151.0))
+    with pytest.raises(ScenarioError, match=r"prior\.speed_max.*at most 150 m/s"):
+        from_dict(_set(_base(), "prior.speed_max", "300 kn"))
+    from_dict(_set(_base(), "prior.speed_max", "150 m/s"))  # the limit itself is accepted
+
+
+def test_binary_file_names_the_file(tmp_path):
+    f = tmp_path / "x.toml"
+    f.write_bytes(b"name = \"a\"\n\xff\xfe\x00")
+    with pytest.raises(ScenarioError) as exc:
+        load(f)
+    assert str(f) in str(exc.value) and "0xff at offset 11" in str(exc.value)

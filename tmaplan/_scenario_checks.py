@@ -1,18 +1,63 @@
 """Cross-field validation of scenarios (what the type annotations alone cannot say).
 
 Every rule raises :class:`tmaplan.errors.ScenarioError` naming the field, the expected and
-the received value. Called by :func:`tmaplan.scenario.from_dict` and ``Scenario.replace``.
+the received value. :func:`check` is called by :func:`tmaplan.scenario.from_dict` and
+``Scenario.replace``; :func:`check_bare_numbers` by ``from_dict`` on the raw file data.
+
+Plausibility limits (documented in the README's scenario section):
+
+* Speeds, in any unit: at most :data:`MAX_SPEED` = 150 m/s (≈ 292 kn) for the target, the
+  observer and the prior (speeds, velocity components and their stds). The sound speed of a
+  frequency sensor is not a platform speed and is not limited.
+* Bare numbers are SI, so a bare angle is radians. A bare number beyond :data:`BARE_LIMITS`
+  is almost surely degrees and is refused with a message suggesting the unit: a direction
+  (course, heading, bearing, phase) beyond 2π rad; a bearing noise (``sensors[].sigma`` of a
+  bearing sensor) above 0.2 rad (11.5°); a prior angular std (``bearing_std``,
+  ``course_std``) above 1 rad (57°); a turn rate (``omega``, ``turn_rate``,
+  ``turn_rate_max``, ``turn_rates``) above 0.1 rad/s (5.7 °/s). Any of these values is
+  accepted with an explicit unit (``"0.3 rad"``, ``"15 deg"``), and :func:`tmaplan.scenario.dump`
+  writes such values with their unit so that files round-trip.
 """
 
 from __future__ import annotations
 
+import math
+import re
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.units import KNOT
 
-__all__ = ["check"]
+__all__ = ["BARE_LIMITS", "MAX_SPEED", "check", "check_bare_numbers", "truth_fields",
+           "with_units"]
+
+MAX_SPEED = 150.0
+"""Largest plausible platform speed [m/s] (≈ 292 kn)."""
+
+#: role -> (largest plausible bare value in SI, SI unit, what the value is)
+BARE_LIMITS: dict[str, tuple[float, str, str]] = {
+    "direction": (2 * math.pi, "rad", "a direction (course, heading, bearing)"),
+    "bearing_noise": (0.2, "rad", "a bearing noise"),
+    "angle_std": (1.0, "rad", "an angular prior std"),
+    "turn_rate": (0.1, "rad/s", "a turn rate"),
+}
+
+# dotted path in the file ("*" = every list item) -> role
+_BARE_FIELDS: tuple[tuple[str, str], ...] = (
+    ("target.course", "direction"), ("target.phase", "direction"),
+    ("target.omega", "turn_rate"), ("target.legs.*.course", "direction"),
+    ("observer.course", "direction"), ("observer.heading_min", "direction"),
+    ("observer.heading_max", "direction"), ("observer.legs.*.course", "direction"),
+    ("observer.legs.*.turn_rate", "turn_rate"), ("observer.turn_rate_max", "turn_rate"),
+    ("observer.turn_rates.*", "turn_rate"), ("sensors.*.sigma", "bearing_noise"),
+    ("prior.bearing_mean", "direction"), ("prior.course_mean", "direction"),
+    ("prior.bearing_std", "angle_std"), ("prior.course_std", "angle_std"),
+)
+
+_BARE_RE = re.compile(r"^\s*[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\s*$")
 
 
 def _err(field: str, expected: str, received: Any, source: str | None) -> ScenarioError:
@@ -142,8 +187,10 @@ def check(s: Any, source: str | None) -> None:
         if sen.kind == "range" and sen.period is not None and sen.period < g.dt:
             raise _err(f"{f}.period", f">= dt = {g.dt} s", sen.period, source)
 
+    _check_speeds(s, source)
     p = s.prior
     if p is not None:
+        _check_prior(p, source)
         if p.kind == "gaussian":
             if p.std is None:
                 raise _err("prior.std", "[σ_x, σ_y, σ_vx, σ_vy] for a gaussian prior", None,
@@ -190,3 +237,175 @@ def check(s: Any, source: str | None) -> None:
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)
+
+
+# --------------------------------------------------------------------------------------------
+# Plausibility
+# --------------------------------------------------------------------------------------------
+
+
+def _walk(node: Any, parts: list[str], where: str, parent: Any = None
+          ) -> Iterator[tuple[str, Any, Any, Any]]:
+    """Yield ``(field, container, key, value)`` for every value at ``parts`` under ``node``
+    (``parent`` is the table holding a list item, to read a sensor's ``kind``)."""
+    if not parts:
+        return
+    head, rest = parts[0], parts[1:]
+    if head == "*":
+        if not isinstance(node, list):
+            return
+        for i, item in enumerate(node):
+            if rest:
+                yield from _walk(item, rest, f"{where}[{i}]", item)
+            else:
+                yield f"{where}[{i}]", node, i, item
+        return
+    if not isinstance(node, dict) or head not in node:
+        return
+    field = f"{where}.{head}" if where else head
+    if rest:
+        yield from _walk(node[head], rest, field, parent)
+    else:
+        yield field, node, head, node[head]
+
+
+def _role_values(data: Any) -> Iterator[tuple[str, str, Any, Any, Any]]:
+    """``(field, role, container, key, value)`` of every angle/turn-rate value in ``data``."""
+    for path, role in _BARE_FIELDS:
+        for field, box, key, value in _walk(data, path.split("."), ""):
+            if role == "bearing_noise" and box.get("kind") != "bearing":
+                continue
+            yield field, role, box, key, value
+
+
+def _bare(value: Any) -> float | None:
+    """The value of a bare number (int, float or unit-less string), else None."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int | float):
+        return float(value)
+    if isinstance(value, str) and _BARE_RE.match(value):
+        return float(value)
+    return None
+
+
+def check_bare_numbers(data: Any, source: str | None) -> None:
+    """Refuse bare angles and turn rates that are implausible in SI (see the module notes).
+
+    Raises
+    ------
+    ScenarioError
+        ``field 'sensors[0].sigma': expected a bearing noise of at most 0.2 rad (11.5°) as a
+        bare number: 1.5 rad (85.9°) is implausible; write "1.5 deg" if you meant degrees
+        (or "1.5 rad" to keep radians), received 1.5``.
+    """
+    for field, role, _, _, value in _role_values(data):
+        v = _bare(value)
+        limit, unit, what = BARE_LIMITS[role]
+        if v is None or not math.isfinite(v) or abs(v) <= limit:
+            continue
+        per = "/s" if unit == "rad/s" else ""
+        deg = "deg/s" if per else "deg"
+        raise _err(field, f"{what} of at most {limit:.4g} {unit} ({math.degrees(limit):.3g}°"
+                   f"{per}) as a bare number (bare numbers are SI): {v:g} {unit} "
+                   f"({math.degrees(v):.4g}°{per}) is implausible; write \"{v:g} {deg}\" if "
+                   f"you meant degrees (or \"{v:g} {unit}\" to keep it)", value, source)
+
+
+def with_units(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` (from :func:`tmaplan.scenario.to_dict`, SI) with every angle or turn rate that
+    :func:`check_bare_numbers` would refuse as a bare number written with its SI unit
+    (``"0.2617993877991494 rad"``), so that ``loads(dump(s)) == s`` for every scenario.
+    Modifies and returns ``data``."""
+    for _, role, box, key, value in list(_role_values(data)):
+        limit, unit, _ = BARE_LIMITS[role]
+        if isinstance(value, float) and abs(value) > limit:
+            box[key] = f"{value!r} {unit}"
+    return data
+
+
+def _speeds(s: Any) -> Iterator[tuple[str, float]]:
+    """Every platform speed of a scenario (SI), with its field name."""
+    def norm(v: Any) -> float:
+        return float(np.hypot(*v))
+
+    t, o, p = s.target, s.observer, s.prior
+    for name, obj in (("target", t), ("observer", o)):
+        if obj.velocity is not None:
+            yield f"{name}.velocity", norm(obj.velocity)
+        if obj.speed is not None:
+            yield f"{name}.speed", obj.speed
+        for i, leg in enumerate(obj.legs):
+            if leg.velocity is not None:
+                yield f"{name}.legs[{i}].velocity", norm(leg.velocity)
+            if leg.speed is not None:
+                yield f"{name}.legs[{i}].speed", leg.speed
+    if t.omega is not None and t.radius is not None:
+        yield "target.omega", abs(t.omega) * t.radius
+    for name in ("speed_min", "speed_max"):
+        if getattr(o, name) is not None:
+            yield f"observer.{name}", getattr(o, name)
+    if p is not None:
+        if p.velocity_mean is not None:
+            yield "prior.velocity_mean", norm(p.velocity_mean)
+        for name in ("velocity_std", "speed_mean", "speed_std", "speed_min", "speed_max"):
+            if getattr(p, name) is not None:
+                yield f"prior.{name}", getattr(p, name)
+        if p.mean is not None:
+            yield "prior.mean", norm(p.mean[2:])
+        if p.std is not None:
+            yield "prior.std", norm(p.std[2:])
+
+
+def _check_speeds(s: Any, source: str | None) -> None:
+    for field, v in _speeds(s):
+        if v > MAX_SPEED:
+            raise _err(field, f"a speed of at most {MAX_SPEED:g} m/s ({MAX_SPEED / KNOT:.0f} kn, "
+                       "the plausibility limit for a ship, a submarine or a contact)",
+                       f"{v:.6g} m/s ({v / KNOT:.5g} kn)", source)
+
+
+def truth_fields(p: Any) -> tuple[str, ...]:
+    """Fields of prior ``p`` whose value is the target's true initial value, in file order
+    (see :class:`tmaplan.scenario.Prior`)."""
+    if p.kind == "gaussian":
+        return ("mean",) if p.mean is None else ()
+    out = []
+    if p.bearing_mean is None:
+        out.append("bearing_mean")
+    if p.range_distribution == "normal" and p.range_mean is None:
+        out.append("range_mean")
+    if p.velocity_distribution == "normal":
+        if p.velocity_mean is None:
+            out.append("velocity_mean")
+    else:
+        if p.speed_distribution == "normal" and p.speed_mean is None:
+            out.append("speed_mean")
+        if p.course_mode == "true":
+            out.append("course_mode")
+    return tuple(out)
+
+
+def _check_prior(p: Any, source: str | None) -> None:
+    """A prior states its velocity and never takes the truth silently."""
+    if p.kind == "polar":
+        if p.velocity_distribution == "normal" and not p.velocity_std > 0:
+            raise _err("prior.velocity_std", "a velocity prior: velocity_mean = [v_x, v_y] with "
+                       "velocity_std > 0 per axis (e.g. velocity_mean = [0, 0], velocity_std = "
+                       "\"7.5 kn\"), or velocity_distribution = \"speed-course\" with "
+                       "speed_distribution = \"uniform\", speed_max (e.g. \"15 kn\") and "
+                       "course_mode = \"uniform\"", p.velocity_std, source)
+        if p.velocity_distribution == "speed-course" and p.course_mode is None:
+            raise _err("prior.course_mode", "a course prior for velocity_distribution "
+                       "'speed-course': \"uniform\", \"given\" (with course_mean and "
+                       "course_std), \"reciprocal-bearing\", or \"true\" (the true course, "
+                       "on purpose)", None, source)
+    if p.centred_on_truth:
+        return
+    for name in truth_fields(p):
+        if name == "course_mode":  # "true" is itself the explicit choice
+            continue
+        raise _err(f"prior.{name}", f"a value: without '{name}' the prior would take the "
+                   "target's true initial value; add the key, or set prior.centred_on_truth "
+                   "= true to centre the prior on the truth on purpose (as the papers' bounds "
+                   "do)", None, source)

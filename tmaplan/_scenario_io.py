@@ -17,7 +17,7 @@ from typing import Any
 import tomli_w
 from pydantic import TypeAdapter, ValidationError
 
-from tmaplan._scenario_checks import check
+from tmaplan._scenario_checks import check, check_bare_numbers, with_units
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import Scenario
 
@@ -80,6 +80,9 @@ def _convert_validation_error(exc: ValidationError, source: str | None) -> Scena
 def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario:
     """Build and validate a scenario from a plain dict (as read from TOML).
 
+    Bare numbers are SI; a bare angle or turn rate that is implausible in SI (surely
+    degrees) is refused, see :mod:`tmaplan._scenario_checks`.
+
     Raises
     ------
     ScenarioError
@@ -88,6 +91,7 @@ def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario
     if not isinstance(data, Mapping):
         raise ScenarioError("<root>", "a table of scenario fields", type(data).__name__,
                             source=source)
+    check_bare_numbers(data, source)
     try:
         scenario = _adapter().validate_python(dict(data))
     except ValidationError as exc:
@@ -110,8 +114,12 @@ def to_dict(scenario: Scenario) -> dict[str, Any]:
 
 
 def dump(scenario: Scenario) -> str:
-    """TOML text of a scenario. ``loads(dump(s)) == s`` exactly."""
-    return tomli_w.dumps(to_dict(scenario))
+    """TOML text of a scenario. ``loads(dump(s)) == s`` exactly.
+
+    Values are SI numbers; angles and turn rates that a file could not give as bare numbers
+    (e.g. a bearing noise above 0.2 rad) carry their SI unit (``"0.3 rad"``).
+    """
+    return tomli_w.dumps(with_units(to_dict(scenario)))
 
 
 def loads(text: str, *, source: str | None = None) -> Scenario:
@@ -171,6 +179,17 @@ def load_problem(name: str) -> Scenario:
     return loads(path.read_text(encoding="utf-8"), source=name)
 
 
+def _read_text(path: Path) -> str:
+    """The UTF-8 text of a scenario file; a binary or undecodable file names the file."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError("<file>", "a UTF-8 text file in TOML format (is it a binary file?)",
+                            f"undecodable byte 0x{data[exc.start]:02x} at offset {exc.start}",
+                            source=str(path)) from None
+
+
 def load(name_or_path: str | os.PathLike[str]) -> Scenario:
     """Load a scenario from a TOML file path or a built-in problem name."""
     path = Path(name_or_path)
@@ -179,7 +198,7 @@ def load(name_or_path: str | os.PathLike[str]) -> Scenario:
             names = ", ".join(p["name"] for p in list_problems())
             raise ScenarioError("problem", f"an existing .toml file or one of: {names}",
                                 str(name_or_path))
-        return loads(path.read_text(encoding="utf-8"), source=str(path))
+        return loads(_read_text(path), source=str(path))
     return load_problem(str(name_or_path))
 
 

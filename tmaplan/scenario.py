@@ -202,10 +202,16 @@ class Prior:
     position; range from ``range_distribution`` (``normal``: N(range_mean, range_std²)
     truncated to [range_min, range_max]; ``uniform`` or ``log-uniform`` on
     [range_min, range_max]); velocity either Cartesian normal (``velocity_mean``,
-    ``velocity_std`` per axis) or speed/course (``speed-course``). ``None`` means values are
-    taken from the true initial state (the papers' "prior centred on the truth").
-    ``kind = "gaussian"``: absolute Cartesian N(mean, diag(std²)) with mean/std in
-    [x, y, v_x, v_y] order.
+    ``velocity_std`` > 0 per axis) or speed/course (``speed-course``: ``speed_distribution``
+    and ``course_mode`` are then required). ``kind = "gaussian"``: absolute Cartesian
+    N(mean, diag(std²)) with mean/std in [x, y, v_x, v_y] order.
+
+    A prior never takes the truth silently: a mean left out (``bearing_mean``, ``range_mean``,
+    ``velocity_mean``, ``speed_mean`` of normal distributions, a gaussian ``mean``) is the true
+    initial value only with ``centred_on_truth = true`` (the papers' "prior centred on the
+    truth", brehard2005 L612, ristic2004 B2), else an error naming the key; ``course_mode =
+    "true"`` is explicit. A velocity prior is required. :attr:`truth_fields` lists what comes
+    from the truth; the command line warns about it on every run.
 
     Attributes
     ----------
@@ -229,9 +235,10 @@ class Prior:
     speed_distribution : {"normal", "uniform"}
     speed_mean, speed_std, speed_min, speed_max : float
         [m/s]; speed_mean None: true speed.
-    course_mode : {"true", "given", "reciprocal-bearing", "uniform"}
+    course_mode : {"true", "given", "reciprocal-bearing", "uniform"}, optional
         Course mean: the true course, ``course_mean``, the bearing + π (target heading at the
-        observer, Ristic et al. 2004), or uniform on the circle.
+        observer, Ristic et al. 2004), or uniform on the circle. Required for
+        ``speed-course``.
     course_mean, course_std : float, optional
         [rad].
     mean, std : tuple of 4 floats, optional
@@ -240,6 +247,8 @@ class Prior:
         Number of prior samples used where a bound needs prior moments (file 000 eq. 56).
     seed : int
         Seed of those samples, so bounds are reproducible.
+    centred_on_truth : bool
+        Allow omitted means to be the target's true initial values (see above).
     """
 
     kind: Literal["polar", "gaussian"] = "polar"
@@ -258,13 +267,22 @@ class Prior:
     speed_std: NonNegSpeed = 0.0
     speed_min: NonNegSpeed = 0.0
     speed_max: PositiveSpeed | None = None
-    course_mode: Literal["true", "given", "reciprocal-bearing", "uniform"] = "true"
+    course_mode: Literal["true", "given", "reciprocal-bearing", "uniform"] | None = None
     course_mean: Angle | None = None
     course_std: NonNegAngle = 0.0
     mean: tuple[Length, Length, Speed, Speed] | None = None
     std: tuple[NonNegLength, NonNegLength, NonNegSpeed, NonNegSpeed] | None = None
     samples: PositiveInt = 100_000
     seed: NonNegInt = 0
+    centred_on_truth: bool = False
+
+    @property
+    def truth_fields(self) -> tuple[str, ...]:
+        """Fields whose value is the target's true initial value (omitted means, and
+        ``course_mode`` when "true"), in file order; empty if the prior does not use it."""
+        from tmaplan._scenario_checks import truth_fields
+
+        return truth_fields(self)
 
 
 @_frozen

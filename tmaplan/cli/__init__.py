@@ -1,9 +1,12 @@
 """Command line interface ``tmaplan`` (DESIGN §4).
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
-``add_arguments(parser)`` and ``run(args) -> dict | None``; the returned dict is written as JSON
-to ``--json PATH`` (``-`` for stdout). Errors exit non-zero with one line on stderr (a traceback
-only with ``--debug``).
+``add_arguments(parser)``, ``run(args) -> dict | None`` and, for a verb without a problem
+argument that works on a fixed problem, ``PROBLEM`` (its name); the returned dict is written as JSON
+to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
+Argument types, limits and the up-front checks that need the scenario live in
+:mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
+with one line on stderr (a traceback only with ``--debug``).
 """
 
 from __future__ import annotations
@@ -17,6 +20,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from tmaplan import __version__
+from tmaplan.cli._args import OneLineParser, UsageError, preflight
+from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
 
@@ -68,14 +75,17 @@ def write_json(payload: Any, path: str) -> None:
         Path(path).write_text(text + "\n", encoding="utf-8")
 
 
-def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
-    parser = argparse.ArgumentParser(
+def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
+                             dict[str, argparse.ArgumentParser]]:
+    parser = OneLineParser(
         prog="tmaplan",
         description="Observer-trajectory planning and sensor management for TMA.",
     )
+    parser.add_argument("--version", action="version", version=f"tmaplan {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="verb", metavar="VERB")
     modules: dict[str, Any] = {}
+    parsers: dict[str, argparse.ArgumentParser] = {}
     for verb, modname in VERBS.items():
         try:
             mod = importlib.import_module(f"tmaplan.cli.{modname}")
@@ -89,18 +99,38 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any]]:
         p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
         mod.add_arguments(p)
         modules[verb] = mod
-    return parser, modules
+        parsers[verb] = p
+    return parser, modules, parsers
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``tmaplan`` command. Returns the exit status."""
-    parser, modules = _build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of the ``tmaplan`` command. Returns the exit status.
+
+    0 on success, 1 on any error (one line on stderr), 2 without a verb (help), 130 when
+    interrupted.
+    """
+    parser, modules, parsers = _build_parser()
+    try:
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # reported by the verb's parser, whose --help lists what it takes
+            parsers.get(args.verb, parser).error(f"unrecognized arguments: {' '.join(extra)}")
+    except UsageError as exc:
+        print(str(exc).replace("\n", " "), file=sys.stderr)
+        return 1
     if not args.verb:
         parser.print_help()
         return 2
     try:
+        problem = None
+        # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
+        fixed = getattr(modules[args.verb], "PROBLEM", None)
+        if getattr(args, "problem", None) is not None or fixed is not None:
+            scenario = load(args.problem) if fixed is None else load_problem(fixed)
+            problem = scenario.name
+            preflight(args, scenario)
         payload = modules[args.verb].run(args)
+        if isinstance(payload, dict) and problem is not None:
+            payload.setdefault("problem", problem)
         if args.json is not None and payload is not None:
             write_json(payload, args.json)
     except KeyboardInterrupt:

@@ -10,6 +10,15 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.cli._args import (
+    MAX_SAMPLES,
+    add_figure_arguments,
+    add_problem_argument,
+    add_seed_argument,
+    duration,
+    integer,
+    step_list,
+)
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
 
@@ -17,31 +26,37 @@ HELP = "posterior Cramér-Rao bound over time (closed form in LPC or Monte Carlo
 
 _LPC_LABELS = ("β [rad]", "ln r [-]", "β̇ [rad/s]", "ṙ/r [1/s]")
 _CART_LABELS = ("r_x [m]", "r_y [m]", "v_x [m/s]", "v_y [m/s]")
+# console: (name, display unit, factor from SI) per component
+_LPC_CONSOLE = (("β", "°", np.degrees(1.0)), ("ln r", "", 1.0), ("β̇", "°/s", np.degrees(1.0)),
+                ("ṙ/r", "1/s", 1.0))
+_CART_CONSOLE = (("r_x", "m", 1.0), ("r_y", "m", 1.0), ("v_x", "m/s", 1.0),
+                 ("v_y", "m/s", 1.0))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``tmaplan bound``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+    add_problem_argument(parser)
     parser.add_argument("--method", choices=("closed-form", "monte-carlo"),
                         default="closed-form")
     parser.add_argument("--coords", choices=("lpc", "cartesian"), default=None,
                         help="coordinates (closed form: lpc only; default lpc for the closed "
                              "form, cartesian for Monte Carlo)")
-    parser.add_argument("--samples", type=int, default=1000,
+    parser.add_argument("--samples", type=integer(2, MAX_SAMPLES), default=1000,
                         help="Monte Carlo samples (default 1000, as brehard2005 §6)")
     pings = parser.add_mutually_exclusive_group()
-    pings.add_argument("--ping-every", type=float, metavar="SEC",
-                       help="a range ping at the first step at or after each multiple of SEC")
-    pings.add_argument("--ping-steps", metavar="K,K,..", help="range pings at these steps")
-    parser.add_argument("--seed", type=int, default=0, help="Monte Carlo seed")
-    parser.add_argument("--out", default="out", help="figure directory (default out/)")
+    pings.add_argument("--ping-every", type=duration(), metavar="T",
+                       help="a range ping at the first step at or after each multiple of T "
+                            "(seconds or with a unit: '80 s')")
+    pings.add_argument("--ping-steps", type=step_list, metavar="K,K,..",
+                       help="range pings at these steps")
+    add_seed_argument(parser, help="Monte Carlo seed (default 0)")
+    add_figure_arguments(parser)
     parser.add_argument("--no-overlay", action="store_true",
                         help="do not overlay the other method on the LPC figure")
-    parser.add_argument("--no-figure", action="store_true", help="do not write a figure")
 
 
 def ping_steps_from_args(scenario: Scenario, every: float | None,
-                         steps: str | None) -> list[int] | None:
+                         steps: str | list[int] | None) -> list[int] | None:
     """Ping steps from ``--ping-every`` / ``--ping-steps`` (None: the scenario's own)."""
     if every is None and steps is None:
         return None
@@ -54,6 +69,8 @@ def ping_steps_from_args(scenario: Scenario, every: float | None,
             raise ScenarioError("--ping-every", "> 0 s", every)
         sensor = dataclasses.replace(ranges[0], steps=(), period=float(every), every=None)
         return measurement_steps(sensor, scenario.time).tolist()
+    if isinstance(steps, list):
+        return [int(x) for x in steps]
     try:
         return [int(x) for x in str(steps).split(",") if x.strip()]
     except ValueError as exc:
@@ -130,9 +147,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         payload["figure"] = str(fig_path)
     if not quiet:
         k = len(res.times) - 1
-        print(f"{scenario.name}: {args.method} PCRB in {coords}, {k} steps, "
-              f"{len(res.ping_steps)} pings, {res.seconds:.3f} s")
-        print(f"  final std: {np.array2string(res.std[-1], precision=4)}")
+        print(f"{scenario.name}: {args.method} PCRB in {coords}, {k} steps over "
+              f"{(res.times[-1] - res.times[0]) / 60:g} min, {len(res.ping_steps)} pings, "
+              f"computed in {res.seconds:.3f} s")
+        comps = _LPC_CONSOLE if coords == "lpc" else _CART_CONSOLE
+        print("  final std: " + ", ".join(
+            f"{name} {v * f:.4g}{'' if unit in ('', '°') else ' '}{unit}"
+            for (name, unit, f), v in zip(comps, res.std[-1])))
         print(f"  final range bound {res.range_std[-1]:.1f} m, "
               f"position bound {res.position_std[-1]:.1f} m")
         for n in notes:

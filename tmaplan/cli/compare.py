@@ -8,6 +8,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tmaplan.cli._args import (
+    MAX_PARTICLES,
+    MAX_RUNS,
+    MAX_WORKERS,
+    add_figure_arguments,
+    add_problem_argument,
+    add_seed_argument,
+    integer,
+    open_fraction,
+)
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import load
@@ -17,24 +27,26 @@ HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``compare``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+    add_problem_argument(parser)
     parser.add_argument("--policies", default="straight,single-turn,zigzag",
                         help="comma-separated MANOEUVRE[+PING] (manoeuvres: straight, "
                              "single-turn, zigzag, planned, receding; pings: no-ping, uniform, "
                              "scheduled, scheduled-terminal, adaptive)")
-    parser.add_argument("--runs", type=int, default=50, help="Monte Carlo runs (default 50)")
-    parser.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
-    parser.add_argument("--particles", type=int, default=3000,
+    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
+                        help="Monte Carlo runs (default 50)")
+    add_seed_argument(parser, help="root seed (default 0)")
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
                         help="particle-filter size (default 3000)")
-    parser.add_argument("--accuracy", type=float, default=0.1,
+    parser.add_argument("--accuracy", type=open_fraction, default=0.1,
                         help="relative range error that counts as localised (default 0.1)")
     parser.add_argument("--truth", choices=("prior", "scenario"), default="prior",
                         help="draw each run's target from the prior (default) or use the "
                              "scenario's")
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=int, default=1, help="local worker processes")
+    g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
+                   help="local worker processes")
     g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
-    parser.add_argument("--out", default="out", help="output directory (default out/)")
+    add_figure_arguments(parser, report=True)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:

@@ -4,28 +4,58 @@ JSON (SI units): ``parameters`` (final-time parametrisation Z_N: target position
 the remaining motion parameters and the tones), ``std`` (CRLB std of each, same order),
 ``final_range_std`` [m], ``final_range_rsd`` (σ_R/R), plus ``values``, ``units``,
 ``final_time``, ``final_range``, ``condition_number``, ``frequencies``, ``n_measurements``,
-``observability`` (verdict) and ``notes``.
+``observability`` (verdict) and ``notes``; ``figure`` when one is written (the truth's
+geometry with the CRLB 2σ ellipse of the target position at t_N, ``<out>/crlb_<problem>.png``).
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tmaplan.bounds.crlb import crlb
-from tmaplan.scenario import load
+from tmaplan.bounds.crlb import CRLBResult, crlb
+from tmaplan.cli._args import add_figure_arguments, add_problem_argument, integer
+from tmaplan.scenario import Scenario, load
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """``P`` (problem name or .toml path) and ``--frequencies N``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
-    parser.add_argument("--frequencies", type=int, default=0, metavar="N",
+    """``P`` (problem name or .toml path), ``--frequencies N``, ``--out``, ``--no-figure``."""
+    add_problem_argument(parser)
+    parser.add_argument("--frequencies", type=integer(0), default=0, metavar="N",
                         help="also use the first N frequency lines of the scenario "
                              "(default 0: bearings, and pings if any, only)")
+    add_figure_arguments(parser)
+
+
+def _figure(scenario: Scenario, res: CRLBResult, path: Path) -> None:
+    """Truth geometry (km) with the 2σ CRLB ellipse of the target position at t_N."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Ellipse
+
+    from tmaplan.plotting import plot_geometry
+    from tmaplan.simulate import simulate
+
+    fig = plot_geometry(simulate(scenario, None))
+    ax = fig.axes[0]
+    w, v = np.linalg.eigh(np.asarray(res.final_covariance, float)[:2, :2])
+    angle = float(np.degrees(np.arctan2(v[1, 1], v[0, 1])))
+    half = 2.0 * np.sqrt(np.maximum(w, 0.0)) / 1e3
+    ax.add_patch(Ellipse(tuple(np.asarray(res.final_position, float) / 1e3), 2 * half[1],
+                         2 * half[0], angle=angle, fill=False, color="k", lw=1.4,
+                         label=f"CRLB 2σ at t_N = {res.final_time / 60:g} min"))
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(f"{scenario.name}: batch CRLB, range std {res.final_range_std / 1e3:.3g} km")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def _display(name: str, unit: str, value: float) -> tuple[float, str]:
@@ -69,7 +99,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     }
     if args.json != "-":
         print(f"{scenario.name}: batch CRLB, model {res.model}, {n_tones} frequency line(s), "
-              f"t_N = {res.final_time:g} s")
+              f"t_N = {res.final_time / 60:g} min")
         print(f"{'parameter':<10} {'value':>12} {'std':>12}  unit")
         for name, unit, v, s in zip(res.final_parameters, units, res.final_values,
                                     res.final_std):
@@ -82,4 +112,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         print(verdict)
         for note in res.notes:
             print(f"note: {note}")
+    if not args.no_figure:
+        path = Path(args.out) / f"crlb_{scenario.name}.png"
+        _figure(scenario, res, path)
+        payload["figure"] = str(path)
+        if args.json != "-":
+            print(f"wrote {path}")
     return payload

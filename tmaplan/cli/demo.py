@@ -20,6 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.cli._args import (
+    MAX_PARTICLES,
+    MAX_RUNS,
+    MAX_WORKERS,
+    add_figure_arguments,
+    add_seed_argument,
+    integer,
+)
 from tmaplan.errors import PlanningError
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
@@ -30,6 +38,9 @@ from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
+#: The problem the demo works on.
+PROBLEM = "default"
+
 #: Policies compared by the demo (manoeuvre[+ping]).
 DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
                  "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
@@ -38,14 +49,15 @@ DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``demo``."""
-    parser.add_argument("--out", default="out", help="output directory (default out/)")
-    parser.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
-    parser.add_argument("--runs", type=int, default=40,
+    add_figure_arguments(parser, report=True)
+    add_seed_argument(parser, help="root seed (default 0)")
+    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=40,
                         help="Monte Carlo runs per policy (default 40: under 10 minutes on 2 "
                              "cores; use `tmaplan compare` for 200)")
-    parser.add_argument("--particles", type=int, default=3000,
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
                         help="particle-filter size (default 3000)")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2,
+                        help="worker processes (default 2)")
 
 
 def _say(args: argparse.Namespace, msg: str) -> None:
@@ -62,7 +74,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             raise PlanningError(f"{name}: expected >= {low}, received {value}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    scenario = load_problem("default")
+    scenario = load_problem(PROBLEM)
     belief = Belief.from_prior(scenario)
 
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")

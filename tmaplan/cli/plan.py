@@ -1,4 +1,9 @@
-"""``tmaplan plan P [--objective …] [--horizon SEC] [--out DIR] --json``: optimal headings."""
+"""``tmaplan plan P [--objective ...] [--horizon T] [--out DIR] --json``: optimal headings.
+
+The JSON carries the planned observer track on the scenario's grid (``observer``: ``times``,
+``position``, ``velocity``, ``mean_velocity``, ``heading``, ``speed``, SI), so that
+``tmaplan schedule P --observer-plan PLAN.json`` schedules pings along exactly this track.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +11,14 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from tmaplan.cli._args import (
+    MAX_STARTS,
+    add_figure_arguments,
+    add_problem_argument,
+    duration,
+    integer,
+    minutes,
+)
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlanner
@@ -18,17 +31,19 @@ HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline mano
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``plan``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+    add_problem_argument(parser)
     parser.add_argument("--objective", choices=OBJECTIVE_NAMES, default=None,
                         help="objective (default: the problem's planning.objective)")
-    parser.add_argument("--horizon", type=float, default=None, metavar="SEC",
-                        help="planning horizon [s] (default: the problem's)")
-    parser.add_argument("--control-interval", type=float, default=None, metavar="SEC",
-                        help="duration of a piecewise-constant turn rate [s]")
+    parser.add_argument("--horizon", type=duration(), default=None, metavar="T",
+                        help="planning horizon, seconds or with a unit ('30 min'; default: "
+                             "the problem's)")
+    parser.add_argument("--control-interval", type=duration(), default=None, metavar="T",
+                        help="duration of a piecewise-constant turn rate, seconds or with a "
+                             "unit ('1 min')")
     parser.add_argument("--transcription", choices=("direct", "bang-bang"), default="direct")
-    parser.add_argument("--starts", type=int, default=4, help="multi-start initial guesses")
-    parser.add_argument("--out", default="out", help="directory for the figure (default out/)")
-    parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=4,
+                        help="multi-start initial guesses (default 4)")
+    add_figure_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -51,13 +66,18 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "baseline_params": {k: v[0].params for k, v in base.items()},
         "solver": {"status": plan.status, "seconds": plan.seconds,
                    "iterations": plan.iterations, "transcription": plan.transcription},
+        "observer": {"times": plan.observer.times, "position": plan.observer.position,
+                     "velocity": plan.observer.velocity,
+                     "mean_velocity": plan.observer.mean_velocity,
+                     "heading": plan.observer.heading, "speed": plan.observer.speed},
     }
     if args.json != "-":
-        print(f"{scenario.name}: {planner.objective.name} = {plan.objective:.4g} "
-              f"({plan.status}, {plan.seconds:.2f} s)")
+        print(f"{scenario.name}: {planner.objective.name} = {plan.objective:.4g} over "
+              f"{minutes(plan.times[-1] - plan.times[0], 0)} ({plan.status}, solved in "
+              f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}")
-    if not args.no_plot:
+    if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_plan.png"
         plot_plan(plan, base, belief, path)
         payload["figure"] = str(path)

@@ -1,36 +1,104 @@
-"""``tmaplan schedule P --budget K [--method …] [--objective …] --json``: ping times."""
+"""``tmaplan schedule P --budget K [--method ...] [--objective ...] --json``: ping times.
+
+Pings are scheduled along the problem's scripted observer track, or along a planned track
+saved by ``tmaplan plan P --json PLAN.json`` (``--observer-plan PLAN.json``).
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 from typing import Any
 
-from tmaplan.models.observer import observer_track
+import numpy as np
+
+from tmaplan.cli._args import (
+    add_figure_arguments,
+    add_problem_argument,
+    duration,
+    integer,
+    minutes,
+)
+from tmaplan.errors import ScenarioError
+from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
 from tmaplan.plotting import plot_schedule
-from tmaplan.scenario import load
+from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
+
+_TRACK_KEYS = ("times", "position", "velocity", "mean_velocity", "heading", "speed")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``schedule``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
-    parser.add_argument("--budget", type=int, default=None,
+    add_problem_argument(parser)
+    parser.add_argument("--budget", type=integer(0), default=None,
                         help="maximum number of pings (default: planning.ping_budget)")
     parser.add_argument("--method", choices=("exact", "relaxed", "greedy"), default="relaxed")
     parser.add_argument("--objective", choices=PING_OBJECTIVES, default="mean-range-bound")
-    parser.add_argument("--min-spacing", type=float, default=None, metavar="SEC",
-                        help="minimum time between pings [s] (default: the problem's)")
-    parser.add_argument("--time-limit", type=float, default=600.0, metavar="SEC",
-                        help="enumeration time limit for --method exact [s] (the certified "
-                             "gap is reported when it is hit)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--min-spacing", type=duration(allow_zero=True), default=None,
+                        metavar="T", help="minimum time between pings, seconds or with a unit "
+                                          "('2 min'; default: the problem's)")
+    parser.add_argument("--time-limit", type=duration(), default=600.0, metavar="T",
+                        help="enumeration time limit for --method exact, seconds or with a "
+                             "unit (default 600 s; the certified gap is reported when hit)")
+    parser.add_argument("--workers", type=integer(1, 256), default=None,
                         help="processes for --method exact (default: the cores, at most 2)")
-    parser.add_argument("--out", default="out", help="directory for the figure (default out/)")
-    parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    parser.add_argument("--observer-plan", metavar="PLAN.json", default=None,
+                        help="schedule along the planned track saved by `tmaplan plan P "
+                             "--json PLAN.json` (default: the problem's scripted observer)")
+    add_figure_arguments(parser)
+
+
+def read_observer_plan(path: str | Path, scenario: Scenario) -> ObserverTrack:
+    """The planned observer track in a ``tmaplan plan --json`` file, checked against the
+    scenario it is used with.
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``--observer-plan`` and the file: unreadable or not JSON, no ``observer``
+        track, a plan of another problem, or a track not on the scenario's time grid.
+    """
+    def err(expected: str, received: Any) -> ScenarioError:
+        return ScenarioError("--observer-plan", expected, received, source=str(path))
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise err("an existing file written by `tmaplan plan P --json PLAN.json`",
+                  "no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise err("a JSON file written by `tmaplan plan P --json PLAN.json`",
+                  f"{type(exc).__name__}: {exc}") from None
+    obs = data.get("observer") if isinstance(data, dict) else None
+    if not isinstance(obs, dict) or any(k not in obs for k in _TRACK_KEYS):
+        raise err(f"a plan with an 'observer' track ({', '.join(_TRACK_KEYS)})",
+                  sorted(obs) if isinstance(obs, dict) else type(obs).__name__)
+    if data.get("problem") != scenario.name:
+        raise err(f"a plan of problem {scenario.name!r}", data.get("problem"))
+    try:
+        track = ObserverTrack(**{k: np.asarray(obs[k], dtype=float) for k in _TRACK_KEYS})
+    except (TypeError, ValueError) as exc:
+        raise err("numeric arrays in the 'observer' track", str(exc)) from None
+    t = track.times
+    n = t.shape[0]
+    shapes_ok = (t.ndim == 1 and n >= 2 and track.position.shape == (n, 2)
+                 and track.velocity.shape == (n, 2) and track.mean_velocity.shape == (n, 2)
+                 and track.heading.shape == (n,) and track.speed.shape == (n,))
+    if not shapes_ok:
+        raise err("per-step arrays of one length: times (n,), position/velocity (n, 2)",
+                  f"times {t.shape}, position {track.position.shape}")
+    grid = scenario.time
+    if abs(t[0] - grid.t0) > 1e-6 or np.max(np.abs(np.diff(t) - grid.dt)) > 1e-6 \
+            or n - 1 > grid.n_steps:
+        raise err(f"a track on the problem's grid (t0 = {grid.t0:g} s, dt = {grid.dt:g} s, "
+                  f"at most {grid.n_steps} steps)",
+                  f"t0 = {t[0]:g} s, {n - 1} steps of {np.diff(t).mean():g} s")
+    return track
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -40,7 +108,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if budget is None:
         budget = scenario.planning.ping_budget if scenario.planning is not None else 0
     belief = Belief.from_prior(scenario)
-    obs = observer_track(scenario.observer, scenario.time)
+    if args.observer_plan is not None:
+        obs = read_observer_plan(args.observer_plan, scenario)
+    else:
+        obs = observer_track(scenario.observer, scenario.time)
     res = schedule_pings(scenario, budget=budget, method=args.method,
                          objective=args.objective, observer=obs, belief=belief,
                          min_spacing=args.min_spacing, time_limit=args.time_limit,
@@ -51,15 +122,17 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "no_ping_objective": res.no_ping_objective, "uniform_objective": res.uniform_objective,
         "lower_bound": res.lower_bound, "gap": res.gap, "gap_reference": res.gap_reference,
         "times": obs.times, "bound": res.bound,
+        "observer_plan": args.observer_plan,
         "solver": {"status": res.status, "seconds": res.seconds, "method": res.method,
                    "bound_seconds": res.bound_seconds},
     }
     if args.json != "-":
+        along = f"along {args.observer_plan}" if args.observer_plan else "along the scripted track"
         print(f"{scenario.name}: {res.objective_name} = {res.objective:.4g} m with pings at "
-              f"{', '.join(f'{t:.0f}' for t in res.times)} s ({res.method}, {res.status}, "
+              f"{minutes(res.times)} {along} ({res.method}, {res.status}, "
               f"lower bound {res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); "
               f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
-    if not args.no_plot:
+    if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_schedule.png"
         plot_schedule(scenario, obs, belief, res, path)
         payload["figure"] = str(path)

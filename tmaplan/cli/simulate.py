@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.cli._args import add_figure_arguments, add_problem_argument, add_seed_argument
 from tmaplan.plotting import plot_geometry
 from tmaplan.scenario import load
 from tmaplan.simulate import simulate
@@ -17,10 +18,9 @@ HELP = "simulate one truth and measurement run of a problem and plot its geometr
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``simulate``."""
-    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--out", default="out", help="directory for the figure (default out/)")
-    parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    add_problem_argument(parser)
+    add_seed_argument(parser)
+    add_figure_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -29,7 +29,15 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     sim = simulate(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
-    if not args.no_plot:
+    if args.json != "-":
+        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
+                           for m in sim.measurements)
+        r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
+        print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
+              f"{scenario.time.dt:g} s over {scenario.time.horizon / 60:g} min; range "
+              f"{r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km (min {r.min() / 1e3:.2f} km); "
+              f"measurements: {counts or 'none'}")
+    if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_geometry.png"
         plot_geometry(sim, path)
         payload["figure"] = str(path)

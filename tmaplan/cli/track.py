@@ -9,6 +9,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tmaplan.cli._args import (
+    MAX_PARTICLES,
+    MAX_RUNS,
+    add_figure_arguments,
+    add_problem_argument,
+    add_seed_argument,
+    integer,
+)
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
@@ -22,12 +30,13 @@ HELP = "run an estimator over Monte Carlo runs against its bound"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``tmaplan track``."""
-    parser.add_argument("problem", help="built-in problem name or .toml path")
+    add_problem_argument(parser)
     parser.add_argument("--estimator", choices=ESTIMATORS, default="pf",
                         help="pf (prior), pf-bearings (file 001 init), mle, range-only")
-    parser.add_argument("--particles", type=int, default=10_000, help="particles (pf)")
-    parser.add_argument("--runs", type=int, default=20, help="Monte Carlo runs")
-    parser.add_argument("--seed", type=int, default=0, help="root SeedSequence seed")
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=10_000,
+                        help="particles (pf)")
+    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=20, help="Monte Carlo runs")
+    add_seed_argument(parser, help="root SeedSequence seed (default 0)")
     parser.add_argument("--bound", choices=("truth", "prior"), default="truth",
                         help="filters: PCRB along the runs' truths (B2, default) or "
                              "averaged over prior draws")
@@ -39,15 +48,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default="mixture",
                         help="range-only: Gaussian mixture over azimuth sectors (default), or "
                              "file 004's single-Gaussian moment / Dirac-mixture recursion")
-    parser.add_argument("--frequencies", type=int, default=0, metavar="N",
+    parser.add_argument("--frequencies", type=integer(0), default=0, metavar="N",
                         help="also use the first N frequency lines of the scenario (default 0: "
                              "bearings, and pings if any, only; as `tmaplan crlb`)")
     parser.add_argument("--turn-direction", default="auto",
                         choices=("auto", "either", "clockwise", "anticlockwise"),
                         help="mle, constant-turn source: sense of turn searched (auto: the "
                              "problem's [estimation] section, else either)")
-    parser.add_argument("--out", default="out", help="figure directory")
-    parser.add_argument("--no-figure", action="store_true", help="skip the figure")
+    add_figure_arguments(parser)
 
 
 def _with_lines(scenario: Scenario, n: int) -> Scenario:

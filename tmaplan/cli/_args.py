@@ -1,0 +1,403 @@
+"""Argument types, limits and up-front checks shared by every ``tmaplan`` verb.
+
+One place defines how a number on the command line is read and checked, so that every verb
+answers a bad value with the same one-line error (``tmaplan plan: error: --horizon must be a
+duration > 0 s ..., received '0'``) before any work starts, and every time-valued flag takes
+the unit strings of the scenario files (``--horizon "30 min"``, ``--min-spacing "2 min"``,
+``--ping-every "80 s"``; a bare number is seconds), parsed by :func:`tmaplan.units.to_si`.
+
+Documented limits (beyond them a run would take hours or exhaust memory on a workstation;
+each is refused with its value in the message):
+
+=====================  ==========================================================
+``--runs``             1 .. :data:`MAX_RUNS`
+``--particles``        2 .. :data:`MAX_PARTICLES`
+``--samples``          2 .. :data:`MAX_SAMPLES`
+``--workers``          1 .. :data:`MAX_WORKERS`
+``--starts``           1 .. :data:`MAX_STARTS`
+``--budget``           >= 0 (and at most the number of steps, checked by the scheduler)
+``--accuracy``         in (0, 1)
+``--seed``             an integer >= 0 (``numpy.random.SeedSequence``)
+time flags             > 0 (``--min-spacing`` >= 0), at most :data:`MAX_DURATION`
+``plan --horizon``     at most :data:`MAX_PLAN_STEPS` grid steps (the heading OCP grows with
+                       the number of steps; ``plan default --starts 1`` took 3 s for 180
+                       steps, 12 s for 720 and 21 s for 1440 on 2 cores, ×4 with 4 starts)
+=====================  ==========================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+
+from tmaplan.errors import ScenarioError, UnitError
+from tmaplan.units import to_si
+
+__all__ = [
+    "MAX_DURATION",
+    "MAX_PARTICLES",
+    "MAX_PLAN_STEPS",
+    "MAX_RUNS",
+    "MAX_SAMPLES",
+    "MAX_STARTS",
+    "MAX_WORKERS",
+    "MLE_DRIFT_RATIO_MAX",
+    "OneLineParser",
+    "UsageError",
+    "add_figure_arguments",
+    "add_problem_argument",
+    "add_seed_argument",
+    "duration",
+    "integer",
+    "minutes",
+    "open_fraction",
+    "out_dir",
+    "preflight",
+    "seed",
+    "step_list",
+]
+
+MAX_RUNS = 100_000
+"""Largest ``--runs``."""
+MAX_PARTICLES = 1_000_000
+"""Largest ``--particles`` (a million particles already need ~100 MB per filter step)."""
+MAX_SAMPLES = 1_000_000
+"""Largest ``--samples`` of a Monte Carlo bound."""
+MAX_WORKERS = 256
+"""Largest ``--workers``."""
+MAX_STARTS = 64
+"""Largest ``--starts`` (multi-start initial guesses of the heading OCP)."""
+MAX_DURATION = 7 * 86400.0
+"""Largest value of a time flag [s] (one week)."""
+MAX_PLAN_STEPS = 1440
+"""Largest planning horizon of ``tmaplan plan`` in grid steps (6 h at dt = 15 s)."""
+MLE_DRIFT_RATIO_MAX = 10.0
+"""``track --estimator mle`` is refused when the target's process noise moves it by more than
+this many times the finest measurement noise over the horizon (see :func:`preflight`)."""
+
+
+# --------------------------------------------------------------------------------------------
+# Parser: every usage error is one line
+# --------------------------------------------------------------------------------------------
+
+
+class UsageError(Exception):
+    """A command-line argument is invalid; the message is one line."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose errors raise :class:`UsageError`.
+
+    ``tmaplan.cli.main`` prints them as one line (``tmaplan VERB: error: ...``) and exits 1,
+    the same as any other error, instead of argparse's usage block and exit status 2.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        # "argument --runs: must be >= 1, received 0" -> "--runs must be >= 1, received 0"
+        m = re.match(r"argument ([^:]+): (must be .*)$", message)
+        if m:
+            message = f"{m[1].split('/')[0]} {m[2]}"
+        raise UsageError(f"{self.prog}: error: {message} (see '{self.prog} --help')")
+
+
+# --------------------------------------------------------------------------------------------
+# Types (callables for ``type=``): raise ArgumentTypeError("must be ..., received ...")
+# --------------------------------------------------------------------------------------------
+
+
+def _fail(constraint: str, received: Any) -> NoReturn:
+    raise argparse.ArgumentTypeError(f"must be {constraint}, received {received}")
+
+
+def integer(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    """Type of an integer flag in ``[minimum, maximum]``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            try:  # "1e4" is an integer too
+                number = float(text)
+            except ValueError:
+                number = math.nan
+            if not (math.isfinite(number) and number.is_integer()):
+                _fail(f"an integer >= {minimum}", repr(text))
+            value = int(number)
+        if value < minimum:
+            _fail(f">= {minimum}", value)
+        if maximum is not None and value > maximum:
+            _fail(f"<= {maximum} (documented limit)", value)
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def seed(text: str) -> int:
+    """Type of ``--seed``: an integer >= 0 (the root of a ``numpy.random.SeedSequence``)."""
+    return integer(0)(text)
+
+
+def open_fraction(text: str) -> float:
+    """Type of a fraction in (0, 1): ``0.1`` or ``"10 %"``."""
+    t = text.strip()
+    try:
+        value = float(t[:-1]) / 100.0 if t.endswith("%") else float(t)
+    except ValueError:
+        _fail("a number in (0, 1) or a percentage like '10 %'", repr(text))
+    if not 0.0 < value < 1.0:
+        _fail("in (0, 1)", value)
+    return value
+
+
+def _seconds_text(value: float) -> str:
+    """A duration for messages: ``'100000 s (27.8 h)'``."""
+    if value >= 7200:
+        return f"{value:g} s ({value / 3600:.3g} h)"
+    if value >= 120:
+        return f"{value:g} s ({value / 60:.3g} min)"
+    return f"{value:g} s"
+
+
+def duration(*, allow_zero: bool = False,
+             maximum: float = MAX_DURATION) -> Callable[[str], float]:
+    """Type of a time flag: seconds, or a string with a unit (``"30 min"``, ``"80 s"``).
+
+    Returns the value in seconds. Zero is accepted only with ``allow_zero``.
+    """
+    lower = ">= 0" if allow_zero else "> 0"
+
+    def parse(text: str) -> float:
+        try:
+            value = to_si(text, "time", "value")
+        except UnitError:
+            _fail(f"a duration {lower} s (seconds, or with a unit like '30 min')", repr(text))
+        if value < 0 or (value == 0 and not allow_zero):
+            _fail(f"a duration {lower} s", repr(text))
+        if value > maximum:
+            _fail(f"at most {_seconds_text(maximum)} (documented limit)",
+                  f"{text!r} = {_seconds_text(value)}")
+        return value
+
+    parse.__name__ = "duration"
+    return parse
+
+
+def step_list(text: str) -> list[int]:
+    """Type of ``--ping-steps``: comma-separated grid steps >= 0 (``"14,27,40"``)."""
+    try:
+        steps = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        _fail("comma-separated integers like '14,27,40'", repr(text))
+    if not steps:
+        _fail("at least one step", repr(text))
+    if min(steps) < 0:
+        _fail("steps >= 0", min(steps))
+    return steps
+
+
+def out_dir(text: str) -> str:
+    """Type of ``--out``: a directory (created when needed), not an existing file."""
+    if Path(text).exists() and not Path(text).is_dir():
+        _fail("a directory", f"{text!r} (an existing file)")
+    return text
+
+
+# --------------------------------------------------------------------------------------------
+# Shared argument definitions
+# --------------------------------------------------------------------------------------------
+
+
+def add_problem_argument(parser: argparse.ArgumentParser) -> None:
+    """The positional ``P``: a built-in problem name or a path to a .toml file."""
+    parser.add_argument("problem", help="built-in problem name or path to a .toml file")
+
+
+def add_seed_argument(parser: argparse.ArgumentParser, help: str = "random seed (default 0)"
+                      ) -> None:
+    """``--seed S`` (an integer >= 0, default 0)."""
+    parser.add_argument("--seed", type=seed, default=0, help=help)
+
+
+class _DeprecatedNoPlot(argparse.Action):
+    """``--no-plot``: the old name of ``--no-figure``; sets it and prints a one-line note."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        print(f"{parser.prog}: note: --no-plot is deprecated, use --no-figure",
+              file=sys.stderr)
+        namespace.no_figure = True
+
+
+def add_figure_arguments(parser: argparse.ArgumentParser, *, report: bool = False) -> None:
+    """``--out DIR`` and ``--no-figure`` (every verb that draws); ``--no-plot`` is a hidden,
+    deprecated alias of ``--no-figure``. ``report``: the verb writes a report, whose figures
+    are part of it, so only ``--out`` is added."""
+    parser.add_argument("--out", type=out_dir, default="out", metavar="DIR",
+                        help="output directory (default out/)")
+    if report:
+        return
+    parser.add_argument("--no-figure", action="store_true", help="do not write figures")
+    parser.add_argument("--no-plot", action=_DeprecatedNoPlot, nargs=0, dest="no_figure",
+                        help=argparse.SUPPRESS)
+
+
+def minutes(seconds: float | Sequence[float] | np.ndarray, digits: int = 1) -> str:
+    """Scenario times for console lines, in minutes.
+
+    ``minutes([840, 1620]) == '14.0, 27.0 min'``; ``'none'`` for no time.
+    """
+    values = np.atleast_1d(np.asarray(seconds, float))
+    if values.size == 0:
+        return "none"
+    return ", ".join(f"{v / 60:.{digits}f}" for v in values) + " min"
+
+
+# --------------------------------------------------------------------------------------------
+# Up-front checks that need the scenario
+# --------------------------------------------------------------------------------------------
+
+
+def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
+    return ScenarioError(flag, constraint, received, source=scenario.name)
+
+
+def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
+    dt = float(scenario.time.dt)
+    pl = scenario.planning
+    tc = args.control_interval if getattr(args, "control_interval", None) is not None else (
+        pl.control_interval if pl is not None and pl.control_interval else dt)
+    if getattr(args, "control_interval", None) is not None:
+        m = tc / dt
+        if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
+            raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
+                              _seconds_text(tc), scenario)
+    if args.horizon is None:
+        return
+    k = round(args.horizon / dt)
+    if k > MAX_PLAN_STEPS:
+        raise _flag_error("--horizon", f"at most {MAX_PLAN_STEPS} steps of dt = {dt:g} s "
+                          f"({_seconds_text(MAX_PLAN_STEPS * dt)}, documented limit)",
+                          f"{_seconds_text(args.horizon)} = {k} steps", scenario)
+    n = args.horizon / tc
+    if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+        raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
+                          f"{_seconds_text(tc)}", _seconds_text(args.horizon), scenario)
+
+
+def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
+    if args.ping_every is not None and args.ping_every < scenario.time.dt:
+        raise _flag_error("--ping-every", f">= dt = {scenario.time.dt:g} s",
+                          _seconds_text(args.ping_every), scenario)
+    if args.ping_steps is not None and max(args.ping_steps) > scenario.n_steps:
+        raise _flag_error("--ping-steps", f"steps within 0..{scenario.n_steps}",
+                          max(args.ping_steps), scenario)
+
+
+def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
+    if args.observer_plan is not None:
+        from tmaplan.cli.schedule import read_observer_plan
+
+        read_observer_plan(args.observer_plan, scenario)
+
+
+def _resolution(scenario: Any) -> tuple[float, str]:
+    """Finest measurement noise of the scenario in metres along its truth, and its name."""
+    from tmaplan.scenario import measurement_steps
+    from tmaplan.simulate import simulate
+
+    rel = simulate(scenario, None).relative
+    r = np.hypot(rel[:, 0], rel[:, 1])
+    best = (math.inf, "")
+    for sen in scenario.sensors:
+        steps = measurement_steps(sen, scenario.time)
+        if not steps.size:
+            continue
+        if sen.kind == "bearing":
+            r_min = float(np.min(r[steps]))
+            best = min(best, (sen.sigma * r_min, f"bearing noise {np.degrees(sen.sigma):.3g}° "
+                              f"at {r_min / 1e3:.3g} km"))
+        elif sen.kind == "range":
+            best = min(best, (sen.sigma, f"range noise {sen.sigma:g} m"))
+    return best
+
+
+def _check_track(args: argparse.Namespace, scenario: Any) -> None:
+    from tmaplan.scenario import measurement_steps
+
+    est = args.estimator
+    if args.bound == "prior" and est == "mle":
+        raise _flag_error("--bound", "'truth' (the default) with --estimator mle: the MLE is "
+                          "compared with the batch CRLB at the truth, --bound chooses the "
+                          "filters' PCRB", args.bound, scenario)
+    if args.bound == "prior":
+        raise _flag_error("--bound", "'truth' (the default): the prior-averaged PCRB gives a "
+                          "position bound only, its range bound would print as NaN; use "
+                          "--bound truth (the PCRB along each run's truth, ristic2004 ch. 6) "
+                          "or `tmaplan bound P --method monte-carlo` for the prior average",
+                          args.bound, scenario)
+    if est == "range-only":
+        n = sum(measurement_steps(s, scenario.time).size for s in scenario.sensors_of("range"))
+        if n < 3:
+            raise _flag_error("--estimator", "an estimator that applies: range-only tracking "
+                              "(sharma2024) needs range measurements at every scan, "
+                              f"{scenario.name} has {n}; use pf, pf-bearings or mle",
+                              est, scenario)
+    if est == "mle" and scenario.target.model != "constant-turn" and scenario.target.q > 0:
+        t = scenario.time.horizon
+        drift = math.sqrt(scenario.target.q * t**3 / 3.0)
+        res, what = _resolution(scenario)
+        if drift > MLE_DRIFT_RATIO_MAX * res:
+            alt = "range-only or pf" if scenario.sensors_of("range") and any(
+                s.every is not None for s in scenario.sensors_of("range")) else "pf"
+            raise _flag_error(
+                "--estimator",
+                f"an estimator that applies: mle fits one deterministic track (clavard2013), "
+                f"but the target's process noise q = {scenario.target.q:g} m^2/s^3 moves it "
+                f"by {drift:.0f} m (1σ) over the {t / 60:g} min horizon, "
+                f"{drift / res:.0f}× the finest measurement ({what}; limit "
+                f"{MLE_DRIFT_RATIO_MAX:g}×): its χ² test would reject every run (NaN RMSE); "
+                f"use --estimator {alt}", est, scenario)
+
+
+#: Verbs whose results depend on the prior (the others do not read it).
+_PRIOR_VERBS = frozenset({"bound", "track", "plan", "schedule", "compare", "demo"})
+
+
+def _truth_note(verb: str, scenario: Any) -> None:
+    if verb not in _PRIOR_VERBS:
+        return
+    p = scenario.prior
+    fields = p.truth_fields if p is not None else ()
+    if fields:
+        print(f"tmaplan {verb}: warning: {scenario.name}: the prior is centred on the target's "
+              f"true initial state ({', '.join('prior.' + f for f in fields)} from the truth)",
+              file=sys.stderr)
+
+
+def preflight(args: argparse.Namespace, scenario: Any) -> None:
+    """Checks of the arguments that need the scenario, before any work starts.
+
+    Raises :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
+    ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
+    below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
+    of this problem on its grid; ``track`` estimator/bound combinations
+    that cannot give a number (``--bound prior`` (no range bound; with ``mle``: not used),
+    ``range-only`` without ranges, ``mle`` on a target whose process noise drifts more than
+    :data:`MLE_DRIFT_RATIO_MAX` times the finest measurement noise over the horizon, the
+    drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line warning on
+    stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
+    or ``course_mode = "true"``): every run of a verb that uses the prior says so.
+    """
+    check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
+             "schedule": _check_schedule}.get(args.verb)
+    if check is not None:
+        check(args, scenario)
+    _truth_note(args.verb, scenario)

@@ -5,6 +5,7 @@ and estimator/bound combinations that cannot give a number refused with a reason
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -236,9 +237,8 @@ def test_binary_scenario_file_names_the_file(tmp_path, capsys):
 
 
 def test_a_scenario_written_from_the_readme_plans_and_compares(tmp_path, capsys):
-    from tmaplan.scenario import problems_dir
 
-    readme = (problems_dir().parent / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
     f = tmp_path / "my.toml"
     f.write_text(readme.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
     assert main(["plan", str(f), "--horizon", "20 min", "--starts", "1", "--no-figure",

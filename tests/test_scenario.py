@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import re
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -218,7 +219,7 @@ def test_builtin_priors_say_what_they_take_from_the_truth(name):
 
 
 def _readme_scenario_text() -> str:
-    text = (problems_dir().parent / "README.md").read_text(encoding="utf-8")
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
     block = text.split("```toml\n", 1)[1].split("```", 1)[0]
     assert "[prior]" in block and 'name = "my-case"' in block
     return block

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import PlanningError
-from tmaplan.geometry import course_speed
+from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning.objectives import Objective, ObjectiveEvaluator
@@ -30,6 +30,7 @@ __all__ = [
     "BearingRatePlan",
     "baseline_objectives",
     "bearing_rate_plan",
+    "course_program_track",
     "evaluate_baselines",
     "single_turn_track",
     "straight_track",
@@ -121,6 +122,21 @@ def single_turn_track(scenario: Scenario, angle: float, time: float, *,
     u = _course_program(times, [(float(time), h + float(angle))], h,
                         _rate(scenario, turn_rate), dt)
     return turn_rate_track(p, h, s, u, dt, t0)
+
+
+def course_program_track(scenario: Scenario, courses: Sequence[tuple[float, float]], *,
+                         n_steps: int | None = None) -> ObserverTrack:
+    """Track steering at the maximum turn rate to course ``c`` [rad] from ``t`` [s after t0],
+    for each ``(t, c)`` of ``courses`` (times increasing), each turn the shorter way."""
+    h, s, p = _start(scenario, None, None, None)
+    K = scenario.time.n_steps if n_steps is None else int(n_steps)
+    dt = scenario.time.dt
+    prog, prev = [], h
+    for t, c in courses:
+        prev = prev + float(wrap_angle(float(c) - prev))
+        prog.append((float(t), prev))
+    u = _course_program(dt * np.arange(K + 1), prog, h, _rate(scenario, None), dt)
+    return turn_rate_track(p, h, s, u, dt, scenario.time.t0)
 
 
 def zigzag_track(scenario: Scenario, leg_duration: float, angle: float, *,

@@ -10,9 +10,10 @@ joins one of each.
 
 Manoeuvre policies: :class:`Straight`, :class:`SingleTurn`, :class:`Zigzag`, :class:`Planned`
 (offline heading plan from the prior), :class:`Receding` (re-plans on the particle filter's
-posterior every ``replan_interval``). Ping policies: :class:`NoPing`, :class:`UniformPings`,
-:class:`ScheduledPings` (offline schedule), :class:`AdaptivePings` (ping when the filter's
-relative range uncertainty calls for it).
+posterior every ``replan_interval``); practitioner tactics (:mod:`tmaplan.policies.tactics`):
+:class:`LegTurnLeg` (bearing-rate doctrine) and :class:`LeadLag`. Ping policies:
+:class:`NoPing`, :class:`UniformPings`, :class:`ScheduledPings` (offline schedule),
+:class:`AdaptivePings` (ping when the filter's relative range uncertainty calls for it).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from tmaplan.policies._base import (
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
 from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
+from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 __all__ = [
     "CLOSED_LOOP_OBJECTIVE",
@@ -36,6 +38,8 @@ __all__ = [
     "BeliefView",
     "Combined",
     "Controller",
+    "LeadLag",
+    "LegTurnLeg",
     "ManoeuvrePolicy",
     "NoPing",
     "Planned",

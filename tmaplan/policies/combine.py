@@ -30,6 +30,7 @@ from tmaplan.policies.pings import (
     _budget,
     _offline_schedule,
 )
+from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -113,7 +114,10 @@ def best_zigzag(scenario: Scenario) -> Zigzag:
                   start=scenario.time.t0)
 
 
-_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding"}
+_TACTICS: dict[str, type[LegTurnLeg] | type[LeadLag]] = {"leg-turn-leg": LegTurnLeg,
+                                                         "lead-lag": LeadLag}
+_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding", "leg-turn-leg",
+               "lead-lag"}
 _PINGS = {"no-ping", "uniform", "scheduled", "scheduled-terminal", "adaptive"}
 
 
@@ -145,6 +149,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         man = best_zigzag(scenario)
     elif name == "planned":
         man = Planned()
+    elif name in _TACTICS:
+        man = _TACTICS[name]()
     else:
         man = Receding()
     ping: Policy = NoPing()

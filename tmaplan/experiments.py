@@ -1,4 +1,5 @@
-"""Monte Carlo comparison of policies (DESIGN §2's campaigns module, public entry point).
+"""Monte Carlo comparison of policies and of cost functionals (DESIGN §2's campaigns module,
+public entry point).
 
 The implementation lives in the evaluation layer (:mod:`tmaplan.evaluation.campaigns`, with
 the closed loop, the run records and the metrics beside it); this module keeps the name that
@@ -12,5 +13,16 @@ from tmaplan.evaluation.campaigns import (
     run_campaign,
     run_one,
 )
+from tmaplan.evaluation.cost_ranking import (
+    Candidate,
+    CostCorrelation,
+    CostRankingResult,
+    candidate_manoeuvres,
+    cost_functionals,
+    rank_correlations,
+    rank_costs,
+)
 
-__all__ = ["CampaignResult", "CampaignSpec", "resolve_policies", "run_campaign", "run_one"]
+__all__ = ["CampaignResult", "CampaignSpec", "Candidate", "CostCorrelation",
+           "CostRankingResult", "candidate_manoeuvres", "cost_functionals",
+           "rank_correlations", "rank_costs", "resolve_policies", "run_campaign", "run_one"]

@@ -155,8 +155,9 @@ class CampaignResult:
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
         ``time_to_accuracy`` (median [s], inf if most runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
-        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_rel_range_error``
-        (per run), ``replan_seconds`` (mean per re-plan), ``replan_failures``.
+        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m] and
+        ``final_rel_range_error`` (per run), ``replan_seconds`` (mean per re-plan),
+        ``replan_failures``.
     differences : tuple of PairedDifference
         All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
         ``final_range_error``.
@@ -237,6 +238,7 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "divergence_rate": float(np.mean([m.diverged for m in ms])),
             "pings_used": float(np.mean([m.pings_used for m in ms])),
             "final_range_rmse": float(np.sqrt(np.mean(fin**2))),
+            "final_range_error_runs": fin,
             "final_rel_range_error": np.array([m.final_rel_range_error for m in ms]),
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),

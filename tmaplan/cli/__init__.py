@@ -37,6 +37,7 @@ VERBS: dict[str, str] = {
     "plan": "plan",
     "schedule": "schedule",
     "compare": "compare",
+    "rank-costs": "rank_costs",
     "demo": "demo",
 }
 

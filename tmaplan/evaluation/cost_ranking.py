@@ -386,7 +386,10 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
                                      vectorized=False, n_resamples=int(n_resamples),
                                      confidence_level=level, method="percentile",
                                      random_state=np.random.default_rng(seed))
-            lo, hi = bs.confidence_interval
+            # percentiles of the resamples where the correlation is defined (a resample of
+            # one repeated candidate has none)
+            a = 100.0 * (1.0 - level) / 2.0
+            lo, hi = np.nanpercentile(bs.bootstrap_distribution, [a, 100.0 - a], axis=-1)
             cis = [(float(lo[i]), float(hi[i])) for i in range(3)]
         out.append(CostCorrelation(name=name, values=v, spearman=s, spearman_ci=cis[0],
                                    kendall=k, kendall_ci=cis[1], spearman_rmse=s2,

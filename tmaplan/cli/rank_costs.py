@@ -1,0 +1,113 @@
+"""``tmaplan rank-costs P [--candidates N] [--runs R] [--workers W | --scheduler ADDR]``: how
+well each cost functional predicts closed-loop performance."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from typing import Any
+
+from tmaplan.cli._args import (
+    MAX_PARTICLES,
+    MAX_RUNS,
+    MAX_SAMPLES,
+    MAX_WORKERS,
+    add_figure_arguments,
+    add_problem_argument,
+    add_seed_argument,
+    integer,
+    open_fraction,
+)
+from tmaplan.errors import ScenarioError
+from tmaplan.experiments import rank_costs
+from tmaplan.planning.objectives import OBJECTIVE_NAMES
+from tmaplan.scenario import load
+
+HELP = ("rank every cost functional against closed-loop Monte Carlo over a family of candidate "
+        "manoeuvres (Spearman/Kendall with bootstrap intervals)")
+#: Largest ``--candidates`` (the grid of single turns and zig-zags plus tactics and plans).
+MAX_CANDIDATES = 500
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``rank-costs``."""
+    add_problem_argument(parser)
+    parser.add_argument("--candidates", type=integer(3, MAX_CANDIDATES), default=40,
+                        help="number of candidate manoeuvres (default 40): straight, the "
+                             "tactics, the plan of each objective, then single turns and "
+                             "zig-zags spread over their grids")
+    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
+                        help="paired Monte Carlo runs per candidate (default 50)")
+    add_seed_argument(parser, help="root seed (default 0)")
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
+                        help="particle-filter size (default 3000)")
+    parser.add_argument("--accuracy", type=open_fraction, default=0.1,
+                        help="relative range error that counts as localised (default 0.1)")
+    parser.add_argument("--plans", default="all", metavar="all|none|OBJ,OBJ,..",
+                        help="objectives whose offline plans are candidates (default all)")
+    parser.add_argument("--cost-samples", type=integer(20, MAX_SAMPLES), default=1000,
+                        help="prior draws behind the Monte Carlo bounds (default 1000)")
+    parser.add_argument("--resamples", type=integer(0, 100_000), default=999,
+                        help="bootstrap resamples of the intervals (default 999)")
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
+                   help="local worker processes")
+    g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
+    add_figure_arguments(parser)
+
+
+def _plans(text: str) -> tuple[str, ...] | None:
+    t = text.strip()
+    if t == "all":
+        return None
+    if t == "none":
+        return ()
+    names = tuple(x.strip() for x in t.split(",") if x.strip())
+    bad = [n for n in names if n not in OBJECTIVE_NAMES]
+    if bad or not names:
+        raise ScenarioError("--plans", f"'all', 'none' or names of {', '.join(OBJECTIVE_NAMES)}",
+                            text)
+    return names
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run (or resume) the ranking; write the figure and ``rank-costs.html``."""
+    from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
+
+    scenario = load(args.problem)
+    quiet = args.json == "-"
+    res = rank_costs(scenario, candidates=args.candidates, runs=args.runs, seed=args.seed,
+                     n_particles=args.particles, accuracy=args.accuracy,
+                     plan_objectives=_plans(args.plans), cost_samples=args.cost_samples,
+                     n_resamples=args.resamples, workers=args.workers,
+                     scheduler=args.scheduler, out_dir=args.out,
+                     progress=(not quiet) and sys.stderr.isatty())
+    payload = res.to_json()
+    fig = None
+    if not args.no_figure:
+        fig = plot_cost_ranking(res, f"{args.out}/{scenario.name}_rank_costs.png")
+        payload["figure"] = f"{args.out}/{scenario.name}_rank_costs.png"
+        del fig
+    cmd = "tmaplan rank-costs " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
+        if sys.argv and sys.argv[0].endswith("tmaplan") else \
+        (f"tmaplan rank-costs {args.problem} --candidates {args.candidates} --runs "
+         f"{args.runs} --seed {args.seed} --particles {args.particles}")
+    from pathlib import Path
+
+    report = write_ranking_report(res, args.out, command=cmd, figure=None if args.no_figure
+                                  else Path(payload["figure"]))
+    payload["report"] = str(report)
+    if not quiet:
+        print(f"{scenario.name}: {len(res.candidates)} candidates, {args.runs} runs; default "
+              f"objective {res.default_objective}")
+        print(f"{'cost':<28} {'Spearman ρ':>10} {'95 % CI':>17} {'Kendall τ':>10} "
+              f"{'ρ (RMSE)':>9}")
+        for c in res.costs:
+            ci = "–" if c.spearman_ci[0] != c.spearman_ci[0] else \
+                f"[{c.spearman_ci[0]:+.2f}, {c.spearman_ci[1]:+.2f}]"
+            print(f"{c.name:<28} {c.spearman:>+10.2f} {ci:>17} {c.kendall:>+10.2f} "
+                  f"{c.spearman_rmse:>+9.2f}")
+        print(f"wrote {report} ({len(res.campaign.computed_runs)} runs computed, "
+              f"{len(res.campaign.loaded_runs)} loaded)")
+    return payload

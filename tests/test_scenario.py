@@ -29,6 +29,8 @@ DESIGN_PROBLEMS = {
     "clavard2013-halfturn-acw", "sharma2024-range-only", "ristic-bot-moderate",
     "ristic-bot-high", "gordon1993-bot", "default",
 }
+#: Our own planning problems (not from a paper): each says what it exercises.
+OUR_PROBLEMS = {"default", "bow-closing", "contact-astern"}
 
 
 def test_every_design_problem_is_built_in():
@@ -38,7 +40,7 @@ def test_every_design_problem_is_built_in():
         assert p["description"], p["name"]
 
 
-@pytest.mark.parametrize("name", sorted(DESIGN_PROBLEMS))
+@pytest.mark.parametrize("name", sorted(DESIGN_PROBLEMS | OUR_PROBLEMS))
 def test_load_dump_load_is_identity(name):
     s = load_problem(name)
     text = dump(s)
@@ -53,10 +55,32 @@ def test_every_file_parameter_is_commented():
     for path in problems_dir().glob("*.toml"):
         text = path.read_text(encoding="utf-8")
         assert text.lstrip().startswith("#"), path.name
-        if path.stem != "default":
+        if path.stem not in OUR_PROBLEMS:
             key = "ristic2004" if path.stem.startswith("ristic") else path.stem.split("-")[0]
             assert text.lstrip().startswith(f"# {key}:"), path.name
             assert not re.search(r"\bL\d{2,4}\b", text), path.name
+
+
+@pytest.mark.parametrize(("name", "rel_bearing", "closing"), [
+    ("bow-closing", 10.0, True), ("contact-astern", 185.0, None)])
+def test_our_planning_problems_have_their_geometry(name, rel_bearing, closing):
+    """The extra planning problems say what they exercise, and their prior (never the truth)
+    puts the contact where the comment says; the single-run truth is inside the prior."""
+    from tmaplan.geometry import wrap_angle
+    from tmaplan.planning.belief import Belief
+
+    s = load_problem(name)
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    assert text.startswith("# tmaplan's planning case") and "What it exercises:" in text
+    assert not s.prior.centred_on_truth and s.planning is not None
+    m = Belief.from_prior(s).mean
+    course = float(s.observer.course)
+    rel = np.degrees(float(wrap_angle(np.arctan2(m[0], m[1]) - course)))
+    assert abs(float(wrap_angle(np.radians(rel - rel_bearing)))) < np.radians(1.0)
+    if closing:
+        assert m[:2] @ m[2:] < 0          # mean range rate < 0
+    r0 = np.hypot(*s.target.position)
+    assert s.prior.range_min <= r0 <= s.prior.range_max
 
 
 def test_units_are_converted_at_load():
@@ -202,6 +226,8 @@ TRUTH_FIELDS = {
     "sharma2024-range-only": ("bearing_mean", "range_mean"),
     "default": (),
     "gordon1993-bot": (),
+    "bow-closing": (),
+    "contact-astern": (),
 }
 
 

@@ -109,9 +109,12 @@ def test_expected_crlb_is_far_above_the_prior_averaged_pcrb(scenario):
     tr = Straight().nominal_track(scenario)
     assert costs["expected-crlb-range"](tr) > 10.0 * costs["pcrb-cartesian-range"](tr)
     assert costs["mean-expected-crlb-range"](tr) > costs["mean-pcrb-cartesian-range"](tr)
-    # common random numbers: the same track gives the same value
+    # common random numbers: the same track gives the same value; another track another one
     assert costs["expected-crlb-range"](tr) == costs["expected-crlb-range"](
         Straight().nominal_track(scenario))
+    turn = SingleTurn(angle=1.5, time=900.0).nominal_track(scenario)
+    for name in ("expected-crlb-range", "pcrb-cartesian-range", "range-bound"):
+        assert costs[name](turn) != costs[name](tr), name
 
 
 def test_default_objective_is_read_from_the_planner(scenario):

@@ -193,6 +193,18 @@ def _full_track(scenario: Scenario, track: ObserverTrack) -> ObserverTrack:
                            u, scenario.time.dt, scenario.time.t0)
 
 
+def _track_key(tr: ObserverTrack) -> bytes:
+    """Content key of a track (terminal and mean costs share one bound computation)."""
+    return np.ascontiguousarray(tr.state).tobytes()
+
+
+def _objective_cost(ev: Any) -> CostFn:
+    def cost(tr: ObserverTrack) -> float:
+        return float(ev(tr)[0])
+
+    return cost
+
+
 def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
                      ) -> tuple[dict[str, CostFn], dict[str, str]]:
     """Every cost functional that can be evaluated on a fixed own-ship track (minimised).
@@ -233,30 +245,30 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
         except (PlanningError, ScenarioError, NotImplementedError) as exc:
             skipped[name] = str(exc)
             continue
-        costs[name] = lambda tr, ev=ev: ev(tr)[0]
+        costs[name] = _objective_cost(ev)
 
-    pcrb_cache: dict[int, Any] = {}
+    pcrb_cache: dict[bytes, np.ndarray] = {}
 
     def pcrb(tr: ObserverTrack) -> np.ndarray:
-        if id(tr) not in pcrb_cache:
-            pcrb_cache.clear()
-            pcrb_cache[id(tr)] = monte_carlo_pcrb(
+        key = _track_key(tr)
+        if key not in pcrb_cache:
+            pcrb_cache[key] = monte_carlo_pcrb(
                 scenario, samples=int(samples), rng=np.random.default_rng(seed),
                 coords="cartesian", observer=tr).range_std
-        return pcrb_cache[id(tr)]
+        return pcrb_cache[key]
 
     costs["pcrb-cartesian-range"] = lambda tr: float(pcrb(tr)[-1])
     costs["mean-pcrb-cartesian-range"] = lambda tr: float(np.mean(pcrb(tr)))
     n_draws = max(int(samples) // 10, 2)
     targets = np.stack([draw_truth(scenario, np.random.default_rng(s), from_prior=True)
                         for s in np.random.SeedSequence(seed).spawn(n_draws)])
-    ecrlb_cache: dict[int, Any] = {}
+    ecrlb_cache: dict[bytes, np.ndarray] = {}
 
     def ecrlb(tr: ObserverTrack) -> np.ndarray:
-        if id(tr) not in ecrlb_cache:
-            ecrlb_cache.clear()
-            ecrlb_cache[id(tr)] = truth_bounds(scenario, targets - tr.state[None])[1]
-        return ecrlb_cache[id(tr)]
+        key = _track_key(tr)
+        if key not in ecrlb_cache:
+            ecrlb_cache[key] = truth_bounds(scenario, targets - tr.state[None])[1]
+        return ecrlb_cache[key]
 
     costs["expected-crlb-range"] = lambda tr: float(ecrlb(tr)[-1])
     costs["mean-expected-crlb-range"] = lambda tr: float(np.mean(ecrlb(tr)))

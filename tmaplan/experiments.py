@@ -1,5 +1,5 @@
-"""Monte Carlo comparison of policies and of cost functionals (DESIGN §2's campaigns module,
-public entry point).
+"""Monte Carlo comparison of policies and of cost functionals (docs/architecture.md's
+campaigns module, public entry point).
 
 The implementation lives in the evaluation layer (:mod:`tmaplan.evaluation.campaigns`, with
 the closed loop, the run records and the metrics beside it); this module keeps the name that

@@ -1,15 +1,15 @@
 """Angle conventions and coordinate maps: the single home of both.
 
-Conventions (DESIGN.md §1)
+Conventions (docs/conventions.md)
 --------------------------
 * Frame: x = East, y = North, metres.
 * Bearings, courses and headings are measured from North, clockwise:
   ``β = atan2(Δx, Δy)`` in (−π, π] rad.
 * Relative state ``X = target − observer = [r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s).
-* Log-polar coordinates (LPC, file 000 eq. 6–8): ``Y = [β, ln r, β̇, ṙ/r]``
+* Log-polar coordinates (LPC, brehard2005 eq. 6–8): ``Y = [β, ln r, β̇, ṙ/r]``
   (rad, ln m, rad/s, 1/s). The full-circle bearing is used, so ``lpc_to_cart`` needs no
   ± branch; ``ambiguity="pi"`` reproduces the paper's ``arctan(r_x/r_y)``.
-* Modified polar coordinates (MP, file 001 eq. 5, its order): ``Y = [β̇, ṙ/r, β, 1/r]``
+* Modified polar coordinates (MP, brehard2004 eq. 5, its order): ``Y = [β̇, ṙ/r, β, 1/r]``
   (rad/s, 1/s, rad, 1/m).
 
 Every function is vectorised over leading dimensions: states have shape ``(..., 4)``,
@@ -48,7 +48,7 @@ __all__ = [
 ]
 
 Ambiguity = Literal["none", "pi"]
-"""Bearing ambiguity: ``"none"`` (full circle) or ``"pi"`` (known modulo π, file 000 eq. 4)."""
+"""Bearing ambiguity: ``"none"`` (full circle) or ``"pi"`` (known modulo π, brehard2005 eq. 4)."""
 
 FloatArray = NDArray[np.float64]
 
@@ -118,7 +118,7 @@ def wrap_angle(a: ArrayLike) -> FloatArray:
 def wrap_half_angle(a: ArrayLike) -> FloatArray:
     """Wrap angles to (−π/2, π/2], i.e. reduce them modulo π.
 
-    This is the range of a bearing known only modulo π (linear array, file 000 eq. 4).
+    This is the range of a bearing known only modulo π (linear array, brehard2005 eq. 4).
 
     Parameters
     ----------
@@ -163,8 +163,8 @@ def bearing_of(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
         Relative states ``[r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), shape (..., 4), or
         displacements ``[Δx, Δy]`` (East, North), shape (..., 2); only ``X[..., :2]`` is used.
     ambiguity
-        ``"none"``: full-circle bearing ``atan2(r_x, r_y)`` in (−π, π] (DESIGN §1).
-        ``"pi"``: bearing modulo π in (−π/2, π/2], i.e. ``arctan(r_x/r_y)`` of file 000
+        ``"none"``: full-circle bearing ``atan2(r_x, r_y)`` in (−π, π] (docs/conventions.md).
+        ``"pi"``: bearing modulo π in (−π/2, π/2], i.e. ``arctan(r_x/r_y)`` of brehard2005
         eq. 4 (``π/2`` when ``r_y = 0``).
 
     Returns
@@ -255,7 +255,7 @@ def course_speed(v: ArrayLike) -> tuple[FloatArray, FloatArray]:
 
 # -------------------------------------------------------------------------------- LPC
 def cart_to_lpc(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
-    """Cartesian relative states to log-polar coordinates (file 000 eq. 8).
+    """Cartesian relative states to log-polar coordinates (brehard2005 eq. 8).
 
     Parameters
     ----------
@@ -292,7 +292,7 @@ def cart_to_lpc(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
 
 
 def lpc_to_cart(Y: ArrayLike) -> FloatArray:
-    """Log-polar coordinates to Cartesian relative states (file 000 eq. 7, r_y > 0 branch).
+    """Log-polar coordinates to Cartesian relative states (brehard2005 eq. 7, r_y > 0 branch).
 
     Parameters
     ----------
@@ -338,7 +338,7 @@ def jacobian_cart_wrt_lpc_from_cart(X: ArrayLike) -> FloatArray:
 
     Notes
     -----
-    J is linear in X (file 000, key to the closed-form PCRB), so expectations of quadratic
+    J is linear in X (brehard2005, key to the closed-form PCRB), so expectations of quadratic
     forms in J only need the first two moments of X. Because J(−X) = −J(X), the formula
     also holds on the r_y < 0 branch of the π-ambiguous LPC (X = −f(Y)).
     """
@@ -415,13 +415,13 @@ def jacobian_lpc_wrt_cart(X: ArrayLike) -> FloatArray:
 
 # --------------------------------------------------------------------------------- MP
 def cart_to_mp(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
-    """Cartesian relative states to modified polar coordinates (file 001 eq. 81).
+    """Cartesian relative states to modified polar coordinates (brehard2004 eq. 81).
 
     Parameters
     ----------
     X
         Relative states ``[r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), shape (..., 4).
-        (File 001 orders X as velocity first; tmaplan always uses position first.)
+        (brehard2004 orders X as velocity first; tmaplan always uses position first.)
     ambiguity
         Bearing convention for ``Y_3``, as in :func:`bearing_of`.
 
@@ -440,7 +440,7 @@ def cart_to_mp(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
 
 
 def mp_to_cart(Y: ArrayLike) -> FloatArray:
-    """Modified polar coordinates to Cartesian relative states (file 001 eq. 80).
+    """Modified polar coordinates to Cartesian relative states (brehard2004 eq. 80).
 
     Parameters
     ----------
@@ -487,7 +487,7 @@ def jacobian_cart_wrt_mp(Y: ArrayLike) -> FloatArray:
              [ r_y,  r_x,   v_y, -v_x/u],
              [-r_x,  r_y,  -v_x, -v_y/u]]
 
-        ``det J = −1/Y_4⁵`` (so ``|det J| = 1/Y_4⁵``, file 001).
+        ``det J = −1/Y_4⁵`` (so ``|det J| = 1/Y_4⁵``, brehard2004).
 
     Raises
     ------

@@ -156,8 +156,8 @@ class Target:
     ``model = "ncv"``: nearly constant velocity with white acceleration of intensity ``q``
     [m²/s³] (``q = 0`` is constant velocity). ``"multi-leg"``: piecewise constant velocity
     changing at the known times of ``legs`` (plus optional process noise ``q``).
-    ``"constant-turn"``: file 002's circle ``P(t) = centre + radius·[sin(ωt+φ), cos(ωt+φ)]``
-    (file 002 eq. at L108; ω > 0 clockwise).
+    ``"constant-turn"``: clavard2013's circle ``P(t) = centre + radius·[sin(ωt+φ), cos(ωt+φ)]``
+    (clavard2013 eq.; ω > 0 clockwise).
 
     Attributes
     ----------
@@ -168,7 +168,7 @@ class Target:
         Initial velocity (v_x, v_y) [m/s]; or give ``course`` [rad] and ``speed`` [m/s].
     course, speed : float, optional
     q : float
-        Process-noise intensity [m²/s³] (DESIGN §1; file 000's σ_max²).
+        Process-noise intensity [m²/s³] (docs/conventions.md; brehard2005's σ_max²).
     legs : tuple of TargetLeg
         Known velocity changes (multi-leg).
     centre : tuple of float, optional
@@ -209,7 +209,7 @@ class Prior:
     A prior never takes the truth silently: a mean left out (``bearing_mean``, ``range_mean``,
     ``velocity_mean``, ``speed_mean`` of normal distributions, a gaussian ``mean``) is the true
     initial value only with ``centred_on_truth = true`` (the papers' "prior centred on the
-    truth", brehard2005 L612, ristic2004 B2), else an error naming the key; ``course_mode =
+    truth", brehard2005, ristic2004 B2), else an error naming the key; ``course_mode =
     "true"`` is explicit. A velocity prior is required. :attr:`truth_fields` lists what comes
     from the truth; the command line warns about it on every run.
 
@@ -244,7 +244,7 @@ class Prior:
     mean, std : tuple of 4 floats, optional
         Gaussian prior, [x, y, v_x, v_y] in [m, m, m/s, m/s].
     samples : int
-        Number of prior samples used where a bound needs prior moments (file 000 eq. 56).
+        Number of prior samples used where a bound needs prior moments (brehard2005 eq. 56).
     seed : int
         Seed of those samples, so bounds are reproducible.
     centred_on_truth : bool
@@ -371,7 +371,7 @@ class BearingSensor:
     steps : tuple of int, optional
         Explicit measurement steps.
     ambiguity : {"none", "pi"}
-        "pi": bearing known modulo π, in (−π/2, π/2] (linear array, file 000 eq. 4).
+        "pi": bearing known modulo π, in (−π/2, π/2] (linear array, brehard2005 eq. 4).
     """
 
     kind: Literal["bearing"] = "bearing"
@@ -387,7 +387,7 @@ class RangeSensor:
     """Range sensor: active pings at chosen steps, or continuous range-only measurement.
 
     ``z = ‖r‖ + v``, v ~ N(0, σ²). Steps: the union of ``steps``; for ``period`` the first
-    grid step at or after each multiple of the period (file 000 §6's "every 80 s" with
+    grid step at or after each multiple of the period (brehard2005 §6's "every 80 s" with
     δ = 6 s gives k = 14, 27, 40, 54, ...); for ``every`` the steps ``first_step + i·every``.
     No steps at all is allowed (a ping sensor left to the scheduler).
 
@@ -419,7 +419,7 @@ class RangeSensor:
 
 @_frozen
 class FrequencySensor:
-    """Narrow-band frequency lines: ``f_p(t) = f_p·(1 − Ṙ(t)/c) + v`` (file 002 eq. 3).
+    """Narrow-band frequency lines: ``f_p(t) = f_p·(1 − Ṙ(t)/c) + v`` (clavard2013 eq. 3).
 
     Attributes
     ----------
@@ -500,10 +500,10 @@ class Estimation:
     ----------
     turn_direction : {"either", "clockwise", "anticlockwise"}
         Sense of turn that the constant-turn MLE searches (clockwise = starboard, ω > 0 in
-        file 002's convention). "either" (default) searches both senses and reports
+        clavard2013's convention). "either" (default) searches both senses and reports
         indistinguishable mirror solutions (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`);
-        a given sense is prior knowledge of the contact's turn, the way file 002 §III
-        evaluates its clockwise and anticlockwise sources separately (L300).
+        a given sense is prior knowledge of the contact's turn, the way clavard2013 §III
+        evaluates its clockwise and anticlockwise sources separately.
     """
 
     turn_direction: Literal["either", "clockwise", "anticlockwise"] = "either"

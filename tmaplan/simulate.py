@@ -121,7 +121,7 @@ class Simulation:
         Absolute target state [x, y, v_x, v_y].
     observer : ObserverTrack
     relative : ndarray, shape (K + 1, 4)
-        ``target − observer.state`` (observer mean velocity, DESIGN §1).
+        ``target − observer.state`` (observer mean velocity, docs/conventions.md).
     measurements : tuple of MeasurementSet
         One per sensor, in scenario order.
     """
@@ -134,7 +134,7 @@ class Simulation:
     measurements: tuple[MeasurementSet, ...]
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready dict (DESIGN §4: ``times, target, observer, measurements``), SI units."""
+        """JSON-ready dict (docs/cli.md: ``times, target, observer, measurements``), SI units."""
         return {
             "problem": self.scenario.name,
             "times": self.times.tolist(),

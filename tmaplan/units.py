@@ -1,7 +1,7 @@
 """Unit parsing and conversion at the edges of tmaplan.
 
 Everything inside tmaplan is SI: metres, seconds, radians, m/s, rad/s, Hz and m²/s³
-(see DESIGN.md §1). Scenario files, CLI flags, plots and reports may use other units; this
+(see docs/conventions.md). Scenario files, CLI flags, plots and reports may use other units; this
 module is the single place where they are converted, using a module-level :mod:`pint`
 registry.
 

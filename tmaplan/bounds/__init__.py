@@ -5,14 +5,14 @@ bound does not pay for the others):
 
 * :mod:`tmaplan.bounds.crlb` — batch Fisher information / CRLB of a deterministic target track
   (constant velocity, multi-leg, constant turn; bearings, frequency lines, range pings).
-* :mod:`tmaplan.bounds.fimdet` — exact ``log det FIM`` of a bearing sequence and file 003's
+* :mod:`tmaplan.bounds.fimdet` — exact ``log det FIM`` of a bearing sequence and lecadre1997's
   bearing-rate approximations.
-* :mod:`tmaplan.bounds.observability` — discrete-time rank tests (file 003) and file 002's
+* :mod:`tmaplan.bounds.observability` — discrete-time rank tests (lecadre1997) and clavard2013's
   observability conditions.
 * :mod:`tmaplan.bounds.pcrb` — posterior CRB by Tichavský's recursion with Monte Carlo
   D-terms (Cartesian or log-polar coordinates).
 * :mod:`tmaplan.bounds.closed_form` — the closed-form PCRB in log-polar coordinates of
-  Bréhard & Le Cadre (file 000, corrected), numeric, batched over ping schedules and casadi.
+  Bréhard & Le Cadre (brehard2005, corrected), numeric, batched over ping schedules and casadi.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ its final-time quantities). It holds the array-level measurement sets (:class:`B
 :func:`fisher_information`: ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` with analytic rows from
 :mod:`tmaplan.models.tracks`, for bearings, range pings and P frequency lines with
 unknown tones as nuisance parameters — the FIM of Clavard, Pillon, Pignol & Jauffret
-(file 002, eq. 3, eqs. 11–16, L503–L524; §3.1 of NOTES_002).
+(clavard2013, eq. 3, eqs. 11–16; docs/errata.md).
 
 The names are re-exported by :mod:`tmaplan.bounds.crlb`; import them from there.
 """
@@ -61,7 +61,7 @@ class RangeData:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class FrequencyData:
-    """Frequency-line measurements (file 002 eq. 3, multi-line L503–L524).
+    """Frequency-line measurements (clavard2013 eq. 3, multi-line).
 
     Attributes
     ----------
@@ -72,7 +72,7 @@ class FrequencyData:
     f0 : ndarray, shape (P,)
         Emitted tones [Hz] (unknown nuisance parameters of the bound).
     sigma : ndarray, shape (P,)
-        Noise std per line [Hz] (file 002 uses σ_fp = f_p/1000, L586).
+        Noise std per line [Hz] (clavard2013 uses σ_fp = f_p/1000).
     c : float
         Sound speed [m/s].
     """
@@ -152,8 +152,8 @@ def fisher_information(
 
     Notes
     -----
-    Frequency gradient (file 002 §1.6 of the notes): ``∂f_p/∂f_p = 1 − Ṙ/c`` and
-    ``∇_θ f_p = −(f_p/c) ∇_θ Ṙ``; the block structure is file 002 eq. (12)–(15).
+    Frequency gradient (clavard2013): ``∂f_p/∂f_p = 1 − Ṙ/c`` and
+    ``∇_θ f_p = −(f_p/c) ∇_θ Ṙ``; the block structure is clavard2013 eq. (12)–(15).
     """
     theta = np.asarray(theta, dtype=float)
     if theta.shape != (model.dim,) or not np.all(np.isfinite(theta)):

@@ -12,7 +12,7 @@ same code gives
   derivatives),
 * their compiled C versions for numeric speed (:mod:`tmaplan.bounds._jit`).
 
-Mathematics (file 000 §4 with the corrections of NOTES_000, moment form of NOTES_000 §2.9):
+Mathematics (brehard2005 §4 with the corrections of docs/errata.md, moment form of docs/errata.md):
 the relative state obeys ``X_{t+1} = A X_t + c_t + w_t``, ``w_t ~ N(0, Q)`` with
 ``c_t = −H Δv_t``. The Jacobian ``J_X = ∂X/∂Y`` of the LPC → Cartesian map is linear in X,
 ``J_X = Σ_k X_k E_k``, so with ``m_t = E X_t``, ``S_t = E X_t X_tᵀ``, ``Z_t = A X_t + c_t``::
@@ -20,13 +20,13 @@ the relative state obeys ``X_{t+1} = A X_t + c_t + w_t``, ``w_t ~ N(0, Q)`` with
     D11 = Σ_kl S_t[k,l]               E_kᵀ AᵀQ⁻¹A E_l
     D12 = −Σ_kl (S_t Aᵀ + m_t c_tᵀ)[k,l] E_kᵀ AᵀQ⁻¹ E_l
     D22 = Σ_kl E[Z Zᵀ][k,l]          E_kᵀ Q⁻¹ E_l + 𝒞
-    J_{t+1} = D22 + D33 − D12ᵀ (J_t + D11)⁻¹ D12          (information, NOT J_t⁻¹: file 000
-                                                           Prop. 5 L327 prints J_t⁻¹ — wrong)
+    J_{t+1} = D22 + D33 − D12ᵀ (J_t + D11)⁻¹ D12          (information, NOT J_t⁻¹: brehard2005
+                                                           Prop. 5 prints J_t⁻¹ — wrong)
 
 𝒞 = Cov(J(w)ᵀQ⁻¹w) is computed exactly (Isserlis); for the CV model it equals
-diag(0, 8, 8δ²/3, 8δ²/3), *not* file 000 eq. 43/101's constant (NOTES_000 §2.5).
+diag(0, 8, 8δ²/3, 8δ²/3), *not* brehard2005 eq. 43/101's constant (docs/errata.md).
 These moments replace the paper's Γ/Ψ/Ω/Λ/Υ recursions (whose printed Γ₀¹², Λ³³ and Γ₀³³ are
-wrong, NOTES_000 §2.6–2.8, §4.1); they are exact for any prior (no E r₀² factorisation).
+wrong, docs/errata.md); they are exact for any prior (no E r₀² factorisation).
 """
 
 from __future__ import annotations
@@ -106,10 +106,10 @@ def lpc_noise_constant(Q: np.ndarray) -> np.ndarray:
     """The constant 𝒞 = Cov(J(w)ᵀ Q⁻¹ w), w ~ N(0, Q), added to D22 (4, 4).
 
     Exact by Isserlis' theorem: the score component ``g_i = wᵀ B_i w`` is a quadratic form,
-    so ``Cov(g_i, g_j) = 2 tr(B_i^s Q B_j^s Q)`` with ``B^s`` the symmetric part. File 000's
-    printed constant (eq. 43 / 101, L504–508) is wrong (sign of the +4 ln r term, the wrong
+    so ``Cov(g_i, g_j) = 2 tr(B_i^s Q B_j^s Q)`` with ``B^s`` the symmetric part. brehard2005's
+    printed constant (eq. 43 / 101) is wrong (sign of the +4 ln r term, the wrong
     Jacobian, unit-intensity CV only); the correct value for any Σ is
-    diag(0, 8, 2α3²/detΣ, 2α3²/detΣ) (NOTES_000 §2.5), which the tests check.
+    diag(0, 8, 2α3²/detΣ, 2α3²/detΣ) (docs/errata.md), which the tests check.
 
     Parameters
     ----------
@@ -186,8 +186,8 @@ def moment_dterm_step(m: list[Entry], S: Mat, c: list[Entry], A: np.ndarray,
     Returns
     -------
     m_next, S_next, D11, D12, D22, er2_next
-        Moments at t+1, the D-terms (D22 includes 𝒞) and ``E r²_{t+1}`` [m²] (file 000
-        eq. 52, here exact from S_{t+1}; the printed Λ³³ third row is wrong, NOTES_000 §4.1).
+        Moments at t+1, the D-terms (D22 includes 𝒞) and ``E r²_{t+1}`` [m²] (brehard2005
+        eq. 52, here exact from S_{t+1}; the printed Λ³³ third row is wrong, docs/errata.md).
     """
     Al = A.tolist()
     Am = [_or_zero(sum_entries(Al[i], m)) for i in range(4)]
@@ -264,8 +264,8 @@ def tichavsky_step(J: Mat, D11: Mat, D12: Mat, D22: Mat, bearing_info: Entry,
                    range_info: Entry) -> tuple[Mat, list[Entry]]:
     """Tichavský's recursion ``J_{t+1} = D22 + D33 − D12ᵀ (J_t + D11)⁻¹ D12``.
 
-    Corrected form of file 000 Prop. 5 (L327): the bracket holds the information ``J_t``, not
-    ``J_t⁻¹`` (NOTES_000 §2.2). ``D33 = diag(bearing_info, range_info, 0, 0)`` (eq. 47 and
+    Corrected form of brehard2005 Prop. 5: the bracket holds the information ``J_t``, not
+    ``J_t⁻¹`` (docs/errata.md). ``D33 = diag(bearing_info, range_info, 0, 0)`` (eq. 47 and
     eq. 51: ``range_info = u_{t+1}·E r²_{t+1}/σ_r²``).
 
     Parameters

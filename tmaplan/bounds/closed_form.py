@@ -5,7 +5,7 @@
 prior: J₀ is the inverse of the LPC covariance of ``scenario.prior.samples`` prior samples
 (eq. 56, read as an outer product; default 100 000 samples for the brehard2005 problems, drawn
 with ``prior.seed``), the range truncation is the prior's ``range_min``; the result carries the
-side-assumption diagnostic of NOTES_000 §3.2 (:func:`side_assumption_density`).
+side-assumption diagnostic of docs/errata.md (:func:`side_assumption_density`).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ __all__ = [
     "side_density_gaussian",
 ]
 
-#: Default tolerance on κ = (wrap period)·p_β(wrap) for the side assumption (NOTES_000 §3.2).
+#: Default tolerance on κ = (wrap period)·p_β(wrap) for the side assumption (docs/errata.md).
 SIDE_TOL = 1e-3
 
 
@@ -45,7 +45,7 @@ def side_density_gaussian(theta: float, mean: np.ndarray, cov: np.ndarray) -> np
 
     ``p(θ) = ∫₀^∞ ρ N(ρ u_θ; m, C) dρ``, u_θ = (sin θ, cos θ), in closed form:
     ``[e^{−c/2}/a + (b/a)·sqrt(2π/a)·e^{−(c − b²/a)/2}·Φ(b/√a)] / (2π sqrt(det C))`` with
-    ``a = uᵀC⁻¹u, b = uᵀC⁻¹m, c = mᵀC⁻¹m`` (NOTES_000 §3.2 (b)).
+    ``a = uᵀC⁻¹u, b = uᵀC⁻¹m, c = mᵀC⁻¹m`` (docs/errata.md).
 
     Parameters
     ----------
@@ -174,7 +174,7 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
 
 def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
                             ) -> tuple[np.ndarray, np.ndarray]:
-    """Density of the true bearing at the wrap point per step, and κ (NOTES_000 §3.2).
+    """Density of the true bearing at the wrap point per step, and κ (docs/errata.md).
 
     Given X₀ the relative position at step k is exactly Gaussian (linear dynamics), with mean
     ``(A^k X₀ + Σ A^{k−1−s} c_s)_pos`` and the process-noise covariance ``C_k``; the density is
@@ -186,7 +186,7 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
     density : ndarray, shape (K + 1,)
         [1/rad]: of β mod π at π/2 for π-ambiguous bearings, of β at ±π otherwise.
     kappa : ndarray, shape (K + 1,)
-        (wrap period)·density: the file 000 eq. 25 correction 1 − κ of the β bound.
+        (wrap period)·density: the brehard2005 eq. 25 correction 1 − κ of the β bound.
     """
     K, A, Q = inp.n_steps, inp.A, inp.Q
     X = inp.prior_subsample.copy()

@@ -13,7 +13,7 @@ relaxations). The planner, the ping scheduler and ``tmaplan bound`` all use it. 
 written once on explicit entries in :mod:`tmaplan.bounds._lpc_terms` (compiled by
 :mod:`tmaplan.bounds._jit`); the tests check every path against the others to 1e-10.
 
-Corrections to brehard2005 (NOTES_000): information (not its inverse) in the Tichavský bracket
+Corrections to brehard2005 (docs/errata.md): information (not its inverse) in the Tichavský bracket
 (Prop. 5); the true Jacobian ∂X/∂Y instead of the printed F (eq. 31); the constant
 𝒞 = diag(0, 8, 2α3²/detΣ, 2α3²/detΣ) instead of eq. 43/101; exact moment propagation instead
 of the Γ recursions (whose printed Γ₀¹², Λ³³ third row and Γ₀³³ are wrong); ``E r²_{t+1}``
@@ -101,7 +101,7 @@ class StepInformation:
         J_prior, the LPC prior information (eq. 56).
     D11, D12, D22 : ndarray, shape (K, 4, 4)
         Tichavský's D-terms of the transition t → t + 1 (eq. 29; D22 includes the constant 𝒞,
-        NOTES_000 §2.5); D11, D22 symmetric, D21 = D12ᵀ.
+        docs/errata.md); D11, D22 symmetric, D21 = D12ᵀ.
     B : ndarray, shape (K + 1, 4, 4)
         Bearing information ``diag(Σ 1/σ_β², 0, 0, 0)`` at step k (eq. 47, D33).
     M : ndarray, shape (K + 1, 4, 4)
@@ -124,7 +124,7 @@ class StepInformation:
 class ClosedFormEngine:
     """The closed-form LPC PCRB of one belief and observer track, ready for fast evaluation.
 
-    The moments and D-terms depend only on the belief and the observer (NOTES_000 §4.2 (i));
+    The moments and D-terms depend only on the belief and the observer (docs/errata.md);
     a ping schedule u enters only through ``u_k·E r_k²/σ_r²`` on ln r. Build with
     :meth:`from_belief` (planners) or :func:`tmaplan.bounds.closed_form.closed_form_model`
     (a scenario's prior).
@@ -173,10 +173,10 @@ class ClosedFormEngine:
               backend: str = "auto") -> ClosedFormEngine:
         """Engine from the moments of X₀ (``E X₀`` (4,) [m, m/s], ``E X₀X₀ᵀ`` (4, 4)), the LPC
         J₀ (4, 4), an observer track (K + 1 instants; only its velocity increments enter,
-        ``c_t = −H Δv_t``, DESIGN §1), dt [s], the NCV intensity q > 0 [m²/s³], the bearing
-        information per step (K + 1,) [rad⁻²] (:func:`tmaplan.bounds.inputs.information_rates`)
-        and σ_r of a ping [m]; ``backend`` ("auto", "compiled", "casadi") evaluates the moment
-        recursion."""
+        ``c_t = −H Δv_t``, docs/conventions.md), dt [s], the NCV intensity q > 0 [m²/s³],
+        the bearing information per step (K + 1,) [rad⁻²]
+        (:func:`tmaplan.bounds.inputs.information_rates`) and σ_r of a ping [m]; ``backend``
+        ("auto", "compiled", "casadi") evaluates the moment recursion."""
         K = observer.position.shape[0] - 1
         bearing_info = np.asarray(bearing_info, float)
         if bearing_info.shape != (K + 1,):
@@ -281,7 +281,7 @@ class ClosedFormEngine:
         schedules (``"compiled"``: an error without a compiler; ``"auto"``: when available).
         ``quantity``: "range", eq. 58's ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, or "position",
         ``sqrt(tr P_pos)`` of the Cartesian bound ``E[J_X J_k⁻¹ J_Xᵀ]_pos`` (numpy only).
-        ``reduce``: None, per step (S, K + 1); "mean" over the K + 1 steps (DESIGN §4);
+        ``reduce``: None, per step (S, K + 1); "mean" over the K + 1 steps (docs/cli.md);
         "terminal", the last step (S,). Raises :class:`ObservabilityError` if some
         ``J_t + D11`` is not positive definite.
         """
@@ -360,7 +360,7 @@ class ClosedFormEngine:
     def position_weights(self) -> np.ndarray:
         """``W_k = Σ_kl S_k[k,l] E_kᵀ_pos E_l,pos`` (K + 1, 4, 4): ``tr P_pos = tr(W_k J_k⁻¹)``.
 
-        ``J_X = ∂X/∂Y = Σ_k X_k E_k`` is linear in X (NOTES_000 §2.9), so the Cartesian
+        ``J_X = ∂X/∂Y = Σ_k X_k E_k`` is linear in X (docs/errata.md), so the Cartesian
         position covariance bound is ``E[J_X J⁻¹ J_Xᵀ]_pos`` with trace ``tr(W J⁻¹)`` [m²·Y²].
         """
         E = basis()[:, :2, :]
@@ -457,7 +457,7 @@ def lpc_pcrb_graph(A: np.ndarray, Q: np.ndarray, dt: float, *, v_obs: Any, x0: A
     K = v_obs.shape[0] - 1
     moment_fn, _ = step_functions(A, Q)
     dv = v_obs[1:, :] - v_obs[:-1, :]
-    c = -ca.horzcat(dt * dv, dv).T  # c_t = −H Δv_t (DESIGN §1), 4 × K
+    c = -ca.horzcat(dt * dv, dv).T  # c_t = −H Δv_t (docs/conventions.md), 4 × K
     xs, aux = _accumulated(moment_fn, K)(x0, c)
     er2 = ca.vertcat(x0[4] + x0[8], aux[36, :].T)  # S[0,0] + S[1,1] in the packed order
     g = _information_graph(A, Q, j0=j0, aux=aux, er2=er2, bearing=bearing, ping=ping,

@@ -1,22 +1,22 @@
 """Batch Fisher information and Cramér–Rao lower bound of a deterministic target track.
 
 The target track is a deterministic function of a parameter vector θ (constant velocity,
-multi-leg with known change times, or file 002's constant turn, see
+multi-leg with known change times, or clavard2013's constant turn, see
 :mod:`tmaplan.models.tracks`). Measurements are independent Gaussian:
 
 * bearings ``β_k = atan2(d_x, d_y) + ε``, σ_β [rad];
 * range pings ``R_k + ε``, σ_R [m];
 * P frequency lines ``f_p (1 − Ṙ_k/c) + ε`` with unknown emitted tones ``f_p`` (nuisance
-  parameters appended to θ), σ_fp [Hz] (file 002 eq. 3 and L503–L524).
+  parameters appended to θ), σ_fp [Hz] (clavard2013 eq. 3, multi-line form).
 
-The FIM is ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (file 002 eq. 11, §3.1 of NOTES_002) with analytic rows.
+The FIM is ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (clavard2013 eq. 11, docs/errata.md) with analytic rows.
 With frequency lines the full (dim + P) FIM is inverted; its trajectory block equals the
-Schur-complement form of file 002 eq. (16) (checked in the tests).
+Schur-complement form of clavard2013 eq. (16) (checked in the tests).
 
 Before inversion the FIM is scaled to unit diagonal; the condition number of the scaled FIM
 is reported and a (numerically) singular FIM raises :class:`ObservabilityError` naming the
 unobservable direction. Derived quantities use the delta method: the final position
-``p(t_N)`` and final range ``R_N`` (file 002 §3.1, J_{Z,Z_N}; ``∇R_N = [Δx/R, Δy/R]``).
+``p(t_N)`` and final range ``R_N`` (clavard2013 §3.1, J_{Z,Z_N}; ``∇R_N = [Δx/R, Δy/R]``).
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ class CRLBResult:
         t_N [s].
     final_parameters : tuple of str
         Names of the final-time parametrisation Z_N: the position parameters replaced by the
-        target position at t_N (file 002 §3.1, L281); the tones and other parameters kept.
+        target position at t_N (clavard2013 §3.1); the tones and other parameters kept.
     final_values, final_std : ndarray, shape (d,)
         Z_N and its CRLB std (SI).
     final_covariance : ndarray, shape (d, d)
@@ -110,7 +110,7 @@ class CRLBResult:
     final_range_std : float
         CRLB std of the final range [m] (delta method).
     final_range_rsd : float
-        σ_R / R (dimensionless; file 002's RSD, L298–L311).
+        σ_R / R (dimensionless; clavard2013's RSD).
     n_measurements : dict
         Scalar measurement counts per kind.
     notes : tuple of str
@@ -431,7 +431,7 @@ def crlb(scenario: Scenario, *, frequencies: int | None = None,
     --------
     >>> from tmaplan.scenario import load_problem
     >>> res = crlb(load_problem("clavard2013-halfturn-cw"), frequencies=0)
-    >>> round(res.final_range_rsd, 3)  # file 002 Table 1: 0.71 km / 9.76 km  # doctest: +SKIP
+    >>> round(res.final_range_rsd, 3)  # clavard2013 Table 1: 0.71 km / 9.76 km  # doctest: +SKIP
     0.073
     """
     model, theta, data, notes = scenario_data(scenario, frequencies=frequencies, t_ref=t_ref)

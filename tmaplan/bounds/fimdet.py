@@ -1,26 +1,26 @@
-"""FIM-determinant cost functionals of a bearing sequence (file 003, Le Cadre & Jauffret 1997).
+"""FIM-determinant cost functionals of a bearing sequence (lecadre1997, Le Cadre & Jauffret 1997).
 
 Exact values
     :func:`fim_bearings`, :func:`logdet_fim_bearings` — FIM of the relative constant-velocity
-    state ``X = [r_x, r_y, v_x, v_y]`` at a reference time from bearings (file 003 eq. 64–65,
-    L700–L706), ``log det`` by a column-scaled QR of the whitened Jacobian (never a raw det).
+    state ``X = [r_x, r_y, v_x, v_y]`` at a reference time from bearings (lecadre1997 eq. 64–65),
+    ``log det`` by a column-scaled QR of the whitened Jacobian (never a raw det).
     :func:`fim_bearings_generic`, :func:`logdet_generic` and :func:`inverse_quadratic_generic`
     build the same 4×4 FIM with only ``+ − * /`` so that they evaluate on numpy arrays *and*
     casadi SX/MX symbols (the planner's ``logdet`` and relative-range objectives).
     :func:`logdet_fim_from_bearings` takes measured bearings and (assumed) ranges.
 
-File 003's identities and bearing-rate approximations
+lecadre1997's identities and bearing-rate approximations
     Constant range, unit sampling period, ``(σr)^8 det F`` normalisation, rates in rad per
-    sample. :func:`det4_subset` (general 4-sample identity, NOTES_003 §3.5), :func:`det4_eq68`
+    sample. :func:`det4_subset` (general 4-sample identity, docs/errata.md), :func:`det4_eq68`
     (eq. 68, expanded form), :func:`det4_second_order` (Property 5, eq. 69),
     :func:`nardone_aidala` (eq. 71/73 with the third derivative restored),
     :func:`single_leg_det` (Result 1, eq. 76, with the corrected ℓ = 8 coefficient 3876),
     :func:`single_leg_small_rate_constant` (k_n of eq. 89), :func:`quartic_coefficients`
     and :func:`bearing_rate_det_approx` (two- and three-leg polynomials, eq. 90–92 and
-    Appendix B, "Model A" sample convention of NOTES_003 §3.6), and
+    Appendix B, "Model A" sample convention of docs/errata.md), and
     :func:`exact_det_piecewise` (the exact value under the same model).
 
-Corrections of printed equations (NOTES_003 §3, §5.4): eq. (71) prints ``2θ̇θ̈`` for
+Corrections of printed equations (docs/errata.md): eq. (71) prints ``2θ̇θ̈`` for
 ``2θ̇θ⃛``; eq. (76) prints 3867 for 3876 (ℓ = 8); eq. (78) prints ``(c−b)(c−a)`` for
 ``(c−b)(b−a)``; eq. (80) swaps ``(a−d)``/``(c−d)`` for ``(a−b)``/``(c−b)``; eq. (91) loses the
 ``784x⁴`` term of F_{3,6} and misplaces ``−5488``; Appendix B prints ``+5264`` for ``−5264``.
@@ -59,8 +59,8 @@ __all__ = [
     "single_leg_small_rate_constant",
 ]
 
-#: Result 1 (file 003 eq. 76, L796): ``(σr)^8 det F_{k,ℓ} = 32 sin⁸θ̇ Σ_j c_j cos(2jθ̇)``.
-#: ℓ = 8 uses the corrected coefficient 3876 (printed 3867; NOTES_003 §3.4, T13).
+#: Result 1 (lecadre1997 eq. 76): ``(σr)^8 det F_{k,ℓ} = 32 sin⁸θ̇ Σ_j c_j cos(2jθ̇)``.
+#: ℓ = 8 uses the corrected coefficient 3876 (printed 3867; docs/errata.md, T13).
 SINGLE_LEG_COEFFICIENTS: dict[int, tuple[float, ...]] = {
     4: (0.5,),  # 16 sin⁸θ̇
     5: (18.0, 16.0, 1.0),
@@ -101,7 +101,7 @@ def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndar
 
 
 def _rows(rel: np.ndarray, tau: np.ndarray, s: np.ndarray, r2: np.ndarray) -> np.ndarray:
-    """Whitened rows ``[cos β, −sin β, τ cos β, −τ sin β]/(σ r)`` (file 003 eq. 65)."""
+    """Whitened rows ``[cos β, −sin β, τ cos β, −τ sin β]/(σ r)`` (lecadre1997 eq. 65)."""
     k = 1.0 / (s * r2)
     ry, rx = rel[..., 1] * k, rel[..., 0] * k
     return np.stack([ry, -rx, tau * ry, -tau * rx], axis=-1)
@@ -136,7 +136,7 @@ def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
     """Exact ``log det FIM`` of the relative CV state from bearings (stable, batched).
 
     Computed as ``2 Σ log|R_ii|`` from the QR factorisation of the column-scaled whitened
-    Jacobian (NOTES_003 §5.2), never as ``log(det(F))`` of a matrix with det ~ 1e−30.
+    Jacobian (docs/errata.md), never as ``log(det(F))`` of a matrix with det ~ 1e−30.
 
     Parameters
     ----------
@@ -147,7 +147,7 @@ def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
     sigma : float or array_like, shape (n,)
         [rad].
     t_ref : float, optional
-        Reference time [s]; det is invariant to it (file 003 L708); the default, mid-horizon,
+        Reference time [s]; det is invariant to it (lecadre1997); the default, mid-horizon,
         is the best conditioned.
 
     Returns
@@ -168,7 +168,7 @@ def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
 
 
 def logdet_fim_from_bearings(bearings: Any, times: Any, sigma: Any, ranges: Any) -> float:
-    """``log det FIM`` from measured bearings and (assumed) ranges (file 003 eq. 66).
+    """``log det FIM`` from measured bearings and (assumed) ranges (lecadre1997 eq. 66).
 
     Parameters
     ----------
@@ -179,7 +179,7 @@ def logdet_fim_from_bearings(bearings: Any, times: Any, sigma: Any, ranges: Any)
     sigma : float or array_like
         [rad].
     ranges : float or array_like, shape (n,)
-        Range [m]; a constant is file 003's long-range hypothesis r_n ≡ r (L710).
+        Range [m]; a constant is lecadre1997's long-range hypothesis r_n ≡ r.
 
     Returns
     -------
@@ -215,7 +215,7 @@ def fim_bearings_generic(rx: Any, ry: Any, tau: Any, information: Any, *,
 
     The one generic form, for numpy arrays and casadi symbols alike (the planner's ``logdet``
     and relative-range objectives): entry (i, j) is ``total(info·g_i g_j / r⁴)`` with
-    ``g = [r_y, −r_x, τ r_y, −τ r_x]`` (file 003 eq. 65 with ``cos β/r = r_y/r²``, ``sin β/r =
+    ``g = [r_y, −r_x, τ r_y, −τ r_x]`` (lecadre1997 eq. 65 with ``cos β/r = r_y/r²``, ``sin β/r =
     r_x/r²``), i.e. :func:`fim_bearings` when ``info = 1/σ²`` and ``total`` sums the steps.
 
     ``rx, ry`` [m] (steps along axis 0, e.g. belief samples along axis 1), ``tau`` [s] and
@@ -263,15 +263,15 @@ def inverse_quadratic_generic(F: list[list[Any]], g: Sequence[Any]) -> Any:
 
 
 # --------------------------------------------------------------------------------------------
-# File 003 identities (constant range, (σr)^8 normalisation)
+# lecadre1997 identities (constant range, (σr)^8 normalisation)
 # --------------------------------------------------------------------------------------------
 
 
 def det4_subset(phases: Any, times: Any) -> np.ndarray:
     """Exact ``det 𝒢_E`` of four samples with arbitrary bearings and times.
 
-    ``𝒢_E = (G_a, G_b, G_c, G_d)``, ``G = (cos φ, −sin φ, t cos φ, −t sin φ)`` (file 003 eq.
-    66). General identity of NOTES_003 §3.5 (time origin at sample b, ``S_pq = sin(φ_p−φ_q)``):
+    ``𝒢_E = (G_a, G_b, G_c, G_d)``, ``G = (cos φ, −sin φ, t cos φ, −t sin φ)`` (lecadre1997 eq.
+    66). General identity of docs/errata.md (time origin at sample b, ``S_pq = sin(φ_p−φ_q)``):
     ``S_ab S_cd t_cb t_db − S_ac S_bd t_ab t_cb + S_ad S_bc t_ab t_db``; it contains the
     corrected Property 6 (eq. 78, Appendix C2) and Property 7 (eq. 80) as special cases.
 
@@ -297,9 +297,9 @@ def det4_subset(phases: Any, times: Any) -> np.ndarray:
 
 
 def det4_eq68(phi1: Any, phi2: Any, phi3: Any) -> np.ndarray:
-    """File 003 eq. (68) for samples at 0, 1, 2, 3 with bearing offsets φ_i = θ_{k+i} − θ_k.
+    """lecadre1997 eq. (68) for samples at 0, 1, 2, 3 with bearing offsets φ_i = θ_{k+i} − θ_k.
 
-    Expanded exact form (NOTES_003 §3.2): ``4 α1 α3 c2 − 3 α1 α2 c3 − α2 α3 c1`` with
+    Expanded exact form (docs/errata.md): ``4 α1 α3 c2 − 3 α1 α2 c3 − α2 α3 c1`` with
     ``α_i = sin φ_i``, ``c_i = cos φ_i`` (equal to the printed ``α1(2α3β'2 − α2β'3)``).
     """
     p1, p2, p3 = (np.asarray(x, dtype=float) for x in (phi1, phi2, phi3))
@@ -309,7 +309,7 @@ def det4_eq68(phi1: Any, phi2: Any, phi3: Any) -> np.ndarray:
 
 
 def det4_second_order(rate: Any, accel: Any) -> np.ndarray:
-    """Property 5 (file 003 eq. 69): ``det 𝒢_{k,4} ≈ 6θ̇⁴ − 3θ̈²`` (second-order model).
+    """Property 5 (lecadre1997 eq. 69): ``det 𝒢_{k,4} ≈ 6θ̇⁴ − 3θ̈²`` (second-order model).
 
     Only the θ̈ term is consistent: the second-order truncation drops the ``−θ̇³`` part of
     the third-order coefficient, so with θ̈ = 0 the true leading term is ``4θ̇⁴``
@@ -320,9 +320,9 @@ def det4_second_order(rate: Any, accel: Any) -> np.ndarray:
 
 
 def nardone_aidala(rate: Any, accel: Any, jerk: Any) -> np.ndarray:
-    """Nardone–Aidala determinant ``4θ̇⁴ − 3θ̈² + 2θ̇θ⃛`` (file 003 eq. 71 and 73).
+    """Nardone–Aidala determinant ``4θ̇⁴ − 3θ̈² + 2θ̇θ⃛`` (lecadre1997 eq. 71 and 73).
 
-    Corrected: the paper prints ``2θ̇θ̈`` (L758); the last factor is the third derivative.
+    Corrected: the paper prints ``2θ̇θ̈``; the last factor is the third derivative.
     ``(σr)^{−8} (·)²`` is the third-order approximation of ``det F_{k,4}`` (eq. 73); it vanishes
     identically on rectilinear uniform relative motion (unobservable).
     """
@@ -347,7 +347,7 @@ def bearing_derivatives(X: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def single_leg_det(rate: Any, n: int) -> np.ndarray:
-    """Result 1 (file 003 eq. 76): ``(σr)^8 det F_{k,n}`` for a constant bearing rate.
+    """Result 1 (lecadre1997 eq. 76): ``(σr)^8 det F_{k,n}`` for a constant bearing rate.
 
     Exact for the first-order bearing model ``θ_{k+i} = θ_k + iθ̇`` at constant range, for
     n ∈ {4, 5, 6, 8} (the printed cases; ℓ = 8 with the corrected 3876).
@@ -384,17 +384,17 @@ def _vandermonde(E: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def single_leg_small_rate_constant(n: int) -> float:
-    """k_n of file 003 eq. (89): ``(σr)^8 det F ≈ k_n θ̇⁸`` for n samples on one leg.
+    """k_n of lecadre1997 eq. (89): ``(σr)^8 det F ≈ k_n θ̇⁸`` for n samples on one leg.
 
     ``k_n = (1/9) Σ_E V(E)²`` with V the Vandermonde product of the subset's sample indices
-    (NOTES_003 §3.4; k_4 = 16).
+    (docs/errata.md; k_4 = 16).
     """
     E = _subsets(int(n))
     return float(np.sum(_vandermonde(E, np.arange(n, dtype=float)) ** 2) / 9.0)
 
 
 def _leg_times(leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Model A (NOTES_003 §3.6): samples t = 0..N−1; time spent on each leg, shape (N, L)."""
+    """Model A (docs/errata.md): samples t = 0..N−1; time spent on each leg, shape (N, L)."""
     lengths = [int(x) for x in leg_lengths]
     if not lengths or any(x < 1 for x in lengths):
         raise ScenarioError("leg_lengths", "positive sample counts per leg", leg_lengths)
@@ -407,11 +407,11 @@ def _leg_times(leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def model_a_phases(rates: Any, leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Sample times and bearing phases of file 003's piecewise-rate model ("Model A").
+    """Sample times and bearing phases of lecadre1997's piecewise-rate model ("Model A").
 
     Leg 1 has ``leg_lengths[0]`` samples with phase ``t·x_1``; the first sample of the next
     leg is one step after the last sample of the previous leg and already carries the new
-    rate (NOTES_003 §3.6; this convention reproduces the printed polynomials).
+    rate (docs/errata.md; this convention reproduces the printed polynomials).
 
     Returns
     -------
@@ -477,7 +477,7 @@ def _leading_forms(leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray, 
 
 
 def bearing_rate_det_approx(rates: Any, leg_lengths: Sequence[int]) -> np.ndarray:
-    """File 003's bearing-rate approximation of ``(σr)^8 det F`` for one, two or three legs.
+    """lecadre1997's bearing-rate approximation of ``(σr)^8 det F`` for one, two or three legs.
 
     ``Σ_E det²𝒢_E`` (Cauchy–Binet, eq. 75) with each subset's determinant replaced by its
     leading term: ``(xᵀA_E x)²`` for subsets spanning a manoeuvre (eq. 81–82, 90–91, the
@@ -534,7 +534,7 @@ def logdet_bearing_rate_approx(rates: Any, leg_lengths: Sequence[int], sigma: fl
                                rng_: float, dt: float = 1.0) -> np.ndarray:
     """``log det F`` (SI, velocity in m/s) from the bearing-rate approximation.
 
-    ``det_SI = P(x)·dt⁴/(σ r)^8`` with x the per-sample rates (NOTES_003 §5.2).
+    ``det_SI = P(x)·dt⁴/(σ r)^8`` with x the per-sample rates (docs/errata.md).
 
     Parameters
     ----------

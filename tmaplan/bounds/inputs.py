@@ -1,10 +1,11 @@
 """Inputs shared by every PCRB (Monte Carlo, closed form, truth-conditional) and the planners.
 
 Everything a PCRB needs from a :class:`~tmaplan.scenario.Scenario` is resolved here once:
-the observer track and its velocity increments (``c_t = −H Δv_t``, DESIGN §1), the bearing and
-range information per step (:func:`information_rates`, the one per-step sensor-information
-function), the ping weights per step, and the prior of the relative initial state (moments and
-the LPC information ``J₀`` of brehard2005 eq. 56, :func:`lpc_prior_information`, the one J₀).
+the observer track and its velocity increments (``c_t = −H Δv_t``, docs/conventions.md), the
+bearing and range information per step (:func:`information_rates`, the one per-step
+sensor-information function), the ping weights per step, and the prior of the relative
+initial state (moments and the LPC information ``J₀`` of brehard2005 eq. 56,
+:func:`lpc_prior_information`, the one J₀).
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ class PCRBInputs:
     bearing_info : ndarray, shape (K + 1,)
         Σ 1/σ_β² over the bearing sensors measuring at each step [rad⁻²].
     ambiguity : {"none", "pi"}
-        "pi" if any bearing sensor is π-ambiguous (file 000 eq. 4).
+        "pi" if any bearing sensor is π-ambiguous (brehard2005 eq. 4).
     ping_steps : ndarray of int
         Steps with a range ping.
     ping_weight : ndarray, shape (K + 1,)
@@ -75,7 +76,7 @@ class PCRBInputs:
     cov_cart0 : ndarray, shape (4, 4)
         Covariance of X₀.
     cov_lpc0 : ndarray, shape (4, 4), or None
-        Covariance of the LPC initial state (file 000 eq. 56, bearing centred on its circular
+        Covariance of the LPC initial state (brehard2005 eq. 56, bearing centred on its circular
         mean).
     prior_subsample : ndarray, shape (n_sub, 4)
         The first ≤ 500 prior samples of X₀ (for the side-assumption diagnostic).
@@ -183,7 +184,7 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
 
     The one prior information of the closed-form PCRB (brehard2005 eq. 56), for a scenario's
     prior and a planner's belief alike. Eq. 56 is printed as a scalar ``(Y−EY)ᵀ(Y−EY)``; it is
-    the outer product about the mean (NOTES_000 §2.8), normalised by Σw (n for equal weights,
+    the outer product about the mean (docs/errata.md), normalised by Σw (n for equal weights,
     as :attr:`Belief.cov`). The bearing is centred on its circular mean first (a prior
     straddling β = ±π is handled). Samples [m, m/s] must be at non-zero range; raises
     :class:`ObservabilityError` if the covariance is not positive definite.

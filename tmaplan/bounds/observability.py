@@ -1,20 +1,20 @@
-"""Observability tests: file 003's discrete-time rank tests and file 002's conditions.
+"""Observability tests: lecadre1997's discrete-time rank tests and clavard2013's conditions.
 
-File 003 (Le Cadre & Jauffret 1997), bearings only, source legs with known change instants:
+lecadre1997 (Le Cadre & Jauffret 1997), bearings only, source legs with known change instants:
 the pseudo-measurement ``h_kᵀ(p(t_k) − p_obs,k) = 0`` with ``h_k = (cos β_k, −sin β_k)``
 (eq. 4) is linear in the source parameters ``p = [x_0, y_0, v¹, …, v^ℓ]`` (eq. 24–25):
 ``O p = z``, ``O_k = h_kᵀ[I, τ_1(t_k) I, …, τ_ℓ(t_k) I]``, ``z_k = h_kᵀ p_obs,k``. The source
-is observable iff ``rank O = 2ℓ + 2`` (NOTES_003 §2.0). The propositions predict:
+is observable iff ``rank O = 2ℓ + 2`` (docs/errata.md). The propositions predict:
 
-* RUN source, RUN observer (§III, L177–L185): rank 3 (2 with zero bearing rate);
-* Property 1 (L245): RUN source, manoeuvring observer: 4 unless every leg has zero
+* RUN source, RUN observer (§III): rank 3 (2 with zero bearing rate);
+* Property 1: RUN source, manoeuvring observer: 4 unless every leg has zero
   bearing rate;
-* Property 2 (L345): ℓ-leg source, RUN observer: 2ℓ + 1;
-* Property 3 (L392–L400): ℓ-leg source, an observer manoeuvre at an instant different from
+* Property 2: ℓ-leg source, RUN observer: 2ℓ + 1;
+* Property 3: ℓ-leg source, an observer manoeuvre at an instant different from
   the source's: 2ℓ + 2 (a manoeuvre at the same instant loses one rank);
-* Property 4 (L684): unknown source change instants are identifiable — :func:`switch_time_scan`.
+* Property 4: unknown source change instants are identifiable — :func:`switch_time_scan`.
 
-File 002 (Clavard et al. 2013), constant-turn source: Result 1 (bearings only: observable iff
+clavard2013 (Clavard et al. 2013), constant-turn source: Result 1 (bearings only: observable iff
 the observer is not motionless), Result 3 (no constant-velocity source produces the same
 bearings) and Result 5 (bearings + frequency, motionless observer: observable iff not at the
 circle centre), checked numerically by the rank of the FIM (:func:`ct_observability`) and by
@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 #: Default relative singular-value tolerance (unobservable cases give ~1e−15 after column
-#: normalisation, observable ones > 1e−7 in the scenarios of the tests; NOTES_003 §2.0).
+#: normalisation, observable ones > 1e−7 in the scenarios of the tests; docs/errata.md).
 RANK_RTOL = 1e-9
 
 
@@ -91,7 +91,7 @@ class ObservabilityResult:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class SwitchScanResult:
-    """File 003 Property 4: least-squares residual per candidate source change time.
+    """lecadre1997 Property 4: least-squares residual per candidate source change time.
 
     Attributes
     ----------
@@ -101,7 +101,7 @@ class SwitchScanResult:
         Normalised residual ``‖O p − z‖/‖z‖`` (inf for rejected candidates).
     degenerate : ndarray of bool, shape (m,)
         Candidates whose solution is the trivial "source ≡ observer" track (r ≈ 0) or that
-        coincide with an observer manoeuvre (NOTES_003 §2.6 pitfall); they are rejected.
+        coincide with an observer manoeuvre (docs/errata.md pitfall); they are rejected.
     best : float
         Candidate with the smallest residual [s].
     """
@@ -136,7 +136,7 @@ def _leg_tau(t: np.ndarray, change_times: Sequence[float]) -> np.ndarray:
 
 def observability_matrix(bearings: Any, times: Any, *,
                          change_times: Sequence[float] = ()) -> np.ndarray:
-    """File 003's observability matrix for a source with known leg change times.
+    """lecadre1997's observability matrix for a source with known leg change times.
 
     Parameters
     ----------
@@ -181,7 +181,7 @@ def numerical_rank(M: Any, rtol: float = RANK_RTOL) -> tuple[int, np.ndarray]:
 def rank_test(bearings: Any, times: Any, *, change_times: Sequence[float] = (),
               observer_manoeuvre_times: Sequence[float] = (),
               rtol: float = RANK_RTOL) -> ObservabilityResult:
-    """File 003 rank test (Props 1–3) for a multi-leg source with known change times.
+    """lecadre1997 rank test (Props 1–3) for a multi-leg source with known change times.
 
     Parameters
     ----------
@@ -211,27 +211,27 @@ def rank_test(bearings: Any, times: Any, *, change_times: Sequence[float] = (),
     src = [float(x) for x in change_times]
     constant = float(np.ptp(np.unwrap(b))) < 1e-10
     if n_legs == 1 and not man:
-        test = "file 003 §III (RUN source, RUN observer)"
+        test = "lecadre1997 §III (RUN source, RUN observer)"
         predicted = 2 if constant else 3
         why = ("zero bearing rate: only the bearing line is known" if constant else
                "a constant-velocity source seen from a constant-velocity observer is never "
-               "observable: the range scale is free (Thales, L187)")
+               "observable: the range scale is free (Thales)")
     elif n_legs == 1:
-        test = "file 003 Property 1"
+        test = "lecadre1997 Property 1"
         predicted = 2 if constant else 4
-        why = ("every observer leg has zero bearing rate (collision legs, L253)" if constant
+        why = ("every observer leg has zero bearing rate (collision legs)" if constant
                else "an observer manoeuvre makes a constant-velocity source observable")
     elif not man:
-        test = "file 003 Property 2"
+        test = "lecadre1997 Property 2"
         predicted = 2 * n_legs + 1
         why = (f"a {n_legs}-leg source seen from a non-manoeuvring observer has a "
-               f"{2 * n_legs + 1}-dimensional observable space; the scale is free (L345)")
+               f"{2 * n_legs + 1}-dimensional observable space; the scale is free")
     else:
-        test = "file 003 Property 3"
+        test = "lecadre1997 Property 3"
         distinct = [m for m in man if all(abs(m - s) > 1e-9 * max(1.0, abs(s)) for s in src)]
         predicted = dim if distinct else dim - 1
         why = ("an observer manoeuvre at an instant different from the source's makes the "
-               "source observable (L392–L400)" if distinct else
+               "source observable" if distinct else
                "the observer manoeuvres only when the source does: one rank is lost")
     observable = rank == dim
     verdict = (f"{test}: rank {rank} of {dim} — "
@@ -248,12 +248,12 @@ def rank_test(bearings: Any, times: Any, *, change_times: Sequence[float] = (),
 def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
                      candidates: Sequence[float], *,
                      observer_manoeuvre_times: Sequence[float] = ()) -> SwitchScanResult:
-    """File 003 Property 4: identify an unknown source change instant from bearings.
+    """lecadre1997 Property 4: identify an unknown source change instant from bearings.
 
     For each candidate instant, solve ``O p = z`` (two-leg source, ``z_k = h_kᵀ p_obs,k``) by
     least squares; with noise-free bearings only the true instant leaves a zero residual.
     Candidates at an observer manoeuvre instant, or whose solution is the trivial track
-    ``r ≡ 0`` (source ≡ observer), are rejected (NOTES_003 §2.6).
+    ``r ≡ 0`` (source ≡ observer), are rejected (docs/errata.md).
 
     Parameters
     ----------
@@ -295,7 +295,7 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
 
 
 # --------------------------------------------------------------------------------------------
-# File 002: constant-turn source
+# clavard2013: constant-turn source
 # --------------------------------------------------------------------------------------------
 
 
@@ -303,7 +303,7 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
                      theta: Any, *, sigma: float = 1.0, f0: Sequence[float] = (),
                      sigma_f: Sequence[float] = (), c: float = 1500.0,
                      rtol: float = 1e-10) -> ObservabilityResult:
-    """File 002 Results 1 and 5: rank of the constant-turn FIM (bearings, + frequency lines).
+    """clavard2013 Results 1 and 5: rank of the constant-turn FIM (bearings, + frequency lines).
 
     Parameters
     ----------
@@ -356,13 +356,13 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     centre_dist = float(np.max(np.linalg.norm(pos - theta[:2], axis=-1)))
     at_centre = centre_dist <= 1e-9 * max(1.0, abs(theta[2]))
     if not len(f0):
-        test = "file 002 Result 1"
+        test = "clavard2013 Result 1"
         predicted = dim if moving else dim - 1
         why = ("the observer moves: a constant-turn source is observable from bearings alone"
                if moving else "motionless observer: every homothety centred on the observer "
                "gives the same bearings (Result 2)")
     else:
-        test = "file 002 Result 5" if not moving else "file 002 Results 1 and 5"
+        test = "clavard2013 Result 5" if not moving else "clavard2013 Results 1 and 5"
         if moving:
             predicted, why = dim, "the observer moves, bearings alone already suffice"
         elif at_centre:
@@ -381,12 +381,12 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
 
 def ct_vs_cv_test(bearings: Any, times: Any, observer_position: Any, *,
                   rtol: float = RANK_RTOL) -> ObservabilityResult:
-    """File 002 Result 3: can a constant-velocity source produce these (noise-free) bearings?
+    """clavard2013 Result 3: can a constant-velocity source produce these (noise-free) bearings?
 
-    A CV source ``p = [x_0, y_0, v_x, v_y]`` must satisfy ``O p = z`` (file 003's pseudo-linear
+    A CV source ``p = [x_0, y_0, v_x, v_y]`` must satisfy ``O p = z`` (lecadre1997's pseudo-linear
     form, ``z_k = h_kᵀ p_obs,k``). The solution set is empty when ``rank [O | z] > rank O``;
     when ``rank O = 4`` it is a single track, which for a constant-velocity observer is the
-    observer itself (the degenerate ``r ≡ 0`` solution, NOTES_003 §2.6) and not a source;
+    observer itself (the degenerate ``r ≡ 0`` solution, docs/errata.md) and not a source;
     when ``rank O < 4`` a family of genuine CV sources reproduces the bearings (modulo π).
     For a constant-turn source Result 3 predicts ``rank O = 4`` with no genuine solution.
 
@@ -418,10 +418,10 @@ def ct_vs_cv_test(bearings: Any, times: Any, observer_position: Any, *,
     else:
         distinct, why = False, (f"rank O = {rank_o} < 4: a family of CV sources reproduces "
                                 "these bearings")
-    verdict = "file 002 Result 3: " + (
+    verdict = "clavard2013 Result 3: " + (
         f"no constant-velocity source reproduces these bearings; {why}" if distinct else
         f"a constant-velocity source reproduces these bearings; {why}")
-    return ObservabilityResult(test="file 002 Result 3", rank=rank_o, expected_rank=4,
+    return ObservabilityResult(test="clavard2013 Result 3", rank=rank_o, expected_rank=4,
                                predicted_rank=None, observable=distinct, verdict=verdict,
                                singular_values=sv, tolerance=rtol)
 
@@ -435,8 +435,8 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
                   rtol: float | None = None) -> ObservabilityResult:
     """Observability verdict for a scenario's noise-free bearings (and frequency lines).
 
-    Constant-turn targets use file 002 (:func:`ct_observability`); constant-velocity and
-    multi-leg targets use file 003's rank test (:func:`rank_test`) with the target's leg
+    Constant-turn targets use clavard2013 (:func:`ct_observability`); constant-velocity and
+    multi-leg targets use lecadre1997's rank test (:func:`rank_test`) with the target's leg
     change times and the observer's manoeuvre instants. Range sensors are ignored (the file
     003 test is bearings-only).
 

@@ -1,19 +1,19 @@
 """Posterior Cramér–Rao bound by Tichavský's recursion with Monte Carlo D-terms.
 
 The relative state ``X = target − observer`` follows ``X_{t+1} = A X_t + c_t + w_t``
-(``c_t = −H Δv_t``, DESIGN §1). Samples of X are drawn from the scenario's prior and propagated
-with process noise; the D-terms of Tichavský's recursion (file 000 eq. 29, L331) are sample
-averages of outer products of *exact analytic scores* (:func:`lpc_transition_scores`, checked
-against finite differences in the tests)::
+(``c_t = −H Δv_t``, docs/conventions.md). Samples of X are drawn from the scenario's prior
+and propagated with process noise; the D-terms of Tichavský's recursion (brehard2005 eq. 29)
+are sample averages of outer products of *exact analytic scores*
+(:func:`lpc_transition_scores`, checked against finite differences in the tests)::
 
     J_{t+1} = D22 + D33 − D21 (J_t + D11)⁻¹ D12
 
-with the information ``J_t`` inside the bracket (file 000 Prop. 5 prints ``J_t⁻¹`` there, which
-is wrong, NOTES_000 §2.2).
+with the information ``J_t`` inside the bracket (brehard2005 Prop. 5 prints ``J_t⁻¹`` there, which
+is wrong, docs/errata.md).
 
 * ``coords="lpc"``: Y = [β, ln r, β̇, ṙ/r] (full-circle β). The LPC transition density is
-  ``p(Y'|Y) = r'⁴ p_X(X'|X)`` (file 000 App. B1), so the scores are
-  ``∇_Y = J_Xᵀ AᵀQ⁻¹e`` and ``∇_{Y'} = −J_{X'}ᵀQ⁻¹e + 4e₂`` (NOTES_000 §2.4; eq. 103–104 print
+  ``p(Y'|Y) = r'⁴ p_X(X'|X)`` (brehard2005 App. B1), so the scores are
+  ``∇_Y = J_Xᵀ AᵀQ⁻¹e`` and ``∇_{Y'} = −J_{X'}ᵀQ⁻¹e + 4e₂`` (docs/errata.md; eq. 103–104 print
   inconsistent signs).
 * ``coords="cartesian"``: the dynamics are linear-Gaussian, so the recursion reduces exactly to
   ``J_{t+1} = (Q + A J_t⁻¹ Aᵀ)⁻¹ + E[H̃ᵀR⁻¹H̃]`` (Ristic et al.); only the measurement term is
@@ -22,9 +22,9 @@ is wrong, NOTES_000 §2.2).
 The measurement term D33 is the Monte Carlo average over the propagated X of the *conditional*
 Fisher information ``E[s sᵀ | X]`` (Rao–Blackwellised: the expectation over the measurement
 noise is analytic), for bearings (1/σ_β²; with the π ambiguity this holds up to the overlap of
-the wrapped components, e^{−π²/(2σ²)}, file 000 eq. 84), range pings and frequency lines. The
+the wrapped components, e^{−π²/(2σ²)}, brehard2005 eq. 84), range pings and frequency lines. The
 frequency lines' emitted tones are treated as *known* here (the bound is then optimistic
-compared with file 002's unknown-tone CRLB).
+compared with clavard2013's unknown-tone CRLB).
 """
 
 from __future__ import annotations
@@ -62,9 +62,9 @@ Coords = Literal["cartesian", "lpc"]
 
 
 class SideAssumptionWarning(UserWarning):
-    """The true bearing has non-negligible density at the wrap point (file 000 eq. 27).
+    """The true bearing has non-negligible density at the wrap point (brehard2005 eq. 27).
 
-    The LPC bound is then not valid for β (file 000 Prop. 3: the β entry should be scaled by
+    The LPC bound is then not valid for β (brehard2005 Prop. 3: the β entry should be scaled by
     (1 − κ)², κ = (wrap period)·p_β(wrap)).
     """
 
@@ -90,14 +90,14 @@ class PCRBResult:
         ``sqrt(tr)`` of the Cartesian position block of the bound [m] (LPC: delta method,
         ``E[J_X J⁻¹ J_Xᵀ]`` over the propagated state).
     range_std : ndarray, shape (K + 1,)
-        Range bound [m]: LPC ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (file 000
-        eq. 58, DESIGN §4); Cartesian ``sqrt(E[ûᵀ P_pos û])``, û the unit line of sight.
+        Range bound [m]: LPC ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (brehard2005
+        eq. 58, docs/cli.md); Cartesian ``sqrt(E[ûᵀ P_pos û])``, û the unit line of sight.
     seconds : float
         Wall time [s].
     samples : int
         Monte Carlo samples of the propagation (0 for the closed form).
     prior_samples : int
-        Prior samples behind J₀ (file 000 eq. 56) and the prior moments.
+        Prior samples behind J₀ (brehard2005 eq. 56) and the prior moments.
     ping_steps : ndarray of int
         Steps with a range ping.
     range_bound : ndarray, shape (K + 1,), optional
@@ -128,7 +128,7 @@ class PCRBResult:
     warnings: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, object]:
-        """DESIGN §4 fields (SI units)."""
+        """docs/cli.md fields (SI units)."""
         out: dict[str, object] = {
             "times": self.times, "coords": self.coords, "method": self.method,
             "std": self.std, "range_std": self.range_std, "position_std": self.position_std,
@@ -150,9 +150,9 @@ def lpc_transition_scores(X: np.ndarray, X_next: np.ndarray, c: np.ndarray, A: n
                           Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Exact scores of the LPC transition density ``ln p(Y_{t+1} | Y_t)``.
 
-    ``p(Y'|Y) = r'⁴ N(X'; A X + c, Q)`` (file 000 App. B1; |det ∂X/∂Y| = r⁴), so with
+    ``p(Y'|Y) = r'⁴ N(X'; A X + c, Q)`` (brehard2005 App. B1; |det ∂X/∂Y| = r⁴), so with
     ``e = X' − A X − c``: ``∇_Y = J_Xᵀ AᵀQ⁻¹ e`` and ``∇_{Y'} = −J_{X'}ᵀ Q⁻¹ e + [0, 4, 0, 0]``
-    (corrected signs of file 000 eq. 103–104, NOTES_000 §2.4; J is the true ∂X/∂Y, not the
+    (corrected signs of brehard2005 eq. 103–104, docs/errata.md; J is the true ∂X/∂Y, not the
     printed F of eq. 31).
 
     Parameters
@@ -219,7 +219,7 @@ def bearing_score(z: np.ndarray | float, X: np.ndarray, sigma: float,
                   coords: Coords = "lpc") -> np.ndarray:
     """Score ``∇ ln p(z | X)`` of a bearing, shape (..., 4).
 
-    With ``ambiguity="pi"`` the density is file 000 eq. 71's 3-term wrapped Gaussian, whose
+    With ``ambiguity="pi"`` the density is brehard2005 eq. 71's 3-term wrapped Gaussian, whose
     β-derivative is the weighted residual of eq. 104 (third line) without its hard switch.
     """
     b = np.arctan2(X[..., 0], X[..., 1])
@@ -243,7 +243,7 @@ def range_score(z: np.ndarray | float, X: np.ndarray, sigma: float,
 
 def frequency_score(z: np.ndarray, X: np.ndarray, f0: np.ndarray, sigma: np.ndarray,
                     c: float = 1500.0, coords: Coords = "lpc") -> np.ndarray:
-    """Score of P frequency lines ``f_p(1 − ṙ/c) + v_p`` (file 002 eq. 3), known tones.
+    """Score of P frequency lines ``f_p(1 − ṙ/c) + v_p`` (clavard2013 eq. 3), known tones.
 
     Parameters
     ----------
@@ -325,14 +325,14 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
                      coords: Coords = "cartesian", ping_steps: Sequence[int] | None = None,
                      observer: ObserverTrack | None = None,
                      prior_samples: int | None = None) -> PCRBResult:
-    """PCRB by Tichavský's recursion with Monte Carlo D-terms (file 000 Fig. 3, corrected).
+    """PCRB by Tichavský's recursion with Monte Carlo D-terms (brehard2005 Fig. 3, corrected).
 
     Parameters
     ----------
     scenario : Scenario
         NCV target, a prior, bearing / range / frequency sensors.
     samples : int
-        Monte Carlo samples of the propagated relative state (file 000 uses 1000, L612).
+        Monte Carlo samples of the propagated relative state (brehard2005 uses 1000).
     rng : numpy.random.Generator
         For the propagation samples and the process noise.
     coords : {"cartesian", "lpc"}

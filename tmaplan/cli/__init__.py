@@ -1,4 +1,4 @@
-"""Command line interface ``tmaplan`` (DESIGN §4).
+"""Command line interface ``tmaplan`` (docs/cli.md).
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
 ``add_arguments(parser)``, ``run(args) -> dict | None`` and, for a verb without a problem

@@ -84,7 +84,7 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
 
     if method == "closed-form":
         if coords != "lpc":
-            raise ScenarioError("--coords", "lpc for the closed form (DESIGN §4)", coords)
+            raise ScenarioError("--coords", "lpc for the closed form (docs/cli.md)", coords)
         return closed_form_pcrb(scenario, ping_steps=pings)
     return monte_carlo_pcrb(scenario, samples=samples, rng=np.random.default_rng(seed),
                             coords=coords, ping_steps=pings)  # type: ignore[arg-type]
@@ -123,7 +123,7 @@ def _figure(results: list[Any], path: Path, title: str) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Compute the bound, write the figure, return the DESIGN §4 JSON fields."""
+    """Compute the bound, write the figure, return the docs/cli.md JSON fields."""
     scenario = load(args.problem)
     coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
     if args.samples < 2:

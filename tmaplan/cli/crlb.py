@@ -1,4 +1,4 @@
-"""``tmaplan crlb P [--frequencies N]``: CRLB of the batch estimate (DESIGN §4).
+"""``tmaplan crlb P [--frequencies N]``: CRLB of the batch estimate (docs/cli.md).
 
 JSON (SI units): ``parameters`` (final-time parametrisation Z_N: target position at t_N, then
 the remaining motion parameters and the tones), ``std`` (CRLB std of each, same order),

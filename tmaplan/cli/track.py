@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``tmaplan track``."""
     add_problem_argument(parser)
     parser.add_argument("--estimator", choices=ESTIMATORS, default="pf",
-                        help="pf (prior), pf-bearings (file 001 init), mle, range-only")
+                        help="pf (prior), pf-bearings (brehard2004 init), mle, range-only")
     parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=10_000,
                         help="particles (pf)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=20, help="Monte Carlo runs")
@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--range-only-mode", choices=("mixture", "moments", "dirac"),
                         default="mixture",
                         help="range-only: Gaussian mixture over azimuth sectors (default), or "
-                             "file 004's single-Gaussian moment / Dirac-mixture recursion")
+                             "sharma2024's single-Gaussian moment / Dirac-mixture recursion")
     parser.add_argument("--frequencies", type=integer(0), default=0, metavar="N",
                         help="also use the first N frequency lines of the scenario (default 0: "
                              "bearings, and pings if any, only; as `tmaplan crlb`)")
@@ -94,7 +94,7 @@ def _figure(res: Any, path: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Run the Monte Carlo and return the DESIGN §4 ``track`` fields."""
+    """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
     if args.runs < 1:
         raise ScenarioError("--runs", ">= 1", args.runs)
     if args.particles < 2:

@@ -1,4 +1,4 @@
-"""Measurement model of the batch maximum-likelihood TMA (file 002, Clavard et al. 2013).
+"""Measurement model of the batch maximum-likelihood TMA (clavard2013, Clavard et al. 2013).
 
 Role: everything :mod:`tmaplan.estimators.mle` needs to *evaluate* a parameter vector, kept
 apart from the search (coarse grid, Gauss–Newton, Levenberg–Marquardt, acceptance test) that
@@ -6,12 +6,12 @@ lives there:
 
 * :class:`TMAData` / :func:`tma_data`: the measurements of a run and the observer geometry;
 * :func:`kinematics`: target position and velocity of the cv, multi-leg and constant-turn
-  parametrisations (file 002's ``Z = [x_C, y_C, ρ_C, φ, ω]``, L108, L141) with analytic
+  parametrisations (clavard2013's ``Z = [x_C, y_C, ρ_C, φ, ω]``) with analytic
   Jacobians, from :mod:`tmaplan.models.tracks` (the same models as the batch CRLB);
 * :func:`residuals`: whitened bearing, range and frequency-line residuals (unknown tones as
-  nuisance parameters, file 002 eq. 3, §IV) and their Jacobian (file 002 §1.6 of the notes);
-* :func:`fisher_information` (file 002 eqs. 11–16) and :func:`acceptance_threshold`
-  (file 002 L265, L577, generalised as in the :mod:`~tmaplan.estimators.mle` notes);
+  nuisance parameters, clavard2013 eq. 3, §IV) and their Jacobian (clavard2013);
+* :func:`fisher_information` (clavard2013 eqs. 11–16) and :func:`acceptance_threshold`
+  (clavard2013, generalised as in the :mod:`~tmaplan.estimators.mle` notes);
 * :func:`state_track`: absolute states and their covariance by the delta method.
 
 The public names are re-exported by :mod:`tmaplan.estimators.mle`; import them from there.
@@ -306,7 +306,7 @@ def residuals(data: TMAData, params: np.ndarray, *, jacobian: bool = True
 def fisher_information(data: TMAData, params: np.ndarray) -> np.ndarray:
     """FIM ``J'J`` of the whitened residuals at ``params``, shape (n_params, n_params).
 
-    At the true parameters this is the CRLB information of file 002 (eqs. 11–16, §3.1–3.2 of
+    At the true parameters this is the CRLB information of clavard2013 (eqs. 11–16, §3.1–3.2 of
     the notes); its inverse is the CRLB including the nuisance tones.
     """
     _, J = residuals(data, params)
@@ -315,7 +315,7 @@ def fisher_information(data: TMAData, params: np.ndarray) -> np.ndarray:
 
 
 def acceptance_threshold(data: TMAData) -> float:
-    """File 002's acceptance threshold (L265, L577), generalised as in the module notes."""
+    """clavard2013's acceptance threshold, generalised as in the module notes."""
     ng = data.n_geom
     dofs = []
     if data.b_times.size:

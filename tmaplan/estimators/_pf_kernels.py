@@ -132,7 +132,8 @@ def _normals_f32(rng: np.random.Generator, out: np.ndarray) -> None:
 
 @functools.lru_cache(maxsize=64)
 def _dynamics(dt: float, q: float) -> tuple[float, float, float]:
-    """Per-axis Cholesky factor ``[[l11, 0], [l21, l22]]`` of the NCV ``Q`` (DESIGN §1)."""
+    """Per-axis Cholesky factor ``[[l11, 0], [l21, l22]]`` of the NCV
+    ``Q`` (docs/conventions.md)."""
     l11 = np.sqrt(q * dt**3 / 3.0)
     l21 = (q * dt**2 / 2.0) / l11 if l11 > 0 else 0.0
     l22 = np.sqrt(max(q * dt - l21 * l21, 0.0))

@@ -1,31 +1,31 @@
-"""Trigonometric moments of the azimuth given a range (file 004, Sharma et al. 2024).
+"""Trigonometric moments of the azimuth given a range (sharma2024, Sharma et al. 2024).
 
 With a Gaussian predicted relative position ``y ~ N(ŷ, V)`` and a measured range r, the azimuth
-θ of ``y = r·[cos θ, sin θ]`` has the generalised von Mises density of order 2 (file 004
-eq. 24, L172; GvM2 identification of NOTES_004 §1.4)::
+θ of ``y = r·[cos θ, sin θ]`` has the generalised von Mises density of order 2 (sharma2024
+eq. 24; GvM2 identification of docs/errata.md)::
 
     p(θ | r) ∝ exp(κ1 cos(θ − μ1) + κ2 cos 2(θ − μ2)),
     κ1 = r‖V⁻¹ŷ‖, μ1 = atan2(q, p), κ2 = r²A3, μ2 = −φ2/2,
 
 with ``[p, q] = V⁻¹ŷ``, ``V⁻¹ = [[a, b], [b, c]]``, ``A3 = ‖((c−a)/4, b/2)‖`` and
-``φ2 = atan2(b/2, (c−a)/4)`` (eq. 20, L149–150; the printed ``tan⁻¹`` must be ``atan2``).
+``φ2 = atan2(b/2, (c−a)/4)`` (eq. 20; the printed ``tan⁻¹`` must be ``atan2``).
 θ here is the angle of ``[cos θ, sin θ]`` in the (x, y) frame of the state; it is only a
 parametrisation, so the paper's counter-clockwise convention needs no conversion.
 
 Two engines for ``c_m = E[e^{imθ} | r]``:
 
-* :func:`moments_grid` (default, NOTES_004 §2.5 / §5.2): periodic trapezoid on
+* :func:`moments_grid` (default, docs/errata.md / §5.2): periodic trapezoid on
   ``exp(logf − max logf)`` with G ≥ 20·2π·√(κ1 + 4κ2) points, all m at once by FFT. Exact to
   rounding for any κ.
 * :func:`moments_series`: the paper's Bessel series, eqs. (29)–(34) with the corrections of
-  NOTES_004 §1.6 — spurious 2π dropped in (33)/(34), the j = 0 term counted once, negative
+  docs/errata.md — spurious 2π dropped in (33)/(34), the j = 0 term counted once, negative
   orders ``I_{|2j−m|}``, exact ratios ``ive(n, x)/ive(0, x)`` instead of the approximation of
   eq. (35) — in the compact form ``c_m = e^{imμ2} S(m)/S(0)``,
   ``S(m) = Σ_j I_j(κ2) I_{|2j+m|}(κ1) e^{i(2j+m)δ}``, δ = μ1 − μ2. It suffers catastrophic
   cancellation when the two terms compete (≈ loss/ln 10 digits lost, ``loss = κ1 + κ2 −
   max logf``), so it is kept as a cross-check for small κ only; :func:`series_loss` reports it.
 
-:func:`dirac_mixture` fits L weighted points to the first M moments (eq. 52, L307) with
+:func:`dirac_mixture` fits L weighted points to the first M moments (eq. 52) with
 ``Σγ = 1`` enforced as an equality constraint (scipy SLSQP) and θ left unbounded (wrapped
 afterwards), from a deterministic start at the quantiles of the density.
 """
@@ -73,7 +73,7 @@ class GvM2:
 
 
 def gvm2_from_gaussian(yhat: np.ndarray, V: np.ndarray, r: float) -> GvM2:
-    """Azimuth density given range r for ``y ~ N(yhat, V)`` (file 004 eqs. 17–24).
+    """Azimuth density given range r for ``y ~ N(yhat, V)`` (sharma2024 eqs. 17–24).
 
     Parameters
     ----------
@@ -99,7 +99,7 @@ def gvm2_from_gaussian(yhat: np.ndarray, V: np.ndarray, r: float) -> GvM2:
 
 
 def grid_size(g: GvM2, minimum: int = 256) -> int:
-    """Grid size G = power of two ≥ 20·2π·√(κ1 + 4κ2) (NOTES_004 §2.5)."""
+    """Grid size G = power of two ≥ 20·2π·√(κ1 + 4κ2) (docs/errata.md)."""
     need = 20.0 * 2.0 * np.pi * np.sqrt(g.kappa1 + 4.0 * g.kappa2 + 1.0)
     return int(2 ** int(np.ceil(np.log2(max(minimum, need)))))
 
@@ -130,13 +130,13 @@ def moments_grid(g: GvM2, m_max: int, n_grid: int | None = None) -> np.ndarray:
 
 
 def series_loss(g: GvM2) -> float:
-    """Digits-loss exponent ``κ1 + κ2 − max_θ logf`` of the Bessel series (NOTES_004 §2.5c)."""
+    """Digits-loss exponent ``κ1 + κ2 − max_θ logf`` of the Bessel series (docs/errata.mdc)."""
     theta = 2.0 * np.pi * np.arange(4096) / 4096
     return float(g.kappa1 + g.kappa2 - g.logf(theta).max())
 
 
 def moments_series(g: GvM2, m_max: int, n_terms: int) -> np.ndarray:
-    """File 004's Bessel series (corrected eqs. 29–34), truncated at ``n_terms`` (j = 1..N).
+    """sharma2024's Bessel series (corrected eqs. 29–34), truncated at ``n_terms`` (j = 1..N).
 
     Parameters
     ----------
@@ -185,7 +185,7 @@ class DiracMixture:
 
 def dirac_mixture(moments: np.ndarray, n_points: int, g: GvM2 | None = None,
                   theta0: np.ndarray | None = None) -> DiracMixture:
-    """Fit L Dirac points to moments 1..M (file 004 eq. 52 with Σγ = 1 enforced).
+    """Fit L Dirac points to moments 1..M (sharma2024 eq. 52 with Σγ = 1 enforced).
 
     Parameters
     ----------

@@ -1,25 +1,25 @@
-"""Particle-filter initialisation from bearings only (file 001, §3, Bréhard & Le Cadre 2004).
+"""Particle-filter initialisation from bearings only (brehard2004, §3, Bréhard & Le Cadre 2004).
 
 Before an observer manoeuvre only the reduced modified-polar (RMP) components
 ``Y^r = (β̇, ṙ/r, β)`` are observable. They are estimated at the *centre* k of a batch of
-2k+1 bearings by Gauss–Newton on the exact regression of eq. (13) (L177),
+2k+1 bearings by Gauss–Newton on the exact regression of eq. (13),
 ``Z_t = β_k + atan2(τ β̇_k, 1 + τ (ṙ/r)_k) + V_t`` with ``τ = t_t − t_k`` [s], started from the
 modified linear estimate of eqs. (16)–(17). The unobservable ``1/r`` is drawn from
-``1/U([R_min, R_max])`` (eq. 30, L261), and Y^r uniformly inside the confidence region CA
+``1/U([R_min, R_max])`` (eq. 30), and Y^r uniformly inside the confidence region CA
 (eq. 21, eq. 29) with the Dezert–Musso recipe.
 
-Corrections to the printed equations (NOTES_001 §2, §6, all checked there numerically):
+Corrections to the printed equations (docs/errata.md, all checked there numerically):
 
-* eq. (16) L187 prints ``Ŷ = (γ̂2, γ̂3, γ̂1)``; the start point is ``(γ̂2, −γ̂3/γ̂2, γ̂1)``
+* eq. (16) prints ``Ŷ = (γ̂2, γ̂3, γ̂1)``; the start point is ``(γ̂2, −γ̂3/γ̂2, γ̂1)``
   (from eq. 15, γ3 ≈ −Y1·Y2);
-* eqs. (83)–(84) L608–615 drop δ_t: we use τ = (t−k)δ_t in seconds;
-* eq. (26) L267 misses the factor ``sqrt(det Q) = η⁴δ⁴/12``; eq. (28) applies the factor
+* eqs. (83)–(84) drop δ_t: we use τ = (t−k)δ_t in seconds;
+* eq. (26) misses the factor ``sqrt(det Q) = η⁴δ⁴/12``; eq. (28) applies the factor
   (1/R_min − 1/R_max) that (27) applies again (apply it once), and uses χ²₄ for a 3-D region
   (χ²₃ here);
 * the batch-duration loop of Fig. 1 is "the smallest k ≥ 3 with V(CA) ≤ Σ V(B)".
 
 The literal eq. (21) (total FIM *and* the 1/(2k+1) factor) is what reproduces the paper's
-initialisation time (k = 35 on its scenario, NOTES_001 §2.5) and is used for the *decision*
+initialisation time (k = 35 on its scenario, docs/errata.md) and is used for the *decision*
 rule; but that region covers the truth with probability ≈ 1 % only, so the *particles* are drawn
 by default from the statistically consistent region ``(Y−Ŷ)'J_total(Y−Ŷ) ≤ χ²₃(1−α)``
 (``region="consistent"``; ``"paper"`` gives the literal one).
@@ -137,7 +137,7 @@ def _jacobian(Yr: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def rmp_fisher_information(Yr: np.ndarray, tau: np.ndarray, sigma: float) -> np.ndarray:
-    """Total FIM of the bearing batch for Y^r (corrected file 001 eq. 84), shape (3, 3)."""
+    """Total FIM of the bearing batch for Y^r (corrected brehard2004 eq. 84), shape (3, 3)."""
     G = _jacobian(np.asarray(Yr, float), np.asarray(tau, float))
     return G.T @ G / sigma**2
 
@@ -252,7 +252,7 @@ def initialise_from_bearings(
     region: Literal["consistent", "paper"] = "consistent",
     ambiguity: Literal["none", "pi"] = "none",
 ) -> BearingsInit:
-    """File 001 initialisation: batch length rule, RMP fit, particles in MP → Cartesian.
+    """brehard2004 initialisation: batch length rule, RMP fit, particles in MP → Cartesian.
 
     Parameters
     ----------
@@ -263,7 +263,7 @@ def initialise_from_bearings(
     sigma : float
         Bearing std [rad].
     r_min, r_max : float
-        Range interval [m] (the only prior, file 001 L221, L291).
+        Range interval [m] (the only prior, brehard2004).
     n_particles : int
     rng : numpy.random.Generator
     q : float
@@ -320,7 +320,7 @@ def initialise_from_bearings(
         sign, logdet = np.linalg.slogdet(fit.fim)
         if sign <= 0 or not np.isfinite(fit.estimate).all():
             continue
-        # V(CA) (corrected eqs. 27-28, literal eq. 21 reading (a) of NOTES_001 §2.5).
+        # V(CA) (corrected eqs. 27-28, literal eq. 21 reading (a) of docs/errata.md).
         log_vca = (np.log(1 / r_min - 1 / r_max)
                    + _log_ellipsoid_volume(3, chi3 / (2 * k + 1), logdet))
         ratio = float(np.exp(log_vca - log_vb))

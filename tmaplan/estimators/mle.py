@@ -1,22 +1,22 @@
 """Batch maximum-likelihood TMA: constant-velocity, multi-leg and constant-turn sources.
 
 Measurements: bearings (wrapped residuals, optionally modulo π), frequency lines with unknown
-tones (nuisance parameters, file 002 eq. 3, §IV) and range pings. Gaussian noise makes the MLE a
-weighted least-squares problem, minimised as in file 002 §III.2 (L258–L263): a coarse grid
+tones (nuisance parameters, clavard2013 eq. 3, §IV) and range pings. Gaussian noise makes the MLE a
+weighted least-squares problem, minimised as in clavard2013 §III.2: a coarse grid
 start, ten Gauss–Newton iterations, then Levenberg–Marquardt (``scipy.optimize.least_squares``)
 up to convergence, with parameter scaling (``x_scale``: km-scale positions, 1e-3 rad/s turn
-rates). Residual Jacobians are analytic (file 002 §1.6 of the notes, checked against finite
+rates). Residual Jacobians are analytic (clavard2013, checked against finite
 differences in the tests).
 
-Acceptance test (file 002 L265, L577). The paper accepts the estimate when
+Acceptance test (clavard2013). The paper accepts the estimate when
 ``C(Ẑ) < N − 5 + 3√(2N − 10)`` (bearings only) and
 ``C(Ŷ) < N − 5 + P(N − 6) + 3√(2N − 10) + 3P√(2N − 12)`` (P lines). We reproduce these exactly
 for the constant-turn model, and generalise them as ``Σ_s d_s + 3 Σ_s √(2 d_s)`` over the
 measurement streams s with ``d_s = N_s − n_geom`` for bearings and ranges and
-``d_s = N_s − n_geom − 1`` per frequency line. NOTE (NOTES_002 §3.3): these are not the
+``d_s = N_s − n_geom − 1`` per frequency line. NOTE (docs/errata.md): these are not the
 99.5 % χ² quantiles they are claimed to be (the BO one is ≈ 99.8 %, the MFB one is very loose).
 
-Initialisation and the half-turn ghost. ``MLEConfig(init="paper")`` is file 002's scheme as
+Initialisation and the half-turn ghost. ``MLEConfig(init="paper")`` is clavard2013's scheme as
 written (single best grid node). On the reconstructed §III.4 half turn, a distinct source turning
 the other way fits the noise-free cw bearings with cost 0.10 (acw: 0.60), so the acceptance test
 cannot reject it and, searching both senses, it is the global minimum in ~45 % of runs
@@ -24,7 +24,7 @@ cannot reject it and, searching both senses, it is the global minimum in ~45 % o
 searched sense, keeps the lowest cost and reports statistically indistinguishable distinct
 minima in :attr:`MLEResult.alternatives` instead of hiding the ambiguity.
 ``MLEConfig.turn_direction`` (default: the scenario's ``[estimation]`` section) restricts the
-search to one sense of turn, prior knowledge that file 002's Table 1 shows its clockwise study
+search to one sense of turn, prior knowledge that clavard2013's Table 1 shows its clockwise study
 had (σ̂_ω = σ_CRLB leaves no room for a single mirror estimate), while its Table 2 biases are
 those of a both-senses search (a 21 % mixture with the clockwise mirror; tests/test_mle.py).
 
@@ -32,8 +32,8 @@ Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
 * ``cv``: ``[x, y, v_x, v_y]`` at t0;
 * ``multi-leg``: ``[x, y]`` at t0 and one velocity per leg (leg start times known);
-* ``constant-turn``: file 002's ``Z = [x_C, y_C, ρ_C, φ, ω]`` with ``P(t) = P_C + ρ_C[sin(ωt+φ),
-  cos(ωt+φ)]`` (L108, L141).
+* ``constant-turn``: clavard2013's ``Z = [x_C, y_C, ρ_C, φ, ω]`` with ``P(t) = P_C + ρ_C[sin(ωt+φ),
+  cos(ωt+φ)]``.
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ class MLEConfig:
     model : {"auto", "cv", "multi-leg", "constant-turn"}
         "auto": from the scenario's target model.
     gn_iterations : int
-        Gauss–Newton iterations before Levenberg–Marquardt (10 in file 002).
+        Gauss–Newton iterations before Levenberg–Marquardt (10 in clavard2013).
     max_nfev : int
         LM function-evaluation budget.
     grid_ranges : tuple of float
@@ -108,7 +108,7 @@ class MLEConfig:
     frequencies : int, optional
         Use only the first lines (0 = bearings only; None = all available).
     init : {"multistart", "paper"}
-        "paper": file 002 L258–L263 as written — refine the single best node of the coarse
+        "paper": clavard2013 as written — refine the single best node of the coarse
         grid (10 Gauss–Newton iterations, then descent to convergence). "multistart": refine
         the ``n_starts`` best nodes of each turn direction and keep the lowest cost (the
         global MLE over the basins found); distinct local minima whose cost is within
@@ -163,7 +163,7 @@ class MLEResult:
     cost : float
         C(θ̂) = Σ whitened residuals².
     threshold : float
-        Acceptance threshold of file 002.
+        Acceptance threshold of clavard2013.
     accepted : bool
         ``cost < threshold``.
     iterations : int
@@ -177,7 +177,7 @@ class MLEResult:
         Other local minima ``(params, cost)`` found by the multistart, distinct from the
         estimate (final positions more than 3 CRLB std apart) and with a cost within
         ``MLEConfig.ambiguity_margin`` of it: bearings cannot tell them apart (e.g. the
-        mirror-turn near-ambiguity of the file 002 half turn, noise-free cost 0.10).
+        mirror-turn near-ambiguity of the clavard2013 half turn, noise-free cost 0.10).
     """
 
     model: str
@@ -390,7 +390,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
         if cfg.init == "paper":
             order = np.argsort(costs)[:1]
         elif data.model == "constant-turn" and not sense:
-            # Both turn directions: the half-turn geometry of file 002 has a mirror-turn
+            # Both turn directions: the half-turn geometry of clavard2013 has a mirror-turn
             # near-ghost whose basin holds the best grid node in ~20 % of the runs.
             order = np.concatenate([np.flatnonzero(sgn)[np.argsort(costs[sgn])[: cfg.n_starts]]
                                     for sgn in (grid[:, 4] > 0, grid[:, 4] < 0)])

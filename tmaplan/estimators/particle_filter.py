@@ -1,10 +1,10 @@
 """Particle filter on the relative Cartesian state, batched over particles.
 
 State per particle: ``X = target − observer = [r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), with the
-relative dynamics of DESIGN §1 ``X_{k+1} = F X_k − H Δv_k + w_k``, ``H = [dt·I; I]``,
-``w ~ N(0, Q)`` (``tmaplan.models.target.ncv_matrices``). File 001 prints ``+H U_t`` in eq. (2)
-(L113) but ``−H U_t`` in eq. (95) (L675); for a relative state the observer increment enters with
-a minus sign (NOTES_001 §1.1), which is what :func:`predict` implements.
+relative dynamics of docs/conventions.md ``X_{k+1} = F X_k − H Δv_k + w_k``, ``H = [dt·I; I]``,
+``w ~ N(0, Q)`` (``tmaplan.models.target.ncv_matrices``). brehard2004 prints ``+H U_t`` in eq. (2)
+ but ``−H U_t`` in eq. (95); for a relative state the observer increment enters with
+a minus sign (docs/errata.md), which is what :func:`predict` implements.
 
 The API is explicit and stateless: a frozen :class:`PFConfig`, a frozen :class:`PFState` (arrays
 inside), and pure functions :func:`predict` and :func:`update` returning new states, so a
@@ -17,12 +17,12 @@ receding-horizon controller can step the filter one measurement batch at a time:
 
 Measurements:
 
-* bearings, full circle or known modulo π (3-term wrapped Gaussian of file 000 eq. 71 via
+* bearings, full circle or known modulo π (3-term wrapped Gaussian of brehard2005 eq. 71 via
   :func:`tmaplan.models.sensors.bearing_loglik`: both modes keep their weight);
 * ranges (Gaussian, noise after the norm); an active ping (``Measurement.ping``), far more
   informative than the cloud's spread, is assimilated by progressive correction (Oudjane &
   Musso): see :func:`update`;
-* frequency lines ``f_p (1 − Ṙ/c)`` (file 002 eq. 3). **Choice:** the unknown tones f_p are
+* frequency lines ``f_p (1 − Ṙ/c)`` (clavard2013 eq. 3). **Choice:** the unknown tones f_p are
   *marginalised analytically* (Rao–Blackwellised): each particle carries a Gaussian posterior
   (mean, variance) per line, updated by a scalar Kalman filter since the measurement is linear in
   f_p given the particle; the weight uses the marginal likelihood. The first frequency of a line

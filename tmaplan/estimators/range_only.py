@@ -1,19 +1,20 @@
-"""Range-only filter with GvM2 azimuth moments (file 004, Sharma et al. 2024, §VI), three modes.
+"""Range-only filter with GvM2 azimuth moments (sharma2024, Sharma et al. 2024, §VI), three modes.
 
 One filter (:class:`RangeOnlyFilter`), one state type: the posterior of the relative
 ``X = [r_x, r_y, v_x, v_y]`` is a Gaussian mixture (:class:`RangeOnlyState`); the moment and
 Dirac modes keep one component ``N(x̂, P)``, the paper's single Gaussian. Prediction is the
-NCV model with the observer increment, ``x̂⁻ = F x̂ − H Δv`` (file 004 eq. 2/56 written with
-DESIGN §1's Δv), ``P⁻ = F P F' + Q``, per component. The range update uses the linear-position
-view of eq. (9): given the azimuth θ, ``y = r·b(θ)``, ``b = [cos θ, sin θ]`` is a linear
-measurement of the position with noise σ_r²I (eq. 6 model), so with ``V = H P⁻ H' + σ_r² I``,
+NCV model with the observer increment, ``x̂⁻ = F x̂ − H Δv`` (sharma2024 eq. 2/56 written with
+docs/conventions.md's Δv), ``P⁻ = F P F' + Q``, per component. The range update uses
+the linear-position view of eq. (9): given the azimuth θ, ``y = r·b(θ)``,
+``b = [cos θ, sin θ]`` is a linear measurement of the position with noise σ_r²I (eq. 6
+model), so with ``V = H P⁻ H' + σ_r² I``,
 ``K = P⁻ H' V⁻¹``:
 
 * ``mode="mixture"`` (default): a Gaussian mixture kept across scans, every component split
   into azimuth sectors each updated with eqs. (12)–(13) restricted to its sector, weighted by
   its marginal range likelihood and reduced by Runnalls merging (see *Mixture mode* below).
-  File 004 collapses to one Gaussian after every scan (§VI.A step 7, L355) and names the
-  mixture prior as future work (L357); on ``sharma2024-range-only`` the collapse loses the
+  sharma2024 collapses to one Gaussian after every scan (§VI.A step 7) and names the
+  mixture prior as future work; on ``sharma2024-range-only`` the collapse loses the
   second passing side near the closest approach: final position RMSE ≈ 2600 m against
   1154 m for the mixture (100 runs, seed 4; issue-5 report), with NEES in the thousands
   against ≈ 4. With one sector (``max_sectors=1``) the mixture update of one component *is*
@@ -25,26 +26,26 @@ measurement of the position with noise σ_r²I (eq. 6 model), so with ``V = H P�
   Kalman component per point (eqs. 53–54) and a collapse to one Gaussian. The component
   covariance is ``component_cov="exact"`` ``(I−KH)P⁻`` (default) or ``"paper"``
   (eq. 55 as printed, which adds ``r²KP_bK'`` to every component and so double-counts the
-  azimuth spread after the collapse, NOTES_004 §3.4).
+  azimuth spread after the collapse, docs/errata.md).
 
 Moments come from the max-shifted grid/FFT engine by default (``moments="grid"``); the
 paper's Bessel series (``moments="series"``, N terms) is unreliable at the concentrations of
-tracking (NOTES_004 §2.5) and kept for comparison. :meth:`RangeOnlyFilter.init` moment-matches
+tracking (docs/errata.md) and kept for comparison. :meth:`RangeOnlyFilter.init` moment-matches
 the scenario's prior; :func:`single_point_prior` is the paper's initialisation (one range and
-one azimuth, file 004 L389, L396): position from polar coordinates with
+one azimuth, sharma2024): position from polar coordinates with
 ``P_pos = J diag(σ_r², σ_β²) J'`` and a velocity prior given by the caller (the paper does not
-specify it, NOTES_004 §4.2).
+specify it, docs/errata.md).
 
 Mixture mode. Range-only data on a straight relative leg leave the target on a ring arc, and
 close to the closest point of approach the two *passing sides* are both consistent with the
-ranges; one Gaussian has to pick a side (NOTES_004 §6 item 16, "bimodality is lost across
-time"). The mixture is kept across time (NOTES_004 §3.3, "DERIVED extension"):
+ranges; one Gaussian has to pick a side ("bimodality is lost across
+time"). The mixture is kept across time (our extension):
 
 * every component ``N(x̂_i, P_i)`` is predicted as above;
-* at a range r the azimuth posterior of component i (the GvM2 of file 004 eq. 24) is evaluated
+* at a range r the azimuth posterior of component i (the GvM2 of sharma2024 eq. 24) is evaluated
   on a grid restricted to the window where it has mass, together with the component's marginal
   range likelihood ``p_i(r) = ∫ p(r b(θ)) r dθ`` (eqs. 19/25 computed directly in logs,
-  NOTES_004 §1.5 "DERIVED use");
+  our derivation);
 * the window is cut into azimuth sectors no wider than ``Δ = sqrt(8 s / r)`` so that the arc
   sagitta ``r Δ²/8`` stays below ``s = sagitta·σ_r``; on each sector the exact moment-matched
   update of eqs. (12)–(13) is applied with the sector-conditional moments ``E[b | r, θ ∈ S]``
@@ -56,7 +57,7 @@ time"). The mixture is kept across time (NOTES_004 §3.3, "DERIVED extension"):
   pair merging down to ``max_components``.
 
 This is the angle-parameterised Gaussian-sum idea (range-parameterised EKF of Peach 1995 and
-Arulampalam & Ristic 2000, here in azimuth) with file 004's exact moments in each sector.
+Arulampalam & Ristic 2000, here in azimuth) with sharma2024's exact moments in each sector.
 """
 
 from __future__ import annotations
@@ -106,14 +107,14 @@ class RangeOnlyConfig:
     q : float
         Process-noise intensity of the filter [m²/s³].
     mode : {"mixture", "moments", "dirac"}
-        "mixture": Gaussian-mixture filter (ours, default); "moments": file 004's single
-        Gaussian with the exact moment update; "dirac": file 004's L-point Dirac mixture and
+        "mixture": Gaussian-mixture filter (ours, default); "moments": sharma2024's single
+        Gaussian with the exact moment update; "dirac": sharma2024's L-point Dirac mixture and
         collapse.
     component_cov : {"exact", "paper"}
         Dirac mode only.
     moments : {"grid", "series"}
     series_terms : int
-        N for the series engine (5 in file 004 Table II).
+        N for the series engine (5 in sharma2024 Table II).
     n_moments : int
         M (10 in Table II).
     n_points : int
@@ -215,7 +216,7 @@ def from_gaussian(mean: np.ndarray, cov: np.ndarray, *, step: int = 0) -> RangeO
 def single_point_prior(r0: float, bearing0: float, sigma_r: float, sigma_bearing: float,
                        velocity_mean: np.ndarray, velocity_std: float, *, step: int = 0
                        ) -> RangeOnlyState:
-    """Single-point initialisation from one range and one bearing (file 004 L389, L444).
+    """Single-point initialisation from one range and one bearing (sharma2024).
 
     Parameters
     ----------
@@ -273,7 +274,7 @@ def range_only_predict(state: RangeOnlyState, dv: np.ndarray | None, config: Ran
 
 def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
                       config: RangeOnlyConfig) -> RangeOnlyState:
-    """Range update: sector mixture (``mixture``), file 004 eqs. 12–14 (``moments``) or
+    """Range update: sector mixture (``mixture``), sharma2024 eqs. 12–14 (``moments``) or
     eqs. 52–55 + collapse (``dirac``).
 
     Parameters
@@ -284,7 +285,7 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
         Measured range [m]; a non-positive range (possible under the truth's additive noise,
         eq. 58) skips the update.
     sigma_r : float
-        [m]; the filter uses file 004's eq. (6) model (noise σ_r²I inside the norm).
+        [m]; the filter uses sharma2024's eq. (6) model (noise σ_r²I inside the norm).
     config : RangeOnlyConfig
 
     Returns
@@ -363,7 +364,7 @@ def _sector_update(state: RangeOnlyState, r: float, sigma_r: float, config: Rang
     K = P[:, :, :2] @ Vi  # (C, 4, 2)
     centre, half = _windows(yhat, V, r)
     # Grid spacing ≤ 1/(4 sqrt(κ)) with κ ≥ the curvature of the log-density in θ
-    # (κ1 + 4κ2 ≤ r ρ λmax(V⁻¹) + r² λmax(V⁻¹), NOTES_004 §1.4/§2.5).
+    # (κ1 + 4κ2 ≤ r ρ λmax(V⁻¹) + r² λmax(V⁻¹), our derivation).
     lmax_inv = 1.0 / np.linalg.eigvalsh(V)[:, 0]
     rho = np.hypot(yhat[:, 0], yhat[:, 1])
     kappa = r * (rho + r) * lmax_inv + 1.0
@@ -377,7 +378,7 @@ def _sector_update(state: RangeOnlyState, r: float, sigma_r: float, config: Rang
     maha = Vi[:, 0, 0, None] * ex * ex + 2.0 * Vi[:, 0, 1, None] * ex * ey \
         + Vi[:, 1, 1, None] * ey * ey
     logdet = np.linalg.slogdet(V)[1]
-    # log p(θ, r) = log r − log 2π − ½ log|V| − ½ maha   (file 004 eq. 17)
+    # log p(θ, r) = log r − log 2π − ½ log|V| − ½ maha   (sharma2024 eq. 17)
     logp = np.log(r) - _LOG_2PI - 0.5 * logdet[:, None] - 0.5 * maha
     # Trapezoid weights on the (closed or full-circle) window.
     full = half >= np.pi - 1e-12

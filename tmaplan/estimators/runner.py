@@ -9,7 +9,7 @@ the particle filter from the prior or from bearings only, the range-only filter)
 filter / MLE configuration; the Monte Carlo evaluation is
 :func:`tmaplan.evaluation.tracking.monte_carlo`.
 
-Priors. The papers centre their priors on the truth; following Ristic et al. (BENCHMARK B2)
+Priors. The papers centre their priors on the truth; following Ristic et al. (ristic2004, ch. 6)
 the *centre* of the prior is itself random per run: :func:`run_prior` draws the prior bearing
 (the measured bearing at step 0 when there is one), range, speed / velocity means from the
 prior around the truth, and the filter's particles are drawn around that centre. The estimator
@@ -190,9 +190,9 @@ class FilterEstimator:
         :class:`~tmaplan.estimators.range_only.RangeOnlyFilter`.
     init : {"prior", "bearings"}
         "prior": from the run's prior (:func:`run_prior`); "bearings": the particle filter from
-        the bearings-only batch initialisation (file 001).
+        the bearings-only batch initialisation (brehard2004).
     r_min, r_max : float
-        Range interval of the bearings-only initialisation [m] (file 001 L291).
+        Range interval of the bearings-only initialisation [m] (brehard2004).
     """
 
     filter: Filter[Any]
@@ -358,7 +358,7 @@ def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyC
     Parameters
     ----------
     estimator : {"pf", "pf-bearings", "mle", "range-only"}, an Estimator or a config
-        "pf": particle filter from the prior; "pf-bearings": from bearings only (file 001).
+        "pf": particle filter from the prior; "pf-bearings": from bearings only (brehard2004).
         A :class:`PFConfig` runs the prior-initialised PF with it (:func:`estimator_for`).
     scenario : Scenario
     measurements : Simulation or sequence of MeasurementSet
@@ -371,7 +371,7 @@ def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyC
     q : float, optional
         Filter process noise [m²/s³] (default: the scenario target's q).
     r_min, r_max : float
-        Range interval of the bearings-only initialisation [m] (file 001 L291).
+        Range interval of the bearings-only initialisation [m] (brehard2004).
 
     Returns
     -------

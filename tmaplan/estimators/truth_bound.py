@@ -1,11 +1,11 @@
 """Cartesian PCRB of the filters along the true trajectories.
 
 A bound for the position RMSE of a filter, from Tichavský's recursion for the
-linear-Gaussian NCV dynamics of the relative state (DESIGN §1)::
+linear-Gaussian NCV dynamics of the relative state (docs/conventions.md)::
 
     J_{k+1} = (Q + F J_k⁻¹ F')⁻¹ + H̃(X_{k+1})' R⁻¹ H̃(X_{k+1}),    J_0 = P_0⁻¹ + H̃(X_0)'R⁻¹H̃(X_0)
 
-:func:`truth_pcrb` (the runner's default, BENCHMARK_SCENARIOS §B2) evaluates H̃ along the
+:func:`truth_pcrb` (the runner's default, ristic2004, ch. 6) evaluates H̃ along the
 *true* relative trajectory of each Monte Carlo run, with ``P_0`` the covariance of the prior
 centred on the truth (``r̄ = r``). This is the bound ristic2004 (ch. 6) plot. Over the runs we
 average the bound *covariance*, ``sqrt(mean_runs tr[J_k⁻¹]_pos)``, the quantity that a position

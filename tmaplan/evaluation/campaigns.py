@@ -182,7 +182,7 @@ class CampaignResult:
     seconds: float
 
     def to_json(self) -> dict[str, Any]:
-        """DESIGN §4 payload (SI units)."""
+        """docs/cli.md payload (SI units)."""
         pol = {}
         for name in self.policies:
             s = self.summary[name]

@@ -4,7 +4,7 @@
 over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares
 the RMSE with the estimator's bound (:attr:`tmaplan.estimators.runner.Estimator.bound`): for the
 filters the PCRB along the runs' true trajectories, averaged over the runs
-(:func:`tmaplan.estimators.truth_bound.truth_pcrb`, BENCHMARK_SCENARIOS §B2; option
+(:func:`tmaplan.estimators.truth_bound.truth_pcrb`, ristic2004, ch. 6; option
 ``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb``, see
 :func:`_pcrb_position`), the CRLB of the batch estimate for the MLE (:func:`_crlb_bounds`).
 """
@@ -85,7 +85,7 @@ def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class MonteCarloResult:
-    """Monte Carlo evaluation of an estimator (DESIGN §4 ``track`` fields).
+    """Monte Carlo evaluation of an estimator (docs/cli.md ``track`` fields).
 
     Attributes
     ----------
@@ -167,7 +167,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     bound : bool or {"truth", "prior"}
         Compute the bound (False: NaN). Filters: True / "truth" is the PCRB along each run's
         true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
-        runs (BENCHMARK §B2, Ristic's bound); "prior" is the PCRB averaged over trajectories
+        runs (ristic2004, ch. 6); "prior" is the PCRB averaged over trajectories
         drawn from the prior (optimistic before an unobservable geometry becomes observable).
         The MLE always uses the CRLB at the truth.
     bound_samples : int

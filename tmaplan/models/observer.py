@@ -1,6 +1,6 @@
 """Observer (own-ship) kinematics: scripted legs and turn-rate control sequences.
 
-Convention (DESIGN §1): the relative state ``X = target − observer`` obeys
+Convention (docs/conventions.md): the relative state ``X = target − observer`` obeys
 ``X_{k+1} = A X_k − H Δv_k + w_k``. This is exact when the observer velocity stored at step k
 is its *mean velocity over the interval (t_{k−1}, t_k]* (``mean_velocity``), so that
 ``p_{k+1} = p_k + dt·v̄_{k+1}``. For straight legs switching on grid instants this equals the

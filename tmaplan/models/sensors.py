@@ -28,7 +28,7 @@ def range_rate(X: np.ndarray) -> np.ndarray:
 
 
 def doppler_frequency(X: np.ndarray, f0: np.ndarray, c: float = 1500.0) -> np.ndarray:
-    """Received frequency of each line, first-order Doppler ``f_p (1 − Ṙ/c)`` (file 002 eq. 3).
+    """Received frequency of each line, first-order Doppler ``f_p (1 − Ṙ/c)`` (clavard2013 eq. 3).
 
     ``X`` must carry the *instantaneous* relative velocity (target − observer).
 
@@ -54,7 +54,7 @@ def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
     """Log-likelihood of a bearing ``z`` for each state.
 
     Unambiguous bearings use the Gaussian of the wrapped residual (valid for σ ≪ π). With the
-    π ambiguity the density is the 3-term wrapped Gaussian of file 000 eq. 71 (L704) on
+    π ambiguity the density is the 3-term wrapped Gaussian of brehard2005 eq. 71 on
     (−π/2, π/2], so both the front and the back mode keep their weight.
 
     Parameters

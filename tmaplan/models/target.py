@@ -1,4 +1,4 @@
-"""Target motion models: nearly constant velocity, multi-leg, constant turn (file 002).
+"""Target motion models: nearly constant velocity, multi-leg, constant turn (clavard2013).
 
 State order everywhere: ``[x, y, v_x, v_y]`` (x East, y North), SI units.
 """
@@ -26,8 +26,8 @@ __all__ = [
 def ncv_matrices(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
     """Transition and process-noise matrices of the nearly-constant-velocity model.
 
-    ``F = [[I, dt·I], [0, I]]``, ``Q = q·[[dt³/3, dt²/2], [dt²/2, dt]] ⊗ I₂`` (DESIGN §1;
-    file 000 L76–80 with σ_max² = q).
+    ``F = [[I, dt·I], [0, I]]``, ``Q = q·[[dt³/3, dt²/2], [dt²/2, dt]] ⊗ I₂`` (docs/conventions.md;
+    brehard2005 with σ_max² = q).
 
     Parameters
     ----------
@@ -49,10 +49,10 @@ def ncv_matrices(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
 def constant_turn_state(
     centre: np.ndarray, radius: float, phase: float, omega: float, t: np.ndarray
 ) -> np.ndarray:
-    """Position and velocity of file 002's constant-turn source.
+    """Position and velocity of clavard2013's constant-turn source.
 
     ``P(t) = P_C + ρ_C [sin(ωt+φ), cos(ωt+φ)]``, ``V(t) = ρ_C ω [cos(ωt+φ), −sin(ωt+φ)]``
-    (file 002 L108, L467–469; ω > 0 clockwise).
+    (clavard2013; ω > 0 clockwise).
 
     Parameters
     ----------

@@ -9,14 +9,14 @@ times, with analytic Jacobians ``∂p/∂θ`` and ``∂v/∂θ``:
 
 * ``cv``            — constant velocity, ``θ = [x, y, v_x, v_y]`` at a reference time.
 * ``multi-leg``     — piecewise constant velocity with known change times,
-  ``θ = [x, y, v_x¹, v_y¹, …, v_x^ℓ, v_y^ℓ]`` (file 003 eq. 24, L291–L305; position at the
+  ``θ = [x, y, v_x¹, v_y¹, …, v_x^ℓ, v_y^ℓ]`` (lecadre1997 eq. 24; position at the
   reference time, then one velocity per leg; ``cv`` is the one-leg case).
-* ``constant-turn`` — file 002's circle ``θ = [x_C, y_C, ρ_C, φ, ω]`` (L105–L121, L141).
+* ``constant-turn`` — clavard2013's circle ``θ = [x_C, y_C, ρ_C, φ, ω]``.
 
 Measurement Jacobians (rows ``∂h_k/∂θ``) are formed by the chain rule from the relative
 position ``d = p − p_obs`` and velocity ``w = v − v_obs``:
 
-* bearing ``β = atan2(d_x, d_y)``: ``∂β/∂d = [d_y, −d_x]/R²`` (file 002 §1.6 of the notes);
+* bearing ``β = atan2(d_x, d_y)``: ``∂β/∂d = [d_y, −d_x]/R²`` (clavard2013);
 * range ``R``: ``∂R/∂d = d/R``;
 * range rate ``Ṙ = d·w/R``: ``∂Ṙ/∂d = (w − Ṙ d/R)/R``, ``∂Ṙ/∂w = d/R``.
 
@@ -63,7 +63,7 @@ class TrackModel:
         SI unit of each parameter.
     t_ref : float
         Reference time [s] of the position parameters (cv, multi-leg); unused for
-        constant-turn (whose phase refers to t = 0 of the scenario clock, file 002 L119).
+        constant-turn (whose phase refers to t = 0 of the scenario clock, clavard2013).
     change_times : tuple of float
         Velocity change times [s] (multi-leg), increasing; leg j+1 starts at
         ``change_times[j]``.
@@ -195,7 +195,7 @@ def cv_model(t_ref: float = 0.0) -> TrackModel:
 
 
 def multi_leg_model(change_times: Sequence[float], t_ref: float = 0.0) -> TrackModel:
-    """Multi-leg model with known velocity change times [s] (file 003 eq. 24).
+    """Multi-leg model with known velocity change times [s] (lecadre1997 eq. 24).
 
     Parameters are the position at ``t_ref`` and one velocity per leg.
     """
@@ -213,7 +213,7 @@ def multi_leg_model(change_times: Sequence[float], t_ref: float = 0.0) -> TrackM
 
 
 def constant_turn_model() -> TrackModel:
-    """File 002's constant-turn model ``Z = [x_C, y_C, ρ_C, φ, ω]`` (L141)."""
+    """clavard2013's constant-turn model ``Z = [x_C, y_C, ρ_C, φ, ω]``."""
     return TrackModel(kind="constant-turn", names=("xc", "yc", "radius", "phase", "omega"),
                       units=("m", "m", "m", "rad", "rad/s"))
 

@@ -14,7 +14,7 @@ per-step sensor information as one casadi parameter vector (:class:`ParamLayout`
   initial state (lecadre1997 eq. 64–65, :func:`tmaplan.bounds.fimdet.fim_bearings_generic`),
   in scaled units (km, 100 s);
 * :func:`relative_range_crlb_graph`: σ_r/r of the batch bearings CRLB with prior information
-  (file 003's batch setting, delta method).
+  (lecadre1997's batch setting, delta method).
 
 The names are re-exported by :mod:`tmaplan.planning.objectives`; import them from there.
 """
@@ -222,7 +222,7 @@ def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
 
 
 def logdet_graph(ctx: PlanContext) -> Any:
-    """``log det(F + I₀)`` [SI] averaged over the logdet samples (file 003 eq. 64–65)."""
+    """``log det(F + I₀)`` [SI] averaged over the logdet samples (lecadre1997 eq. 64–65)."""
     import casadi as ca
 
     terms = _sample_fim_terms(ctx, cumulative=False)
@@ -234,12 +234,12 @@ def logdet_graph(ctx: PlanContext) -> Any:
 def relative_range_crlb_graph(ctx: PlanContext) -> Any:
     """Relative range std ``σ_{r_k}/r_k`` from the bearings up to step k, (K+1, n_samples).
 
-    For each belief sample (a deterministic relative track, file 003's batch setting) the
-    information on X₀ after k steps is ``F_k + I₀`` (bearing FIM of the steps ≤ k, file 003
+    For each belief sample (a deterministic relative track, lecadre1997's batch setting) the
+    information on X₀ after k steps is ``F_k + I₀`` (bearing FIM of the steps ≤ k, lecadre1997
     eq. 64–65, plus the prior information); the range at step k is ``r_k = ‖p₀ + t_k v₀ − d_k‖``
     with gradient ``g_k = [u_k, t_k u_k]`` (u_k the line of sight), so
     ``σ²_{r_k} = g_kᵀ (F_k + I₀)⁻¹ g_k`` (delta method, LDLᵀ solve on entries). Unlike the LPC
-    PCRB's ln r component, it carries no coordinate pseudo-information (NOTES_000 §0 item 3:
+    PCRB's ln r component, it carries no coordinate pseudo-information (docs/errata.md item 3:
     the 𝒞 term), so it rewards exactly the bearing-rate geometry that localises the contact.
     """
     if "rel_crlb" in ctx.cache:

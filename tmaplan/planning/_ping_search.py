@@ -1,14 +1,14 @@
-"""Search methods of the active-ping scheduler (file 000 §5, NOTES_000 §4.2).
+"""Search methods of the active-ping scheduler (brehard2005 §5, docs/errata.md).
 
 Role: the combinatorial side of :func:`tmaplan.planning.pings.schedule_pings`, which builds
 a :class:`~tmaplan.planning.pings.PingEvaluator` (the batched closed-form PCRB of Bréhard &
-Le Cadre, file 000, with a ping adding ``u_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]``, eq. 51) and
+Le Cadre, brehard2005, with a ping adding ``u_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]``, eq. 51) and
 hands it to the helpers here:
 
 * feasibility: candidate steps outside the forbidden windows, minimum spacing, the largest
   number of pings the spacing allows;
 * ``_exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
-  bound "all remaining candidates pinged" (NOTES_000 §4.2) — used for the position objective,
+  bound "all remaining candidates pinged" (docs/errata.md) — used for the position objective,
   which the compiled kernel of :mod:`tmaplan.planning.ping_exact` does not evaluate;
 * the roundings of the relaxed weights of :mod:`tmaplan.planning.ping_relaxation`;
 * ``greedy`` and the local swaps that polish every method;

@@ -206,11 +206,11 @@ def baseline_objectives(scenario: Scenario, objective: str | Objective = "range-
 
 
 # --------------------------------------------------------------------------------------------
-# File 003's idealised bearing-rate problem (reference case for the two transcriptions)
+# lecadre1997's idealised bearing-rate problem (reference case for the two transcriptions)
 # --------------------------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class BearingRatePlan:
-    """Optimum of file 003's idealised problem (constant range, bearing rate as the control).
+    """Optimum of lecadre1997's idealised problem (constant range, bearing rate as the control).
 
     Attributes
     ----------
@@ -250,17 +250,17 @@ def _mgs_logdet(cols: list[Any]) -> Any:
 def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
                       switch_time: float | None = None, n_arcs: int = 3,
                       n_starts: int = 6) -> BearingRatePlan:
-    """Maximise det FIM over bounded piecewise-constant bearing rates (file 003 §VII).
+    """Maximise det FIM over bounded piecewise-constant bearing rates (lecadre1997 §VII).
 
     Samples at t = 0..N−1, phase φ(t) piecewise linear, rows
     ``G = (cos φ, −sin φ, t cos φ, −t sin φ)`` (eq. 66, constant range, σr = 1), exact
     ``log det Σ G Gᵀ`` (modified Gram–Schmidt, never a raw det).
 
     ``switch="fixed"``: two legs switching at ``switch_time`` (default mid-horizon), the two
-    rates in [−rate_max, rate_max] are the variables (direct transcription); file 003 eq. 87
+    rates in [−rate_max, rate_max] are the variables (direct transcription); lecadre1997 eq. 87
     predicts ``|θ̇_1| = |θ̇_2| = θ̇max`` with opposite signs.
     ``switch="free"``: bang-bang switching-time transcription: ``n_arcs`` arcs of rates
-    ±rate_max (alternating) whose durations are the variables; NOTES_003 §3.7: the optimum
+    ±rate_max (alternating) whose durations are the variables; docs/errata.md: the optimum
     has ONE switch near N/3 (or 2N/3) — the printed three-leg alternating optimum (eq. 92)
     does not reproduce.
 
@@ -315,7 +315,7 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
     ok = [r for r in results if r[2] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")]
     if switch == "fixed":
         if not ok:
-            raise SolverError("ipopt", results[0][2], "file 003 bearing-rate problem")
+            raise SolverError("ipopt", results[0][2], "lecadre1997 bearing-rate problem")
         val, xo, st = min(ok, key=lambda r: r[0])
         return BearingRatePlan(rates=rate_max * xo, durations=np.array([Ts, H - Ts]),
                                switch_times=np.array([Ts]), logdet=-val, status=st)
@@ -334,10 +334,10 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
             s2 = sw.copy()
             s2[i] += d
             if 0 < s2[i] < H and _logdet_switches(mr, s2, N) > best + 1e-12:
-                raise SolverError("ipopt", st, "file 003 bearing-rate problem: the snapped "
+                raise SolverError("ipopt", st, "lecadre1997 bearing-rate problem: the snapped "
                                   "switch times are not a local optimum")
     if best < -val - 1e-8:
-        raise SolverError("ipopt", st, "file 003 bearing-rate problem: snapping lost value")
+        raise SolverError("ipopt", st, "lecadre1997 bearing-rate problem: snapping lost value")
     return BearingRatePlan(rates=np.asarray(mr), durations=np.diff(np.concatenate(
         [[0.0], sw, [H]])), switch_times=sw, logdet=best,
         status=f"Kink_Optimal (ipopt: {st})")

@@ -2,13 +2,13 @@
 
 A :class:`Belief` holds the moments (and optionally weighted samples) of the relative state
 ``X = target − observer = [r_x, r_y, v_x, v_y]`` at a time t, relative to the observer's state
-``[position, velocity]`` at that time (DESIGN §1). The planners turn it into
+``[position, velocity]`` at that time (docs/conventions.md). The planners turn it into
 
 * the raw moments ``m₀ = E X``, ``S₀ = E X Xᵀ`` that seed the exact moment propagation of the
-  closed-form PCRB (file 000, NOTES_000 §2.9),
-* the LPC prior information ``J₀`` (file 000 eq. 56: inverse of the LPC covariance of the
+  closed-form PCRB (brehard2005, docs/errata.md),
+* the LPC prior information ``J₀`` (brehard2005 eq. 56: inverse of the LPC covariance of the
   samples, bearing centred on its circular mean),
-* the Cartesian prior information ``Cov(X)⁻¹`` for the ``logdet`` objective (file 003).
+* the Cartesian prior information ``Cov(X)⁻¹`` for the ``logdet`` objective (lecadre1997).
 
 Beliefs without samples (moments only, e.g. from a Gaussian filter) get deterministic Gaussian
 samples (fixed seed) for J₀, truncated to ranges above :data:`MIN_RANGE`.

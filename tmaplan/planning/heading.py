@@ -10,7 +10,7 @@ Transcriptions
     (ψ_j, p_j) at the nodes, piecewise-constant ω_j, continuity constraints; inside an interval
     the grid steps are integrated exactly with :func:`arc_displacement_casadi`.
     ``"bang-bang"``: switching-time parametrisation: a fixed sequence of arcs with
-    ω ∈ {+ω_max, 0, −ω_max} (file 003 §VII / Le Cadre & Laurent-Michel: bounded controls give
+    ω ∈ {+ω_max, 0, −ω_max} (lecadre1997 §VII / Le Cadre & Laurent-Michel: bounded controls give
     bang-bang optima) whose *durations* are the variables; positions on the dt grid are exact
     sums of arcs clipped at the grid instants, so the switch times are exact.
 

@@ -1,22 +1,22 @@
 """Planning objectives: ``logdet``, ``range-bound``, ``position-bound``, composable with penalties.
 
-Every objective is *minimised* (DESIGN §4) and written once as a casadi expression of a
+Every objective is *minimised* (docs/cli.md) and written once as a casadi expression of a
 :class:`PlanContext` (observer mean velocities and displacements over the plan horizon, the
 belief as casadi parameters). The same expression is compiled into a numeric
 :class:`ObjectiveEvaluator` for baselines and reports, so the optimiser and the evaluator
 cannot drift apart.
 
-* ``range-bound``: the closed-form LPC PCRB (file 000, corrected, NOTES_000 §2.9) range bound
-  ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (DESIGN §4, file 000 eq. 58) at the
+* ``range-bound``: the closed-form LPC PCRB (brehard2005, corrected, docs/errata.md) range bound
+  ``r̂_k·sqrt([J_k⁻¹]_{ln r})`` with ``r̂_k = sqrt(E r_k²)`` (docs/cli.md, brehard2005 eq. 58) at the
   last step (``reduce="terminal"``, the heading default) or averaged over the horizon
   (``reduce="mean"``) [m]: :func:`tmaplan.bounds.closed_form_engine.lpc_pcrb_graph` (the one
   closed-form engine) with the prior moments and J₀ as casadi *parameters* (build once,
   re-solve for a new belief).
 * ``position-bound``: ``sqrt(tr P_pos)`` [m], the square root of the trace of the Cartesian
   position PCRB, ``tr E[J_X J⁻¹ J_Xᵀ]_pos = Σ_kl S[k,l] tr(E_k J⁻¹ E_lᵀ)_pos`` (``J_X = ∂X/∂Y``
-  is linear in X, NOTES_000 §2.9), terminal or mean.
+  is linear in X, docs/errata.md), terminal or mean.
 * ``logdet``: ``−log det(F + I₀)``, F the exact bearing FIM of the relative initial state
-  (file 003 eq. 64–65, ranges not assumed constant) and ``I₀ = Cov(X₀)⁻¹`` the prior
+  (lecadre1997 eq. 64–65, ranges not assumed constant) and ``I₀ = Cov(X₀)⁻¹`` the prior
   information, at the belief mean (``samples=1``) or averaged over deterministic belief
   samples. Computed in scaled units (km, 100 s) with an LDLᵀ log-determinant, reported in SI.
 * penalties: :func:`turn_penalty` (mean squared turn rate, normalised by u_max²).
@@ -209,7 +209,7 @@ def position_bound(reduce: str = "terminal") -> Objective:
 
 
 def logdet(samples: int = 1) -> Objective:
-    """``−log det`` of the bearing FIM of X₀ plus the prior information (file 003).
+    """``−log det`` of the bearing FIM of X₀ plus the prior information (lecadre1997).
 
     Parameters
     ----------

@@ -1,9 +1,9 @@
-"""Active-ping scheduling under a budget with the closed-form PCRB (file 000 §5, NOTES_000 §4.2).
+"""Active-ping scheduling under a budget with the closed-form PCRB (brehard2005 §5, docs/errata.md).
 
 Choose at most ``budget`` ping steps on a fixed observer track to minimise a closed-form PCRB
-objective. Structure used (NOTES_000 §4.2): the moments, the D-terms and ``E r_k²`` do not
+objective. Structure used (docs/errata.md): the moments, the D-terms and ``E r_k²`` do not
 depend on the schedule; a ping at step k adds ``u_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]``
-(file 000 eq. 51); the Riccati map is matrix-monotone, so adding a ping never increases any
+(brehard2005 eq. 51); the Riccati map is matrix-monotone, so adding a ping never increases any
 objective below (range bound ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, position bound
 ``sqrt(tr P_pos)``), which makes "all remaining candidates pinged" a valid lower bound for
 branch and bound.

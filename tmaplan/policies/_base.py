@@ -24,7 +24,7 @@ log = logging.getLogger("tmaplan.policies")
 #: Planning objective of the closed-loop policies (``planned``, ``receding``) and of the choice
 #: of the best single turn / zig-zag. Scale-free and smooth in time, it tracks the time to a
 #: *relative* range accuracy that the comparison measures; the absolute range bound of
-#: DESIGN §4 (the scenario's default ``planning.objective``) rewards closing on the contact
+#: docs/cli.md (the scenario's default ``planning.objective``) rewards closing on the contact
 #: for its own sake and localised more slowly in Monte Carlo trials (see the README).
 CLOSED_LOOP_OBJECTIVE = "mean-relative-range-crlb"
 

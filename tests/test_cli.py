@@ -28,7 +28,7 @@ def test_simulate_writes_json_and_figure(tmp_path):
     assert (tmp_path / "brehard2005-s2_geometry.png").stat().st_size > 10_000
     obs = np.array(d["observer"])
     t = np.array(d["times"])
-    # the observer changes velocity at 1500 s and 4500 s (file 000 eq. 59)
+    # the observer changes velocity at 1500 s and 4500 s (brehard2005 eq. 59)
     v = obs[:, 2:]
     changes = t[1:][np.any(np.abs(np.diff(v, axis=0)) > 1e-9, axis=1)]
     assert changes.tolist() == [1506.0, 4506.0]  # mean velocity over (t_{k−1}, t_k]

@@ -1,4 +1,4 @@
-"""Tests of the closed-form LPC PCRB (file 000 §4–5 with the NOTES_000 corrections)."""
+"""Tests of the closed-form LPC PCRB (brehard2005 §4–5 with the docs/errata.md corrections)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem, measurement_steps
 
-PING_PERIOD = 80.0  # file 000 §6 L632: a ping every 80 s, σ_r = 100 m
+PING_PERIOD = 80.0  # brehard2005 §6: a ping every 80 s, σ_r = 100 m
 
 
 def _quiet(fn, *args, **kw):
@@ -54,7 +54,7 @@ def s2():
 
 # ---------------------------------------------------------------------------- constants
 def test_noise_constant_matches_notes_and_monte_carlo():
-    # NOTES_000 §2.5: 𝒞 = diag(0, 8, 2α3²/detΣ, 2α3²/detΣ); CV model δ = 6: diag(0, 8, 96, 96).
+    # docs/errata.md: 𝒞 = diag(0, 8, 2α3²/detΣ, 2α3²/detΣ); CV model δ = 6: diag(0, 8, 96, 96).
     _, Q = ncv_matrices(6.0, 0.0025)
     np.testing.assert_allclose(lpc_noise_constant(Q), np.diag([0, 8, 96, 96]), atol=1e-9)
     # a non-CV Σ: the general formula (not the paper's polynomial, valid for unit CV only)
@@ -169,7 +169,7 @@ def test_closed_form_matches_monte_carlo_20000(name, ping):
     _compare(sc, _ping_steps(sc) if ping else None, 20_000, 0.03, seed=12)
 
 
-# ----------------------------------------------------------------- file 000 §6 results
+# ----------------------------------------------------------------- brehard2005 §6 results
 def test_qualitative_results_of_section_6(s1, s2):
     # (T3) s1: eq. 58 r bound grows over time while ln r's bound shrinks (the 𝒞 floor)
     r1 = _quiet(closed_form_pcrb, s1)
@@ -186,7 +186,7 @@ def test_qualitative_results_of_section_6(s1, s2):
         assert r1.range_bound[k + 20] > 0.95 * r1.range_bound[k]
     # (T5) pings every 80 s: ln r bound drops at each ping and stays below passive
     pings = _ping_steps(s1)
-    assert pings[:4] == [14, 27, 40, 54]  # NOTES_000 §5.3 rounding rule
+    assert pings[:4] == [14, 27, 40, 54]  # docs/errata.md rounding rule
     rp = _quiet(closed_form_pcrb, s1, ping_steps=pings)
     var = rp.std[:, 1] ** 2
     assert all(var[k] < 0.9 * var[k - 1] for k in pings)
@@ -255,7 +255,7 @@ def test_side_density_gaussian_matches_samples():
 
 
 def test_side_assumption_warning_for_wrap_crossing(s2):
-    # s2's relative r_y crosses 0 near t ≈ 2722 s (NOTES_000 §5.3): flagged, not silent
+    # s2's relative r_y crosses 0 near t ≈ 2722 s (docs/errata.md): flagged, not silent
     with pytest.warns(SideAssumptionWarning, match="side assumption"):
         r = closed_form_pcrb(s2)
     assert not r.side_valid[455]  # t = 2730 s

@@ -1,4 +1,4 @@
-"""Tests of tmaplan.bounds.crlb: batch FIM / CRLB (file 002 tables, gradients, invariances)."""
+"""Tests of tmaplan.bounds.crlb: batch FIM / CRLB (clavard2013 tables, gradients, invariances)."""
 
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ DEG = np.pi / 180.0
 
 
 def _ct_scenario(omega: float, horizon: float = 627.0):
-    """File 002 §III.4 half-turn geometry (RECON, NOTES_002 §4.4) built without the problem
+    """clavard2013 §III.4 half-turn geometry (RECON, docs/errata.md) built without the problem
     files, so the tests do not depend on them."""
     return from_dict({
         "name": "ct", "time": {"dt": 1.0, "horizon": horizon},
@@ -48,7 +48,7 @@ def _ct_scenario(omega: float, horizon: float = 627.0):
 
 
 def _close(ours: float, printed: float, decimals: int) -> bool:
-    """Printed values are rounded to ``decimals``: accept 3 % relative (NOTES_002 §4.8: the
+    """Printed values are rounded to ``decimals``: accept 3 % relative (docs/errata.md: the
     inferred geometry reproduces the tables within ~2 %) plus half a unit of the last printed
     digit (e.g. "0.09 km" means [0.085, 0.095) km)."""
     return abs(ours - printed) <= 0.03 * abs(printed) + 0.5 * 10.0**-decimals
@@ -56,11 +56,11 @@ def _close(ours: float, printed: float, decimals: int) -> bool:
 
 # Table columns: x_S(t_N) km, y_S(t_N) km, ρ_C km, φ deg, ω deg/s, R_N km (and decimals).
 TABLES = {
-    # file 002 Table 1 (clockwise, bearings only), L402–L410
+    # clavard2013 Table 1 (clockwise, bearings only)
     ("cw", 0): ((0.29, 2), (0.65, 2), (0.09, 2), (7.28, 2), (0.025, 3), (0.71, 2)),
-    # Table 2 (anticlockwise, bearings only), L412–L420
+    # Table 2 (anticlockwise, bearings only)
     ("acw", 0): ((1.08, 2), (2.59, 2), (0.25, 2), (28.5, 1), (0.06, 2), (2.81, 2)),
-    # Table 4 (clockwise) σ_CRLB with 1, 2, 4 lines, L603–L611 (0.077 read 0.0077, NOTES_002)
+    # Table 4 (clockwise) σ_CRLB with 1, 2, 4 lines (0.077 read 0.0077, docs/errata.md)
     ("cw", 1): ((0.09, 2), (0.20, 2), (0.04, 2), (2.79, 2), (0.0077, 4), None),
     ("cw", 2): ((0.07, 2), (0.15, 2), (0.03, 2), (2.23, 2), (0.006, 3), None),
     ("cw", 4): ((0.06, 2), (0.12, 2), (0.03, 2), (1.81, 2), (0.005, 3), None),
@@ -94,7 +94,7 @@ def test_file002_final_range_rsd(direction, printed_rsd):
 
 
 def test_file002_table7_mutual_tracking():
-    """Table 7 (L648–L653): RSD (%) of BO-CTTMA (CV observer tracks the turning platform) and
+    """Table 7: RSD (%) of BO-CTTMA (CV observer tracks the turning platform) and
     BO-TMA (turning platform tracks the CV one, CV state at t_N), anticlockwise, within 3 %."""
     printed = {753: (12.29, 22.35), 879: (3.58, 20.38), 1004: (1.46, 14.70),
                1130: (0.81, 4.79)}
@@ -158,7 +158,7 @@ def test_analytic_gradients_match_finite_differences(which, kind):
 
 def test_cv_fim_matches_relative_state_fim():
     """Two independent implementations: the absolute CV parameter FIM equals the relative
-    CV state FIM of fimdet (the observer track is known, file 003 eq. 64–65)."""
+    CV state FIM of fimdet (the observer track is known, lecadre1997 eq. 64–65)."""
     t = np.arange(0.0, 1200.0, 20.0)
     obs = np.stack([5.0 * t, np.where(t > 600, 3.0 * (t - 600), 0.0)], axis=-1)
     theta = np.array([4000.0, 15000.0, -2.0, -1.0])
@@ -186,7 +186,7 @@ def test_multileg_reduces_to_cv_when_legs_merge():
 
 
 def test_schur_complement_eq16_and_result6():
-    """The trajectory block of the full (5+P) inverse equals file 002 eq. (16)'s Schur form,
+    """The trajectory block of the full (5+P) inverse equals clavard2013 eq. (16)'s Schur form,
     and each added line reduces the bound (Result 6: B_P − B_{P+1} ⪰ 0)."""
     scen = _ct_scenario(-0.005)
     prev = None
@@ -206,7 +206,7 @@ def test_schur_complement_eq16_and_result6():
 @pytest.mark.parametrize("angle", [0.7, -2.1])
 def test_rotation_and_translation_invariance(angle):
     """Rotating and translating the whole scene leaves σ_R, σ_ρ, σ_φ and σ_ω unchanged
-    (file 002 L313–L317)."""
+    (clavard2013)."""
     t = np.arange(0.0, 628.0)
     Z = np.array([7530.0, 10000.0, 1000.0, 0.0, 0.005])
     obs = np.stack([6.0 * t, 0.0 * t], axis=-1)
@@ -235,7 +235,7 @@ def test_range_pings_add_information():
     obs = np.stack([5.0 * t, 0.0 * t], axis=-1)
     theta = np.array([3000.0, 12000.0, -2.0, 1.0])
     bd = [BearingData(times=t, observer_position=obs, sigma=0.01)]
-    # bearings only with a non-manoeuvring observer: unobservable (file 003 §III)
+    # bearings only with a non-manoeuvring observer: unobservable (lecadre1997 §III)
     with pytest.raises(ObservabilityError, match="singular"):
         crlb_from_data(cv_model(), theta, bearings=bd)
     pings = RangeData(times=t[[10, 60]], observer_position=obs[[10, 60]], sigma=50.0)
@@ -271,12 +271,12 @@ def test_bad_input_errors():
             BearingData(times=t, observer_position=at, sigma=SIG)])
     with pytest.raises(ScenarioError, match="frequencies"):
         crlb(load_problem("clavard2013-halfturn-cw"), frequencies=5)
-    # motionless observer, bearings only: homothety (file 002 Result 2) -> singular
+    # motionless observer, bearings only: homothety (clavard2013 Result 2) -> singular
     with pytest.raises(ObservabilityError, match="singular"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=np.zeros_like(obs), sigma=SIG)])
     # observer at the circle centre with a frequency line: Ṙ ≡ 0, ρ_C gets no information
-    # (file 002 Result 5); must be reported, not inverted into a 1e15 m "bound"
+    # (clavard2013 Result 5); must be reported, not inverted into a 1e15 m "bound"
     centre = np.tile(Z[:2], (t.size, 1))
     fc = FrequencyData(times=t, observer_position=centre, observer_velocity=0 * centre,
                        f0=np.array([3000.0]), sigma=np.array([3.0]))

@@ -110,7 +110,7 @@ def test_cli_track_bad_runs(capsys) -> None:
 
 def test_cli_track_mle_frequencies_and_turn_direction(tmp_path, capsys) -> None:
     # --frequencies N as in `tmaplan crlb` (default 0 = bearings only): the CRLB range std
-    # reported by `track` equals the one of `crlb` (file 002 Table 1: 0.71 km; Table 4 with
+    # reported by `track` equals the one of `crlb` (clavard2013 Table 1: 0.71 km; Table 4 with
     # 4 lines far smaller); --turn-direction overrides the problem's [estimation] section.
     from tmaplan.bounds.crlb import crlb
 

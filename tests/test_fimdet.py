@@ -1,4 +1,4 @@
-"""Tests of tmaplan.bounds.fimdet: exact log det FIM and file 003's approximations."""
+"""Tests of tmaplan.bounds.fimdet: exact log det FIM and lecadre1997's approximations."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def test_logdet_qr_matches_slogdet_and_is_batched():
     F = fim_bearings(rel, t, sig, t_ref=0.0)
     ld = logdet_fim_bearings(rel, t, sig)
     assert ld == pytest.approx(np.linalg.slogdet(F)[1], rel=1e-9)
-    # det is invariant to the reference time (file 003 L708)
+    # det is invariant to the reference time (lecadre1997)
     assert logdet_fim_bearings(rel, t, sig, t_ref=1234.0) == pytest.approx(ld, rel=1e-9)
     # batch: scaling all ranges by 2 divides det by 2^8
     both = logdet_fim_bearings(np.stack([rel, 2 * rel]), t, sig)
@@ -59,7 +59,7 @@ def test_logdet_qr_matches_slogdet_and_is_batched():
 
 
 def test_logdet_straight_legs_is_much_smaller():
-    """Without an observer manoeuvre the CV/CV FIM is singular (file 003 §III): its log det
+    """Without an observer manoeuvre the CV/CV FIM is singular (lecadre1997 §III): its log det
     collapses by tens of nats (numerical noise only)."""
     t, rel = _manoeuvre_geometry()
     obs_straight = t[:, None] * [5.0, 0.0]
@@ -99,7 +99,7 @@ def test_generic_numpy_and_casadi_agree():
 
 
 def test_general_four_sample_identity():
-    """NOTES_003 §3.5 identity, exact for arbitrary phases and non-integer times."""
+    """docs/errata.md identity, exact for arbitrary phases and non-integer times."""
     rng = np.random.default_rng(3)
     ph = rng.normal(size=(50, 4))
     t = np.sort(rng.uniform(0.0, 7.0, size=(50, 4)), axis=1)
@@ -179,7 +179,7 @@ def test_single_leg_result1_exact(n):
 
 def test_printed_3867_is_wrong():
     x = 0.37
-    coeffs = (26691, 44912, 27608, 12368, 3867, 816, 136, 16, 1)  # as printed, L796
+    coeffs = (26691, 44912, 27608, 12368, 3867, 816, 136, 16, 1)  # as printed
     printed = 32 * np.sin(x) ** 8 * sum(c * np.cos(2 * j * x) for j, c in enumerate(coeffs))
     assert abs(printed / exact_det_piecewise([x], [8]) - 1) > 1e-5
 
@@ -193,7 +193,7 @@ def test_small_rate_constant():
 
 
 def test_two_and_three_leg_polynomials_match_printed():
-    """Eq. (90)–(91) and Appendix B under Model A (NOTES_003 §3.6–3.7), with the corrections
+    """Eq. (90)–(91) and Appendix B under Model A (docs/errata.md), with the corrections
     784x⁴/−5488x³y for F_{3,6} and −5264 for F_{3,3,3}."""
     key = [(4, 0), (3, 1), (2, 2), (1, 3), (0, 4)]
 
@@ -240,7 +240,7 @@ def test_two_leg_optimum_is_bang_bang_opposite():
 
 
 def test_realistic_long_range_check():
-    """NOTES_003 §4: fixed source 20 km north, observer 5 m/s, 3 samples heading 090° then 4
+    """docs/errata.md: fixed source 20 km north, observer 5 m/s, 3 samples heading 090° then 4
     heading 270°, σ = 1°: the SI log det matches P_{3,4}·dt⁴/(σ r̄)^8 for small dt and drifts
     as dt grows."""
     sig = np.radians(1.0)

@@ -126,7 +126,7 @@ def test_bearing_ambiguity_pi() -> None:
     X = np.array([[1, 1, 0, 0], [1, -1, 0, 0], [-1, -1, 0, 0], [-1, 1, 0, 0], [1, 0, 0, 0.0]])
     expected = np.array([45.0, -45.0, 45.0, -45.0, 90.0]) * DEG
     np.testing.assert_allclose(g.bearing_of(X, ambiguity="pi"), expected, atol=1e-15)
-    # Matches file 000's arctan(r_x/r_y) wherever r_y != 0.
+    # Matches brehard2005's arctan(r_x/r_y) wherever r_y != 0.
     np.testing.assert_allclose(
         g.bearing_of(X[:4], ambiguity="pi"), np.arctan(X[:4, 0] / X[:4, 1]), atol=1e-15
     )
@@ -343,7 +343,7 @@ def test_jacobian_determinants(X: np.ndarray) -> None:
     assert np.linalg.det(g.jacobian_lpc_wrt_cart(X)) == pytest.approx(r**-4, rel=1e-9)
     Ymp = g.cart_to_mp(X)
     u = Ymp[3]
-    # MP: det ∂X/∂Y = −1/Y4⁵ (file 001 gives |det| = 1/Y4⁵). LU round-off grows with the
+    # MP: det ∂X/∂Y = −1/Y4⁵ (brehard2004 gives |det| = 1/Y4⁵). LU round-off grows with the
     # column-scale spread (~r), hence rel=1e-8 rather than 1e-9.
     assert np.linalg.det(g.jacobian_cart_wrt_mp(Ymp)) == pytest.approx(-(u**-5), rel=1e-8)
     assert np.linalg.det(g.jacobian_mp_wrt_cart(X)) == pytest.approx(-(u**5), rel=1e-8)

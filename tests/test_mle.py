@@ -1,4 +1,4 @@
-"""Batch maximum likelihood (file 002) and its CRLB."""
+"""Batch maximum likelihood (clavard2013) and its CRLB."""
 
 from __future__ import annotations
 
@@ -33,9 +33,9 @@ def _crlb(name: str, nf: int):
 
 
 @pytest.mark.parametrize(("name", "nf", "paper"), [
-    # File 002 Table 1 (L402–410) and Table 2 (L412–420): σ_CRLB of x_N, y_N [m], ρ [m],
-    # φ [deg], ω [deg/s], R_N [m]; Table 4 (L603–611) with the typo 0.077 → 0.0077 (NOTES_002
-    # §1.7). Tolerance ±3 % (NOTES_002 §4.8: the geometry is a reconstruction, ±2 %).
+    # clavard2013 Table 1 and Table 2: σ_CRLB of x_N, y_N [m], ρ [m],
+    # φ [deg], ω [deg/s], R_N [m]; Table 4 with the typo 0.077 → 0.0077 (docs/errata.md
+    # §1.7). Tolerance ±3 % (docs/errata.md: the geometry is a reconstruction, ±2 %).
     ("clavard2013-halfturn-cw", 0, [290, 650, 90, 7.28, 0.025, 710]),
     ("clavard2013-halfturn-acw", 0, [1080, 2590, 250, 28.5, 0.06, 2810]),
     ("clavard2013-halfturn-cw", 1, [90, 200, 40, 2.79, 0.0077, None]),
@@ -88,7 +88,7 @@ def test_mle_noise_free_recovers_truth_from_grid() -> None:
 
 
 def test_mle_with_frequencies_efficient_small_mc() -> None:
-    # With one line the MLE is efficient in both directions (file 002 §IV.3.b). 30 seeded runs:
+    # With one line the MLE is efficient in both directions (clavard2013 §IV.3.b). 30 seeded runs:
     # final-range RMSE within [0.6, 1.5]× the CRLB std (std-of-std ≈ 13 % at 30 runs).
     sc = load_problem("clavard2013-halfturn-acw")
     sd, R = _crlb("clavard2013-halfturn-acw", 1)
@@ -161,10 +161,10 @@ def test_halfturn_mirror_ghost_is_genuine_and_reported() -> None:
 
 
 def test_mirror_ghost_is_structural_not_a_reconstruction_artefact() -> None:
-    # The circle centre is a reconstruction (NOTES_002 §4.4). Moving it by ±0.5 km (the CRLB
+    # The circle centre is a reconstruction (docs/errata.md). Moving it by ±0.5 km (the CRLB
     # tables then change by far more than the notes' ±3 %) keeps an anticlockwise solution
     # with noise-free cost < 1 (χ² units): the near-ambiguity belongs to the scenario class,
-    # so file 002's efficient clockwise MLE cannot have searched both senses globally.
+    # so clavard2013's efficient clockwise MLE cannot have searched both senses globally.
     import dataclasses
 
     sc0 = load_problem("clavard2013-halfturn-cw")
@@ -198,7 +198,7 @@ def test_turn_direction_restricts_the_search() -> None:
 
 
 def test_paper_tables_fingerprint_the_searched_senses() -> None:
-    # File 002 Table 1 (cw): σ̂_ω = 0.026 °/s = σ_CRLB (0.025). One of 500 estimates at the
+    # clavard2013 Table 1 (cw): σ̂_ω = 0.026 °/s = σ_CRLB (0.025). One of 500 estimates at the
     # mirror solution (ω ≈ −0.108 °/s) would add (Δω)²/500 to the variance and print ≥ 0.030:
     # the paper's clockwise search never left the clockwise sense.
     _, _, d = _noise_free("clavard2013-halfturn-cw")
@@ -265,7 +265,7 @@ def _halfturn_mc(name: str, runs: int, seed: int, config: MLEConfig | None = Non
 
 
 def test_mle_halfturn_cw_efficient_small_mc() -> None:
-    # Default-suite version of the 500-run acceptance (file 002 Table 1): 60 seeded runs with
+    # Default-suite version of the 500-run acceptance (clavard2013 Table 1): 60 seeded runs with
     # the problem's settings (clockwise sense). RERMSE/RSD in [0.75, 1.3] (std-of-std ≈ 9 %
     # at 60 runs; a both-senses search gives ≈ 6.5, a wrong model or Jacobian far more).
     est, _, sd, R, rej = _halfturn_mc("clavard2013-halfturn-cw", 60, 11)
@@ -276,7 +276,7 @@ def test_mle_halfturn_cw_efficient_small_mc() -> None:
 
 @pytest.mark.slow
 def test_mle_halfturn_cw_500_runs_table1() -> None:
-    # Issue 5 / file 002 §III.4 Table 1, 500 runs, the problem's settings (clockwise sense,
+    # Issue 5 / clavard2013 §III.4 Table 1, 500 runs, the problem's settings (clockwise sense,
     # multistart) and the paper's single-best-node start: rejections ≈ 1/500 (≤ 3), final-range
     # RERMSE within 15 % of the RSD, and every component's σ̂ within 10 % of σ_CRLB (the
     # paper's efficiency claim; ±10 % ≈ 3× the std-of-std 1/√1000 at 500 runs).
@@ -292,7 +292,7 @@ def test_mle_halfturn_cw_500_runs_table1() -> None:
 
 @pytest.mark.slow
 def test_mle_halfturn_acw_500_runs_table2_biases() -> None:
-    # File 002 Table 2: with both senses searched (the problem's settings, as the paper's
+    # clavard2013 Table 2: with both senses searched (the problem's settings, as the paper's
     # table fingerprints) φ and ω are biased (printed 32.7° and 0.123 °/s) because a fraction
     # of estimates sits at the clockwise mirror; rejections few (paper 7/500).
     est, true, _, _, rej = _halfturn_mc("clavard2013-halfturn-acw", 500, 2013)
@@ -340,7 +340,7 @@ first_step = 0
 
 
 def test_mle_multi_leg_agrees_with_the_batch_crlb() -> None:
-    # Multi-leg source (file 003 eq. 24: position at t0, one velocity per leg, known change
+    # Multi-leg source (lecadre1997 eq. 24: position at t0, one velocity per leg, known change
     # time). (i) Noise-free bearings: the grid + GN + LM estimate recovers the truth. (ii) The
     # MLE's FIM (J'J of its whitened residuals) equals the batch CRLB module's FIM (the rows
     # are assembled independently). (iii) 40 seeded runs: final position RMSE within

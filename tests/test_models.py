@@ -15,20 +15,20 @@ from tmaplan.scenario import Observer, ObserverLeg, TimeGrid, load_problem
 def test_ncv_matrices():
     F, Q = ncv_matrices(6.0, 0.0025)
     assert F[0, 2] == F[1, 3] == 6.0
-    # NOTES_001 §1.1: var(r) = η²δ³/3 = 0.18, cov = η²δ²/2 = 0.045, var(v) = η²δ = 0.015
+    # docs/errata.md: var(r) = η²δ³/3 = 0.18, cov = η²δ²/2 = 0.045, var(v) = η²δ = 0.015
     assert Q[0, 0] == pytest.approx(0.18) and Q[0, 2] == pytest.approx(0.045)
     assert Q[2, 2] == pytest.approx(0.015) and Q[0, 1] == 0.0
     assert np.all(np.linalg.eigvalsh(Q) > 0)
 
 
 def test_constant_turn_matches_file002_half_turn():
-    # File 002 L108 with the RECON geometry (NOTES_002 §4.4): the clockwise source is at
+    # clavard2013 with the RECON geometry (docs/errata.md): the clockwise source is at
     # (7.537, 9.000) km at t = 627 s and starts heading 090° at 5 m/s.
     s = constant_turn_state([7530.0, 10000.0], 1000.0, 0.0, 0.005, np.array([0.0, 627.0]))
     assert s[0] == pytest.approx([7530.0, 11000.0, 5.0, 0.0], abs=1e-12)
     assert s[1, :2] == pytest.approx([7530 + 1000 * np.sin(3.135), 10000 + 1000 * np.cos(3.135)])
     assert s[1, 0] == pytest.approx(7536.59, abs=0.01) and s[1, 1] == pytest.approx(9000.0, abs=0.1)
-    # speed = |ω| ρ_C (L121) at every time, and the velocity is the time derivative
+    # speed = |ω| ρ_C at every time, and the velocity is the time derivative
     t = np.linspace(0, 1256, 50)
     st = constant_turn_state([0.0, 0.0], 1000.0, 0.3, -0.005, t)
     assert np.hypot(st[:, 2], st[:, 3]) == pytest.approx(np.full(50, 5.0))
@@ -39,14 +39,14 @@ def test_constant_turn_matches_file002_half_turn():
 
 
 def test_doppler_matches_file002_formula():
-    # File 002 eq. 3 at t = 0 of the clockwise half turn: source (7530, 11000) m moving (5, 0),
+    # clavard2013 eq. 3 at t = 0 of the clockwise half turn: source (7530, 11000) m moving (5, 0),
     # observer at the origin moving (6, 0) m/s: Ṙ = (ẋS − ẋO) sin θ + (ẏS − ẏO) cos θ
     # = −1·7530/13330.40 = −0.564876 m/s, so f = 3000·(1 + 0.564876/1500) = 3001.12975 Hz.
     X = np.array([7530.0, 11000.0, 5.0 - 6.0, 0.0])
     f = doppler_frequency(X, np.array([3000.0, 4500.0]), 1500.0)
     assert f[0] == pytest.approx(3001.12975, abs=1e-5)
     assert f[1] == pytest.approx(4500 * (1 + 7530 / np.hypot(7530, 11000) / 1500), rel=1e-12)
-    # Motionless observer: Ṙ = ρ_C ω sin(θ − ωt − φ) (file 002 L1182)
+    # Motionless observer: Ṙ = ρ_C ω sin(θ − ωt − φ) (clavard2013)
     t = np.linspace(0, 600, 7)
     st = constant_turn_state([7530.0, 10000.0], 1000.0, 0.2, 0.005, t)
     theta = bearing(st)
@@ -67,7 +67,7 @@ def test_pi_ambiguous_likelihood_keeps_both_modes():
     assert ll[0] == pytest.approx(ll[1])
     ll_plain = bearing_loglik(z, np.stack([front, back]), 0.01)
     assert ll_plain[0] - ll_plain[1] > 1000
-    # density integrates to one over (−π/2, π/2] (file 000 eq. 71), even next to the wrap
+    # density integrates to one over (−π/2, π/2] (brehard2005 eq. 71), even next to the wrap
     zz = np.linspace(-np.pi / 2, np.pi / 2, 20001)
     near_wrap = np.array([1000.0 * np.sin(1.55), 1000.0 * np.cos(1.55), 0, 0])
     dens = np.exp(bearing_loglik(zz, near_wrap, 0.05, "pi"))

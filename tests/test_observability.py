@@ -1,4 +1,4 @@
-"""Tests of tmaplan.bounds.observability: file 003 Props 1–4, file 002 Results 1, 3, 5."""
+"""Tests of tmaplan.bounds.observability: lecadre1997 Props 1–4, clavard2013 Results 1, 3, 5."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ def _brg(src, obs):
     return np.arctan2(d[:, 0], d[:, 1])
 
 
-# NOTES_003 §2.1–§2.4 geometry: source (5, 20) km, (−3, −1) m/s; observer 5 m/s east.
+# docs/errata.md§2.4 geometry: source (5, 20) km, (−3, −1) m/s; observer 5 m/s east.
 CASES = [
     # (label, source change, observer manoeuvre, expected rank, state dim, test name)
     ("RUN/RUN", None, None, 3, 4, "§III"),
@@ -82,7 +82,7 @@ def test_three_leg_source_property2():
 
 def test_collision_legs_property1_exception():
     """Stationary source due north: two collision legs give rank 2; one collision leg then a
-    non-collision leg gives rank 4 (NOTES_003 §2.2)."""
+    non-collision leg gives rank 4 (docs/errata.md)."""
     src = np.array([0.0, 20000.0]) + 0 * T[:, None]
     r = rank_test(_brg(src, _observer(20.0, (0.0, 5.0), (0.0, 3.0))), T,
                   observer_manoeuvre_times=[20.0])
@@ -114,7 +114,7 @@ def test_property4_switch_time_identification():
     assert scan.degenerate[list(scan.candidates).index(28.0)]
 
 
-# -- file 002 ----------------------------------------------------------------------------------
+# -- clavard2013 ----------------------------------------------------------------------------------
 
 Z = np.array([7530.0, 10000.0, 1000.0, 0.0, 0.005])
 TT = np.arange(0.0, 628.0, 3.0)
@@ -129,7 +129,7 @@ def test_result1_moving_vs_motionless_observer():
     r = ct_observability(TT, still, 0 * vel, Z)
     assert (r.rank, r.predicted_rank, r.observable) == (4, 4, False)
     assert "homothety" in r.verdict
-    # the homothety of Result 2 (μ = 3) gives identical bearings (NOTES_002 checklist 10)
+    # the homothety of Result 2 (μ = 3) gives identical bearings (docs/errata.md checklist 10)
     mu = 3.0
     Z2 = np.r_[mu * (Z[:2] - still[0]) + still[0], mu * Z[2], Z[3:]]
     b1 = constant_turn_state(Z[:2], Z[2], Z[3], Z[4], TT)[:, :2] - still
@@ -165,7 +165,7 @@ def test_result3_ct_never_mistaken_for_cv():
 
 def test_scenario_level_verdicts():
     r = observability(load_problem("clavard2013-halfturn-acw"), frequencies=0)
-    assert r.observable and r.test == "file 002 Result 1"
+    assert r.observable and r.test == "clavard2013 Result 1"
     r = observability(load_problem("clavard2013-halfturn-cw"))
     assert r.observable and r.expected_rank == 9
     r = observability(load_problem("default"))  # straight observer, CV target

@@ -24,7 +24,7 @@ from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
 
-# File 001 §4 scenario (L285-291): relative X0 = (−10000, 10000) m, (16, 3) m/s, δ = 6 s.
+# brehard2004 §4 scenario: relative X0 = (−10000, 10000) m, (16, 3) m/s, δ = 6 s.
 X0_001 = np.array([-10000.0, 10000.0, 16.0, 3.0])
 
 
@@ -35,7 +35,7 @@ def _bearings_001(n: int = 100) -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_regression_eq13_exact_for_cv_geometry() -> None:
-    # File 001 eq. (13) is exact for a non-manoeuvring geometry (NOTES_001 §1.6: 1e-16).
+    # brehard2004 eq. (13) is exact for a non-manoeuvring geometry (docs/errata.md: 1e-16).
     t, z = _bearings_001(71)
     tk = t[35]
     X = X0_001[:2] + tk * X0_001[2:]
@@ -43,7 +43,7 @@ def test_regression_eq13_exact_for_cv_geometry() -> None:
     yr = np.array([(X0_001[2] * X[1] - X0_001[3] * X[0]) / r2,
                    (X0_001[2] * X[0] + X0_001[3] * X[1]) / r2, np.arctan2(X[0], X[1])])
     assert np.max(np.abs(bearing_regression(yr, t - tk) - z)) < 1e-12
-    # Truth at k = 35 from NOTES_001 §4 table: Y1 = 1.2095e-3, Y2 = −4.733e-4, Y3 = −0.5583.
+    # Truth at k = 35 from docs/errata.md table: Y1 = 1.2095e-3, Y2 = −4.733e-4, Y3 = −0.5583.
     np.testing.assert_allclose(yr, [1.2095e-3, -4.733e-4, -0.5583], rtol=2e-3)
 
 
@@ -53,7 +53,7 @@ def test_rmp_fit_and_corrected_start_point() -> None:
     assert fit.converged
     np.testing.assert_allclose(fit.estimate, [1.2095e-3, -4.733e-4, -0.55835], rtol=1e-3)
     # Corrected eq. (16) start (γ̂2, −γ̂3/γ̂2, γ̂1) lands within a few % of the truth
-    # (NOTES_001 §7 item 4); the printed (γ̂2, γ̂3, γ̂1) would give Y2 ≈ 5.7e-7 instead.
+    # (docs/errata.md item 4); the printed (γ̂2, γ̂3, γ̂1) would give Y2 ≈ 5.7e-7 instead.
     np.testing.assert_allclose(fit.start, fit.estimate, rtol=0.05)
 
 
@@ -73,8 +73,8 @@ def test_rmp_fim_matches_finite_differences() -> None:
 
 
 def test_initialisation_time_reproduces_paper_k35() -> None:
-    # File 001 L291: condition met at 420 s, PF initialised at 210 s (k = 35), with N = 1e4,
-    # R in [1, 40] km, α = 5 %, η = 0.05 (q = η²). Noise-free data; NOTES_001 §2.5 tolerance
+    # brehard2004: condition met at 420 s, PF initialised at 210 s (k = 35), with N = 1e4,
+    # R in [1, 40] km, α = 5 %, η = 0.05 (q = η²). Noise-free data; docs/errata.md tolerance
     # ±2 steps.
     t, z = _bearings_001(100)
     res = initialise_from_bearings(t, z, 0.05, r_min=1e3, r_max=4e4, n_particles=10_000,

@@ -47,7 +47,7 @@ def _log_gauss(x, mean, cov):
 
 
 def test_lpc_transition_scores_match_finite_differences():
-    # ln p(Y'|Y) = ln N(X'; A X + c, Q) + 4 ln r'  (|det ∂X/∂Y| = r⁴, file 000 L758)
+    # ln p(Y'|Y) = ln N(X'; A X + c, Q) + 4 ln r'  (|det ∂X/∂Y| = r⁴, brehard2005)
     for x in X:
         xn = x @ A.T + C + RNG.multivariate_normal(np.zeros(4), Q)
         y, yn = cart_to_lpc(x), cart_to_lpc(xn)
@@ -82,7 +82,7 @@ def test_measurement_scores_match_finite_differences(ambiguity):
         y = cart_to_lpc(x)
         z_b = float(np.arctan2(x[0], x[1])) + 0.03
         if ambiguity == "pi":
-            z_b = float(np.angle(np.exp(2j * z_b)) / 2)  # measured modulo π (file 000 eq. 4)
+            z_b = float(np.angle(np.exp(2j * z_b)) / 2)  # measured modulo π (brehard2005 eq. 4)
         hy = np.array([1e-6, 1e-6, 1e-9, 1e-9])
         hx = np.array([1e-3, 1e-3, 1e-4, 1e-4])
         for coords, f_in, pt, h in (("lpc", lpc_to_cart, y, hy), ("cartesian", None, x, hx)):

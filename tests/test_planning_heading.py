@@ -1,4 +1,4 @@
-"""Heading OCP (issue 6): transcriptions, objectives, file 003 bang-bang results, errors."""
+"""Heading OCP (issue 6): transcriptions, objectives, lecadre1997 bang-bang results, errors."""
 
 from __future__ import annotations
 
@@ -111,10 +111,10 @@ def test_rotation_and_translation_invariance(default, prior):
         assert vb == pytest.approx(va, rel=1e-6), obj
 
 
-# ------------------------------------------------------------------ file 003 (NOTES_003)
+# ------------------------------------------------------------------ lecadre1997 (docs/errata.md)
 @pytest.mark.parametrize("n", [12, 15])
 def test_two_leg_fixed_switch_is_bang_bang_opposite(n):
-    # File 003 eq. 87 (NOTES_003 §3.6, T18): |θ̇1| = |θ̇2| = θ̇max and θ̇2 = −θ̇1.
+    # lecadre1997 eq. 87 (docs/errata.md, T18): |θ̇1| = |θ̇2| = θ̇max and θ̇2 = −θ̇1.
     res = bearing_rate_plan(n, 1e-2, switch="fixed")
     np.testing.assert_allclose(np.abs(res.rates), 1e-2, rtol=1e-6)
     assert res.rates[0] * res.rates[1] < 0
@@ -122,7 +122,7 @@ def test_two_leg_fixed_switch_is_bang_bang_opposite(n):
 
 @pytest.mark.parametrize("n", [12, 15, 20])
 def test_free_switch_gives_one_switch_near_third(n):
-    # NOTES_003 §3.7: exhaustive search gives ONE switch near N/3 (or 2N/3 by time
+    # docs/errata.md: exhaustive search gives ONE switch near N/3 (or 2N/3 by time
     # reversal); the printed alternating three-leg optimum (eq. 92) is not reproduced. The
     # switching-time NLP starts with three alternating arcs and must drop one.
     res = bearing_rate_plan(n, 1e-2, switch="free", n_arcs=3, n_starts=4)

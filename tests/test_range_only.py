@@ -1,4 +1,4 @@
-"""GvM2 moments (file 004) and the range-only filter."""
+"""GvM2 moments (sharma2024) and the range-only filter."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from tmaplan.estimators import (
     reduce_mixture,
 )
 
-# File 004 §VII.A (L365): ŷ = [−11, 20], V = [[50, −10], [−10, 50]], r = √521 (NOTES_004 §2.5a).
+# sharma2024 §VII.A: ŷ = [−11, 20], V = [[50, −10], [−10, 50]], r = √521 (docs/errata.mda).
 YHAT = np.array([-11.0, 20.0])
 V = np.array([[50.0, -10.0], [-10.0, 50.0]])
 R = np.sqrt(521.0)
@@ -27,7 +27,7 @@ R = np.sqrt(521.0)
 
 def test_gvm2_parameters_match_notes() -> None:
     g = gvm2_from_gaussian(YHAT, V, R)
-    # NOTES_004 §2.5a: κ1 = 9.09543, κ2 = 1.085417, φ1 = 1.945478 (atan2, not tan⁻¹).
+    # docs/errata.mda: κ1 = 9.09543, κ2 = 1.085417, φ1 = 1.945478 (atan2, not tan⁻¹).
     assert g.kappa1 == pytest.approx(9.09543, rel=1e-5)
     assert g.kappa2 == pytest.approx(1.085417, rel=1e-5)
     assert g.mu1 == pytest.approx(1.945478, abs=1e-6)
@@ -46,7 +46,7 @@ def test_grid_moments_match_quadrature() -> None:
 
 
 def test_series_convergence_magnitudes_table_I() -> None:
-    # File 004 Table I (L391–394) magnitudes at N = 0, 2, 5, ≥10 (NOTES_004 §4.1 acceptance:
+    # sharma2024 Table I magnitudes at N = 0, 2, 5, ≥10 (docs/errata.md acceptance:
     # ~1e-1, ~1e-3, ≤ ~2e-7, ≤ 1e-14); the series is the corrected eqs. (29)–(34).
     g = gvm2_from_gaussian(YHAT, V, R)
     ref = moments_grid(g, 1)[1]
@@ -71,7 +71,7 @@ def test_von_mises_limit_and_m0() -> None:
 
 
 def test_grid_engine_concentrated_case_is_stable() -> None:
-    # Range-only regime (NOTES_004 §2.5c): κ ~ 1e5–1e6 where the series is unusable.
+    # Range-only regime (docs/errata.mdc): κ ~ 1e5–1e6 where the series is unusable.
     c_th = np.deg2rad(45.0)
     rot = np.array([[np.cos(c_th), -np.sin(c_th)], [np.sin(c_th), np.cos(c_th)]])
     Vc = rot @ np.diag([10.0**2, 174.0**2]) @ rot.T + 100.0 * np.eye(2)
@@ -120,7 +120,7 @@ def test_moment_update_equals_monte_carlo_posterior() -> None:
 
 
 def test_dirac_exact_collapse_equals_moment_update() -> None:
-    # NOTES_004 §3.4: with component_cov="exact" the collapse reproduces eq. (13) when the
+    # docs/errata.md: with component_cov="exact" the collapse reproduces eq. (13) when the
     # Dirac points match c1 and c2.
     x = np.array([3000.0, 4000.0, 1.0, -1.0])
     P = np.diag([300.0**2, 300.0**2, 1.0, 1.0])
@@ -133,7 +133,7 @@ def test_dirac_exact_collapse_equals_moment_update() -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# Gaussian-mixture range-only filter (azimuth sectors, file 004 moments per sector)
+# Gaussian-mixture range-only filter (azimuth sectors, sharma2024 moments per sector)
 # --------------------------------------------------------------------------------------------
 
 
@@ -190,7 +190,7 @@ def test_mixture_range_likelihood_matches_monte_carlo() -> None:
 def test_mixture_keeps_both_modes_of_a_ring_posterior() -> None:
     # Prior broad across the line of sight, range shorter than the predicted one: the exact
     # posterior (importance sampling) has two separated modes. The mixture must give their
-    # masses; the single Gaussian of file 004 puts much of its mass between them.
+    # masses; the single Gaussian of sharma2024 puts much of its mass between them.
     from scipy.stats import norm, rice
 
     x = np.array([150.0, 300.0, 0.0, 0.0])
@@ -248,7 +248,7 @@ def test_reduce_mixture_preserves_moments_and_keeps_separated_modes() -> None:
 
 def test_mixture_beats_single_gaussian_on_sharma_seeded() -> None:
     # Small seeded version of the slow comparison (20 of its 100 runs): the single-Gaussian
-    # recursion of file 004 loses the second passing side near the closest approach; the
+    # recursion of sharma2024 loses the second passing side near the closest approach; the
     # mixture does not and stays within 1.3× the PF (10⁴ particles) at the last scan.
     from tmaplan.scenario import load_problem
 
@@ -276,7 +276,7 @@ def test_range_only_smoke_on_sharma() -> None:
 def test_range_only_vs_pf_sharma() -> None:
     # Issue 5 target: range-only final RMSE ≤ 1.3× the PF's (10⁴ particles, 100 runs) with a
     # consistent NEES. Met by the Gaussian-mixture filter (default mode); measured (issue-5
-    # report): mixture 1154 m vs PF 1875 m at the last scan, while file 004's single-Gaussian
+    # report): mixture 1154 m vs PF 1875 m at the last scan, while sharma2024's single-Gaussian
     # recursion (mode="moments") ends at ≈ 2600 m with NEES in the thousands.
     from scipy.stats import chi2
 
@@ -293,9 +293,9 @@ def test_range_only_vs_pf_sharma() -> None:
     rm = monte_carlo(sc, PFConfig(n_particles=10_000, dt=sc.time.dt, q=sc.target.q,
                                   variant="resample-move"), runs=100, seed=4, bound=False)
     assert ro.rmse_position[-1] <= 1.3 * rm.rmse_position[-1]
-    # 4-D NEES against the 95 % band of NOTES_004 §4.2 (100 runs): the time average inside
+    # 4-D NEES against the 95 % band of docs/errata.md (100 runs): the time average inside
     # it, every scan within 1.5× its upper end. Step 0 is excluded: the truth's fixed 15 kn
-    # velocity sits at 2σ of the zero-mean prior (σ_v = v_max/2, NOTES_004 §4.2), so the
+    # velocity sits at 2σ of the zero-mean prior (σ_v = v_max/2, docs/errata.md), so the
     # initial NEES is 2 + 4 = 6 by construction, not a filter property.
     lo, hi = chi2.ppf([0.025, 0.975], 400) / 100
     assert lo < np.mean(ro.nees[1:]) < hi

@@ -120,8 +120,8 @@ def test_unknown_problem_lists_choices():
 
 
 def test_ping_period_rule():
-    # File 000 §6 "every 80 s" with δ = 6 s: first grid step at or after each multiple of 80 s
-    # (NOTES_000 §5.3: k = 14, 27, 40, 54, ...; 75 pings over 6000 s).
+    # brehard2005 §6 "every 80 s" with δ = 6 s: first grid step at or after each multiple of 80 s
+    # (docs/errata.md: k = 14, 27, 40, 54, ...; 75 pings over 6000 s).
     s = load_problem("brehard2005-s1")
     from tmaplan.scenario import RangeSensor
 

@@ -23,7 +23,7 @@ def test_simulate_every_problem(name):
 
 
 def test_brehard2005_s2_bearing_passes_abeam():
-    # NOTES_000 §5.3: relative velocity (2, −9) m/s between 1500 and 4500 s, so r_y crosses 0
+    # docs/errata.md: relative velocity (2, −9) m/s between 1500 and 4500 s, so r_y crosses 0
     # near t ≈ 2722 s and the bearing passes ±90°; with the π ambiguity of eq. 4 the measured
     # bearing jumps from ≈ −90° to ≈ +90° there.
     s = load_problem("brehard2005-s2")

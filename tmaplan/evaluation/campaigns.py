@@ -157,7 +157,10 @@ class CampaignResult:
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m] and
         ``final_rel_range_error`` (per run), ``replan_seconds`` (mean per re-plan),
-        ``replan_failures``.
+        ``replan_failures``, ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m]: the
+        truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
+        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound
+        the filter's RMSE can approach.
     differences : tuple of PairedDifference
         All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
         ``final_range_error``.
@@ -198,6 +201,8 @@ class CampaignResult:
                 "pings_used": s["pings_used"],
                 "final_range_rmse": s["final_range_rmse"],
                 "replan_seconds": s["replan_seconds"],
+                "bound_position": s["bound_position"].tolist(),
+                "bound_range": s["bound_range"].tolist(),
             }
         return {
             "policies": pol,
@@ -243,6 +248,8 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
         }
+        summary[name]["bound_position"], summary[name]["bound_range"] = _truth_bound(
+            spec.scenario, [r.policies[name] for r in runs])
     censor = float(times[-1] - times[0] + (times[1] - times[0]))
     diffs = []
     names = list(spec.policies)
@@ -251,6 +258,22 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             diffs.append(paired_difference(tta, a, b, "time_to_accuracy", censor=censor))
             diffs.append(paired_difference(fre, a, b, "final_range_error"))
     return summary, tuple(diffs)
+
+
+def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> tuple[np.ndarray, np.ndarray]:
+    """Truth-conditioned position and range PCRB over the runs' truths, tracks and pings
+    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    formed (e.g. a prior that is not positive definite)."""
+    from tmaplan.errors import ScenarioError
+    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
+
+    try:
+        return closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
+                                        np.stack([r.target for r in runs]),
+                                        [r.ping_steps for r in runs])
+    except (np.linalg.LinAlgError, ScenarioError):
+        nan = np.full(scenario.n_steps + 1, np.nan)
+        return nan, nan
 
 
 def _iter_backend(backend: Backend, workers: int, scheduler: str | None,

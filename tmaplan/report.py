@@ -38,7 +38,7 @@ def efficiency(result: CampaignResult) -> dict[str, dict[str, float]]:
     not a strict lower bound (the Bayesian one is the prior-averaged PCRB, smaller): a filter
     can go below it while the geometry is weakly observable (``tmaplan compare default
     --policies straight,single-turn,planned,planned+uniform --runs 30``: final range ratios
-    1.06, 1.13, 0.98, 1.04; ``planned`` about 0.6 between 8 and 20 min).
+    1.06, 1.13, 0.98, 1.04; ``planned`` 0.56–0.92, mean 0.73, between 8 and 20 min).
 
     Returns
     -------

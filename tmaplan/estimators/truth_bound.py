@@ -22,6 +22,7 @@ Bearings and ranges are included (per-step information
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -235,7 +236,9 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
     """
     K = scenario.n_steps
     active = [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
-    passive = scenario.replace(sensors=tuple(
+    # the scenario without its active range sensors (their steps are the runs' pings); an
+    # internal copy, not re-validated (it may still hold a ping budget)
+    passive = dataclasses.replace(scenario, sensors=tuple(
         s for s in scenario.sensors if not (isinstance(s, RangeSensor) and s.active)))
     base = information_rates(passive)[1]
     w = np.tile(base, (len(ping_steps), 1))

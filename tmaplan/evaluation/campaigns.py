@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
+from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
 from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
@@ -264,7 +264,6 @@ def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> tuple[np.ndarray,
     """Truth-conditioned position and range PCRB over the runs' truths, tracks and pings
     (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.errors import ScenarioError
     from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
 
     try:

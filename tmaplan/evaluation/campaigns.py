@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import PlanningError
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
 from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
@@ -151,16 +151,17 @@ class CampaignResult:
         [s].
     policies : tuple of str
     summary : dict
-        Per policy: ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
+        Per policy: ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m], the
+        truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
+        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound the
+        filter's RMSE can approach;
+        ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
         ``time_to_accuracy`` (median [s], inf if most runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m] and
         ``final_rel_range_error`` (per run), ``replan_seconds`` (mean per re-plan),
-        ``replan_failures``, ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m]: the
-        truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
-        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound
-        the filter's RMSE can approach.
+        ``replan_failures``.
     differences : tuple of PairedDifference
         All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
         ``final_range_error``.
@@ -192,6 +193,8 @@ class CampaignResult:
             pol[name] = {
                 "rmse_position": s["rmse_position"].tolist(),
                 "rmse_range": s["rmse_range"].tolist(),
+                "bound_position": s["bound_position"].tolist(),
+                "bound_range": s["bound_range"].tolist(),
                 "rmse_course": s["rmse_course"].tolist(),
                 "rmse_speed": s["rmse_speed"].tolist(),
                 "time_to_accuracy": s["time_to_accuracy"],
@@ -201,8 +204,6 @@ class CampaignResult:
                 "pings_used": s["pings_used"],
                 "final_range_rmse": s["final_range_rmse"],
                 "replan_seconds": s["replan_seconds"],
-                "bound_position": s["bound_position"].tolist(),
-                "bound_range": s["bound_range"].tolist(),
             }
         return {
             "policies": pol,
@@ -237,6 +238,7 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "rmse_range": rms("range_error"),
             "rmse_course": rms("course_error"),
             "rmse_speed": rms("speed_error"),
+            **_truth_bound(spec.scenario, [r.policies[name] for r in runs]),
             "time_to_accuracy": float(np.median(t)),
             "time_to_accuracy_runs": t,
             "reached_fraction": float(np.mean(np.isfinite(t))),
@@ -248,8 +250,6 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
         }
-        summary[name]["bound_position"], summary[name]["bound_range"] = _truth_bound(
-            spec.scenario, [r.policies[name] for r in runs])
     censor = float(times[-1] - times[0] + (times[1] - times[0]))
     diffs = []
     names = list(spec.policies)
@@ -258,21 +258,6 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             diffs.append(paired_difference(tta, a, b, "time_to_accuracy", censor=censor))
             diffs.append(paired_difference(fre, a, b, "final_range_error"))
     return summary, tuple(diffs)
-
-
-def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> tuple[np.ndarray, np.ndarray]:
-    """Truth-conditioned position and range PCRB over the runs' truths, tracks and pings
-    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
-    formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
-
-    try:
-        return closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
-                                        np.stack([r.target for r in runs]),
-                                        [r.ping_steps for r in runs])
-    except (np.linalg.LinAlgError, ScenarioError):
-        nan = np.full(scenario.n_steps + 1, np.nan)
-        return nan, nan
 
 
 def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
@@ -400,3 +385,20 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                           summary=summary, differences=diffs, examples=examples,
                           directory=directory, computed_runs=tuple(sorted(computed)),
                           loaded_runs=loaded, seconds=time.perf_counter() - t0)
+
+
+def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndarray]:
+    """``bound_position`` and ``bound_range`` of a policy's runs: the truth-conditioned PCRB
+    over their truths, tracks and pings
+    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    formed (e.g. a prior that is not positive definite)."""
+    from tmaplan.errors import ScenarioError
+    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
+
+    try:
+        pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
+                                            np.stack([r.target for r in runs]),
+                                            [r.ping_steps for r in runs])
+    except (np.linalg.LinAlgError, ScenarioError):
+        pos = rng = np.full(scenario.n_steps + 1, np.nan)
+    return {"bound_position": pos, "bound_range": rng}

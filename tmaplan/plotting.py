@@ -12,7 +12,8 @@ from matplotlib.figure import Figure
 if TYPE_CHECKING:
     from tmaplan.simulate import Simulation
 
-__all__ = ["new_figure", "plot_geometry", "plot_plan", "plot_schedule", "save_figure"]
+__all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_geometry", "plot_plan",
+           "plot_schedule", "save_figure"]
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
@@ -90,32 +91,78 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
     return fig
 
 
-def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path) -> Figure:
-    """Planned track over the prior cloud with the best baselines, and the closed-form range
-    bound over time (plan vs baselines).
+#: Units of the planning and scheduling functionals (plot labels), by base name.
+OBJECTIVE_UNITS: dict[str, str] = {
+    "logdet": "−ln det FIM, SI units",
+    "range-bound": "m", "terminal-range-bound": "m", "mean-range-bound": "m",
+    "position-bound": "m", "terminal-position-bound": "m", "mean-position-bound": "m",
+    "relative-range-bound": "σ_r/r, –", "mean-relative-range-bound": "σ_r/r, –",
+    "relative-range-crlb": "σ_r/r, –", "mean-relative-range-crlb": "σ_r/r, –",
+    "time-to-accuracy": "fraction of the horizon not localised, –",
+    "expected-time-to-accuracy": "s",
+    "turn-penalty": "–",
+}
+
+
+def objective_label(name: str) -> str:
+    """``name [unit]`` of a planning / scheduling functional for titles and axes.
+
+    Composite objectives (``a+b``, weights ``w*a``) label each term. A name outside
+    :data:`OBJECTIVE_UNITS` gets its unit from its family (``…range-bound``,
+    ``…position-bound``: m; ``relative…``: –) or none.
+    """
+    parts = []
+    for term in name.split("+"):
+        base = term.split("*")[-1]
+        unit = OBJECTIVE_UNITS.get(base)
+        if unit is None:
+            unit = ("σ_r/r, –" if "relative" in base else
+                    "m" if base.endswith(("range-bound", "position-bound")) else None)
+        parts.append(f"{term} [{unit}]" if unit else term)
+    return " + ".join(parts)
+
+
+def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,
+              objective: str | None = None) -> Figure:
+    """Planned track over the prior cloud with the best baselines, and the functional that was
+    optimised for the plan and every baseline.
+
+    The right panel shows, for the plan and each baseline family, the value of the objective
+    the planner minimised (``plan.objective``, ``Baseline.objective``: the same functional
+    evaluated by :class:`tmaplan.planning.ObjectiveEvaluator`): a bar for the plan and for the
+    best of each family, a dot for every candidate of the family's grid. Its title names the
+    functional with its units (:func:`objective_label`).
 
     Parameters
     ----------
     plan : tmaplan.planning.HeadingPlan
     base : dict
-        :func:`tmaplan.planning.baselines.evaluate_baselines` output.
+        :func:`tmaplan.planning.baselines.evaluate_baselines` output on the planner's
+        objective (name -> list of Baseline, best first).
     belief : tmaplan.planning.Belief
     path : path
         PNG file.
+    objective : str, optional
+        Name of the optimised objective (``HeadingPlanner.objective.name``); default
+        "objective".
     """
-    fig, axes = new_figure(1, 2, size=(12.0, 5.5))
+    label = objective_label(objective or "objective")
+    fig, axes = new_figure(1, 2, size=(13.0, 5.5))
     ax, bx = axes[0, 0], axes[0, 1]
     p0 = plan.observer.position[0]
     if belief.samples is not None:
         cloud = p0 + belief.samples[:2000, :2]
         ax.plot(cloud[:, 0] / 1e3, cloud[:, 1] / 1e3, ".", ms=1, color="0.7",
                 label="prior (target at t0)")
-    t_h = (plan.observer.times - plan.observer.times[0]) / 60.0
+    names = ["plan", *base]
+    best = [float(plan.objective)] + [float(lst[0].objective) for lst in base.values()]
     for i, (name, lst) in enumerate(base.items()):
         b = lst[0]
         ax.plot(b.track.position[:, 0] / 1e3, b.track.position[:, 1] / 1e3, "--",
                 color=f"C{i + 1}", lw=1, label=f"best {name}")
-        bx.plot(t_h, b.range_bound, "--", color=f"C{i + 1}", label=f"best {name}")
+        vals = [float(c.objective) for c in lst]
+        bx.plot(vals, np.full(len(vals), i + 1.0), "o", ms=3, color=f"C{i + 1}", alpha=0.5,
+                label=f"every {name} of the grid" if len(vals) > 1 else None)
     ax.plot(plan.observer.position[:, 0] / 1e3, plan.observer.position[:, 1] / 1e3, "-",
             color="C0", lw=2, label="plan")
     ax.set_xlabel("East [km]")
@@ -123,18 +170,26 @@ def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path) ->
     ax.set_aspect("equal", adjustable="datalim")
     ax.legend(fontsize=8)
     ax.set_title("planned track over the prior")
-    bx.plot(t_h, plan.range_bound, "-", color="C0", lw=2, label="plan")
-    bx.set_yscale("log")
-    bx.set_xlabel("time [min]")
-    bx.set_ylabel("closed-form PCRB range bound [m]")
-    bx.legend(fontsize=8)
-    bx.set_title("range bound over time")
+    y = np.arange(len(names), dtype=float)
+    bars = bx.barh(y, best, height=0.5, color=[f"C{i}" for i in range(len(names))], alpha=0.8)
+    for rect, v in zip(bars, best):
+        bx.annotate(f"{v:.4g}", (rect.get_width(), rect.get_y() + rect.get_height() / 2),
+                    xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
+    bx.set_yticks(y, ["plan", *(f"best {n}" for n in base)])
+    bx.invert_yaxis()
+    bx.set_xlabel(label)
+    bx.set_title(f"optimised functional (smaller is better):\n{label}", fontsize=10)
+    bx.grid(True, axis="x", alpha=0.3)
+    if any(len(lst) > 1 for lst in base.values()):
+        bx.legend(fontsize=7, loc="lower right")
     save_figure(fig, path)
     return fig
 
 
 def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Path) -> Figure:
-    """Bound over time with the scheduled pings, against no pings and uniform pings.
+    """Bound over time with the scheduled pings, against no pings and uniform pings, all on
+    the functional the schedule optimised (``res.objective_name``, named with its units in
+    the title; a mean objective drawn as a horizontal line, a terminal one as a dot).
 
     Parameters
     ----------
@@ -153,20 +208,30 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     fig, axes = new_figure(1, 1, size=(8.0, 5.0))
     ax = axes[0, 0]
     t = (obs.times - obs.times[0]) / 60.0
-    ax.plot(t, curves[0], "--", color="0.5", label=f"no pings ({res.no_ping_objective:.3g} m)")
-    ax.plot(t, curves[1], ":", color="C1", label=f"uniform ({res.uniform_objective:.3g} m)")
-    ax.plot(t, res.bound, "-", color="C0", lw=2,
-            label=f"{res.method} ({res.objective:.3g} m)")
+    name = res.objective_name
+    label = objective_label(name)
+    mean = name.startswith("mean-")
+    rows = (("no pings", curves[0], res.no_ping_objective, "--", "0.5"),
+            ("uniform", curves[1], res.uniform_objective, ":", "C1"),
+            (res.method, res.bound, res.objective, "-", "C0"))
+    for lab, curve, value, ls, color in rows:
+        ax.plot(t, curve, ls, color=color, lw=2 if ls == "-" else 1.2,
+                label=f"{lab}: {name} = {value:.4g} m")
+        if mean:  # the functional itself: the mean of the curve over the horizon
+            ax.axhline(value, color=color, ls=ls, lw=0.8, alpha=0.7)
+        else:  # terminal: the value at the last step
+            ax.plot(t[-1], value, "o", color=color, ms=6)
     for tp in res.times:
         ax.axvline((tp - obs.times[0]) / 60.0, color="C3", lw=0.8, alpha=0.6)
     ax.set_yscale("log")
     ax.set_xlabel("time [min] (red lines: ping times)")
-    ax.set_ylabel("position bound [m]" if "position" in res.objective_name
-                  else "range bound [m]")
+    what = "position" if "position" in name else "range"
+    ax.set_ylabel(f"closed-form PCRB {what} bound per step [m]")
     gap = (f"certified gap {100 * res.gap:.2f} %" if np.isfinite(res.gap)
            else "no certificate")
-    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.objective_name}, "
-                 f"{res.status} ({gap})")
+    ax.set_title(f"{scenario.name}: {res.budget} pings, {res.status} ({gap})\noptimised: "
+                 f"{label} ({'mean over the horizon: thin lines' if mean else 'last step: dots'})",
+                 fontsize=10)
     ax.legend(fontsize=8)
     save_figure(fig, path)
     return fig

@@ -109,6 +109,10 @@ class PCRBResult:
         Where the side assumption holds (κ ≤ tolerance); the β bound is not valid elsewhere.
     warnings : tuple of str
         Warnings raised while computing.
+    over : {"prior", "truth"}
+        What the bound is averaged over: the prior (the Bayesian PCRB of brehard2005, this
+        module and the closed form) or realisations of the scenario's true track
+        (:func:`tmaplan.estimators.truth_bound.truth_conditioned_pcrb`, ristic2004, ch. 6).
     """
 
     times: np.ndarray
@@ -126,11 +130,13 @@ class PCRBResult:
     side_density: np.ndarray | None = None
     side_valid: np.ndarray | None = None
     warnings: tuple[str, ...] = ()
+    over: Literal["prior", "truth"] = "prior"
 
     def to_json(self) -> dict[str, object]:
         """docs/cli.md fields (SI units)."""
         out: dict[str, object] = {
             "times": self.times, "coords": self.coords, "method": self.method,
+            "over": self.over,
             "std": self.std, "range_std": self.range_std, "position_std": self.position_std,
             "seconds": self.seconds, "samples": self.samples,
             "prior_samples": self.prior_samples, "ping_steps": self.ping_steps,

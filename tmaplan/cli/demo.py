@@ -81,7 +81,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     plan = planner.solve(belief)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K)
-    plan_fig = plot_plan(plan, base, belief, out / "plan.png")
+    plan_fig = plot_plan(plan, base, belief, out / "plan.png",
+                         objective=planner.objective.name)
     del plan_fig
     best = {k: v[0] for k, v in base.items()}
     _say(args, f"      objective {plan.objective:.4g} (straight {best['straight'].objective:.4g}"

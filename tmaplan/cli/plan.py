@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(f"  baseline {k:<12} {v:.4g}")
     if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_plan.png"
-        plot_plan(plan, base, belief, path)
+        plot_plan(plan, base, belief, path, objective=planner.objective.name)
         payload["figure"] = str(path)
         if args.json != "-":
             print(f"wrote {path}")

@@ -151,7 +151,11 @@ class CampaignResult:
         [s].
     policies : tuple of str
     summary : dict
-        Per policy: ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
+        Per policy: ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m], the
+        truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
+        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound the
+        filter's RMSE can approach;
+        ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
         ``time_to_accuracy`` (median [s], inf if most runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
@@ -189,6 +193,8 @@ class CampaignResult:
             pol[name] = {
                 "rmse_position": s["rmse_position"].tolist(),
                 "rmse_range": s["rmse_range"].tolist(),
+                "bound_position": s["bound_position"].tolist(),
+                "bound_range": s["bound_range"].tolist(),
                 "rmse_course": s["rmse_course"].tolist(),
                 "rmse_speed": s["rmse_speed"].tolist(),
                 "time_to_accuracy": s["time_to_accuracy"],
@@ -232,6 +238,7 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "rmse_range": rms("range_error"),
             "rmse_course": rms("course_error"),
             "rmse_speed": rms("speed_error"),
+            **_truth_bound(spec.scenario, [r.policies[name] for r in runs]),
             "time_to_accuracy": float(np.median(t)),
             "time_to_accuracy_runs": t,
             "reached_fraction": float(np.mean(np.isfinite(t))),
@@ -378,3 +385,20 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                           summary=summary, differences=diffs, examples=examples,
                           directory=directory, computed_runs=tuple(sorted(computed)),
                           loaded_runs=loaded, seconds=time.perf_counter() - t0)
+
+
+def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndarray]:
+    """``bound_position`` and ``bound_range`` of a policy's runs: the truth-conditioned PCRB
+    over their truths, tracks and pings
+    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    formed (e.g. a prior that is not positive definite)."""
+    from tmaplan.errors import ScenarioError
+    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
+
+    try:
+        pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
+                                            np.stack([r.target for r in runs]),
+                                            [r.ping_steps for r in runs])
+    except (np.linalg.LinAlgError, ScenarioError):
+        pos = rng = np.full(scenario.n_steps + 1, np.nan)
+    return {"bound_position": pos, "bound_range": rng}

@@ -43,6 +43,7 @@ BARE_LIMITS: dict[str, tuple[float, str, str]] = {
     "bearing_noise": (0.2, "rad", "a bearing noise"),
     "angle_std": (1.0, "rad", "an angular prior std"),
     "turn_rate": (0.1, "rad/s", "a turn rate"),
+    "bearing_bias": (0.2, "rad", "a bearing bias"),
 }
 
 # dotted path in the file ("*" = every list item) -> role
@@ -55,6 +56,9 @@ _BARE_FIELDS: tuple[tuple[str, str], ...] = (
     ("observer.turn_rates.*", "turn_rate"), ("sensors.*.sigma", "bearing_noise"),
     ("prior.bearing_mean", "direction"), ("prior.course_mean", "direction"),
     ("prior.bearing_std", "angle_std"), ("prior.course_std", "angle_std"),
+    ("faults.bearing_bias", "bearing_bias"), ("faults.wild_bearing_spread", "direction"),
+    ("faults.target_manoeuvres.*.course", "direction"),
+    ("faults.target_manoeuvres.*.course_change", "direction"),
 )
 
 _BARE_RE = re.compile(r"^\s*[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\s*$")
@@ -237,6 +241,10 @@ def check(s: Any, source: str | None) -> None:
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)
+    if s.faults is not None:
+        from tmaplan._scenario_faults import check_faults
+
+        check_faults(s.faults, g, source)
 
 
 # --------------------------------------------------------------------------------------------

@@ -13,18 +13,19 @@ and the received value.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, ConfigDict, Field
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-from tmaplan.units import to_si
+from tmaplan.models.faults import Faults
+from tmaplan.units import quantity
 
 __all__ = [
     "BearingSensor",
     "Estimation",
+    "Faults",
     "FrequencySensor",
     "Observer",
     "ObserverLeg",
@@ -55,18 +56,7 @@ def _frozen(cls: type) -> type:
     return _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls)
 
 
-def _unit(dimension: str) -> Callable[[Any, Any], Any]:
-    def convert(value: Any, info: Any) -> Any:
-        if isinstance(value, str | int | float) and not isinstance(value, bool):
-            return to_si(value, dimension, info.field_name or "value")
-        return value
-
-    return convert
-
-
-def _q(dimension: str, **constraints: Any) -> Any:
-    return Annotated[float, BeforeValidator(_unit(dimension)), Field(allow_inf_nan=False,
-                                                                     **constraints)]
+_q = quantity
 
 
 Length = _q("length")
@@ -524,6 +514,9 @@ class Scenario:
     prior : Prior, optional
     planning : Planning, optional
     estimation : Estimation, optional
+    faults : Faults, optional
+        Sensor and target faults applied by :mod:`tmaplan.simulate` to the truth and the
+        measurements only (:mod:`tmaplan.models.faults`).
     """
 
     name: str
@@ -535,6 +528,7 @@ class Scenario:
     prior: Prior | None = None
     planning: Planning | None = None
     estimation: Estimation | None = None
+    faults: Faults | None = None
 
     # -- convenience -------------------------------------------------------------------------
     @property

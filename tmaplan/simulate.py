@@ -15,6 +15,7 @@ from typing import Any, Literal
 import numpy as np
 
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
+from tmaplan.models.faults import apply_manoeuvres, corrupt_bearings, dropped
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.sensors import doppler_frequency
 from tmaplan.models.target import ncv_matrices, target_track
@@ -224,7 +225,31 @@ def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
         out.append(MeasurementSet(sensor=i, kind=sensor.kind, steps=steps, times=times[steps],
                                   values=values, truth=truth, relative=rel,
                                   sigma=np.asarray(sensor.sigma)))
+    if scenario.faults is not None:
+        out = [_with_faults(scenario, ms, obs, rng) for ms in out]
     return tuple(out)
+
+
+def _with_faults(scenario: Scenario, ms: MeasurementSet, obs: ObserverTrack,
+                 rng: np.random.Generator | None) -> MeasurementSet:
+    """``ms`` with the scenario's sensor faults (bias, wild bearings, dropouts, missed pings;
+    :mod:`tmaplan.models.faults`). Uniform draws come after all the noise, sensor by sensor
+    (none with ``rng`` None: no wild bearing, no missed ping)."""
+    faults, sensor = scenario.faults, scenario.sensors[ms.sensor]
+    n = ms.steps.size
+    values, rel = ms.values, ms.relative
+    keep = ~dropped(faults, ms.times, "bearing" if ms.kind == "bearing" else "range")
+    if isinstance(sensor, BearingSensor):
+        u = rng.random((n, 2)) if rng is not None else np.ones((n, 2))
+        values = corrupt_bearings(faults, values, ms.truth, u, ambiguity=sensor.ambiguity)
+        rel = wrap_angle(corrupt_bearings(faults, wrap_angle(ms.relative + obs.heading[ms.steps]),
+                                          ms.truth, u) - obs.heading[ms.steps])
+    elif isinstance(sensor, RangeSensor) and sensor.active and faults is not None:
+        u = rng.random(n) if rng is not None else np.ones(n)
+        keep &= u >= faults.missed_ping_probability
+    return dataclasses.replace(ms, steps=ms.steps[keep], times=ms.times[keep],
+                               values=values[keep], truth=ms.truth[keep],
+                               relative=None if rel is None else rel[keep])
 
 
 def simulate(scenario: Scenario, rng: np.random.Generator | None, *,
@@ -243,14 +268,17 @@ def simulate(scenario: Scenario, rng: np.random.Generator | None, *,
     observer : ObserverTrack, optional
         Override the scenario's scripted observer (closed loop).
     target : ndarray, shape (K + 1, 4), optional
-        Override the true target track (e.g. a truth drawn from the prior).
+        Override the true target track (e.g. a truth drawn from the prior), taken as is;
+        otherwise the scenario's track with its faults' ``target_manoeuvres``. The sensor
+        faults of ``scenario.faults`` are applied to the measurements either way.
 
     Returns
     -------
     Simulation
     """
     obs = observer if observer is not None else observer_track(scenario.observer, scenario.time)
-    tgt = target if target is not None else target_track(scenario.target, scenario.time, rng)
+    tgt = target if target is not None else apply_manoeuvres(
+        scenario.faults, target_track(scenario.target, scenario.time, rng), scenario.times)
     meas = measure(scenario, tgt, obs, rng)
     return Simulation(scenario=scenario, times=scenario.times, target=tgt, observer=obs,
                       relative=tgt - obs.state, measurements=meas)
@@ -262,7 +290,8 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
 
     With ``from_prior`` the initial state is drawn from the scenario's prior (one draw), then
     propagated with the NCV model of intensity ``scenario.target.q``; otherwise the scenario's
-    own initial state is used.
+    own initial state is used. The faults' ``target_manoeuvres`` (unknown to the filter) are
+    applied to the track.
     """
     from tmaplan.models.prior import sample_prior, true_initial_state
 
@@ -276,7 +305,7 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
     x[0] = x0
     for k in range(K):  # recursion over time
         x[k + 1] = F @ x[k] + w[k]
-    return x
+    return apply_manoeuvres(scenario.faults, x, scenario.times)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -289,11 +318,15 @@ class CommonNoise:
     ----------
     bearing, range : ndarray, shape (K + 1, max(1, number of bearing / passive range sensors))
     ping : ndarray, shape (K + 1,)
+    fault : ndarray, shape (K + 1, max(1, number of bearing sensors) + 1, 2), optional
+        Uniforms of the scenario's faults (wild bearings per bearing sensor, then the missed
+        ping in ``[:, -1, 0]``), drawn after the rest; None without faults.
     """
 
     bearing: np.ndarray
     range: np.ndarray
     ping: np.ndarray
+    fault: np.ndarray | None = None
 
 
 def _closed_loop_sensors(scenario: Scenario) -> tuple[list[Any], list[Any], list[Any]]:
@@ -308,9 +341,12 @@ def draw_common_noise(scenario: Scenario, rng: np.random.Generator) -> CommonNoi
     """Draw the :class:`CommonNoise` of one closed-loop run (bearings, ranges, pings, in order)."""
     bs, rs, _ = _closed_loop_sensors(scenario)
     K = scenario.n_steps
-    return CommonNoise(bearing=rng.standard_normal((K + 1, max(len(bs), 1))),
-                       range=rng.standard_normal((K + 1, max(len(rs), 1))),
-                       ping=rng.standard_normal(K + 1))
+    bearing = rng.standard_normal((K + 1, max(len(bs), 1)))
+    rng_ = rng.standard_normal((K + 1, max(len(rs), 1)))
+    ping = rng.standard_normal(K + 1)
+    fault = (rng.random((K + 1, max(len(bs), 1) + 1, 2)) if scenario.faults is not None
+             else None)
+    return CommonNoise(bearing=bearing, range=rng_, ping=ping, fault=fault)
 
 
 def _measurement(sensor: Any, value: Any, offset: np.ndarray | None = None,
@@ -331,7 +367,8 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
                  ping: bool = False) -> list[Measurement]:
     """Measurements of step ``k`` in a closed loop: bearings, passive ranges and, if ``ping``,
     an active ping (first active range sensor; ``Measurement.ping`` set). Frequency sensors
-    are not simulated in the closed loop.
+    are not simulated in the closed loop. The scenario's sensor faults apply (a missed or
+    faded ping's echo is simply absent).
 
     Parameters
     ----------
@@ -345,11 +382,22 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
     """
     bs, rs, ps = _closed_loop_sensors(scenario)
     X = np.asarray(X, float)[None]
-    due = [(s, noise.bearing[k, j:j + 1]) for j, s in enumerate(bs)] + [
-        (s, noise.range[k, j:j + 1]) for j, s in enumerate(rs)]
-    out = [_measurement(s, reading(s, X, z)[1][0]) for s, z in due
-           if k in measurement_steps(s, scenario.time)]
-    if ping and ps:
+    faults, t = scenario.faults, float(scenario.times[k])
+    out = []
+    for j, s in enumerate(bs):
+        if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "bearing"):
+            truth, value = reading(s, X, noise.bearing[k, j:j + 1])
+            if faults is not None and noise.fault is not None:
+                value = corrupt_bearings(faults, value, truth, noise.fault[k, j],
+                                         ambiguity=s.ambiguity)
+            out.append(_measurement(s, value[0]))
+    out += [_measurement(s, reading(s, X, noise.range[k, j:j + 1])[1][0])
+            for j, s in enumerate(rs)
+            if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "range")]
+    echo = not dropped(faults, t, "range") and not (
+        faults is not None and noise.fault is not None
+        and noise.fault[k, -1, 0] < faults.missed_ping_probability)
+    if ping and ps and echo:
         out.append(_measurement(ps[0], reading(ps[0], X, noise.ping[k:k + 1])[1][0], ping=True))
     return out
 

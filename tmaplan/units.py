@@ -34,6 +34,7 @@ __all__ = [
     "KNOT",
     "NMI",
     "format_quantity",
+    "quantity",
     "to_si",
     "to_si_vector",
     "ureg",
@@ -270,3 +271,34 @@ def format_quantity(value_si: float, unit: str, digits: int = 4) -> str:
     if unit == "°":
         return f"{number}°"
     return f"{number} {unit}"
+
+
+def quantity(dimension: str, **constraints: Any) -> Any:
+    """A pydantic-validated float field in ``dimension`` (a plain SI number or a string with a
+    unit, converted by :func:`to_si`), finite, with pydantic ``Field`` constraints
+    (``gt``, ``ge``, ``le``, ...).
+
+    Parameters
+    ----------
+    dimension
+        One of :data:`DIMENSIONS`.
+    **constraints
+        Passed to :func:`pydantic.Field`.
+
+    Returns
+    -------
+    typing.Annotated
+        ``Annotated[float, BeforeValidator(...), Field(...)]`` for dataclass annotations.
+    """
+    from typing import Annotated
+
+    from pydantic import BeforeValidator, Field
+
+    _check_dimension(dimension)
+
+    def convert(value: Any, info: Any) -> Any:
+        if isinstance(value, str | int | float):  # bool too: to_si refuses it by name
+            return to_si(value, dimension, info.field_name or "value")
+        return value
+
+    return Annotated[float, BeforeValidator(convert), Field(allow_inf_nan=False, **constraints)]

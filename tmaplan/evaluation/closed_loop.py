@@ -108,6 +108,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     pf = ParticleFilter(PFConfig(n_particles=n_particles, dt=dt, q=max(q, 1e-8)))
     ctrl = policy.controller(scenario)
     pings: list[int] = []
+    active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
     rates = np.zeros(K)
 
     def step(k: int, state: PFState) -> tuple[np.ndarray, list[Measurement]]:
@@ -128,7 +129,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         positions[k + 1], headings[k + 1] = pos, heading
         meas = measure_step(scenario, k + 1, target[k + 1] - np.concatenate([pos, vel_inst[k + 1]]),
                             noise, ping=bool(act.ping))
-        pings.extend([k + 1] if any(m.ping for m in meas) else [])
+        # a ping counts when transmitted, echo or not (a missed echo, tmaplan.models.faults)
+        pings.extend([k + 1] if act.ping and active else [])
         return vbar[k + 1] - vbar[k], meas
 
     fr = drive(pf, pf.init(scenario, filter_rng), K, step, filter_rng)

@@ -8,7 +8,7 @@ particles.
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.special import logsumexp
@@ -156,6 +156,24 @@ def _bearing_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
     np.square(d, out=d)
     np.negative(d, out=d)
     return d
+
+
+def _clutter(ll: np.ndarray, sigma: float, eps: float) -> np.ndarray:
+    """Clutter-mixture bearing log-likelihood from the Gaussian one ``ll = −d²/(2σ²)``:
+    ``log((1 − ε) N(d; 0, σ²) + ε/(2π))`` up to the constant ``log((1 − ε)/(√(2π) σ))``."""
+    floor = np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * _TWO_PI))
+    return np.logaddexp(ll, floor)
+
+
+def _gated(state: Any, m: Measurement, gate: float | None) -> bool:
+    """Whether ping ``m`` falls outside ``gate`` σ of the cloud's predicted range."""
+    if gate is None:
+        return False
+    w = state.weights
+    r = np.hypot(state.particles[:, 0], state.particles[:, 1])
+    mean = float(w @ r)
+    var = float(w @ (r - mean) ** 2)
+    return abs(float(m.value) - mean) > gate * np.sqrt(float(m.sigma) ** 2 + var)
 
 
 def _range_ll(X: np.ndarray, m: Measurement) -> np.ndarray:

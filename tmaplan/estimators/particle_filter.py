@@ -55,9 +55,11 @@ from scipy.special import logsumexp
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators._pf_kernels import (
     _bearing_ll,
+    _clutter,
     _dynamics,
     _ess,
     _frequency_update,
+    _gated,
     _normals_f32,
     _range_ll,
     _rows,
@@ -132,6 +134,12 @@ class PFConfig:
         exact normals up to float32 rounding (relative 6e-8) with the tail truncated at
         |z| ≤ 5.77 (probability 8e-9 per draw); the particle states and weights stay float64.
         ``benchmarks/particle_filter.py`` shows the RMSE unchanged within Monte Carlo error.
+    bearing_clutter : float
+        Robust bearing model: probability ε in [0, 1) that a bearing is clutter, uniform on the
+        circle; the likelihood is ``(1 − ε) N(z; β, σ²) + ε/(2π)`` (0: plain Gaussian).
+    ping_gate : float, optional
+        Ping gating [σ]: a ping whose innovation ``|z − r̂|/sqrt(σ² + var r)`` over the cloud
+        exceeds this is ignored (None: every ping is assimilated).
     """
 
     n_particles: int = 10_000
@@ -145,8 +153,14 @@ class PFConfig:
     noise: Literal["float32", "float64"] = "float32"
     move_steps: int = 2
     move_scale: float = 0.5
+    bearing_clutter: float = 0.0
+    ping_gate: float | None = None
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.bearing_clutter < 1.0:
+            raise ScenarioError("bearing_clutter", "a probability in [0, 1)", self.bearing_clutter)
+        if self.ping_gate is not None and not self.ping_gate > 0:
+            raise ScenarioError("ping_gate", "> 0 (in σ) or None", self.ping_gate)
         if not isinstance(self.n_particles, int | np.integer) or self.n_particles < 2:
             raise ScenarioError("n_particles", "an integer >= 2", self.n_particles)
         if not self.dt > 0:
@@ -314,7 +328,7 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
     """
     state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
     for m in measurements:
-        if m.ping:
+        if m.ping and not _gated(state, m, config.ping_gate):
             r = np.hypot(state.particles[:, 0], state.particles[:, 1])
             # spread of the cloud about the measurement (a confident but wrong cloud is wide)
             spread = float(np.sqrt(max(state.weights @ (r - float(m.value)) ** 2, 0.0)))
@@ -344,6 +358,8 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
     for m in measurements:
         if m.kind == "bearing":
             c = _bearing_ll(X, m)
+            if config.bearing_clutter > 0.0:
+                c = _clutter(c, float(m.sigma), config.bearing_clutter)
         elif m.kind == "range":
             c = _range_ll(X, m)
         elif m.kind == "frequency":

@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
-from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig, PFState
+from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, arc_displacement
 from tmaplan.models.target import initial_velocity
@@ -54,6 +55,10 @@ class ClosedLoopRun:
         Re-planning log (time, status, seconds) of a receding controller.
     seconds : float
         Wall time of the run.
+    recoveries : int
+        Track recoveries by the consistency monitor (:mod:`tmaplan.estimators.consistency`).
+    alarms : tuple of dict
+        The monitor's log (step, test, statistic, threshold, recovered).
     """
 
     times: np.ndarray
@@ -66,11 +71,14 @@ class ClosedLoopRun:
     turn_rate: np.ndarray
     replans: tuple[dict[str, Any], ...]
     seconds: float
+    recoveries: int = 0
+    alarms: tuple[dict[str, Any], ...] = ()
 
 
 def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                     noise_rng: np.random.Generator, filter_rng: np.random.Generator,
-                    n_particles: int = 5000, filter_q: float | None = None) -> ClosedLoopRun:
+                    n_particles: int = 5000, filter_q: float | None = None,
+                    options: FilterOptions | None = None) -> ClosedLoopRun:
     """Simulate one run of ``policy`` against the true target track ``target``.
 
     Parameters
@@ -86,6 +94,9 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     n_particles : int
     filter_q : float, optional
         Filter process-noise intensity [m²/s³] (default: the scenario's, floored at 1e-8).
+    options : FilterOptions, optional
+        Robust likelihoods and consistency monitoring (default:
+        :meth:`FilterOptions.monitored`, the monitor on).
 
     Returns
     -------
@@ -105,13 +116,14 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     positions[0], vel_inst[0], vbar[0], headings[0] = pos, v0, v0, heading
 
     q = scenario.target.q if filter_q is None else filter_q
-    pf = ParticleFilter(PFConfig(n_particles=n_particles, dt=dt, q=max(q, 1e-8)))
+    opts = FilterOptions.monitored() if options is None else options
+    pf = opts.build(PFConfig(n_particles=n_particles, dt=dt, q=max(q, 1e-8)))
     ctrl = policy.controller(scenario)
     pings: list[int] = []
     active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
     rates = np.zeros(K)
 
-    def step(k: int, state: PFState) -> tuple[np.ndarray, list[Measurement]]:
+    def step(k: int, state: Any) -> tuple[np.ndarray, list[Measurement]]:
         nonlocal heading, pos
         belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
                             particles=state.particles, weights=state.weights,
@@ -140,4 +152,6 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                          estimate=fr.estimates, covariance=fr.covariances,
                          ping_steps=np.asarray(pings, dtype=int), turn_rate=rates,
                          replans=tuple(getattr(ctrl, "log", [])),
-                         seconds=time.perf_counter() - t_start)
+                         seconds=time.perf_counter() - t_start,
+                         recoveries=int(getattr(fr.state, "recoveries", 0)),
+                         alarms=tuple(getattr(fr.state, "log", ())))

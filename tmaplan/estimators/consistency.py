@@ -1,0 +1,426 @@
+"""Consistency monitoring and track recovery around any recursive filter.
+
+:class:`MonitoredFilter` wraps a :class:`tmaplan.estimators.filter.Filter` and, before each
+update, forms the innovation of every bearing and range measurement against the predicted
+state: ``ν = z − ẑ`` with variance ``S = σ² + var(ẑ)`` (over the particles for a particle
+filter, by linearisation ``H P Hᵀ`` otherwise), and the normalised innovation squared
+``ε = ν²/S``, which is χ²₁ when the filter is consistent (Bar-Shalom, Li & Kirubarajan 2001,
+§5.4; ristic2004 ch. 6 uses the same Gaussian innovation picture). Three tests, each at the
+false-alarm probability ``alpha`` per test:
+
+* **bearings, sliding window**: the sum of the last ``window`` bearing NIS is χ²_window;
+  alarm when it exceeds the (1 − α) quantile;
+* **ranges, one at a time**: a ping is rare and decisive; alarm when its NIS exceeds the χ²₁
+  quantile (a confident cloud that lost the contact is told so by the next ping);
+* **manoeuvres, CUSUM**: the signed normalised bearing innovations ``ν/√S`` drift one way after
+  an unmodelled course change, long before the window sum grows; a two-sided CUSUM
+  ``g⁺ ← max(0, g⁺ + ν/√S − κ)``, ``g⁻ ← max(0, g⁻ − ν/√S − κ)`` alarms at ``g > h``
+  (Page 1954), with ``h`` set from α by Siegmund's approximation of the in-control run length
+  ``ARL₀ ≈ (e^{2κh'} − 2κh' − 1)/(2κ²)``, ``h' = h + 1.166`` so that ``1/ARL₀ ≈ α``.
+
+On an alarm the filter **recovers** (when the inner filter is a particle filter): it goes back
+``lookback`` steps to the posterior it stored there, rejuvenates that cloud — a fraction of the
+particles gets new target velocities from the scenario prior (the contact may have
+manoeuvred), another fraction new ranges along its own bearing from the prior's range
+support (the contact may be elsewhere on the line of sight, as in the bearings-only
+initialisation of :mod:`tmaplan.estimators.init_bearings`, brehard2004 eq. 30) — and filters the
+stored observer increments and measurements again up to now (the recent bearings and the last
+ping in that span decide), with the process noise widened by ``q_boost`` for the re-filtered
+span and ``holdoff`` steps after it. Each recovery is logged (:attr:`MonitoredState.log`) and
+counted (:attr:`MonitoredState.recoveries`); the closed loop reports it per run.
+
+:class:`FilterOptions` bundles the robust measurement models of the particle filter
+(:class:`tmaplan.estimators.particle_filter.PFConfig` ``bearing_clutter`` and ``ping_gate``)
+with the monitor; :meth:`FilterOptions.plain`, :meth:`FilterOptions.monitored` and
+:meth:`FilterOptions.robust` are the presets the fault matrix compares
+(``benchmarks/faults.py``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from scipy import optimize, stats
+
+from tmaplan.errors import ScenarioError
+from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+from tmaplan.geometry import wrap_angle
+
+if TYPE_CHECKING:
+    from tmaplan.scenario import Scenario
+    from tmaplan.simulate import Measurement
+
+__all__ = [
+    "FilterOptions",
+    "MonitorConfig",
+    "MonitoredFilter",
+    "MonitoredState",
+    "cusum_threshold",
+    "innovation",
+]
+
+
+def cusum_threshold(alpha: float, kappa: float) -> float:
+    """CUSUM threshold h whose one-sided in-control average run length is ``1/alpha`` steps
+    (Siegmund's approximation, see the module docstring), for unit-variance increments and
+    reference value ``kappa``."""
+    def arl(h: float) -> float:
+        b = 2.0 * kappa * (h + 1.166)
+        return (math.exp(b) - b - 1.0) / (2.0 * kappa**2)
+
+    return float(optimize.brentq(lambda h: math.log(arl(h)) + math.log(alpha), 0.0, 100.0))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MonitorConfig:
+    """Settings of the consistency monitor.
+
+    Attributes
+    ----------
+    window : int
+        Bearings in the sliding NIS window.
+    alpha : float
+        False-alarm probability per test, in (0, 0.5).
+    kappa : float
+        CUSUM reference value [innovation σ] (the drift detected fastest is 2κ).
+    cusum : bool
+        Run the manoeuvre CUSUM.
+    lookback : int
+        Steps re-filtered on recovery.
+    velocity_fraction, range_fraction : float
+        Fractions of the rejuvenated cloud with new velocities / new ranges.
+    q_boost : float
+        Process-noise multiplier while re-filtering and for ``holdoff`` steps after.
+    holdoff : int
+        Steps after a recovery without tests (the statistics restart).
+    recover : bool
+        Recover on alarms (False: only count them).
+    """
+
+    window: int = 8
+    alpha: float = 1e-3
+    kappa: float = 0.5
+    cusum: bool = True
+    lookback: int = 16
+    velocity_fraction: float = 0.5
+    range_fraction: float = 0.25
+    q_boost: float = 100.0
+    holdoff: int = 8
+    recover: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("window", "lookback", "holdoff"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or v < (0 if name == "holdoff" else 1):
+                raise ScenarioError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
+        if not 0.0 < self.alpha < 0.5:
+            raise ScenarioError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
+        if not self.kappa > 0:
+            raise ScenarioError("monitor.kappa", "> 0", self.kappa)
+        if not (0 <= self.velocity_fraction and 0 <= self.range_fraction
+                and self.velocity_fraction + self.range_fraction <= 1):
+            raise ScenarioError("monitor.velocity_fraction",
+                                "fractions >= 0 with velocity + range fractions <= 1",
+                                (self.velocity_fraction, self.range_fraction))
+        if not self.q_boost >= 1:
+            raise ScenarioError("monitor.q_boost", ">= 1", self.q_boost)
+
+    @property
+    def bearing_threshold(self) -> float:
+        """χ²_window (1 − α) quantile."""
+        return float(stats.chi2.isf(self.alpha, self.window))
+
+    @property
+    def range_threshold(self) -> float:
+        """χ²₁ (1 − α) quantile."""
+        return float(stats.chi2.isf(self.alpha, 1))
+
+    @property
+    def cusum_threshold(self) -> float:
+        """CUSUM threshold h for a one-sided run length 2/α (two sides: 1/α)."""
+        return cusum_threshold(self.alpha / 2.0, self.kappa)
+
+
+def innovation(state: Any, m: Measurement) -> tuple[float, float]:
+    """Innovation ``ν = z − ẑ`` and its variance ``S = σ² + var(ẑ)`` of a bearing or range.
+
+    Parameters
+    ----------
+    state : FilterState
+        Predicted state; a particle state (``particles``, ``weights``) gives the moments over
+        the cloud, any other its mean and covariance by linearisation.
+    m : Measurement
+        Bearing [rad] (innovation wrapped) or range [m].
+
+    Returns
+    -------
+    nu, S : float
+        [rad] / [rad²] or [m] / [m²].
+    """
+    sigma2 = float(m.sigma) ** 2
+    if hasattr(state, "particles"):
+        X, w = state.particles, state.weights
+        if m.kind == "bearing":
+            d = wrap_angle(float(m.value) - np.arctan2(X[:, 0], X[:, 1]))
+        else:
+            d = float(m.value) - np.hypot(X[:, 0], X[:, 1])
+        nu = float(w @ d)
+        return nu, sigma2 + float(w @ (d - nu) ** 2)
+    x, P = np.asarray(state.mean, float), np.asarray(state.cov, float)
+    r2 = float(x[0] ** 2 + x[1] ** 2)
+    if m.kind == "bearing":
+        H = np.array([x[1], -x[0], 0.0, 0.0]) / r2
+        nu = float(wrap_angle(float(m.value) - math.atan2(x[0], x[1])))
+    else:
+        H = np.array([x[0], x[1], 0.0, 0.0]) / math.sqrt(r2)
+        nu = float(m.value) - math.sqrt(r2)
+    return nu, sigma2 + float(H @ P @ H)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MonitoredState:
+    """A wrapped filter state with the monitor's statistics.
+
+    Attributes
+    ----------
+    inner : FilterState
+        The wrapped filter's state.
+    nis : tuple of float
+        Bearing NIS of the current window (newest last).
+    cusum : tuple of float
+        (g⁺, g⁻).
+    history : tuple
+        Up to ``lookback`` entries ``(posterior at i, Δv_i, v̄_i, measurements at i + 1)``.
+    pending : tuple or None
+        ``(posterior, Δv, v̄)`` between :meth:`MonitoredFilter.predict` and ``update``.
+    velocity : ndarray, shape (2,)
+        Observer mean velocity v̄ at ``step`` [m/s].
+    recoveries : int
+        Recoveries so far.
+    log : tuple of dict
+        One entry per alarm: step, test, statistic, threshold, recovered.
+    quiet : int
+        Steps left without tests after a recovery.
+    """
+
+    inner: Any
+    nis: tuple[float, ...] = ()
+    cusum: tuple[float, float] = (0.0, 0.0)
+    history: tuple[Any, ...] = ()
+    pending: Any = None
+    velocity: np.ndarray
+    recoveries: int = 0
+    log: tuple[dict[str, Any], ...] = ()
+    quiet: int = 0
+
+    @property
+    def step(self) -> int:
+        """Grid step of the inner state."""
+        return int(self.inner.step)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """Posterior mean, shape (4,)."""
+        return np.asarray(self.inner.mean)
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Posterior covariance, shape (4, 4)."""
+        return np.asarray(self.inner.cov)
+
+    @property
+    def particles(self) -> np.ndarray:
+        """The inner particle cloud (particle filters only), shape (N, 4)."""
+        return np.asarray(self.inner.particles)
+
+    @property
+    def weights(self) -> np.ndarray:
+        """The inner weights (particle filters only), shape (N,)."""
+        return np.asarray(self.inner.weights)
+
+
+class MonitoredFilter:
+    """A filter with consistency monitoring and recovery (module docstring); implements
+    :class:`tmaplan.estimators.filter.Filter`.
+
+    Parameters
+    ----------
+    inner : Filter
+        The wrapped filter (recovery needs a :class:`ParticleFilter`).
+    config : MonitorConfig
+    """
+
+    name: ClassVar[str] = "monitored"
+    applies_to: ClassVar[frozenset[str]] = frozenset({"bearing", "range", "frequency"})
+
+    def __init__(self, inner: Any, config: MonitorConfig | None = None) -> None:
+        self.inner = inner
+        self.config = config or MonitorConfig()
+        self._thresholds = (self.config.bearing_threshold, self.config.range_threshold,
+                            self.config.cusum_threshold)
+        self._boosted = inner
+        if isinstance(inner, ParticleFilter):
+            self._boosted = ParticleFilter(dataclasses.replace(
+                inner.config, q=inner.config.q * self.config.q_boost))
+        self._scenario: Scenario | None = None
+
+    def init(self, scenario: Scenario, rng: np.random.Generator) -> MonitoredState:
+        """The inner filter's initial state, the observer's initial velocity."""
+        from tmaplan.models.target import initial_velocity
+
+        self._scenario = scenario
+        return MonitoredState(inner=self.inner.init(scenario, rng),
+                              velocity=np.asarray(initial_velocity(scenario.observer), float))
+
+    def wrap(self, inner_state: Any, observer_velocity: np.ndarray) -> MonitoredState:
+        """Monitor from a given inner state and observer mean velocity [m/s]."""
+        return MonitoredState(inner=inner_state, velocity=np.asarray(observer_velocity, float))
+
+    def diagnostic(self, state: MonitoredState) -> float:
+        """The inner filter's diagnostic."""
+        return float(self.inner.diagnostic(state.inner))
+
+    def predict(self, state: MonitoredState, dv: np.ndarray | None,
+                rng: np.random.Generator) -> MonitoredState:
+        """Inner prediction (boosted process noise during a hold-off)."""
+        d = np.zeros(2) if dv is None else np.asarray(dv, float).reshape(2)
+        filt = self._boosted if state.quiet > 0 else self.inner
+        return dataclasses.replace(state, inner=filt.predict(state.inner, d, rng),
+                                   pending=(state.inner, d, state.velocity),
+                                   velocity=state.velocity + d)
+
+    def update(self, state: MonitoredState, measurements: Sequence[Measurement],
+               rng: np.random.Generator) -> MonitoredState:
+        """Test the innovations, update the inner filter, recover on an alarm."""
+        cfg = self.config
+        t_b, t_r, t_c = self._thresholds
+        nis, (gp, gm) = list(state.nis), state.cusum
+        alarm: dict[str, Any] | None = None
+        for m in measurements:
+            if m.kind not in ("bearing", "range") or getattr(m, "ambiguity", "none") == "pi":
+                continue
+            nu, S = innovation(state.inner, m)
+            e = nu * nu / S
+            if m.kind == "range":
+                if e > t_r and alarm is None:
+                    alarm = {"test": "range", "statistic": e, "threshold": t_r}
+                continue
+            nis = ([*nis, e])[-cfg.window:]
+            u = nu / math.sqrt(S)
+            gp, gm = max(0.0, gp + u - cfg.kappa), max(0.0, gm - u - cfg.kappa)
+            if alarm is None and len(nis) == cfg.window and sum(nis) > t_b:
+                alarm = {"test": "bearing-window", "statistic": sum(nis), "threshold": t_b}
+            if alarm is None and cfg.cusum and max(gp, gm) > t_c:
+                alarm = {"test": "cusum", "statistic": max(gp, gm), "threshold": t_c}
+        history = state.history
+        if state.pending is not None:
+            history = ((*history, (*state.pending, tuple(measurements))))[-cfg.lookback:]
+        filt = self._boosted if state.quiet > 0 else self.inner
+        new = dataclasses.replace(state, inner=filt.update(state.inner, measurements, rng),
+                                  nis=tuple(nis), cusum=(gp, gm), history=history,
+                                  pending=None, quiet=max(state.quiet - 1, 0))
+        if state.quiet > 0 or alarm is None:
+            return new
+        alarm["step"] = new.step
+        can = cfg.recover and isinstance(self.inner, ParticleFilter) and bool(history)
+        alarm["recovered"] = can
+        if can:
+            new = self._recover(new, rng)
+        return dataclasses.replace(new, log=(*new.log, alarm),
+                                   recoveries=new.recoveries + int(can))
+
+    # -- recovery ------------------------------------------------------------------------------
+    def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator) -> Any:
+        """Resampled cloud with a fraction of new velocities and of new ranges."""
+        cfg, pf = self.config, self.inner
+        n = inner.particles.shape[0]
+        idx = rng.choice(n, size=n, p=inner.weights / inner.weights.sum())
+        X = np.array(inner.particles[idx], float)
+        u = rng.random(n)
+        nv = u < cfg.velocity_fraction
+        nr = (u >= cfg.velocity_fraction) & (u < cfg.velocity_fraction + cfg.range_fraction)
+        speed_max, r_lo, r_hi = self._support(X)
+        sp = speed_max * np.sqrt(rng.random(nv.sum()))  # uniform on the speed disc
+        co = rng.uniform(-np.pi, np.pi, nv.sum())
+        X[nv, 2] = sp * np.sin(co) - vbar[0]
+        X[nv, 3] = sp * np.cos(co) - vbar[1]
+        b = np.arctan2(X[nr, 0], X[nr, 1])
+        r = rng.uniform(r_lo, r_hi, nr.sum())
+        X[nr, 0], X[nr, 1] = r * np.sin(b), r * np.cos(b)
+        return pf.from_particles(X, step=int(inner.step))
+
+    def _support(self, X: np.ndarray) -> tuple[float, float, float]:
+        """Target speed bound [m/s] and range support [m] for rejuvenation: the prior's if it
+        gives them, else from the cloud."""
+        r = np.hypot(X[:, 0], X[:, 1])
+        p = self._scenario.prior if self._scenario is not None else None
+        speed_max = (p.speed_max if p is not None and p.speed_max is not None
+                     else 2.0 * float(np.median(np.hypot(X[:, 2], X[:, 3]))) + 5.0)
+        r_med = float(np.median(r))
+        lo = p.range_min if p is not None and p.range_max is not None else r_med / 3.0
+        hi = p.range_max if p is not None and p.range_max is not None else 3.0 * r_med
+        return float(speed_max), float(max(lo, 1.0)), float(hi)
+
+    def _recover(self, state: MonitoredState, rng: np.random.Generator) -> MonitoredState:
+        """Rejuvenate the stored posterior ``lookback`` steps back and filter forward again
+        with boosted process noise."""
+        post, _, vbar, _ = state.history[0]
+        inner = self._rejuvenate(post, vbar, rng)
+        for _, dv, _, meas in state.history:
+            inner = self._boosted.predict(inner, dv, rng)
+            inner = self._boosted.update(inner, meas, rng)
+        return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0),
+                                   history=(), quiet=self.config.holdoff)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class FilterOptions:
+    """Closed-loop filter options: robust measurement models and the monitor.
+
+    Attributes
+    ----------
+    bearing_clutter : float
+        :attr:`PFConfig.bearing_clutter` (0: Gaussian bearings).
+    ping_gate : float, optional
+        :attr:`PFConfig.ping_gate` [σ].
+    monitor : MonitorConfig, optional
+        None: no monitoring.
+    """
+
+    bearing_clutter: float = 0.0
+    ping_gate: float | None = None
+    monitor: MonitorConfig | None = dataclasses.field(default_factory=MonitorConfig)
+
+    @classmethod
+    def plain(cls) -> FilterOptions:
+        """Gaussian bearings, every ping, no monitor (the filter of earlier releases)."""
+        return cls(monitor=None)
+
+    @classmethod
+    def monitored(cls) -> FilterOptions:
+        """Gaussian bearings with the monitor (the closed-loop default)."""
+        return cls()
+
+    @classmethod
+    def robust(cls) -> FilterOptions:
+        """5 % clutter bearings, pings gated at 10 σ, and the monitor."""
+        return cls(bearing_clutter=0.05, ping_gate=10.0)
+
+    def label(self) -> str:
+        """Short name: "plain", "monitored", "robust" or the field values."""
+        for name in ("plain", "monitored", "robust"):
+            if self == getattr(FilterOptions, name)():
+                return name
+        return (f"clutter={self.bearing_clutter},gate={self.ping_gate},"
+                f"monitor={self.monitor is not None}")
+
+    def build(self, config: PFConfig) -> Any:
+        """The filter: a :class:`ParticleFilter` with these likelihood options, monitored if
+        asked."""
+        pf = ParticleFilter(dataclasses.replace(config, bearing_clutter=self.bearing_clutter,
+                                                ping_gate=self.ping_gate))
+        return pf if self.monitor is None else MonitoredFilter(pf, self.monitor)

@@ -185,7 +185,8 @@ def write_report(result: CampaignResult, out_dir: str | Path, *, command: str,
                 f"{eff[name]['final_position']:.2g} / {eff[name]['final_range']:.2g}",
                 f"{eff[name]['mean_range']:.2g}",
                 f"{s['divergence_rate']:.0%}",
-                f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}")) + "</tr>")
+                f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}",
+                f"{s.get('recoveries', 0.0):.2f}")) + "</tr>")
     drows = []
     for d in result.differences:
         unit = 60.0 if d.metric == "time_to_accuracy" else 1.0
@@ -226,7 +227,7 @@ every policy in a run (paired comparison). Localised = relative range error belo
 <th>final range RMSE [m]</th><th>final position RMSE [m]</th><th>final course RMSE [°]</th>
 <th>final speed RMSE [m/s]</th><th>RMSE / PCRB final (position / range)</th>
 <th>range RMSE / PCRB, mean over time</th><th>diverged</th>
-<th>pings</th><th>re-plan [s]</th></tr>
+<th>pings</th><th>re-plan [s]</th><th>recoveries / run</th></tr>
 {''.join(rows)}</table>
 <h2>Paired differences (95 % confidence intervals)</h2>
 <p>Time to accuracy is censored at the horizon for runs that never get there.</p>

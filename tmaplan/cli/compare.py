@@ -78,7 +78,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             tta_s = "never" if tta == float("inf") else f"{tta / 60:6.1f} min"
             print(f"{name:<28} time to accuracy {tta_s}  localised "
                   f"{s['reached_fraction']:4.0%}  final range RMSE "
-                  f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}")
+                  f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
+                  f"recoveries {s['recoveries']:.2f}")
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")
     return payload

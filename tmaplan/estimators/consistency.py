@@ -8,8 +8,14 @@ filter, by linearisation ``H P Hᵀ`` otherwise), and the normalised innovation 
 §5.4; ristic2004 ch. 6 uses the same Gaussian innovation picture). Three tests, each at the
 false-alarm probability ``alpha`` per test:
 
-* **bearings, sliding window**: the sum of the last ``window`` bearing NIS is χ²_window;
-  alarm when it exceeds the (1 − α) quantile;
+* **bearings, sliding window**: alarm when the sum of the last ``window`` bearing NIS exceeds
+  its (1 − α) quantile. A bearing whose own NIS exceeds the χ²₁ (1 − α) quantile c is an
+  *outlier* (a wild bearing, clutter): it is left out of the window
+  and the CUSUM, and ``outliers`` of them in a row raise the alarm (a lost track gives nothing
+  but outliers; 5 % independent wild bearings give three in a row with probability 1.25e-4);
+  the window therefore sums χ²₁ variables truncated to [0, c], and its threshold is the
+  (1 − α) quantile of that sum (computed by numerical convolution), so the window test's
+  false-alarm probability is α;
 * **ranges, one at a time**: a ping is rare and decisive; alarm when its NIS exceeds the χ²₁
   quantile (a confident cloud that lost the contact is told so by the next ping);
 * **manoeuvres, CUSUM**: the signed normalised bearing innovations ``ν/√S`` drift one way after
@@ -39,6 +45,7 @@ with the monitor; :meth:`FilterOptions.plain`, :meth:`FilterOptions.monitored` a
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -62,6 +69,24 @@ __all__ = [
     "cusum_threshold",
     "innovation",
 ]
+
+
+@functools.cache
+def _truncated_sum_quantile(n: int, alpha: float, step: float = 0.005) -> float:
+    """(1 − α) quantile of the sum of n iid χ²₁ truncated to [0, χ²₁ (1 − α) quantile],
+    by convolving the binned distribution (bin probabilities from the CDF, so the x^{-1/2}
+    singularity at 0 costs nothing); error below ``n·step/2``."""
+    cap = float(stats.chi2.isf(alpha, 1))
+    edges = np.arange(0.0, cap + step, step)
+    edges[-1] = cap
+    p = np.diff(stats.chi2.cdf(edges, 1))
+    p /= p.sum()
+    size = n * p.size
+    f = np.fft.rfft(p, size) ** n
+    pmf = np.clip(np.fft.irfft(f, size), 0.0, None)
+    tail = np.cumsum(pmf[::-1])[::-1] / pmf.sum()
+    centre = (np.arange(size) + 0.5 * n) * step  # n bin centres summed
+    return float(centre[np.nonzero(tail > alpha)[0][-1]])
 
 
 def cusum_threshold(alpha: float, kappa: float) -> float:
@@ -89,6 +114,8 @@ class MonitorConfig:
         CUSUM reference value [innovation σ] (the drift detected fastest is 2κ).
     cusum : bool
         Run the manoeuvre CUSUM.
+    outliers : int
+        Consecutive outlier bearings that raise the alarm.
     lookback : int
         Steps re-filtered on recovery.
     velocity_fraction, range_fraction : float
@@ -105,6 +132,7 @@ class MonitorConfig:
     alpha: float = 1e-3
     kappa: float = 0.5
     cusum: bool = True
+    outliers: int = 3
     lookback: int = 16
     velocity_fraction: float = 0.5
     range_fraction: float = 0.25
@@ -113,7 +141,7 @@ class MonitorConfig:
     recover: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("window", "lookback", "holdoff"):
+        for name in ("window", "lookback", "holdoff", "outliers"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < (0 if name == "holdoff" else 1):
                 raise ScenarioError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
@@ -131,8 +159,9 @@ class MonitorConfig:
 
     @property
     def bearing_threshold(self) -> float:
-        """χ²_window (1 − α) quantile."""
-        return float(stats.chi2.isf(self.alpha, self.window))
+        """(1 − α) quantile of a sum of ``window`` χ²₁ variables truncated to
+        [0, :attr:`range_threshold`] (the inlier NIS, module docstring)."""
+        return _truncated_sum_quantile(self.window, self.alpha)
 
     @property
     def range_threshold(self) -> float:
@@ -190,7 +219,11 @@ class MonitoredState:
     inner : FilterState
         The wrapped filter's state.
     nis : tuple of float
-        Bearing NIS of the current window (newest last).
+        Bearing NIS of the current window (newest last), outliers left out.
+    streak : int
+        Consecutive outlier bearings.
+    outliers : int
+        Outlier bearings so far.
     cusum : tuple of float
         (g⁺, g⁻).
     history : tuple
@@ -209,6 +242,8 @@ class MonitoredState:
 
     inner: Any
     nis: tuple[float, ...] = ()
+    streak: int = 0
+    outliers: int = 0
     cusum: tuple[float, float] = (0.0, 0.0)
     history: tuple[Any, ...] = ()
     pending: Any = None
@@ -298,7 +333,8 @@ class MonitoredFilter:
         """Test the innovations, update the inner filter, recover on an alarm."""
         cfg = self.config
         t_b, t_r, t_c = self._thresholds
-        nis, (gp, gm) = list(state.nis), state.cusum
+        nis, (gp, gm), streak = list(state.nis), state.cusum, state.streak
+        n_out = state.outliers
         alarm: dict[str, Any] | None = None
         for m in measurements:
             if m.kind not in ("bearing", "range") or getattr(m, "ambiguity", "none") == "pi":
@@ -309,6 +345,14 @@ class MonitoredFilter:
                 if e > t_r and alarm is None:
                     alarm = {"test": "range", "statistic": e, "threshold": t_r}
                 continue
+            if e > t_r:  # an outlier: out of the window and the CUSUM
+                streak += 1
+                n_out += 1
+                if alarm is None and streak >= cfg.outliers:
+                    alarm = {"test": "outliers", "statistic": float(streak),
+                             "threshold": float(cfg.outliers)}
+                continue
+            streak = 0
             nis = ([*nis, e])[-cfg.window:]
             u = nu / math.sqrt(S)
             gp, gm = max(0.0, gp + u - cfg.kappa), max(0.0, gm - u - cfg.kappa)
@@ -321,7 +365,8 @@ class MonitoredFilter:
             history = ((*history, (*state.pending, tuple(measurements))))[-cfg.lookback:]
         filt = self._boosted if state.quiet > 0 else self.inner
         new = dataclasses.replace(state, inner=filt.update(state.inner, measurements, rng),
-                                  nis=tuple(nis), cusum=(gp, gm), history=history,
+                                  nis=tuple(nis), cusum=(gp, gm), streak=streak, outliers=n_out,
+                                  history=history,
                                   pending=None, quiet=max(state.quiet - 1, 0))
         if state.quiet > 0 or alarm is None:
             return new
@@ -373,7 +418,7 @@ class MonitoredFilter:
         for _, dv, _, meas in state.history:
             inner = self._boosted.predict(inner, dv, rng)
             inner = self._boosted.update(inner, meas, rng)
-        return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0),
+        return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0), streak=0,
                                    history=(), quiet=self.config.holdoff)
 
 

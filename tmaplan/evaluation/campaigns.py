@@ -29,6 +29,7 @@ from typing import Any, Literal
 import numpy as np
 
 from tmaplan.errors import PlanningError
+from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
 from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
@@ -66,6 +67,9 @@ class CampaignSpec:
         Draw each run's target initial state from the prior, or use the scenario's.
     accuracy : float
         Relative range error that counts as localised.
+    filter_options : FilterOptions, optional
+        Closed-loop filter options (default: the monitored filter of
+        :func:`tmaplan.evaluation.closed_loop.run_closed_loop`).
     """
 
     scenario: Scenario
@@ -75,6 +79,7 @@ class CampaignSpec:
     n_particles: int = 3000
     truth: Literal["prior", "scenario"] = "prior"
     accuracy: float = 0.1
+    filter_options: FilterOptions | None = None
 
     def key(self) -> str:
         """Hash of everything but ``runs`` (extending a campaign reuses its runs), plus the
@@ -88,7 +93,8 @@ class CampaignSpec:
         return {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
-                "format": FORMAT, "tmaplan_version": __version__}
+                "format": FORMAT, "tmaplan_version": __version__,
+                **({} if self.filter_options is None else {"filter": repr(self.filter_options)})}
 
 
 def resolve_policies(scenario: Scenario, specs: Sequence[str]) -> dict[str, Policy]:
@@ -127,7 +133,7 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
             res = run_closed_loop(scenario, pol, target,
                                   noise_rng=np.random.default_rng(s_noise),
                                   filter_rng=np.random.default_rng(s_filter),
-                                  n_particles=spec.n_particles)
+                                  n_particles=spec.n_particles, options=spec.filter_options)
             out[name] = PolicyRun(
                 metrics=run_metrics(res.times, res.truth, res.estimate,
                                     res.observer.mean_velocity, accuracy=spec.accuracy,
@@ -136,7 +142,8 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
                 estimate=res.estimate[:, :2] + res.observer.position,
                 ping_steps=res.ping_steps,
                 replan_seconds=np.array([e["seconds"] for e in res.replans]),
-                replan_failures=sum(not e["success"] for e in res.replans))
+                replan_failures=sum(not e["success"] for e in res.replans),
+                recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
 
@@ -159,9 +166,10 @@ class CampaignResult:
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
         ``time_to_accuracy`` (median [s], inf if most runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
-        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m] and
-        ``final_rel_range_error`` (per run), ``replan_seconds`` (mean per re-plan),
-        ``replan_failures``.
+        ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m],
+        ``final_position_error_runs`` [m] and ``final_rel_range_error`` (per run),
+        ``replan_seconds`` (mean per re-plan),
+        ``replan_failures``, ``recoveries`` (mean per run; consistency monitor).
     differences : tuple of PairedDifference
         All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
         ``final_range_error``.
@@ -204,6 +212,7 @@ class CampaignResult:
                 "pings_used": s["pings_used"],
                 "final_range_rmse": s["final_range_rmse"],
                 "replan_seconds": s["replan_seconds"],
+                "recoveries": s["recoveries"],
             }
         return {
             "policies": pol,
@@ -247,8 +256,10 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "final_range_rmse": float(np.sqrt(np.mean(fin**2))),
             "final_range_error_runs": fin,
             "final_rel_range_error": np.array([m.final_rel_range_error for m in ms]),
+            "final_position_error_runs": np.array([m.final_position_error for m in ms]),
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
+            "recoveries": float(np.mean([r.policies[name].recoveries for r in runs])),
         }
     censor = float(times[-1] - times[0] + (times[1] - times[0]))
     diffs = []

@@ -24,7 +24,7 @@ from tmaplan.evaluation.metrics import RunMetrics
 __all__ = ["FORMAT", "PolicyRun", "RunRecord", "scenario_hash"]
 
 #: Version of the run-file format (part of the campaign cache key).
-FORMAT = 2
+FORMAT = 3
 
 
 def scenario_hash(scenario: Any) -> str:
@@ -64,6 +64,8 @@ class PolicyRun:
         Wall time of each re-plan [s].
     replan_failures : int
         Re-plans that failed (the previous plan was kept).
+    recoveries : int
+        Track recoveries by the filter's consistency monitor.
     """
 
     metrics: RunMetrics
@@ -73,6 +75,7 @@ class PolicyRun:
     ping_steps: np.ndarray
     replan_seconds: np.ndarray
     replan_failures: int
+    recoveries: int = 0
 
 
 def _types(cls: type) -> dict[str, Any]:

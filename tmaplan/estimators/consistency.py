@@ -25,14 +25,21 @@ false-alarm probability ``alpha`` per test:
   ``ARL₀ ≈ (e^{2κh'} − 2κh' − 1)/(2κ²)``, ``h' = h + 1.166`` so that ``1/ARL₀ ≈ α``.
 
 On an alarm the filter **recovers** (when the inner filter is a particle filter): it goes back
-``lookback`` steps to the posterior it stored there, rejuvenates that cloud — a fraction of the
-particles gets new target velocities from the scenario prior (the contact may have
-manoeuvred), another fraction new ranges along its own bearing from the prior's range
-support (the contact may be elsewhere on the line of sight, as in the bearings-only
-initialisation of :mod:`tmaplan.estimators.init_bearings`, brehard2004 eq. 30) — and filters the
-stored observer increments and measurements again up to now (the recent bearings and the last
-ping in that span decide), with the process noise widened by ``q_boost`` for the re-filtered
-span and ``holdoff`` steps after it. Each recovery is logged (:attr:`MonitoredState.log`) and
+to a posterior it stored, rejuvenates that cloud and filters the stored observer increments
+and measurements again up to now, with the process noise widened by ``q_boost`` for the
+re-filtered span and ``holdoff`` steps after it. Two kinds of recovery:
+
+* after a **CUSUM** alarm (a manoeuvre), it goes back to the change point estimated by the
+  CUSUM (the last step its statistic was 0, at most ``lookback`` steps), keeps the positions
+  and gives a fraction ``velocity_fraction`` of the particles a new course (uniform on the
+  circle) at a speed scaled by a log-normal factor of std ``speed_spread``: the bearings since
+  the change decide between them;
+* after any other alarm (the track is lost), it goes back ``lookback`` steps and gives a
+  fraction of the particles new target velocities from the scenario prior, another fraction
+  new ranges along their own bearing from the prior's range support (the contact may be
+  elsewhere on the line of sight, as in the bearings-only initialisation of
+  :mod:`tmaplan.estimators.init_bearings`, brehard2004 eq. 30); the recent bearings and the
+  last ping in that span decide. Each recovery is logged (:attr:`MonitoredState.log`) and
 counted (:attr:`MonitoredState.recoveries`); the closed loop reports it per run.
 
 :class:`FilterOptions` bundles the robust measurement models of the particle filter
@@ -117,9 +124,11 @@ class MonitorConfig:
     outliers : int
         Consecutive outlier bearings that raise the alarm.
     lookback : int
-        Steps re-filtered on recovery.
+        Steps re-filtered on recovery (at most, after a CUSUM alarm).
     velocity_fraction, range_fraction : float
         Fractions of the rejuvenated cloud with new velocities / new ranges.
+    speed_spread : float
+        Std of the log speed factor of a manoeuvre recovery.
     q_boost : float
         Process-noise multiplier while re-filtering and for ``holdoff`` steps after.
     holdoff : int
@@ -136,6 +145,7 @@ class MonitorConfig:
     lookback: int = 16
     velocity_fraction: float = 0.5
     range_fraction: float = 0.25
+    speed_spread: float = 0.25
     q_boost: float = 100.0
     holdoff: int = 8
     recover: bool = True
@@ -226,6 +236,8 @@ class MonitoredState:
         Outlier bearings so far.
     cusum : tuple of float
         (g⁺, g⁻).
+    age : tuple of int
+        Steps since g⁺ and g⁻ were last 0 (the change point of a CUSUM alarm).
     history : tuple
         Up to ``lookback`` entries ``(posterior at i, Δv_i, v̄_i, measurements at i + 1)``.
     pending : tuple or None
@@ -245,6 +257,7 @@ class MonitoredState:
     streak: int = 0
     outliers: int = 0
     cusum: tuple[float, float] = (0.0, 0.0)
+    age: tuple[int, int] = (0, 0)
     history: tuple[Any, ...] = ()
     pending: Any = None
     velocity: np.ndarray
@@ -334,6 +347,7 @@ class MonitoredFilter:
         cfg = self.config
         t_b, t_r, t_c = self._thresholds
         nis, (gp, gm), streak = list(state.nis), state.cusum, state.streak
+        ap, am = state.age
         n_out = state.outliers
         alarm: dict[str, Any] | None = None
         for m in measurements:
@@ -356,16 +370,19 @@ class MonitoredFilter:
             nis = ([*nis, e])[-cfg.window:]
             u = nu / math.sqrt(S)
             gp, gm = max(0.0, gp + u - cfg.kappa), max(0.0, gm - u - cfg.kappa)
+            ap, am = (ap + 1 if gp > 0 else 0), (am + 1 if gm > 0 else 0)
             if alarm is None and len(nis) == cfg.window and sum(nis) > t_b:
                 alarm = {"test": "bearing-window", "statistic": sum(nis), "threshold": t_b}
             if alarm is None and cfg.cusum and max(gp, gm) > t_c:
-                alarm = {"test": "cusum", "statistic": max(gp, gm), "threshold": t_c}
+                alarm = {"test": "cusum", "statistic": max(gp, gm), "threshold": t_c,
+                         "onset": ap if gp > gm else am}
         history = state.history
         if state.pending is not None:
             history = ((*history, (*state.pending, tuple(measurements))))[-cfg.lookback:]
         filt = self._boosted if state.quiet > 0 else self.inner
         new = dataclasses.replace(state, inner=filt.update(state.inner, measurements, rng),
-                                  nis=tuple(nis), cusum=(gp, gm), streak=streak, outliers=n_out,
+                                  nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
+                                  outliers=n_out,
                                   history=history,
                                   pending=None, quiet=max(state.quiet - 1, 0))
         if state.quiet > 0 or alarm is None:
@@ -374,18 +391,28 @@ class MonitoredFilter:
         can = cfg.recover and isinstance(self.inner, ParticleFilter) and bool(history)
         alarm["recovered"] = can
         if can:
-            new = self._recover(new, rng)
+            new = self._recover(new, rng, alarm.get("onset"))
         return dataclasses.replace(new, log=(*new.log, alarm),
                                    recoveries=new.recoveries + int(can))
 
     # -- recovery ------------------------------------------------------------------------------
-    def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator) -> Any:
-        """Resampled cloud with a fraction of new velocities and of new ranges."""
+    def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator,
+                    manoeuvre: bool) -> Any:
+        """Resampled cloud with a fraction of new velocities (and of new ranges)."""
         cfg, pf = self.config, self.inner
         n = inner.particles.shape[0]
         idx = rng.choice(n, size=n, p=inner.weights / inner.weights.sum())
         X = np.array(inner.particles[idx], float)
         u = rng.random(n)
+        if manoeuvre:  # same place, new course, similar speed
+            nv = u < cfg.velocity_fraction
+            vt = X[nv, 2:] + vbar
+            sp = np.hypot(vt[:, 0], vt[:, 1]) * np.exp(cfg.speed_spread
+                                                       * rng.standard_normal(nv.sum()))
+            co = rng.uniform(-np.pi, np.pi, nv.sum())
+            X[nv, 2] = sp * np.sin(co) - vbar[0]
+            X[nv, 3] = sp * np.cos(co) - vbar[1]
+            return pf.from_particles(X, step=int(inner.step))
         nv = u < cfg.velocity_fraction
         nr = (u >= cfg.velocity_fraction) & (u < cfg.velocity_fraction + cfg.range_fraction)
         speed_max, r_lo, r_hi = self._support(X)
@@ -410,15 +437,18 @@ class MonitoredFilter:
         hi = p.range_max if p is not None and p.range_max is not None else 3.0 * r_med
         return float(speed_max), float(max(lo, 1.0)), float(hi)
 
-    def _recover(self, state: MonitoredState, rng: np.random.Generator) -> MonitoredState:
-        """Rejuvenate the stored posterior ``lookback`` steps back and filter forward again
-        with boosted process noise."""
-        post, _, vbar, _ = state.history[0]
-        inner = self._rejuvenate(post, vbar, rng)
-        for _, dv, _, meas in state.history:
+    def _recover(self, state: MonitoredState, rng: np.random.Generator,
+                 onset: int | None) -> MonitoredState:
+        """Rejuvenate a stored posterior (the CUSUM's change point, else ``lookback`` steps
+        back) and filter forward again with boosted process noise."""
+        hist = state.history if onset is None else state.history[-max(int(onset), 1):]
+        post, _, vbar, _ = hist[0]
+        inner = self._rejuvenate(post, vbar, rng, manoeuvre=onset is not None)
+        for _, dv, _, meas in hist:
             inner = self._boosted.predict(inner, dv, rng)
             inner = self._boosted.update(inner, meas, rng)
-        return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0), streak=0,
+        return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0), age=(0, 0),
+                                   streak=0,
                                    history=(), quiet=self.config.holdoff)
 
 

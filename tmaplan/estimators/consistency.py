@@ -29,18 +29,25 @@ to a posterior it stored, rejuvenates that cloud and filters the stored observer
 and measurements again up to now, with the process noise widened by ``q_boost`` for the
 re-filtered span and ``holdoff`` steps after it. Two kinds of recovery:
 
-* after a **CUSUM** alarm (a manoeuvre), it goes back to the change point estimated by the
-  CUSUM (the last step its statistic was 0, at most ``lookback`` steps), keeps the positions
-  and gives a fraction ``velocity_fraction`` of the particles a new course (uniform on the
-  circle) at a speed scaled by a log-normal factor of std ``speed_spread``: the bearings since
-  the change decide between them;
-* after any other alarm (the track is lost), it goes back ``lookback`` steps and gives a
+* after a bearing alarm (a manoeuvre, or a burst of outliers), it goes back to the change
+  point estimated by the CUSUM (the last step its statistic was 0; ``lookback`` steps for the
+  other bearing tests), keeps the positions and gives a fraction ``velocity_fraction`` of the
+  particles a new course (uniform on the circle) at a speed scaled by a log-normal factor of
+  std ``speed_spread``: the bearings since the change decide between them;
+* after a ping alarm (the track is lost), it goes back ``lookback`` steps and gives a
   fraction of the particles new target velocities from the scenario prior, another fraction
   new ranges along their own bearing from the prior's range support (the contact may be
   elsewhere on the line of sight, as in the bearings-only initialisation of
   :mod:`tmaplan.estimators.init_bearings`, brehard2004 eq. 30); the recent bearings and the
-  last ping in that span decide. Each recovery is logged (:attr:`MonitoredState.log`) and
-counted (:attr:`MonitoredState.recoveries`); the closed loop reports it per run.
+  ping decide.
+
+The rejuvenated particles get a total prior weight ``rejuvenation_weight`` (the cloud is an
+importance sample of the mixture "as it was" / "new hypotheses"), so hypotheses the
+measurements cannot refute — the range rate of a contact seen on bearings only — do not take
+over after a false alarm, while a real manoeuvre or a lost track, whose measurements refute the
+old cloud by many orders of likelihood, hands over to them. Each recovery is logged
+(:attr:`MonitoredState.log`) and counted (:attr:`MonitoredState.recoveries`); the closed loop
+reports it per run.
 
 :class:`FilterOptions` bundles the robust measurement models of the particle filter
 (:class:`tmaplan.estimators.particle_filter.PFConfig` ``bearing_clutter`` and ``ping_gate``)
@@ -129,6 +136,10 @@ class MonitorConfig:
         Fractions of the rejuvenated cloud with new velocities / new ranges.
     speed_spread : float
         Std of the log speed factor of a manoeuvre recovery.
+    rejuvenation_weight : float
+        Total prior weight of the rejuvenated particles, in (0, 1): the recovery is a mixture
+        "track as it was" / "new hypotheses" that the re-filtered measurements weigh, so a
+        false alarm costs little.
     q_boost : float
         Process-noise multiplier while re-filtering and for ``holdoff`` steps after.
     holdoff : int
@@ -146,7 +157,8 @@ class MonitorConfig:
     velocity_fraction: float = 0.5
     range_fraction: float = 0.25
     speed_spread: float = 0.25
-    q_boost: float = 100.0
+    rejuvenation_weight: float = 0.1
+    q_boost: float = 1000.0
     holdoff: int = 8
     recover: bool = True
 
@@ -164,6 +176,9 @@ class MonitorConfig:
             raise ScenarioError("monitor.velocity_fraction",
                                 "fractions >= 0 with velocity + range fractions <= 1",
                                 (self.velocity_fraction, self.range_fraction))
+        if not 0.0 < self.rejuvenation_weight < 1.0:
+            raise ScenarioError("monitor.rejuvenation_weight", "in (0, 1)",
+                                self.rejuvenation_weight)
         if not self.q_boost >= 1:
             raise ScenarioError("monitor.q_boost", ">= 1", self.q_boost)
 
@@ -391,39 +406,41 @@ class MonitoredFilter:
         can = cfg.recover and isinstance(self.inner, ParticleFilter) and bool(history)
         alarm["recovered"] = can
         if can:
-            new = self._recover(new, rng, alarm.get("onset"))
+            new = self._recover(new, rng, alarm.get("onset"), lost=alarm["test"] == "range")
         return dataclasses.replace(new, log=(*new.log, alarm),
                                    recoveries=new.recoveries + int(can))
 
     # -- recovery ------------------------------------------------------------------------------
     def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator,
-                    manoeuvre: bool) -> Any:
-        """Resampled cloud with a fraction of new velocities (and of new ranges)."""
+                    lost: bool) -> Any:
+        """Resampled cloud in which a fraction of particles, of total weight
+        ``rejuvenation_weight``, carries new velocities (and, if ``lost``, new ranges)."""
         cfg, pf = self.config, self.inner
         n = inner.particles.shape[0]
         idx = rng.choice(n, size=n, p=inner.weights / inner.weights.sum())
         X = np.array(inner.particles[idx], float)
         u = rng.random(n)
-        if manoeuvre:  # same place, new course, similar speed
-            nv = u < cfg.velocity_fraction
+        nv = u < cfg.velocity_fraction
+        nr = ((u >= cfg.velocity_fraction) & (u < cfg.velocity_fraction + cfg.range_fraction)
+              if lost else np.zeros(n, bool))
+        if lost:  # velocities from the prior, ranges on the line of sight
+            speed_max, r_lo, r_hi = self._support(X)
+            sp = speed_max * np.sqrt(rng.random(nv.sum()))  # uniform on the speed disc
+            b = np.arctan2(X[nr, 0], X[nr, 1])
+            r = rng.uniform(r_lo, r_hi, nr.sum())
+            X[nr, 0], X[nr, 1] = r * np.sin(b), r * np.cos(b)
+        else:  # a manoeuvre: same place, new course, similar speed
             vt = X[nv, 2:] + vbar
             sp = np.hypot(vt[:, 0], vt[:, 1]) * np.exp(cfg.speed_spread
                                                        * rng.standard_normal(nv.sum()))
-            co = rng.uniform(-np.pi, np.pi, nv.sum())
-            X[nv, 2] = sp * np.sin(co) - vbar[0]
-            X[nv, 3] = sp * np.cos(co) - vbar[1]
-            return pf.from_particles(X, step=int(inner.step))
-        nv = u < cfg.velocity_fraction
-        nr = (u >= cfg.velocity_fraction) & (u < cfg.velocity_fraction + cfg.range_fraction)
-        speed_max, r_lo, r_hi = self._support(X)
-        sp = speed_max * np.sqrt(rng.random(nv.sum()))  # uniform on the speed disc
         co = rng.uniform(-np.pi, np.pi, nv.sum())
         X[nv, 2] = sp * np.sin(co) - vbar[0]
         X[nv, 3] = sp * np.cos(co) - vbar[1]
-        b = np.arctan2(X[nr, 0], X[nr, 1])
-        r = rng.uniform(r_lo, r_hi, nr.sum())
-        X[nr, 0], X[nr, 1] = r * np.sin(b), r * np.cos(b)
-        return pf.from_particles(X, step=int(inner.step))
+        new = nv | nr
+        k = int(new.sum())
+        lw = np.where(new, np.log(cfg.rejuvenation_weight / max(k, 1)),
+                      np.log((1.0 - cfg.rejuvenation_weight) / max(n - k, 1)))
+        return pf.from_particles(X, step=int(inner.step), log_weights=lw)
 
     def _support(self, X: np.ndarray) -> tuple[float, float, float]:
         """Target speed bound [m/s] and range support [m] for rejuvenation: the prior's if it
@@ -438,12 +455,12 @@ class MonitoredFilter:
         return float(speed_max), float(max(lo, 1.0)), float(hi)
 
     def _recover(self, state: MonitoredState, rng: np.random.Generator,
-                 onset: int | None) -> MonitoredState:
+                 onset: int | None, lost: bool) -> MonitoredState:
         """Rejuvenate a stored posterior (the CUSUM's change point, else ``lookback`` steps
         back) and filter forward again with boosted process noise."""
         hist = state.history if onset is None else state.history[-max(int(onset), 1):]
         post, _, vbar, _ = hist[0]
-        inner = self._rejuvenate(post, vbar, rng, manoeuvre=onset is not None)
+        inner = self._rejuvenate(post, vbar, rng, lost=lost)
         for _, dv, _, meas in hist:
             inner = self._boosted.predict(inner, dv, rng)
             inner = self._boosted.update(inner, meas, rng)

@@ -1,0 +1,54 @@
+"""The fault matrix of ``benchmarks/faults.py`` at small size: every fault runs, nothing crashes,
+and the robust filter holds up against wild bearings where the plain one breaks."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import warnings
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+
+def _bench():
+    path = Path(__file__).parents[1] / "benchmarks" / "faults.py"
+    spec = importlib.util.spec_from_file_location("faults_benchmark", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_fault_matrix_small(capsys):
+    bench = _bench()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # degeneracy warnings of the plain filter
+        rows = bench.matrix(policies=["planned+scheduled"], faults=list(bench.FAULTS),
+                            options=["plain", "robust"], runs=4, particles=1000)
+    bench.print_matrix(rows, 4)
+    out = capsys.readouterr().out
+    assert "manoeuvre-60deg" in out and "Traceback" not in out
+    assert len(rows) == 2 * len(bench.FAULTS)
+    cell = {(r["option"], r["fault"]): r for r in rows}
+    for r in rows:
+        assert math.isfinite(r["final_range_rmse"]) and 0 <= r["divergence_rate"] <= 1
+    assert cell["plain", "none"]["ratio"] == 1.0 and cell["plain", "none"]["recoveries"] == 0
+    assert cell["robust", "wild-5%"]["ratio"] < 2.0 < cell["plain", "wild-5%"]["ratio"]
+    assert cell["robust", "manoeuvre-60deg"]["recoveries"] >= 1
+
+
+def test_receding_runs_with_a_fault():
+    bench = _bench()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rows = bench.matrix(policies=["receding"], faults=["manoeuvre-60deg"],
+                            options=["robust"], runs=1, particles=500)
+    assert [r["fault"] for r in rows] == ["none", "manoeuvre-60deg"]
+
+
+def test_manoeuvre_detection_small():
+    bench = _bench()
+    r = bench.manoeuvre(runs=4, particles=1000)
+    assert 0 <= r["both"] <= r["detected"] <= 1 and r["detected_ever"] > 0

@@ -138,7 +138,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec = [], []
+    det, rec, disturbed = [], [], []
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -153,6 +153,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         e1 = np.hypot(*(r1.estimate[:, :2] - r1.truth[:, :2]).T)
         tol = np.maximum(2.0 * e0, 0.1 * np.hypot(r1.truth[:, 0], r1.truth[:, 1]))
         bad = np.nonzero(e1[j:] > tol[j:])[0]
+        disturbed.append(bad.size > 0)
         rec.append(0.0 if bad.size == 0 else float(times[j + bad[-1] + 1] - times[j])
                    if j + bad[-1] + 1 < times.size else np.inf)
         steps = [a["step"] for a in r1.alarms if a["step"] >= j]
@@ -163,6 +164,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "detected": float(np.mean(det_a <= w)), "recovered": float(np.mean(rec_a <= w)),
             "both": float(np.mean((det_a <= w) & (rec_a <= w))),
             "detected_ever": float(np.mean(np.isfinite(det_a))),
+            "disturbed": float(np.mean(disturbed)),
             "median_detection_s": float(np.median(det_a)),
             "median_recovery_s": float(np.median(rec_a))}
 

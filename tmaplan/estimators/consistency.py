@@ -126,6 +126,8 @@ class MonitorConfig:
         False-alarm probability per test, in (0, 0.5).
     kappa : float
         CUSUM reference value [innovation σ] (the drift detected fastest is 2κ).
+    cusum_alpha : float, optional
+        False-alarm rate per step of the CUSUM (default ``alpha``).
     cusum : bool
         Run the manoeuvre CUSUM.
     outliers : int
@@ -151,6 +153,7 @@ class MonitorConfig:
     window: int = 8
     alpha: float = 1e-3
     kappa: float = 0.5
+    cusum_alpha: float | None = None
     cusum: bool = True
     outliers: int = 3
     lookback: int = 16
@@ -169,6 +172,9 @@ class MonitorConfig:
                 raise ScenarioError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
         if not 0.0 < self.alpha < 0.5:
             raise ScenarioError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
+        if self.cusum_alpha is not None and not 0.0 < self.cusum_alpha < 0.5:
+            raise ScenarioError("monitor.cusum_alpha", "a probability in (0, 0.5)",
+                                self.cusum_alpha)
         if not self.kappa > 0:
             raise ScenarioError("monitor.kappa", "> 0", self.kappa)
         if not (0 <= self.velocity_fraction and 0 <= self.range_fraction
@@ -196,7 +202,8 @@ class MonitorConfig:
     @property
     def cusum_threshold(self) -> float:
         """CUSUM threshold h for a one-sided run length 2/α (two sides: 1/α)."""
-        return cusum_threshold(self.alpha / 2.0, self.kappa)
+        a = self.alpha if self.cusum_alpha is None else self.cusum_alpha
+        return cusum_threshold(a / 2.0, self.kappa)
 
 
 def innovation(state: Any, m: Measurement) -> tuple[float, float]:

@@ -121,8 +121,8 @@ def print_matrix(rows: list[dict[str, Any]], runs: int) -> None:
         tta_s = "never" if not np.isfinite(tta) else f"{tta / 60:.1f}"
         lo, hi = r["ratio_ci"]
         print(f"{r['option']:<10}{r['policy']:<20}{r['fault']:<18}"
-              f"{r['divergence_rate']:>9.0%}{tta_s:>11}{r['final_range_rmse']:>9.0f}"
-              f"{r['ratio']:>9.2f} [{lo:6.2f}, {hi:6.2f}]{r['outliers']:>9d}"
+              f"{r['divergence_rate']:>9.0%}{tta_s:>11}{r['final_range_rmse']:>9.3g}"
+              f"{r['ratio']:>9.3g} [{lo:6.3g}, {hi:6.3g}]{r['outliers']:>9d}"
               f"{r['recoveries']:>7.2f}")
 
 

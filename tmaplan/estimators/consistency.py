@@ -13,6 +13,8 @@ false-alarm probability ``alpha`` per test:
   *outlier* (a wild bearing, clutter): it is left out of the window
   and the CUSUM, and ``outliers`` of them in a row raise the alarm (a lost track gives nothing
   but outliers; 5 % independent wild bearings give three in a row with probability 1.25e-4);
+  outliers are also kept from the filter (``withhold_outliers``: innovation gating, so a plain
+  Gaussian likelihood survives wild bearings too);
   the window therefore sums χ²₁ variables truncated to [0, c], and its threshold is the
   (1 − α) quantile of that sum (computed by numerical convolution), so the window test's
   false-alarm probability is α;
@@ -132,6 +134,8 @@ class MonitorConfig:
         Run the manoeuvre CUSUM.
     outliers : int
         Consecutive outlier bearings that raise the alarm.
+    withhold_outliers : bool
+        Keep outlier bearings from the filter (innovation gating at the χ²₁ (1 − α) quantile).
     lookback : int
         Steps re-filtered on recovery (at most, after a CUSUM alarm).
     velocity_fraction, range_fraction : float
@@ -156,6 +160,7 @@ class MonitorConfig:
     cusum_alpha: float | None = None
     cusum: bool = True
     outliers: int = 3
+    withhold_outliers: bool = True
     lookback: int = 16
     velocity_fraction: float = 0.5
     range_fraction: float = 0.25
@@ -372,7 +377,9 @@ class MonitoredFilter:
         ap, am = state.age
         n_out = state.outliers
         alarm: dict[str, Any] | None = None
+        kept: list[Measurement] = []
         for m in measurements:
+            kept.append(m)
             if m.kind not in ("bearing", "range") or getattr(m, "ambiguity", "none") == "pi":
                 continue
             nu, S = innovation(state.inner, m)
@@ -381,9 +388,11 @@ class MonitoredFilter:
                 if e > t_r and alarm is None:
                     alarm = {"test": "range", "statistic": e, "threshold": t_r}
                 continue
-            if e > t_r:  # an outlier: out of the window and the CUSUM
+            if e > t_r:  # an outlier: out of the window and the CUSUM (and the filter)
                 streak += 1
                 n_out += 1
+                if cfg.withhold_outliers:
+                    kept.pop()
                 if alarm is None and streak >= cfg.outliers:
                     alarm = {"test": "outliers", "statistic": float(streak),
                              "threshold": float(cfg.outliers)}
@@ -400,9 +409,9 @@ class MonitoredFilter:
                          "onset": ap if gp > gm else am}
         history = state.history
         if state.pending is not None:
-            history = ((*history, (*state.pending, tuple(measurements))))[-cfg.lookback:]
+            history = ((*history, (*state.pending, tuple(kept))))[-cfg.lookback:]
         filt = self._boosted if state.quiet > 0 else self.inner
-        new = dataclasses.replace(state, inner=filt.update(state.inner, measurements, rng),
+        new = dataclasses.replace(state, inner=filt.update(state.inner, kept, rng),
                                   nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
                                   outliers=n_out,
                                   history=history,

@@ -104,3 +104,27 @@ def test_sensor_faults_in_closed_loop(faulty):
     assert dropped(faulty.faults, np.array([599.0, 600.0, 899.0, 900.0]), "bearing").tolist() \
         == [False, True, True, False]
     assert not dropped(faulty.faults, 700.0, "range")
+
+
+def test_recoveries_in_campaign_records_and_json(faulty, tmp_path):
+    import warnings
+
+    from tmaplan.estimators.consistency import FilterOptions
+    from tmaplan.evaluation.campaigns import CampaignSpec, run_campaign
+    from tmaplan.evaluation.records import RunRecord
+
+    spec = CampaignSpec(scenario=faulty, policies=("planned+scheduled",), runs=2,
+                        n_particles=500, filter_options=FilterOptions.robust())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = run_campaign(spec, out_dir=tmp_path)
+    rec = [RunRecord.load(p, spec.policies) for p in sorted(tmp_path.glob("*/runs/*.npz"))]
+    counts = [r.policies["planned+scheduled"].recoveries for r in rec]
+    assert len(counts) == 2 and all(isinstance(c, int) for c in counts)
+    js = res.to_json()["policies"]["planned+scheduled"]
+    assert js["recoveries"] == pytest.approx(np.mean(counts))
+    plain = CampaignSpec(scenario=faulty, policies=("planned+scheduled",), runs=2,
+                         n_particles=500, filter_options=FilterOptions.plain())
+    assert plain.key() != spec.key()
+    default = CampaignSpec(scenario=faulty, policies=("planned+scheduled",), runs=2)
+    assert "filter" not in default._meta()

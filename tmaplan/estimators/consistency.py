@@ -113,6 +113,8 @@ def cusum_threshold(alpha: float, kappa: float) -> float:
         b = 2.0 * kappa * (h + 1.166)
         return (math.exp(b) - b - 1.0) / (2.0 * kappa**2)
 
+    if arl(0.0) >= 1.0 / alpha:  # a large κ: any positive statistic is already rare enough
+        return 0.0
     return float(optimize.brentq(lambda h: math.log(arl(h)) + math.log(alpha), 0.0, 100.0))
 
 

@@ -169,7 +169,7 @@ class MonitorConfig:
     speed_spread: float = 0.25
     rejuvenation_weight: float = 0.1
     q_boost: float = 1000.0
-    holdoff: int = 8
+    holdoff: int = 16
     recover: bool = True
 
     def __post_init__(self) -> None:

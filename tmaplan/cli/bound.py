@@ -36,6 +36,9 @@ from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
 
 HELP = "posterior Cramér-Rao bound over time (closed form in LPC or Monte Carlo)"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("range_std[-1]", "position_std[-1]")
+
 _LPC_LABELS = ("β [rad]", "ln r [-]", "β̇ [rad/s]", "ṙ/r [1/s]")
 _CART_LABELS = ("r_x [m]", "r_y [m]", "v_x [m/s]", "v_y [m/s]")
 # console: (name, display unit, factor from SI) per component

@@ -24,6 +24,9 @@ from tmaplan.scenario import load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``compare``."""

@@ -22,6 +22,9 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("final_range_std",)
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """``P`` (problem name or .toml path), ``--frequencies N``, ``--out``, ``--no-figure``."""

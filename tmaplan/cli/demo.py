@@ -38,6 +38,9 @@ from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
+
 #: The problem the demo works on.
 PROBLEM = "default"
 

@@ -28,6 +28,9 @@ from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("objective",)
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``plan``."""

@@ -29,6 +29,9 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("objective",)
+
 _TRACK_KEYS = ("times", "position", "velocity", "mean_velocity", "heading", "speed")
 
 

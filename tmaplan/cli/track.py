@@ -19,6 +19,7 @@ from tmaplan.cli._args import (
     add_seed_argument,
     integer,
 )
+from tmaplan.cli._finite import require_finite
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
@@ -28,6 +29,9 @@ from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import Scenario, load
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -149,12 +153,15 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         fig = Path(args.out) / f"track_{scenario.name}_{args.estimator}{suffix}.png"
         _figure(res, fig)
         payload["figure"] = str(fig)
+    counts = {s: res.statuses.count(s) for s in dict.fromkeys(res.statuses)}
+    require_finite(payload, FINITE, source=scenario.name,
+                   why="run statuses: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
     if not quiet:
         print(f"{scenario.name}: {args.estimator}, {res.runs} runs, {res.seconds:.1f} s")
         print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
               f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
         print(f"  final range RMSE {res.rmse_range[-1]:.1f} m, bound {res.bound_range[-1]:.1f} m")
-        if args.estimator == "mle":
+        if args.estimator == "mle" and scenario.target.model == "constant-turn":
             print(f"  sense of turn searched: {payload['turn_direction']}; "
                   f"{res.ambiguous_runs} run(s) with an indistinguishable alternative "
                   "solution")

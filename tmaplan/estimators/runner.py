@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_chec
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.estimators.applicability import APPLICABILITY, Applicability
 from tmaplan.estimators.filter import Filter, drive
 from tmaplan.estimators.init_bearings import initialise_from_bearings
 from tmaplan.estimators.mle import MLEConfig, mle, state_track, tma_data
@@ -211,6 +212,11 @@ class FilterEstimator:
         """The filter's sensor kinds; bearings for the bearings-only start."""
         return frozenset({"bearing"}) if self.init == "bearings" else self.filter.applies_to
 
+    @property
+    def applicability(self) -> Applicability | None:
+        """What it applies to (:mod:`tmaplan.estimators.applicability`)."""
+        return APPLICABILITY.get(self.name)
+
     def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
                  observer: ObserverTrack, rng: np.random.Generator) -> Track:
         """Filter the run; NaN before the first estimate."""
@@ -280,6 +286,11 @@ class MLEEstimator:
     def applies_to(self) -> frozenset[str]:
         """Bearings (frequency lines are optional)."""
         return frozenset({"bearing"})
+
+    @property
+    def applicability(self) -> Applicability:
+        """What it applies to (:mod:`tmaplan.estimators.applicability`)."""
+        return APPLICABILITY["mle"]
 
     def estimate(self, scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
                  rng: np.random.Generator) -> Track:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.errors import ScenarioError
+from tmaplan.estimators.applicability import check_applicable
 from tmaplan.estimators.mle import MLEConfig, state_track, tma_data
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
@@ -179,11 +180,18 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     Returns
     -------
     MonteCarloResult
+
+    Raises
+    ------
+    ScenarioError
+        An estimator / bound that cannot give a number on this scenario
+        (:func:`tmaplan.estimators.applicability.check_applicable`).
     """
     if runs < 1:
         raise ScenarioError("runs", ">= 1", runs)
     est = estimator_for(estimator, scenario, n_particles=n_particles,
                         **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
+    check_applicable(est, scenario, bound=bound)
     t0 = _time.perf_counter()
     K = scenario.n_steps
     err_pos = np.full((runs, K + 1), np.nan)

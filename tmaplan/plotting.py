@@ -80,7 +80,7 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
     ax.set_ylabel(f"North [{lab}]")
     ax.set_title(f"{sim.scenario.name}: geometry and bearings")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
+    ax.legend(loc="best", framealpha=0.6)
     lo = np.minimum(tgt.min(0), obs.min(0))
     hi = np.maximum(tgt.max(0), obs.max(0))
     pad = 0.1 * (hi - lo).max() + 1e-9
@@ -168,7 +168,7 @@ def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,
     ax.set_xlabel("East [km]")
     ax.set_ylabel("North [km]")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best", framealpha=0.6)
     ax.set_title("planned track over the prior")
     y = np.arange(len(names), dtype=float)
     bars = bx.barh(y, best, height=0.5, color=[f"C{i}" for i in range(len(names))], alpha=0.8)
@@ -181,7 +181,7 @@ def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,
     bx.set_title(f"optimised functional (smaller is better):\n{label}", fontsize=10)
     bx.grid(True, axis="x", alpha=0.3)
     if any(len(lst) > 1 for lst in base.values()):
-        bx.legend(fontsize=7, loc="lower right")
+        bx.legend(fontsize=7, loc="best", framealpha=0.6)
     save_figure(fig, path)
     return fig
 
@@ -232,6 +232,6 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     ax.set_title(f"{scenario.name}: {res.budget} pings, {res.status} ({gap})\noptimised: "
                  f"{label} ({'mean over the horizon: thin lines' if mean else 'last step: dots'})",
                  fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best", framealpha=0.6)
     save_figure(fig, path)
     return fig

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -16,13 +17,26 @@ if TYPE_CHECKING:
 
     from tmaplan.evaluation.cost_ranking import CostRankingResult
 
-__all__ = ["plot_cost_ranking", "write_ranking_report"]
+__all__ = ["candidate_label", "plot_cost_ranking", "write_ranking_report"]
 
 _MARKERS = {"straight": "s", "single-turn": "o", "zigzag": "^", "tactic": "D", "planned": "*"}
 
 
 def _ci(ci: tuple[float, float]) -> str:
     return "–" if not np.all(np.isfinite(ci)) else f"[{ci[0]:+.2f}, {ci[1]:+.2f}]"
+
+
+def candidate_label(name: str) -> str:
+    """A candidate's name in display units: ``"single-turn:+60deg@900s"`` ->
+    ``"single-turn +60° at 15 min"``, ``"zigzag:+30deg,leg600s"`` -> ``"zigzag +30°, legs
+    of 10 min"`` (other names unchanged)."""
+    def mins(m: re.Match[str]) -> str:
+        return f"{float(m.group(1)) / 60:g} min"
+
+    out = re.sub(r"^(single-turn|zigzag):", r"\1 ", name)
+    out = re.sub(r"([+-]?\d+(?:\.\d+)?)deg", r"\1°", out)
+    out = re.sub(r"@(\d+(?:\.\d+)?)s$", lambda m: f" at {mins(m)}", out)
+    return re.sub(r",leg(\d+(?:\.\d+)?)s$", lambda m: f", legs of {mins(m)}", out)
 
 
 def _num(x: float) -> str:
@@ -60,7 +74,7 @@ def plot_cost_ranking(result: CostRankingResult, path: str | Path) -> Figure:
         if i % ncols == 0:
             ax.set_ylabel("MC mean time to accuracy [min]", fontsize=7)
         ax.set_xlabel("cost (minimised)", fontsize=7)
-    axes.flat[0].legend(fontsize=6)
+    axes.flat[0].legend(fontsize=6, loc="best", framealpha=0.6)
     fig.suptitle(f"{result.problem}: cost functionals against closed-loop Monte Carlo "
                  f"({len(result.candidates)} candidates, {result.campaign.spec.runs} runs)",
                  fontsize=10)
@@ -86,7 +100,8 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
         for c in result.costs)
     order = np.argsort(result.time_to_accuracy, kind="stable")
     cands = "".join(
-        f"<tr><td style='text-align:left'>{html.escape(result.candidates[i])}</td>"
+        f"<tr><td style='text-align:left'>{html.escape(candidate_label(result.candidates[i]))}"
+        "</td>"
         f"<td>{result.families[i]}</td><td>{result.time_to_accuracy[i] / 60:.1f}</td>"
         f"<td>{result.final_range_rmse[i]:.0f}</td></tr>" for i in order)
     img = ""

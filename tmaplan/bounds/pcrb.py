@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import PCRBInputs, prepare
+from tmaplan.display import short_repr
 from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart, wrap_angle, wrap_half_angle
 from tmaplan.models.prior import relative_prior_samples
@@ -114,6 +115,8 @@ class PCRBResult:
         module and the closed form) or realisations of the scenario's true track
         (:func:`tmaplan.estimators.truth_bound.truth_conditioned_pcrb`, ristic2004, ch. 6).
     """
+
+    __repr__ = short_repr
 
     times: np.ndarray
     coords: Coords

@@ -156,7 +156,7 @@ def _figure(results: list[Any], path: Path, title: str) -> None:
         ax.set_xlabel("time [s]")
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
-    axes.flat[0].legend()
+    axes.flat[0].legend(loc="best", framealpha=0.6)
     fig.suptitle(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -34,6 +34,7 @@ from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedul
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
 from tmaplan.report import efficiency, write_report
+from tmaplan.report_tables import baseline_parameters
 from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
@@ -137,7 +138,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{b.objective:.4g}</td>"
-                   f"<td>{html.escape(str(b.params))}</td></tr>" for k, b in best.items())
+                   f"<td>{html.escape(baseline_parameters(b.params))}</td></tr>"
+                   for k, b in best.items())
     pings = ", ".join(f"{t / 60:.1f}" for t in sched.times)
     return (
         "<h2>Offline plan from the prior</h2>"

@@ -96,7 +96,7 @@ def _figure(res: Any, path: Path) -> None:
         eff = res.rmse_position[-1] / res.bound_position[-1]
     ax.set_title(f"{res.problem}: final RMSE / bound = {eff:.2f}")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    ax.legend(loc="best", framealpha=0.6)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

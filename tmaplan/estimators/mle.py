@@ -45,6 +45,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
+from tmaplan.display import short_repr
 from tmaplan.errors import ScenarioError
 
 # The measurement model (data, kinematics, residuals, FIM, acceptance threshold) lives in its
@@ -179,6 +180,8 @@ class MLEResult:
         ``MLEConfig.ambiguity_margin`` of it: bearings cannot tell them apart (e.g. the
         mirror-turn near-ambiguity of the clavard2013 half turn, noise-free cost 0.10).
     """
+
+    __repr__ = short_repr
 
     model: str
     names: tuple[str, ...]

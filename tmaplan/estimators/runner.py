@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_chec
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.applicability import APPLICABILITY, Applicability
 from tmaplan.estimators.filter import Filter, drive
@@ -83,6 +84,8 @@ class Track:
         Estimator-specific result: MLEResult, BearingsInit (``pf-bearings``) or the filter's
         last state.
     """
+
+    __repr__ = short_repr
 
     estimator: str
     times: np.ndarray

@@ -28,6 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
@@ -173,6 +174,8 @@ class CampaignResult:
         Which runs were computed now and which were loaded from disk.
     seconds : float
     """
+
+    __repr__ = short_repr
 
     spec: CampaignSpec
     times: np.ndarray

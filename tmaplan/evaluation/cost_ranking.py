@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
@@ -440,6 +441,8 @@ class CostRankingResult:
     campaign : CampaignResult
     seconds : float
     """
+
+    __repr__ = short_repr
 
     problem: str
     candidates: tuple[str, ...]

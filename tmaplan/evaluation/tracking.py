@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.applicability import check_applicable
 from tmaplan.estimators.mle import MLEConfig, state_track, tma_data
@@ -117,6 +118,8 @@ class MonteCarloResult:
         MLE: runs whose estimate has a statistically indistinguishable distinct alternative
         (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`); 0 for the filters.
     """
+
+    __repr__ = short_repr
 
     problem: str
     estimator: str

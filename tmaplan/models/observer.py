@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.target import initial_velocity
 
@@ -43,6 +44,8 @@ class ObserverTrack:
     speed : ndarray, shape (K + 1,)
         [m/s].
     """
+
+    __repr__ = short_repr
 
     times: np.ndarray
     position: np.ndarray

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
@@ -60,6 +61,8 @@ class Baseline:
         [m].
     track : ObserverTrack
     """
+
+    __repr__ = short_repr
 
     name: str
     params: dict[str, float]

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
@@ -113,6 +114,8 @@ class HeadingPlan:
         Wall time of the solve [s].
     message : str
     """
+
+    __repr__ = short_repr
 
     times: np.ndarray
     heading: np.ndarray

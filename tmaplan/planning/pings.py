@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError, ScenarioError
 from tmaplan.models.observer import ObserverTrack, observer_track
 
@@ -106,6 +107,8 @@ class PingSchedule:
     relaxed_weights : ndarray, shape (n_candidates,)
         Optimal weights of the relaxation (empty when it was not solved).
     """
+
+    __repr__ = short_repr
 
     steps: np.ndarray
     times: np.ndarray

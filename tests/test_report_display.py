@@ -103,6 +103,7 @@ def test_small_sample_warnings(one_run, three_runs):
     assert sample_warning(10) == ""
     text = differences_html(one_run)
     assert "undefined (1 run)" in text and "interval undefined" in text
+    assert "no confidence interval with a single run" in text and "better than" not in text
     assert "inf" not in text
     assert "[" in differences_html(three_runs)
 

@@ -162,7 +162,7 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
     ax.set_xlabel("time [min]")
     ax.set_ylabel("fraction of runs localised")
     ax.set_title(f"time to range accuracy ({result.spec.accuracy:.0%} of range, for good)")
-    ax.set_ylim(0, 1.02)
+    ax.set_ylim(-0.03, 1.03)  # curves at 0 and 1 stay visible
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
     paths["time_to_accuracy"] = save_figure(fig, out / "time_to_accuracy.png")
@@ -216,7 +216,8 @@ document.body.setAttribute("data-images-loaded",n);
 document.body.setAttribute("data-images-total",im.length);}});</script></head>
 <body>
 <h1>{html.escape(title or 'tmaplan policy comparison')}</h1>
-<p>{spec.runs} Monte Carlo runs, seed {spec.seed}, {spec.n_particles} particles; truths drawn
+<p>{spec.runs} Monte Carlo run{'s' if spec.runs != 1 else ''}, seed {spec.seed},
+{spec.n_particles} particles; truths drawn
 from the {'prior' if spec.truth == 'prior' else 'scenario'}; the same truth and noise for
 every policy in a run (paired comparison). Localised = relative range error below
 {spec.accuracy:.0%} and staying there. Wall time {result.seconds:.0f} s

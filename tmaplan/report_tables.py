@@ -126,8 +126,11 @@ def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metr
                ", significant" if d.excludes_zero else ", not significant")
         items.append(f"{html.escape(other)} {sign * d.mean / unit:+.2f} {u} ({ci}{sig})")
     n_sig = sum(_pair(diffs, best, o)[0].excludes_zero for o in order[1:])
+    n_runs = min(d.n for d in diffs)
+    verdict = (f"better than {n_sig} of the {len(order) - 1} other policies at 95 %"
+               if n_runs >= 2 else "no confidence interval with a single run")
     head = (f"<li><strong>{label}</strong>: lowest mean with <strong>{html.escape(best)}"
-            f"</strong>, better than {n_sig} of the {len(order) - 1} other policies at 95 %. ")
+            f"</strong>, {verdict}. ")
     shown = items[:1] + ([items[-1]] if len(items) > 1 else [])
     names = ["runner-up", "last"][:len(shown)]
     rest = "; ".join(f"{n}: {html.escape(best)} − {i}" for n, i in zip(names, shown))

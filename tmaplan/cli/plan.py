@@ -23,7 +23,7 @@ from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
-from tmaplan.plotting import plot_plan
+from tmaplan.plotting import objective_label, plot_plan
 from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
@@ -75,7 +75,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                      "heading": plan.observer.heading, "speed": plan.observer.speed},
     }
     if args.json != "-":
-        print(f"{scenario.name}: {planner.objective.name} = {plan.objective:.4g} over "
+        print(f"{scenario.name}: {objective_label(planner.objective.name)} = "
+              f"{plan.objective:.4g} over "
               f"{minutes(plan.times[-1] - plan.times[0], 0)} ({plan.status}, solved in "
               f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():

@@ -73,4 +73,4 @@ def test_invalid_command_line(case, capsys, tmp_path):
 def test_cli_corpus_covers_every_estimator():
     named = {c["argv"][c["argv"].index("--estimator") + 1] for c in CLI_CASES
              if "--estimator" in c["argv"]}
-    assert named == {"mle", "pf-bearings", "range-only"}  # pf applies to every sensor kind
+    assert named == {"mle", "pf", "pf-bearings", "range-only"}

@@ -291,6 +291,11 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
 
 
 def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
+    if scenario.prior is None:
+        raise _flag_error("prior", "a [prior] table: the PCRB starts from the prior information "
+                          "(J₀ = P₀⁻¹); add one or use `tmaplan crlb "
+                          f"{scenario.name}` for the batch CRLB of a deterministic track",
+                          None, scenario)
     if args.ping_every is not None and args.ping_every < scenario.time.dt:
         raise _flag_error("--ping-every", f">= dt = {scenario.time.dt:g} s",
                           _seconds_text(args.ping_every), scenario)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -57,6 +57,9 @@ class Applicability:
         position and a range bound: "truth" (PCRB along the runs' truths, ristic2004 ch. 6),
         "crlb" (batch CRLB at the truth). The filters' "prior" (prior-averaged PCRB) is a
         position bound only.
+    needs_prior : {"always", "bound", "never"}
+        Whether it needs the scenario's ``[prior]``: "always" (it starts from the prior),
+        "bound" (only its bound does: the PCRB starts from ``J₀ = P₀⁻¹``), "never".
     deterministic : bool
         Fits one deterministic track (the batch MLE, clavard2013): refused when the target's
         process-noise drift over the horizon, ``sqrt(q T³ / 3)`` [m], exceeds
@@ -69,6 +72,7 @@ class Applicability:
     why_min: str = ""
     target_models: frozenset[str] = _ALL_MODELS
     bounds: frozenset[str] = frozenset({"truth"})
+    needs_prior: Literal["always", "bound", "never"] = "always"
     deterministic: bool = False
 
 
@@ -79,11 +83,12 @@ APPLICABILITY: dict[str, Applicability] = {
     "pf-bearings": Applicability(
         what="the particle filter started from bearings, brehard2004",
         needs=frozenset({"bearing"}), min_measurements=3,
-        why_min="its batch initialisation fits a track to the first bearings"),
+        why_min="its batch initialisation fits a track to the first bearings",
+        needs_prior="bound"),
     "mle": Applicability(
         what="the batch MLE of clavard2013", needs=frozenset({"bearing"}), min_measurements=4,
         why_min="its grid start and acceptance test are built on bearings, 4 track parameters",
-        bounds=frozenset({"crlb"}), deterministic=True),
+        bounds=frozenset({"crlb"}), needs_prior="never", deterministic=True),
     "range-only": Applicability(
         what="range-only tracking of sharma2024", needs=frozenset({"range"}), min_measurements=3,
         why_min="range measurements at every scan"),
@@ -129,6 +134,11 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         why = f" ({decl.why_min})" if decl.why_min else ""
         return (f"{name} ({decl.what}) needs at least {decl.min_measurements} {kinds} "
                 f"measurements{why}, {scenario.name} has {n}")
+    if scenario.prior is None and (decl.needs_prior == "always" or (
+            decl.needs_prior == "bound" and bound is not False)):
+        what = ("starts from the prior" if decl.needs_prior == "always" else
+                "is compared with the PCRB, which starts from the prior (J₀ = P₀⁻¹)")
+        return f"{name} ({decl.what}) {what}, {scenario.name} has no [prior] table"
     model = scenario.target.model
     if model not in decl.target_models:
         return (f"{name} ({decl.what}) is defined for {', '.join(sorted(decl.target_models))}"

@@ -145,6 +145,20 @@ def test_short_reprs(one_run):
     assert short_repr(3) == object.__repr__(3)
 
 
+def test_heading_plan_and_belief_reprs_are_short():
+    # repr(plan) was 35 000 characters (every array printed)
+    from tmaplan.planning import Belief, HeadingPlanner
+
+    sc = load_problem("default")
+    belief = Belief.from_prior(sc)
+    plan = HeadingPlanner(sc, horizon=600.0, n_starts=1).solve(belief)
+    for obj in (plan, belief, plan.observer):
+        r = repr(obj)
+        assert len(r) < 600 and "array(" not in r and "\n" not in r, r
+    assert f"objective={plan.objective:.4g}" in repr(plan)
+    assert "samples=<float64 array (" in repr(belief)
+
+
 def test_tracks_lines_all_visible_and_legends_outside(three_runs, tmp_path):
     from matplotlib.image import imread
 

@@ -165,7 +165,9 @@ def _brief(value: Any) -> str:
         return f"{{{keys}{', ...' if len(value) > 6 else ''}}} ({len(value)} items)"
     if isinstance(value, list | tuple):
         if len(value) <= 4 and all(isinstance(v, int | float | str | np.number) for v in value):
-            return "(" + ", ".join(_brief(v) for v in value) + ")"
+            items = ", ".join(_brief(v) for v in value)
+            return f"[{items}]" if isinstance(value, list) else \
+                f"({items}{',' if len(value) == 1 else ''})"
         return f"<{type(value).__name__} of {len(value)}>"
     if value is None:
         return "None"

@@ -69,6 +69,8 @@ class CampaignSpec:
         Relative range error that counts as localised.
     """
 
+    __repr__ = short_repr
+
     scenario: Scenario
     policies: tuple[str, ...]
     runs: int

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.bounds.inputs import lpc_prior_information
+from tmaplan.display import short_repr
 from tmaplan.errors import ObservabilityError, PlanningError
 
 if TYPE_CHECKING:
@@ -52,6 +53,8 @@ class Belief:
     t : float
         Time of the belief [s].
     """
+
+    __repr__ = short_repr
 
     mean: np.ndarray
     cov: np.ndarray

@@ -157,7 +157,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     require_finite(payload, FINITE, source=scenario.name,
                    why="run statuses: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
     if not quiet:
-        print(f"{scenario.name}: {args.estimator}, {res.runs} runs, {res.seconds:.1f} s")
+        runs = f"{res.runs} run{'s' if res.runs != 1 else ''}"
+        print(f"{scenario.name}: {args.estimator}, {runs}, {res.seconds:.1f} s")
         print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
               f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
         print(f"  final range RMSE {res.rmse_range[-1]:.1f} m, bound {res.bound_range[-1]:.1f} m")

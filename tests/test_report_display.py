@@ -195,3 +195,20 @@ def test_report_rendered_in_headless_chromium(report, tmp_path):
     assert 'data-images-loaded="3"' in dom
     check_display_units(_visible_text(dom))
     assert "Warning: small sample" in dom and "<details>" in dom
+
+
+def test_undefined_differences_are_said_not_printed_as_nan():
+    from tmaplan.evaluation.metrics import PairedDifference
+
+    nan = float("nan")
+
+    def pd(a, b, mean, lo, hi):
+        return PairedDifference(a=a, b=b, metric="final_range_error", mean=mean, ci_low=lo,
+                                ci_high=hi, level=0.95, n=3)
+
+    fake = SimpleNamespace(policies=("a", "b", "c"), differences=(
+        pd("a", "b", nan, nan, nan), pd("a", "c", -500.0, -900.0, -100.0),
+        pd("b", "c", nan, nan, nan)))
+    text = differences_html(fake)
+    assert "nan" not in text.lower() and "undefined" in text
+    assert "lowest mean with <strong>a</strong>" in text and "-0.5 km" in text

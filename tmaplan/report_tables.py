@@ -53,8 +53,12 @@ def sample_warning(runs: int) -> str:
 
 def _ci(d: PairedDifference, unit: float, u: str) -> str:
     if not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
-        return f"undefined ({d.n} run{'s' if d.n != 1 else ''})"
-    return f"[{d.ci_low / unit:+.2f}, {d.ci_high / unit:+.2f}] {u}"
+        return f"undefined ({d.n} run)" if d.n < 2 else "undefined"
+    return f"[{d.ci_low / unit:+.3g}, {d.ci_high / unit:+.3g}] {u}"
+
+
+def _mean(x: float, unit: float, u: str) -> str:
+    return f"{x / unit:+.3g} {u}" if math.isfinite(x) else "undefined"
 
 
 def _verdict(d: PairedDifference) -> str:
@@ -111,20 +115,20 @@ def _pair(diffs: list[PairedDifference], a: str, b: str) -> tuple[PairedDifferen
 def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metric: str,
                   ) -> str:
     label, unit, u = _metric(metric)
-    rel = _relative_means(diffs, policies)
+    rel = {p: m for p, m in _relative_means(diffs, policies).items() if math.isfinite(m)}
     if len(rel) < 2:
-        return ""
+        return f"<li><strong>{label}</strong>: no summary (undefined means).</li>"
     order = sorted(rel, key=lambda p: rel[p])
     best = order[0]
     items = []
     for other in order[1:]:
         d, sign = _pair(diffs, best, other)
         lo, hi = sorted((sign * d.ci_low, sign * d.ci_high))
-        ci = (f"[{lo / unit:+.2f}, {hi / unit:+.2f}] {u}"
+        ci = (f"[{lo / unit:+.3g}, {hi / unit:+.3g}] {u}"
               if math.isfinite(lo) and math.isfinite(hi) else "interval undefined")
         sig = ("" if not (math.isfinite(lo) and math.isfinite(hi)) else
                ", significant" if d.excludes_zero else ", not significant")
-        items.append(f"{html.escape(other)} {sign * d.mean / unit:+.2f} {u} ({ci}{sig})")
+        items.append(f"{html.escape(other)} {_mean(sign * d.mean, unit, u)} ({ci}{sig})")
     n_sig = sum(_pair(diffs, best, o)[0].excludes_zero for o in order[1:])
     n_runs = min(d.n for d in diffs)
     verdict = (f"better than {n_sig} of the {len(order) - 1} other policies at 95 %"
@@ -149,7 +153,7 @@ def differences_html(result: CampaignResult) -> str:
     for d in diffs:
         label, unit, u = _metric(d.metric)
         rows.append(f"<tr><td>{html.escape(d.a)} − {html.escape(d.b)}</td><td>{label}</td>"
-                    f"<td>{d.mean / unit:+.2f} {u}</td><td>{_ci(d, unit, u)}</td>"
+                    f"<td>{_mean(d.mean, unit, u)}</td><td>{_ci(d, unit, u)}</td>"
                     f"<td>{_verdict(d)}</td></tr>")
     return (f"<h3>Summary</h3><ul>{summary}</ul>"
             "<p>Negative differences favour the first policy named (lower is better). "

@@ -318,6 +318,11 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
 
 
 def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
+    if scenario.prior is None:
+        raise _flag_error("prior", "a [prior] table: every policy is flown against the "
+                          "particle filter, which starts from the prior (and --truth prior "
+                          "draws the truths from it); add one (see the README's example)",
+                          None, scenario)
     turning = [p.strip() for p in args.policies.split(",")
                if p.strip() and p.strip().split("+")[0] != "straight"]
     if turning and scenario.observer.turn_rate_max is None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -194,4 +195,8 @@ def test_rank_costs_cli_json(tmp_path):
     assert all(isinstance(c["spearman_ci"], list) and len(c["spearman_ci"]) == 2
                for c in d["costs"])
     assert (tmp_path / "default_rank_costs.png").stat().st_size > 0
-    assert "Rank correlations" in (tmp_path / "rank-costs.html").read_text()
+    text = (tmp_path / "rank-costs.html").read_text()
+    assert "Rank correlations" in text
+    # display units and the small-sample warning (2 runs), no SI candidate names
+    assert "final range RMSE [km]" in text and "Warning: small sample" in text
+    assert not re.search(r"@\d+(\.\d+)?s<", text) and "np.float64(" not in text

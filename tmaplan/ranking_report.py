@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.plotting import new_figure, save_figure
+from tmaplan.report_tables import sample_warning
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -31,7 +32,7 @@ def candidate_label(name: str) -> str:
     ``"single-turn +60° at 15 min"``, ``"zigzag:+30deg,leg600s"`` -> ``"zigzag +30°, legs
     of 10 min"`` (other names unchanged)."""
     def mins(m: re.Match[str]) -> str:
-        return f"{float(m.group(1)) / 60:g} min"
+        return f"{float(m.group(1)) / 60:.3g} min"
 
     out = re.sub(r"^(single-turn|zigzag):", r"\1 ", name)
     out = re.sub(r"([+-]?\d+(?:\.\d+)?)deg", r"\1°", out)
@@ -103,7 +104,7 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
         f"<tr><td style='text-align:left'>{html.escape(candidate_label(result.candidates[i]))}"
         "</td>"
         f"<td>{result.families[i]}</td><td>{result.time_to_accuracy[i] / 60:.1f}</td>"
-        f"<td>{result.final_range_rmse[i]:.0f}</td></tr>" for i in order)
+        f"<td>{result.final_range_rmse[i] / 1000:.2f}</td></tr>" for i in order)
     img = ""
     if figure is not None:
         b64 = base64.b64encode(Path(figure).read_bytes()).decode("ascii")
@@ -115,6 +116,7 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
 <html lang="en"><head><meta charset="utf-8"><title>tmaplan rank-costs: {result.problem}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
+.warning{{background:#fff4e0;border-left:4px solid #e69500;padding:.5em 1em}}
 img{{max-width:100%}}</style></head><body>
 <h1>Cost functionals against closed-loop Monte Carlo: {html.escape(result.problem)}</h1>
 <p>{len(result.candidates)} candidate manoeuvres flown in closed loop, {spec.runs} paired runs
@@ -126,13 +128,14 @@ bootstrap percentile 95 % (runs and candidates resampled). Default objective of
 <code>tmaplan plan</code>: <code>{html.escape(result.default_objective)}</code>; of the
 closed-loop policies: <code>{html.escape(result.closed_loop_objective)}</code>.</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
+{sample_warning(spec.runs)}
 <h2>Rank correlations</h2>
 <table><tr><th>cost</th><th>Spearman ρ (time to accuracy)</th><th>95 % CI</th>
 <th>Kendall τ</th><th>Spearman ρ (final range RMSE)</th><th>95 % CI</th></tr>{rows}</table>
 <h2>Figure</h2>{img}
 <h2>Candidates (best first)</h2>
 <table><tr><th>candidate</th><th>family</th><th>mean time to accuracy [min]</th>
-<th>final range RMSE [m]</th></tr>{cands}</table>
+<th>final range RMSE [km]</th></tr>{cands}</table>
 <h2>Left out</h2><ul>{skipped}</ul>
 </body></html>
 """

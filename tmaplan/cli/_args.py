@@ -314,6 +314,14 @@ def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
 def _check_track(args: argparse.Namespace, scenario: Any) -> None:
     from tmaplan.estimators.applicability import check_applicable
 
+    # the flags' own constraints first, then whether the estimator applies at all
+    turn = getattr(args, "turn_direction", "auto")
+    if turn != "auto" and args.estimator != "mle":
+        raise _flag_error("--turn-direction", "only with --estimator mle", turn, scenario)
+    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if getattr(args, "frequencies", 0) > available:
+        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
+                          args.frequencies, scenario)
     check_applicable(args.estimator, scenario, bound=args.bound, cli=True)
 
 

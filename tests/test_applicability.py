@@ -95,3 +95,11 @@ def test_track_never_exits_0_with_nan(monkeypatch, capsys):
     err = out.err.strip().splitlines()
     assert len(err) == 1 and "result 'rmse_position[-1]' is NaN" in err[0]
     assert "run statuses: 1 rejected" in err[0]
+
+
+def test_every_verb_with_numeric_results_declares_them():
+    import importlib
+
+    for verb in ("track", "bound", "crlb", "plan", "schedule", "compare", "demo"):
+        mod = importlib.import_module(f"tmaplan.cli.{verb}")
+        assert mod.FINITE and all(isinstance(p, str) for p in mod.FINITE), verb

@@ -82,7 +82,7 @@ def check_display_units(text: str) -> None:
 def test_report_text_is_in_display_units(report):
     text = _visible_text(report.read_text(encoding="utf-8"))
     check_display_units(text)
-    assert "turn +120° at 15.0 min" in text and "legs of 11.2 min" in text
+    assert "turn +120° at 15.0 min" in text and "first turn -60°, legs of 11.2 min" in text
     assert "final range RMSE [km]" in text and "final speed RMSE [kn]" in text
 
 

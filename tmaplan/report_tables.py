@@ -165,16 +165,19 @@ def differences_html(result: CampaignResult) -> str:
 
 
 def baseline_parameters(params: dict[str, Any]) -> str:
-    """A baseline manoeuvre's parameters in words: ``"turn +60° at 15.0 min"``."""
+    """A baseline manoeuvre's parameters in words: ``"turn +60° at 15.0 min"``, ``"first turn
+    +120°, legs of 7.5 min"`` (zig-zag)."""
     if not params:
         return "no turn"
     parts = []
     if "angle" in params:
-        parts.append(f"turn {angle(float(params['angle']), signed=True)}")
+        first = "first turn" if "leg_duration" in params else "turn"
+        parts.append(f"{first} {angle(float(params['angle']), signed=True)}")
     if "time" in params:
         parts.append(f"at {minutes(float(params['time']))}")
+    text = " ".join(parts)
     if "leg_duration" in params:
-        parts.append(f"legs of {minutes(float(params['leg_duration']))}")
+        text += f"{', ' if text else ''}legs of {minutes(float(params['leg_duration']))}"
     other = [f"{k} = {float(v):.4g}" for k, v in params.items()
              if k not in ("angle", "time", "leg_duration")]
-    return ", ".join([" ".join(parts), *other]) if parts else ", ".join(other)
+    return ", ".join([t for t in (text, *other) if t])

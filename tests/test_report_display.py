@@ -212,3 +212,13 @@ def test_undefined_differences_are_said_not_printed_as_nan():
     text = differences_html(fake)
     assert "nan" not in text.lower() and "undefined" in text
     assert "lowest mean with <strong>a</strong>" in text and "-0.5 km" in text
+
+
+def test_policy_styles_are_never_dotted_like_the_bounds():
+    from tmaplan.report import line_style
+
+    for i in range(12):
+        ls = line_style(i)["ls"]
+        assert ls not in (":", "dotted")
+        if isinstance(ls, tuple):
+            assert max(ls[1][::2]) >= 5  # a dash, not dots

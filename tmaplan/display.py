@@ -67,7 +67,7 @@ def rate(r: float) -> str:
 #: Unit family per key of a scenario file ("sigma" depends on the sensor kind).
 _KIND: dict[str, str] = {
     **dict.fromkeys(("position", "centre", "radius", "range_min", "range_max", "range_mean",
-                     "range_std", "keep_out_range"), "length"),
+                     "range_std", "keep_out_range", "ping_sigma"), "length"),
     **dict.fromkeys(("dt", "horizon", "t0", "start", "ping_min_spacing", "control_interval",
                      "replan_interval", "period", "ping_forbidden"), "time"),
     **dict.fromkeys(("speed", "speed_min", "speed_max", "speed_mean", "speed_std", "velocity",

@@ -103,3 +103,23 @@ def test_every_verb_with_numeric_results_declares_them():
     for verb in ("track", "bound", "crlb", "plan", "schedule", "compare", "demo"):
         mod = importlib.import_module(f"tmaplan.cli.{verb}")
         assert mod.FINITE and all(isinstance(p, str) for p in mod.FINITE), verb
+
+
+def test_compare_never_exits_0_with_nan(monkeypatch, capsys, tmp_path):
+    import tmaplan.cli.compare as compare
+
+    real = compare.run_campaign
+
+    def diverged(*a, **k):
+        res = real(*a, **k)
+        res.summary["straight"]["final_range_rmse"] = float("nan")
+        return res
+
+    monkeypatch.setattr(compare, "run_campaign", diverged)
+    rc = main(["compare", "default", "--policies", "straight", "--runs", "1", "--particles",
+               "100", "--out", str(tmp_path)])
+    out = capsys.readouterr()
+    assert rc == 1 and "nan" not in out.out.lower()
+    err = out.err.strip().splitlines()
+    assert len(err) == 1 and "result 'policies.straight.final_range_rmse' is NaN" in err[0]
+    assert "report written to" in err[0]

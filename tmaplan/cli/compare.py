@@ -18,6 +18,7 @@ from tmaplan.cli._args import (
     integer,
     open_fraction,
 )
+from tmaplan.cli._finite import require_finite
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import load
@@ -74,6 +75,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         payload["policies"][name]["efficiency"] = e
     payload["report"] = str(report)
     payload["directory"] = str(result.directory)
+    require_finite(payload, FINITE, source=scenario.name,
+                   why=f"report written to {report}, runs kept in {result.directory}")
     if not quiet:
         for name in result.policies:
             s = result.summary[name]

@@ -77,6 +77,7 @@ def check_display_units(text: str) -> None:
                   'horizon = "45 min"', 'range_max = "25 km"', 'sigma = "1 deg"'):
         assert shown in text, shown
     assert "inf" not in re.sub(r"information|infinite|info", "", text.lower())
+    assert not re.search(r"\bnan\b", text.lower())
 
 
 def test_report_text_is_in_display_units(report):

@@ -57,6 +57,10 @@ def _ci(d: PairedDifference, unit: float, u: str) -> str:
     return f"[{d.ci_low / unit:+.3g}, {d.ci_high / unit:+.3g}] {u}"
 
 
+def _num(x: float, fmt: str) -> str:
+    return format(float(x), fmt) if math.isfinite(x) else "undefined"
+
+
 def _mean(x: float, unit: float, u: str) -> str:
     return f"{x / unit:+.3g} {u}" if math.isfinite(x) else "undefined"
 
@@ -72,13 +76,14 @@ def results_table(result: CampaignResult, eff: dict[str, dict[str, float]]) -> s
     rows = []
     for name in result.policies:
         s = result.summary[name]
+        e = eff[name]
         cells = (html.escape(name), minutes(s["time_to_accuracy"]),
-                 f"{s['reached_fraction']:.0%}", f"{s['final_range_rmse'] / 1000:.2f}",
-                 f"{s['rmse_position'][-1] / 1000:.2f}",
-                 f"{np.degrees(s['rmse_course'][-1]):.0f}",
+                 f"{s['reached_fraction']:.0%}", _num(s["final_range_rmse"] / 1000, ".2f"),
+                 _num(s["rmse_position"][-1] / 1000, ".2f"),
+                 _num(np.degrees(s["rmse_course"][-1]), ".0f"),
                  speed(s["rmse_speed"][-1]).removesuffix(" kn"),
-                 f"{eff[name]['final_position']:.2g} / {eff[name]['final_range']:.2g}",
-                 f"{eff[name]['mean_range']:.2g}", f"{s['divergence_rate']:.0%}",
+                 f"{_num(e['final_position'], '.2g')} / {_num(e['final_range'], '.2g')}",
+                 _num(e["mean_range"], ".2g"), f"{s['divergence_rate']:.0%}",
                  f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}")
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     return ("<table><tr><th>policy</th><th>median time to accuracy</th><th>localised</th>"

@@ -173,7 +173,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
         runs (ristic2004, ch. 6); "prior" is the PCRB averaged over trajectories
         drawn from the prior (optimistic before an unobservable geometry becomes observable).
-        The MLE always uses the CRLB at the truth.
+        The MLE always uses the CRLB at the truth ("prior" is refused for it).
     bound_samples : int
         Monte Carlo samples of the prior-averaged PCRB.
     progress : callable(done, total), optional

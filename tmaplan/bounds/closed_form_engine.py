@@ -23,7 +23,7 @@ of the ping information (eq. 51) from the exact second moments.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 
@@ -42,6 +42,8 @@ from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.models.target import ncv_matrices
 
 if TYPE_CHECKING:
+    from typing_extensions import Buffer
+
     from tmaplan.models.observer import ObserverTrack
 
 __all__ = [
@@ -534,12 +536,12 @@ def _call(fn: Any, args: list[np.ndarray]) -> list[np.ndarray]:
         a = np.asarray(a, dtype=float)
         a = np.ascontiguousarray(a.T if a.ndim == 2 else a)  # column-major bytes
         keep.append(a)
-        buf.set_arg(i, memoryview(a))
+        buf.set_arg(i, memoryview(cast("Buffer", a)))
     outs = []
     for i in range(fn.n_out()):
         rows, cols = fn.size_out(i)
         o = np.empty((cols, rows))
-        buf.set_res(i, memoryview(o))
+        buf.set_res(i, memoryview(cast("Buffer", o)))
         outs.append(o)
     run()
     if buf.ret() != 0:

@@ -39,6 +39,7 @@ from tmaplan.bounds._crlb_fim import (
 )
 from tmaplan.errors import ObservabilityError, ScenarioError
 from tmaplan.geometry import range_of
+from tmaplan.models.target import circle_parameters
 from tmaplan.models.tracks import (
     TrackModel,
     constant_turn_model,
@@ -197,7 +198,8 @@ def _physical_scales(model: TrackModel, theta: np.ndarray, bearings: Sequence[Be
     """Typical size of each parameter: mean range L for lengths, L/T for speeds, 1 rad,
     1/T for rates (T = observation span), the line's σ for tones."""
     ts, ps = [], []
-    for m in (*bearings, *ranges, *([frequencies] if frequencies is not None else [])):
+    sets: list[BearingData | RangeData | FrequencyData] = [*bearings, *ranges]
+    for m in (*sets, *([frequencies] if frequencies is not None else [])):
         t = np.asarray(m.times, float).reshape(-1)
         if t.size:
             ts.append(t)
@@ -264,9 +266,10 @@ def crlb_from_data(
                                                      frequencies))
 
     # final time and observer position
+    meas: list[BearingData | RangeData] = [*bearings, *ranges]
     sets: list[tuple[np.ndarray, np.ndarray]] = [(np.asarray(b.times, float).reshape(-1),
                                                   np.asarray(b.observer_position, float))
-                                                 for b in (*bearings, *ranges)]
+                                                 for b in meas]
     if frequencies is not None:
         sets.append((np.asarray(frequencies.times, float).reshape(-1),
                      np.asarray(frequencies.observer_position, float)))
@@ -349,8 +352,7 @@ def scenario_data(
     t_ref = float(grid.t0 if t_ref is None else t_ref)
     if tgt.model == "constant-turn":
         model = constant_turn_model()
-        theta = np.array([tgt.centre[0], tgt.centre[1], tgt.radius, tgt.phase, tgt.omega],
-                         dtype=float)
+        theta = np.array(circle_parameters(tgt))
     else:
         p0 = np.asarray(tgt.position, float)
         v0 = initial_velocity(tgt)

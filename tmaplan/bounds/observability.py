@@ -33,6 +33,7 @@ import numpy as np
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of
+from tmaplan.models.target import circle_parameters
 from tmaplan.models.tracks import constant_turn_model
 
 if TYPE_CHECKING:
@@ -289,7 +290,7 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
         if np.max(np.linalg.norm(pos - obs, axis=-1)) < 1e-6 * scale:
             degenerate[i] = True
             continue
-        res[i] = float(np.linalg.norm(O @ p - z) / max(np.linalg.norm(z), 1e-300))
+        res[i] = float(np.linalg.norm(O @ p - z) / max(float(np.linalg.norm(z)), 1e-300))
     best = float(cands[int(np.argmin(res))]) if np.any(np.isfinite(res)) else float("nan")
     return SwitchScanResult(candidates=cands, residuals=res, degenerate=degenerate, best=best)
 
@@ -477,7 +478,7 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
         if not 0 <= n <= len(f0):
             raise ScenarioError("frequencies", f"an integer in [0, {len(f0)}]", frequencies,
                                 source=scenario.name)
-        theta = [tgt.centre[0], tgt.centre[1], tgt.radius, tgt.phase, tgt.omega]
+        theta = list(circle_parameters(tgt))
         return ct_observability(times, obs.position[steps], obs.velocity[steps], theta,
                                 sigma=bsens[0].sigma, f0=f0[:n], sigma_f=sf[:n], c=c,
                                 **({} if rtol is None else {"rtol": rtol}))

@@ -35,6 +35,7 @@ from tmaplan.models.tracks import (
     range_rate_rows,
     range_rows,
 )
+from tmaplan.scenario import BearingSensor, FrequencySensor
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -140,15 +141,15 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
         Use only the first ``frequencies`` lines (0 = bearings only); default all.
     """
     t = scenario.target
-    mdl: Model = model or ("cv" if t.model == "ncv" else t.model)  # type: ignore[assignment]
+    mdl: Model = model or ("cv" if t.model == "ncv" else t.model)
     legs = np.array([leg.start for leg in t.legs], float) if mdl == "multi-leg" else np.zeros(0)
     e2 = np.zeros((0, 2))
     b = [m for m in measurements if m.kind == "bearing"]
     r = [m for m in measurements if m.kind == "range" and m.steps.size]
     f = [m for m in measurements if m.kind == "frequency"]
-    amb = "none"
-    if b:
-        amb = scenario.sensors[b[0].sensor].ambiguity
+    amb: Literal["none", "pi"] = "none"
+    if b and isinstance(bs := scenario.sensors[b[0].sensor], BearingSensor):
+        amb = bs.ambiguity
     pos, vel = observer.position, observer.velocity
 
     def cat(ms: list[MeasurementSet], attr: str) -> np.ndarray:
@@ -167,7 +168,8 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
         sen = scenario.sensors[fm.sensor]
         f_times, f_values = fm.times, fm.values[:, :P]
         f_sigma = np.asarray(fm.sigma, float)[:P]
-        f_obs, f_vel, c = pos[fm.steps], vel[fm.steps], float(sen.c)
+        c = float(sen.c) if isinstance(sen, FrequencySensor) else 1500.0
+        f_obs, f_vel = pos[fm.steps], vel[fm.steps]
     else:
         f_times, f_values, f_sigma = np.zeros(0), np.zeros((0, 0)), np.zeros(0)
         f_obs, f_vel, c = e2, e2, 1500.0

@@ -120,7 +120,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
         if p.mean is not None:
             return scenario
         mean = truth + np.asarray(p.std, float) * rng.standard_normal(4)
-        return scenario.replace(prior=dataclasses.replace(p, mean=tuple(float(x) for x in mean)))
+        m0, m1, m2, m3 = (float(x) for x in mean)
+        return scenario.replace(prior=dataclasses.replace(p, mean=(m0, m1, m2, m3)))
     rel = truth[:2] - np.asarray(scenario.observer.position, float)
     changes: dict[str, Any] = {}
     if p.bearing_mean is None:

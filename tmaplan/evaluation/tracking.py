@@ -25,6 +25,7 @@ from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
 from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.models.target import circle_parameters
 from tmaplan.simulate import simulate
 
 if TYPE_CHECKING:
@@ -58,7 +59,7 @@ def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.
                     frequencies=config.frequencies)
     t = scenario.target
     if data.model == "constant-turn":
-        geom = np.array([*t.centre, t.radius, t.phase, t.omega], float)
+        geom = np.array(circle_parameters(t))
     else:
         # cv / multi-leg: truth = initial position and one velocity per leg
         vel = [sim.target[0, 2:]] + [sim.target[np.searchsorted(scenario.times, s), 2:]

@@ -275,6 +275,7 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     uniform = float(ev.value(uni))
     lb, ref, bound_s = float("nan"), "none", 0.0
     u_rel = np.zeros(0)
+    steps: list[int]
     if budget == 0:
         steps, val, lb, ref = [], no_ping, no_ping, "enumeration"
     else:

@@ -159,8 +159,8 @@ def offline_plan(scenario: Scenario, objective: str | None) -> Any:
     if key not in _PLAN_CACHE:
         from tmaplan.planning import plan_heading
 
-        kw = {} if objective is None else {"objective": objective}
-        _PLAN_CACHE[key] = plan_heading(scenario, **kw)
+        _PLAN_CACHE[key] = (plan_heading(scenario) if objective is None
+                            else plan_heading(scenario, objective=objective))
     return _PLAN_CACHE[key]
 
 

@@ -108,7 +108,8 @@ def _rows(rel: np.ndarray, tau: np.ndarray, s: np.ndarray, r2: np.ndarray) -> np
 
 
 def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) -> np.ndarray:
-    """FIM of ``X(t_ref) = [r_x, r_y, v_x, v_y]`` from bearings of a CV relative track.
+    """FIM of ``X(t_ref) = [r_x, r_y, v_x, v_y]`` from bearings of a CV relative track
+    (:func:`fim_bearings_generic`, the planner's form, on numpy arrays).
 
     Parameters
     ----------
@@ -126,9 +127,11 @@ def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) ->
     ndarray, shape (..., 4, 4)
         [1/m², 1/(m·m/s), 1/(m/s)²].
     """
-    rel, t, s, r2 = _check_bearing_inputs(rel_pos, times, sigma)
-    rows = _rows(rel, t - float(t_ref), s, r2)
-    return np.einsum("...ni,...nj->...ij", rows, rows)
+    rel, t, s, _ = _check_bearing_inputs(rel_pos, times, sigma)
+    steps = (-1,) + (1,) * (rel.ndim - 2)  # steps along axis 0, batch axes after
+    F = fim_bearings_generic(np.moveaxis(rel[..., 0], -1, 0), np.moveaxis(rel[..., 1], -1, 0),
+                             (t - float(t_ref)).reshape(steps), (1.0 / s**2).reshape(steps))
+    return np.moveaxis(np.array(F), (0, 1), (-2, -1))
 
 
 def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,

@@ -327,7 +327,12 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     ObservabilityResult
         ``expected_rank = 5 + P``.
     """
-    from tmaplan.bounds.crlb import BearingData, FrequencyData, fisher_information
+    from tmaplan.bounds.batch_fim import (
+        BearingData,
+        FrequencyData,
+        batch_data,
+        fisher_information,
+    )
 
     t = np.asarray(times, dtype=float).reshape(-1)
     pos = np.asarray(observer_position, dtype=float)
@@ -338,8 +343,9 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     if len(f0):
         freq = FrequencyData(times=t, observer_position=pos, observer_velocity=vel,
                              f0=np.asarray(f0, float), sigma=np.asarray(sigma_f, float), c=c)
-    fim, _ = fisher_information(model, theta, bearings=[BearingData(
-        times=t, observer_position=pos, sigma=sigma)], frequencies=freq)
+    fim = fisher_information(batch_data(model, bearings=[BearingData(
+        times=t, observer_position=pos, sigma=sigma)], frequencies=freq),
+        np.r_[theta, np.asarray(f0, float)])
     dim = fim.shape[0]
     # Physical scales (not the unit diagonal: an exactly uninformed parameter, e.g. ρ_C for
     # an observer at the centre, would be blown up to a unit column): lengths by the mean

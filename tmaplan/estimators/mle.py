@@ -45,22 +45,14 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
-from tmaplan.errors import ScenarioError
-
-# The measurement model (data, kinematics, residuals, FIM, acceptance threshold) lives in its
-# own module; its names are re-exported here (the public home of the API).
-from tmaplan.estimators._mle_models import (
+from tmaplan.bounds.batch_fim import (
     Model,  # noqa: F401
     TMAData,
-    _positions,
-    acceptance_threshold,
     fisher_information,
-    kinematics,
     residuals,
-    state_track,
     tma_data,
-    track_model,
 )
+from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -75,6 +67,78 @@ __all__ = [
     "state_track",
     "tma_data",
 ]
+
+
+# --------------------------------------------------------------------------------------------
+# Parameter vectors -> tracks (the residuals and FIM are in tmaplan.bounds.batch_fim)
+# --------------------------------------------------------------------------------------------
+
+
+def kinematics(data: TMAData, theta: np.ndarray, t: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Target position and velocity and their Jacobians w.r.t. the geometric parameters.
+
+    Parameters
+    ----------
+    data : TMAData
+    theta : ndarray, shape (n_geom,)
+    t : ndarray, shape (n,)
+        Times [s].
+
+    Returns
+    -------
+    P, V : ndarray, shape (n, 2)
+        [m], [m/s].
+    dP, dV : ndarray, shape (n, 2, n_geom)
+    """
+    model = data.track
+    th = np.asarray(theta, float)[: data.n_geom]
+    t = np.asarray(t, float)
+    P, V = model.track(th, t)
+    dP, dV = model.jacobian(th, t)
+    return P, V, dP, dV
+
+
+def _positions(data: TMAData, th: np.ndarray, t: np.ndarray, *, velocity: bool = False
+               ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Batched positions (and velocities) for many parameter vectors, shape (G, n, 2)."""
+    P, V = data.track.track_many(np.asarray(th, float)[:, : data.n_geom], t)
+    return (P, V) if velocity else P
+
+
+def acceptance_threshold(data: TMAData) -> float:
+    """clavard2013's acceptance threshold, generalised as in the module notes."""
+    ng = data.n_geom
+    dofs = []
+    if data.b_times.size:
+        dofs.append(data.b_times.size - ng)
+    if data.r_times.size:
+        dofs.append(data.r_times.size - ng)
+    for _ in range(data.n_lines):
+        dofs.append(data.f_times.size - ng - 1)
+    d = np.maximum(np.asarray(dofs, float), 1.0)
+    return float(d.sum() + 3.0 * np.sqrt(2.0 * d).sum())
+
+
+def state_track(data: TMAData, params: np.ndarray, covariance: np.ndarray | None,
+                times: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Absolute target states ``[x, y, v_x, v_y]`` implied by the parameters, and their
+    covariance by the delta method.
+
+    Returns
+    -------
+    states : ndarray, shape (n, 4)
+    covs : ndarray, shape (n, 4, 4) or None
+    """
+    ng = data.n_geom
+    P, V, dP, dV = kinematics(data, np.asarray(params)[:ng], np.asarray(times, float))
+    S = np.concatenate([P, V], axis=1)
+    if covariance is None:
+        return S, None
+    J = np.concatenate([dP, dV], axis=1)  # (n, 4, ng)
+    C = np.asarray(covariance)[:ng, :ng]
+    return S, J @ C @ J.transpose(0, 2, 1)
+
 
 
 # --------------------------------------------------------------------------------------------
@@ -207,7 +271,7 @@ class MLEResult:
 
 def _names(data: TMAData) -> tuple[str, ...]:
     """The batch CRLB's names (:mod:`tmaplan.models.tracks`), then the tones ``f0[p]``."""
-    return track_model(data).names + tuple(f"f0[{p}]" for p in range(data.n_lines))
+    return data.track.names + tuple(f"f0[{p}]" for p in range(data.n_lines))
 
 
 def _scale(data: TMAData, theta: np.ndarray) -> np.ndarray:

@@ -26,10 +26,11 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_chec
 
 import numpy as np
 
+from tmaplan.bounds.batch_fim import tma_data
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.filter import Filter, drive
 from tmaplan.estimators.init_bearings import initialise_from_bearings
-from tmaplan.estimators.mle import MLEConfig, mle, state_track, tma_data
+from tmaplan.estimators.mle import MLEConfig, mle, state_track
 from tmaplan.estimators.particle_filter import DegeneracyWarning, ParticleFilter, PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig, RangeOnlyFilter
 from tmaplan.models.observer import ObserverTrack, observer_track

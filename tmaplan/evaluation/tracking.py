@@ -19,13 +19,13 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.batch_fim import fisher_information, tma_data, true_parameters
 from tmaplan.errors import ScenarioError
-from tmaplan.estimators.mle import MLEConfig, state_track, tma_data
+from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
 from tmaplan.estimators.truth_bound import truth_bounds
-from tmaplan.models.target import circle_parameters
 from tmaplan.simulate import simulate
 
 if TYPE_CHECKING:
@@ -51,25 +51,11 @@ def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -
 
 def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
     """Position and range std of the batch CRLB at the truth, per step [m]."""
-    from tmaplan.estimators.mle import fisher_information
-
     sim = simulate(scenario, None)
     model = None if config.model == "auto" else config.model
     data = tma_data(scenario, sim.measurements, sim.observer, model=model,
                     frequencies=config.frequencies)
-    t = scenario.target
-    if data.model == "constant-turn":
-        geom = np.array(circle_parameters(t))
-    else:
-        # cv / multi-leg: truth = initial position and one velocity per leg
-        vel = [sim.target[0, 2:]] + [sim.target[np.searchsorted(scenario.times, s), 2:]
-                                     for s in data.leg_starts]
-        geom = np.concatenate([sim.target[0, :2], *vel])
-    f0 = []
-    if data.n_lines:
-        fs = next(s for s in scenario.sensors if s.kind == "frequency")
-        f0 = list(fs.f0[: data.n_lines])
-    p = np.concatenate([geom, f0])
+    p = true_parameters(scenario, data.track, data.n_lines)
     C = np.linalg.inv(fisher_information(data, p))
     S, Cs = state_track(data, p, C, scenario.times)
     assert Cs is not None

@@ -19,7 +19,7 @@ from tmaplan.bounds.crlb import (
     multi_leg_model,
 )
 from tmaplan.bounds.fimdet import fim_bearings
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError
 from tmaplan.models.target import constant_turn_state
 from tmaplan.models.tracks import (
     bearing_rows,
@@ -255,12 +255,12 @@ def test_bad_input_errors():
     with pytest.raises(ObservabilityError, match="too few measurements"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t[:4], observer_position=obs[:4], sigma=SIG)])
-    with pytest.raises(ScenarioError, match="sigma"):
+    with pytest.raises(ArgumentError, match="sigma"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=obs, sigma=0.0)])
     bad = obs.copy()
     bad[3, 0] = np.nan
-    with pytest.raises(ScenarioError, match="finite"):
+    with pytest.raises(ArgumentError, match="finite"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=bad, sigma=SIG)])
     track, _ = constant_turn_model().track(Z, t)
@@ -269,7 +269,7 @@ def test_bad_input_errors():
     with pytest.raises(ObservabilityError, match="observer is at the target"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=at, sigma=SIG)])
-    with pytest.raises(ScenarioError, match="frequencies"):
+    with pytest.raises(ArgumentError, match="frequencies"):
         crlb(load_problem("clavard2013-halfturn-cw"), frequencies=5)
     # motionless observer, bearings only: homothety (clavard2013 Result 2) -> singular
     with pytest.raises(ObservabilityError, match="singular"):
@@ -285,7 +285,7 @@ def test_bad_input_errors():
             BearingData(times=t, observer_position=centre, sigma=SIG)], frequencies=fc)
     fd = FrequencyData(times=t, observer_position=obs, observer_velocity=np.tile([5.0, 0], (
         t.size, 1)), f0=np.array([3000.0]), sigma=np.array([-1.0]))
-    with pytest.raises(ScenarioError, match="sigma"):
+    with pytest.raises(ArgumentError, match="sigma"):
         crlb_from_data(constant_turn_model(), Z, bearings=[ok], frequencies=fd)
 
 

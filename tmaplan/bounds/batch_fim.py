@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.target import circle_parameters, initial_velocity
 from tmaplan.models.tracks import (
@@ -212,7 +212,7 @@ def _sigma(sigma: Any, n: int, field: str) -> np.ndarray:
     s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,))
     bad = ~np.isfinite(s) | (s <= 0.0)
     if np.any(bad):
-        raise ScenarioError(field, "finite noise std > 0 (zero noise gives infinite "
+        raise ArgumentError(field, "finite noise std > 0 (zero noise gives infinite "
                             "information)", float(s[np.argmax(bad)]))
     return np.array(s)
 
@@ -221,9 +221,9 @@ def _times_positions(times: Any, pos: Any, field: str) -> tuple[np.ndarray, np.n
     t = np.asarray(times, dtype=float).reshape(-1)
     p = np.asarray(pos, dtype=float)
     if p.shape != (t.shape[0], 2):
-        raise ScenarioError(f"{field}.observer_position", f"shape ({t.shape[0]}, 2)", p.shape)
+        raise ArgumentError(f"{field}.observer_position", f"shape ({t.shape[0]}, 2)", p.shape)
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
-        raise ScenarioError(field, "finite times and observer positions", "nan/inf")
+        raise ArgumentError(field, "finite times and observer positions", "nan/inf")
     return t, p
 
 
@@ -245,7 +245,7 @@ def batch_data(track: TrackModel, *, bearings: Sequence[BearingData] = (),
 
     Raises
     ------
-    ScenarioError
+    ArgumentError
         Non-positive or non-finite noise, mismatched shapes, NaN inputs, tones ≤ 0.
     """
     bt, bp, bs = _stack(bearings, "bearings")
@@ -257,16 +257,16 @@ def batch_data(track: TrackModel, *, bearings: Sequence[BearingData] = (),
         ft, fp = _times_positions(fd.times, fd.observer_position, "frequencies")
         fv = np.asarray(fd.observer_velocity, float)
         if fv.shape != fp.shape or not np.all(np.isfinite(fv)):
-            raise ScenarioError("frequencies.observer_velocity", f"finite, shape {fp.shape}",
+            raise ArgumentError("frequencies.observer_velocity", f"finite, shape {fp.shape}",
                                 fv.shape)
         f0 = np.asarray(fd.f0, float).reshape(-1)
         fs = np.asarray(fd.sigma, float).reshape(-1)
         if fs.shape != f0.shape:
-            raise ScenarioError("frequencies.sigma", f"one std per line ({f0.size})", fs.size)
+            raise ArgumentError("frequencies.sigma", f"one std per line ({f0.size})", fs.size)
         if not (np.all(np.isfinite(f0)) and np.all(f0 > 0)):
-            raise ScenarioError("frequencies.f0", "finite tones > 0 [Hz]", f0)
+            raise ArgumentError("frequencies.f0", "finite tones > 0 [Hz]", f0)
         if not (np.isfinite(fd.c) and fd.c > 0):
-            raise ScenarioError("frequencies.c", "sound speed > 0 [m/s]", fd.c)
+            raise ArgumentError("frequencies.c", "sound speed > 0 [m/s]", fd.c)
         fs, c = _sigma(fs, fs.size, "frequencies.sigma"), float(fd.c)
     return TMAData(model=track.kind, leg_starts=np.asarray(track.change_times, float),
                    t0=track.t_ref, b_times=bt, b_values=np.zeros(bt.size), b_sigma=bs,

@@ -38,7 +38,7 @@ from tmaplan.bounds.batch_fim import (
     fisher_information,
     true_parameters,
 )
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
@@ -202,7 +202,7 @@ def _check_geometry(data: TMAData, theta: np.ndarray) -> dict[str, int]:
     """Measurement counts; raises when they are too few or the observer is at the target."""
     model, counts = data.track, data.counts
     if theta.shape != (model.dim,) or not np.all(np.isfinite(theta)):
-        raise ScenarioError("theta", f"{model.dim} finite parameters {model.names}", theta)
+        raise ArgumentError("theta", f"{model.dim} finite parameters {model.names}", theta)
     for field, t, p in _observed(data):
         r = range_of(model.track(theta, t)[0] - p)
         # "at the target": within a millionth of the largest range (1 cm at 10 km)
@@ -269,7 +269,7 @@ def crlb_from_data(
     ------
     ObservabilityError
         Singular FIM, too few measurements, observer at the target.
-    ScenarioError
+    ArgumentError
         Non-positive or non-finite noise, NaN inputs.
     """
     theta = np.asarray(theta, dtype=float)
@@ -290,7 +290,7 @@ def crlb_from_data(
     if final_observer_position is None:
         cand = [s[1][np.argmax(s[0])] for s in sets if np.isclose(np.max(s[0]), t_n)]
         if not cand:
-            raise ScenarioError("final_observer_position", f"given when final_time ({t_n} s) "
+            raise ArgumentError("final_observer_position", f"given when final_time ({t_n} s) "
                                 "is not a measurement time", None)
         obs_n = cand[0]
     else:
@@ -396,7 +396,7 @@ def scenario_data(
     n_avail = len(lines_f0)
     n_lines = n_avail if frequencies is None else int(frequencies)
     if n_lines < 0 or n_lines > n_avail:
-        raise ScenarioError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
+        raise ArgumentError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
                             "scenario)", frequencies, source=scenario.name)
     freq = None
     if n_lines and freq_sensor is not None:

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import PCRBInputs, prepare
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart, wrap_angle, wrap_half_angle
 from tmaplan.models.prior import relative_prior_samples
 
@@ -358,15 +358,17 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
     Raises
     ------
     ScenarioError
-        Bad inputs (no prior, ``q = 0`` in LPC, mass at zero range, ...).
+        Bad scenario fields (no prior, ``q = 0`` in LPC, mass at zero range, ...).
+    ArgumentError
+        Bad arguments (``coords``, ``samples``, ``ping_steps``).
     ObservabilityError
         A non-positive-definite information matrix.
     """
     t_start = time.perf_counter()
     if coords not in ("cartesian", "lpc"):
-        raise ScenarioError("coords", "'cartesian' or 'lpc'", coords, source=scenario.name)
+        raise ArgumentError("coords", "'cartesian' or 'lpc'", coords, source=scenario.name)
     if not isinstance(samples, int | np.integer) or samples < 2:
-        raise ScenarioError("samples", "an integer >= 2", samples, source=scenario.name)
+        raise ArgumentError("samples", "an integer >= 2", samples, source=scenario.name)
     inp = prepare(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, lpc=coords == "lpc")
     K, A, Q = inp.n_steps, inp.A, inp.Q

@@ -52,7 +52,7 @@ from tmaplan.bounds.batch_fim import (
     residuals,
     tma_data,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -203,13 +203,13 @@ class MLEConfig:
 
     def __post_init__(self) -> None:
         if self.turn_direction not in ("auto", "either", "clockwise", "anticlockwise"):
-            raise ScenarioError("turn_direction",
+            raise ArgumentError("turn_direction",
                                 "'auto', 'either', 'clockwise' or 'anticlockwise'",
                                 self.turn_direction)
         if self.init not in ("multistart", "paper"):
-            raise ScenarioError("init", "'multistart' or 'paper'", self.init)
+            raise ArgumentError("init", "'multistart' or 'paper'", self.init)
         if not isinstance(self.n_starts, int | np.integer) or self.n_starts < 1:
-            raise ScenarioError("n_starts", "an integer >= 1", self.n_starts)
+            raise ArgumentError("n_starts", "an integer >= 1", self.n_starts)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -289,7 +289,7 @@ def _grid(data: TMAData, config: MLEConfig) -> np.ndarray:
     elif data.r_times.size:
         t1, b1, o1 = data.r_times[0], 0.0, data.r_obs[0]
     else:
-        raise ScenarioError("measurements", "bearings or ranges for a batch estimate", None)
+        raise ArgumentError("measurements", "bearings or ranges for a batch estimate", None)
     r0 = np.asarray(config.grid_ranges, float)
     crs = np.arange(config.grid_courses) * 2 * np.pi / config.grid_courses
     spd = np.asarray(config.grid_speeds, float)
@@ -409,7 +409,7 @@ def _sense(data: TMAData, config: MLEConfig) -> int:
     if name == "either":
         return 0
     if data.model != "constant-turn":
-        raise ScenarioError("turn_direction", f"'auto' or 'either' for a '{data.model}' model",
+        raise ArgumentError("turn_direction", f"'auto' or 'either' for a '{data.model}' model",
                             name)
     return 1 if name == "clockwise" else -1
 
@@ -435,7 +435,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     t_start = _time.perf_counter()
     n_meas = data.b_times.size + data.r_times.size + data.f_times.size * data.n_lines
     if n_meas < data.n_params + 1:
-        raise ScenarioError("measurements", f"more than {data.n_params} measurements for a "
+        raise ArgumentError("measurements", f"more than {data.n_params} measurements for a "
                             f"'{data.model}' batch estimate", n_meas)
     sense = _sense(data, cfg)
     if initial is not None:
@@ -443,7 +443,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
         if init.size == data.n_geom and data.n_lines:
             init = np.concatenate([init, data.f_values.mean(axis=0)])
         if sense and init[4] * sense <= 0:
-            raise ScenarioError("initial[4] (omega)", f"{'>' if sense > 0 else '<'} 0 for a "
+            raise ArgumentError("initial[4] (omega)", f"{'>' if sense > 0 else '<'} 0 for a "
                                 f"{_SENSE_NAMES[sense]} turn", float(init[4]))
         starts = [init]
     else:

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_chec
 import numpy as np
 
 from tmaplan.bounds.batch_fim import tma_data
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.estimators.filter import Filter, drive
 from tmaplan.estimators.init_bearings import initialise_from_bearings
 from tmaplan.estimators.mle import MLEConfig, mle, state_track
@@ -248,7 +248,7 @@ class FilterEstimator:
                        dv: np.ndarray, rng: np.random.Generator) -> tuple[Any, int, Any]:
         """Particle cloud of the bearings-only initialisation, its batch end and details."""
         if not isinstance(self.filter, ParticleFilter):
-            raise ScenarioError("init", "'prior' for a filter other than the particle filter",
+            raise ArgumentError("init", "'prior' for a filter other than the particle filter",
                                 self.init)
         b = [m for m in meas if m.kind == "bearing"]
         steps, z = b[0].steps, b[0].values
@@ -328,20 +328,21 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
 
     Raises
     ------
-    ScenarioError
-        Unknown name, or a scenario without a sensor the estimator applies to.
+    ArgumentError
+        Unknown name (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the
+        estimator applies to).
     """
     qf = float(scenario.target.q if q is None else q)
     if isinstance(estimator, str):
         if estimator not in _NAMED:
-            raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
+            raise ArgumentError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
         est = _NAMED[estimator](scenario, n_particles, qf, r_min, r_max)
     elif type(estimator) in _CONFIGURED:
         est = _CONFIGURED[type(estimator)](estimator)
     elif isinstance(estimator, Estimator):
         est = estimator
     else:
-        raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}, a configuration "
+        raise ArgumentError("estimator", f"one of {', '.join(ESTIMATORS)}, a configuration "
                             "or an Estimator", type(estimator).__name__)
     if not any(s.kind in est.applies_to for s in scenario.sensors):
         raise ScenarioError("sensors", f"a {' or '.join(sorted(est.applies_to))} sensor for "

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.batch_fim import fisher_information, tma_data, true_parameters
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
@@ -168,7 +168,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     MonteCarloResult
     """
     if runs < 1:
-        raise ScenarioError("runs", ">= 1", runs)
+        raise ArgumentError("runs", ">= 1", runs)
     est = estimator_for(estimator, scenario, n_particles=n_particles,
                         **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
     t0 = _time.perf_counter()
@@ -211,7 +211,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         elif bound is True or bound == "truth":
             (b, br), kind = truth_bounds(scenario, truths), "truth"
         else:
-            raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
+            raise ArgumentError("bound", "True, False, 'truth' or 'prior'", bound)
     else:
         b = br = np.full(K + 1, np.nan)
     used = np.array([s not in ("rejected", "failed") for s in statuses])

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.models.observer import ObserverTrack, observer_track
 
 # The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
@@ -145,7 +145,7 @@ class PingEvaluator:
     def __init__(self, scenario: Scenario, observer: ObserverTrack, belief: Belief,
                  objective: str = "mean-range-bound") -> None:
         if objective not in PING_OBJECTIVES:
-            raise ScenarioError("objective", f"one of {', '.join(PING_OBJECTIVES)}", objective)
+            raise ArgumentError("objective", f"one of {', '.join(PING_OBJECTIVES)}", objective)
         self.objective = objective
         sig = ping_sigma(scenario)
         if sig is None:

@@ -66,6 +66,7 @@ from tmaplan.estimators._pf_kernels import (
     _weighted_cov,
     systematic_resample,
 )
+from tmaplan.geometry import range_of
 from tmaplan.simulate import Measurement
 
 if TYPE_CHECKING:
@@ -315,9 +316,9 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
     state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
     for m in measurements:
         if m.ping:
-            r = np.hypot(state.particles[:, 0], state.particles[:, 1])
+            r = range_of(state.particles)
             # spread of the cloud about the measurement (a confident but wrong cloud is wide)
-            spread = float(np.sqrt(max(state.weights @ (r - float(m.value)) ** 2, 0.0)))
+            spread = float(np.sqrt(max(float(state.weights @ (r - float(m.value)) ** 2), 0.0)))
             total = 1.0 / float(m.sigma) ** 2
             p = 1.0 / max(spread / 2.0, float(m.sigma)) ** 2
             precisions: list[float] = []

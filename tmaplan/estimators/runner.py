@@ -33,6 +33,7 @@ from tmaplan.estimators.init_bearings import initialise_from_bearings
 from tmaplan.estimators.mle import MLEConfig, mle, state_track
 from tmaplan.estimators.particle_filter import DegeneracyWarning, ParticleFilter, PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig, RangeOnlyFilter
+from tmaplan.geometry import bearing_of, range_of
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.simulate import Measurement, MeasurementSet, Simulation, measurement_batches
 
@@ -131,10 +132,10 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
             if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0:
                 z0 = float(ms.values[0])
         if z0 is None:
-            z0 = float(np.arctan2(rel[0], rel[1]) + p.bearing_std * rng.standard_normal())
+            z0 = float(bearing_of(rel) + p.bearing_std * rng.standard_normal())
         changes["bearing_mean"] = z0
     if p.range_mean is None:
-        r = float(np.hypot(*rel)) + float(p.range_std or 0.0) * rng.standard_normal()
+        r = float(range_of(rel)) + float(p.range_std or 0.0) * rng.standard_normal()
         lo = max(p.range_min, 1e-3)
         hi = p.range_max if p.range_max is not None else np.inf
         changes["range_mean"] = float(np.clip(r, lo, hi))
@@ -144,7 +145,7 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
                                          * rng.standard_normal(2))
     if p.velocity_distribution == "speed-course" and p.speed_distribution == "normal" \
             and p.speed_mean is None:
-        s = float(np.hypot(*v)) + p.speed_std * rng.standard_normal()
+        s = float(range_of(v)) + p.speed_std * rng.standard_normal()
         changes["speed_mean"] = float(max(s, p.speed_min))
     return scenario.replace(prior=dataclasses.replace(p, **changes))
 

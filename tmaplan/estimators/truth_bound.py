@@ -32,6 +32,7 @@ import numpy as np
 from tmaplan.bounds.inputs import information_rates, prepare
 from tmaplan.bounds.pcrb import PCRBResult, conditional_information
 from tmaplan.errors import ArgumentError
+from tmaplan.geometry import range_of
 from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import RangeSensor
@@ -105,7 +106,7 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
             J += w_r[:, k, None, None] * conditional_information(X[:, k], 0.0, 1.0)
         C = np.linalg.inv(J)
         cov[k] = C.mean(axis=0)
-        u = X[:, k, :2] / np.hypot(X[:, k, 0], X[:, k, 1])[:, None]
+        u = X[:, k, :2] / range_of(X[:, k])[:, None]
         rvar[k] = np.mean(np.einsum("ri,rij,rj->r", u, C[:, :2, :2], u))
     return cov, rvar
 

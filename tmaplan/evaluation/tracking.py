@@ -26,6 +26,7 @@ from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
 from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.geometry import range_of
 from tmaplan.simulate import simulate
 
 if TYPE_CHECKING:
@@ -60,7 +61,7 @@ def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.
     S, Cs = state_track(data, p, C, scenario.times)
     assert Cs is not None
     rel = S[:, :2] - sim.observer.position
-    u = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
+    u = rel / range_of(rel)[:, None]
     return (np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2)),
             np.sqrt(np.einsum("ki,kij,kj->k", u, Cs[:, :2, :2], u)))
 
@@ -188,9 +189,8 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         statuses.append(tr.status)
         ambiguous += bool(getattr(tr.details, "ambiguous", False))
         e = tr.estimates - sim.relative
-        err_pos[i] = np.hypot(e[:, 0], e[:, 1])
-        err_rng[i] = np.hypot(tr.estimates[:, 0], tr.estimates[:, 1]) - np.hypot(
-            sim.relative[:, 0], sim.relative[:, 1])
+        err_pos[i] = range_of(e)
+        err_rng[i] = range_of(tr.estimates) - range_of(sim.relative)
         with np.errstate(invalid="ignore"):
             try:
                 sol = np.linalg.solve(tr.covariances, e[..., None])[..., 0]

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError
-from tmaplan.geometry import wrap_angle
+from tmaplan.geometry import bearing_of, wrap_angle
 from tmaplan.policies._base import (
     Action,
     BeliefView,
@@ -110,7 +110,7 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
     ``β = atan2(r_x, r_y)``), both in the relative state ``[r_x, r_y, v_x, v_y]``.
     """
     p, w = belief.particles, belief.weights
-    b = np.arctan2(p[:, 0], p[:, 1])
+    b = bearing_of(p)
     beta = float(np.arctan2(w @ np.sin(b), w @ np.cos(b)))
     r2 = np.maximum(p[:, 0] ** 2 + p[:, 1] ** 2, 1.0)
     rate = float(w @ ((p[:, 1] * p[:, 2] - p[:, 0] * p[:, 3]) / r2))
@@ -149,7 +149,7 @@ def _prior_line_of_sight(scenario: Scenario, t: float, track: ObserverTrack
     rel = m[:2] + vt * (t - scenario.time.t0) - (track.position[k] - track.position[0])
     v = vt - track.velocity[k]
     r2 = max(float(rel @ rel), 1.0)
-    return float(np.arctan2(rel[0], rel[1])), float((rel[1] * v[0] - rel[0] * v[1]) / r2)
+    return float(bearing_of(rel)), float((rel[1] * v[0] - rel[0] * v[1]) / r2)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -77,3 +77,41 @@ def test_no_private_name_imported_across_packages() -> None:
 def test_module_length(path: Path) -> None:
     n = len(path.read_text(encoding="utf-8").splitlines())
     assert n <= MAX_LINES, f"{path.name}: {n} lines (at most {MAX_LINES})"
+
+
+# --------------------------------------------------------------------------------------------
+# The three extension points of README "Architecture": each is named in one place
+# --------------------------------------------------------------------------------------------
+
+
+def test_every_objective_name_is_built_in_objectives_py() -> None:
+    from tmaplan.planning.objectives import OBJECTIVE_NAMES, Objective, make_objective
+
+    for name in OBJECTIVE_NAMES:
+        assert isinstance(make_objective(name), Objective)
+
+
+def test_every_estimator_name_is_built_in_the_runner() -> None:
+    from tmaplan.estimators.filter import Filter
+    from tmaplan.estimators.runner import ESTIMATORS, Estimator, FilterEstimator, estimator_for
+    from tmaplan.scenario import load_problem
+
+    scenario = load_problem("default")
+    for name in ESTIMATORS:
+        est = estimator_for(name, scenario, n_particles=100)
+        assert isinstance(est, Estimator) and est.name == name
+        if isinstance(est, FilterEstimator):
+            assert isinstance(est.filter, Filter)
+
+
+def test_every_policy_name_is_built_in_combine_py() -> None:
+    from tmaplan.policies import ManoeuvrePolicy, Policy
+    from tmaplan.policies.combine import MANOEUVRES, PINGS, parse_policy
+    from tmaplan.scenario import load_problem
+
+    scenario = load_problem("default")
+    for name, make in PINGS.items():
+        assert isinstance(make(), Policy), name
+        assert parse_policy(f"straight+{name}", scenario).ping.name == name
+    for name in set(MANOEUVRES) - {"single-turn", "zigzag"}:  # those two search a grid
+        assert isinstance(MANOEUVRES[name](scenario), ManoeuvrePolicy), name

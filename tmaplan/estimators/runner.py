@@ -22,7 +22,15 @@ import dataclasses
 import time as _time
 import warnings
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_checkable
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    ClassVar,
+    Literal,
+    Protocol,
+    get_args,
+    runtime_checkable,
+)
 
 import numpy as np
 
@@ -51,8 +59,10 @@ __all__ = [
     "run_prior",
 ]
 
-ESTIMATORS = ("pf", "pf-bearings", "mle", "range-only")
+#: Estimator names (CLI ``track --estimator``); each is built by :data:`_NAMED` below, where a
+#: new filter is named.
 EstimatorName = Literal["pf", "pf-bearings", "mle", "range-only"]
+ESTIMATORS: tuple[str, ...] = get_args(EstimatorName)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

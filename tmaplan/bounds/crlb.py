@@ -1,15 +1,9 @@
-"""Batch Fisher information and Cramér–Rao lower bound of a deterministic target track.
+"""Batch Cramér–Rao lower bound of a deterministic target track.
 
-The target track is a deterministic function of a parameter vector θ (constant velocity,
-multi-leg with known change times, or clavard2013's constant turn, see
-:mod:`tmaplan.models.tracks`). Measurements are independent Gaussian:
-
-* bearings ``β_k = atan2(d_x, d_y) + ε``, σ_β [rad];
-* range pings ``R_k + ε``, σ_R [m];
-* P frequency lines ``f_p (1 − Ṙ_k/c) + ε`` with unknown emitted tones ``f_p`` (nuisance
-  parameters appended to θ), σ_fp [Hz] (clavard2013 eq. 3, multi-line form).
-
-The FIM is ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (clavard2013 eq. 11, docs/errata.md) with analytic rows.
+The track models are those of :mod:`tmaplan.models.tracks` (constant velocity, multi-leg with
+known change times, clavard2013's constant turn); the measurement model (bearings, range pings,
+P frequency lines with unknown tones as nuisance parameters) and the Fisher information
+``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (clavard2013 eq. 11, docs/errata.md) are :mod:`tmaplan.bounds.batch_fim`.
 With frequency lines the full (dim + P) FIM is inverted; its trajectory block equals the
 Schur-complement form of clavard2013 eq. (16) (checked in the tests).
 

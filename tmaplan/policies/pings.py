@@ -78,10 +78,8 @@ def _offline_schedule(scenario: Scenario, budget: int,
                       objective: PingObjectiveName,
                       track: Any = None) -> np.ndarray:
     """Offline ping schedule from the prior along ``track`` (default: the scripted track)."""
-    from tmaplan.scenario import dump
-
     tkey = None if track is None else np.asarray(track.position).tobytes()
-    key = (dump(scenario), budget, method, objective, tkey)
+    key = (scenario, budget, method, objective, tkey)  # a frozen Scenario hashes its fields
     if key not in _SCHEDULE_CACHE:
         from tmaplan.planning import schedule_pings
 

@@ -3,7 +3,7 @@
 State per particle: ``X = target − observer = [r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), with the
 relative dynamics of docs/conventions.md ``X_{k+1} = F X_k − H Δv_k + w_k``, ``H = [dt·I; I]``,
 ``w ~ N(0, Q)`` (``tmaplan.models.target.ncv_matrices``). brehard2004 prints ``+H U_t`` in eq. (2)
- but ``−H U_t`` in eq. (95); for a relative state the observer increment enters with
+but ``−H U_t`` in eq. (95); for a relative state the observer increment enters with
 a minus sign (docs/errata.md), which is what :func:`predict` implements.
 
 The API is explicit and stateless: a frozen :class:`PFConfig`, a frozen :class:`PFState` (arrays

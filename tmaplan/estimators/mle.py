@@ -6,7 +6,9 @@ weighted least-squares problem, minimised as in clavard2013 §III.2: a coarse gr
 start, ten Gauss–Newton iterations, then Levenberg–Marquardt (``scipy.optimize.least_squares``)
 up to convergence, with parameter scaling (``x_scale``: km-scale positions, 1e-3 rad/s turn
 rates). Residual Jacobians are analytic (clavard2013, checked against finite
-differences in the tests).
+differences in the tests). The data (:class:`TMAData`), the residuals and the Fisher information
+behind the covariance are those of the batch CRLB, :mod:`tmaplan.bounds.batch_fim`
+(re-exported here).
 
 Acceptance test (clavard2013). The paper accepts the estimate when
 ``C(Ẑ) < N − 5 + 3√(2N − 10)`` (bearings only) and

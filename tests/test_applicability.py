@@ -11,7 +11,7 @@ import pytest
 
 from tmaplan.cli import main
 from tmaplan.cli._finite import require_finite
-from tmaplan.errors import EstimationError, ScenarioError
+from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.estimators import ESTIMATORS, MLEConfig, estimator_for
 from tmaplan.estimators.applicability import (
     APPLICABILITY,
@@ -44,12 +44,12 @@ def test_applicable_estimators_per_problem():
 
 def test_monte_carlo_refuses_what_cannot_work():
     sc = load_problem("sharma2024-range-only")
-    with pytest.raises(ScenarioError) as exc:
+    with pytest.raises(ArgumentError) as exc:
         monte_carlo(sc, "mle", runs=2)
     msg = str(exc.value)
     assert "field 'estimator'" in msg and "needs at least 4 bearing" in msg
     assert "use estimator range-only or pf" in msg and "\n" not in msg
-    with pytest.raises(ScenarioError, match=r"field 'bound'.*batch CRLB"):
+    with pytest.raises(ArgumentError, match=r"field 'bound'.*batch CRLB"):
         monte_carlo(load_problem("clavard2013-halfturn-cw"), MLEConfig(), runs=1,
                     bound="prior")
 
@@ -59,7 +59,7 @@ def test_prior_bound_of_the_filters_stays_available_in_the_api():
     # by the API
     sc = load_problem("default")
     check_applicable("pf", sc, bound="prior")
-    with pytest.raises(ScenarioError, match="--bound"):
+    with pytest.raises(ArgumentError, match="--bound"):
         check_applicable("pf", sc, bound="prior", cli=True)
 
 

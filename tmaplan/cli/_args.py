@@ -37,7 +37,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError, UnitError
+from tmaplan.errors import ArgumentError, ScenarioError, UnitError
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
 from tmaplan.units import to_si
 
@@ -263,8 +263,12 @@ def minutes(seconds: float | Sequence[float] | np.ndarray, digits: int = 1) -> s
 # --------------------------------------------------------------------------------------------
 
 
-def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
-    return ScenarioError(flag, constraint, received, source=scenario.name)
+def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ArgumentError:
+    return ArgumentError(flag, constraint, received, source=scenario.name)
+
+
+def _scenario_error(field: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
+    return ScenarioError(field, constraint, received, source=scenario.name)
 
 
 def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
@@ -292,10 +296,10 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
 
 def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
     if scenario.prior is None:
-        raise _flag_error("prior", "a [prior] table: the PCRB starts from the prior information "
-                          "(J₀ = P₀⁻¹); add one or use `tmaplan crlb "
-                          f"{scenario.name}` for the batch CRLB of a deterministic track",
-                          None, scenario)
+        raise _scenario_error("prior", "a [prior] table: the PCRB starts from the prior "
+                              "information (J₀ = P₀⁻¹); add one or use `tmaplan crlb "
+                              f"{scenario.name}` for the batch CRLB of a deterministic track",
+                              None, scenario)
     if args.ping_every is not None and args.ping_every < scenario.time.dt:
         raise _flag_error("--ping-every", f">= dt = {scenario.time.dt:g} s",
                           _seconds_text(args.ping_every), scenario)
@@ -327,17 +331,17 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
 
 def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
     if scenario.prior is None:
-        raise _flag_error("prior", "a [prior] table: every policy is flown against the "
-                          "particle filter, which starts from the prior (and --truth prior "
-                          "draws the truths from it); add one (see the README's example)",
-                          None, scenario)
+        raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
+                              "particle filter, which starts from the prior (and --truth prior "
+                              "draws the truths from it); add one (see the README's example)",
+                              None, scenario)
     turning = [p.strip() for p in args.policies.split(",")
                if p.strip() and p.strip().split("+")[0] != "straight"]
     if turning and scenario.observer.turn_rate_max is None:
-        raise _flag_error("observer.turn_rate_max", "a turn-rate limit of the own ship (e.g. "
-                          f"turn_rate_max = \"0.5 deg/s\" in [observer]) for the turning "
-                          f"policies {', '.join(turning)}, or --policies straight[+PING] only",
-                          None, scenario)
+        raise _scenario_error("observer.turn_rate_max", "a turn-rate limit of the own ship "
+                              "(e.g. turn_rate_max = \"0.5 deg/s\" in [observer]) for the "
+                              f"turning policies {', '.join(turning)}, or --policies "
+                              "straight[+PING] only", None, scenario)
 
 
 #: Verbs whose results depend on the prior (the others do not read it).
@@ -358,7 +362,7 @@ def _truth_note(verb: str, scenario: Any) -> None:
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
-    Raises :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
+    Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
     of this problem on its grid; ``compare`` turning policies without

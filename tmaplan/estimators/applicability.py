@@ -7,7 +7,7 @@ it a position *and* a range bound, and whether it fits one deterministic track.
 :func:`check_applicable` turns a combination that cannot give a number (an estimator without
 its measurements, a bound kind not defined for it, the batch MLE on a target whose process
 noise moves it far more than the measurements resolve) into one
-:class:`~tmaplan.errors.ScenarioError` line that says why and what would apply. It is called by
+:class:`~tmaplan.errors.ArgumentError` line that says why and what would apply. It is called by
 :func:`tmaplan.evaluation.tracking.monte_carlo` and by ``tmaplan track`` before any run.
 """
 
@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -182,7 +182,7 @@ def check_applicable(estimator: Any, scenario: Scenario, *, bound: Any = None,
 
     Raises
     ------
-    ScenarioError
+    ArgumentError
         One line: field ``estimator`` (or ``bound``), what would apply, and the reason.
     """
     name = estimator if isinstance(estimator, str) else getattr(estimator, "name", None)
@@ -196,16 +196,16 @@ def check_applicable(estimator: Any, scenario: Scenario, *, bound: Any = None,
         alts = [a for a in applicable_estimators(scenario) if a != name]
         use = (f"use {opt_e} {' or '.join(alts)}" if alts else
                "no estimator applies to this scenario")
-        raise ScenarioError(opt_e, f"an estimator that applies: {reason}; {use}", name,
+        raise ArgumentError(opt_e, f"an estimator that applies: {reason}; {use}", name,
                             source=scenario.name)
     if bound != "prior" or ("prior" in decl.bounds) or not (cli or "crlb" in decl.bounds):
         return
     own = sorted(decl.bounds)[0]
     if "crlb" in decl.bounds:
-        raise ScenarioError(opt_b, f"'truth' (the default) with {opt_e} {name}: {name} is "
+        raise ArgumentError(opt_b, f"'truth' (the default) with {opt_e} {name}: {name} is "
                             f"compared with the batch CRLB at the truth, {opt_b} chooses the "
                             "filters' PCRB", bound, source=scenario.name)
-    raise ScenarioError(opt_b, f"'{own}' (the default): the prior-averaged PCRB gives a "
+    raise ArgumentError(opt_b, f"'{own}' (the default): the prior-averaged PCRB gives a "
                         "position bound only, its range bound would print as NaN; use "
                         f"{opt_b} {own} (the PCRB along each run's truth, ristic2004 ch. 6) or "
                         "`tmaplan bound P --method monte-carlo` for the prior average", bound,

@@ -38,9 +38,12 @@ of 120 s, ping stride 4, K = 1…3; ``python benchmarks/planning.py --joint``): 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import os
+import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -52,6 +55,7 @@ from tmaplan.planning._ping_search import _max_pings, _round, _spacing_ok, ping_
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import _PAIRS
+from tmaplan.planning.objectives import plan_bearing_information
 from tmaplan.planning.pings import PingEvaluator, PingSchedule, schedule_pings
 
 if TYPE_CHECKING:
@@ -68,6 +72,9 @@ __all__ = [
 JOINT_MODES = ("relaxed", "bonmin")
 JOINT_NLP_SOLVERS = ("ipopt", "sqp-osqp", "sqp-qrqp")
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level", "SUCCESS", "Solve_Succeeded (MINLP)"}
+
+#: Continuation weights μ of the binarising penalty μ·Σ w(1 − w) (objective scaled to ≈ 1).
+_BINARIZE_MU = (0.01, 0.03, 0.1, 0.3, 1.0)
 
 #: Measurements behind the choice of the relaxed OCP's default NLP solver (filled from
 #: ``python benchmarks/planning.py --joint``; see the module docstring).
@@ -100,6 +107,9 @@ class JointOCPResult:
         Candidate ping steps of the joint NLP (the stride).
     rounded_steps : ndarray of int
         Pings after rounding ``weights``, before polishing.
+    rounded_objective : float
+        Objective of the NLP's headings with ``rounded_steps`` [m] (polishing starts there
+        and never ends above it).
     mode : str
         "relaxed" or "bonmin".
     nlp_solver : str
@@ -127,6 +137,7 @@ class JointOCPResult:
     weights: np.ndarray
     candidate_steps: np.ndarray
     rounded_steps: np.ndarray
+    rounded_objective: float
     mode: str
     nlp_solver: str
     status: str
@@ -143,6 +154,7 @@ class JointOCPResult:
             "objective": self.objective, "lower_bound": self.lower_bound, "gap": self.gap,
             "gap_reference": self.pings.gap_reference,
             "relaxed_objective": self.relaxed_objective,
+            "rounded_objective": self.rounded_objective,
             "ping_steps": self.pings.steps, "ping_times": self.pings.times,
             "rounded_steps": self.rounded_steps, "budget": self.pings.budget,
             "solver": {"status": self.status, "seconds": self.seconds, "success": self.success,
@@ -172,6 +184,24 @@ def _spacing_matrix(cand: np.ndarray, gap: int) -> np.ndarray:
     return A
 
 
+@contextlib.contextmanager
+def _quiet_stdout(on: bool) -> Iterator[None]:
+    """Silence the C-level standard output (bonmin prints its node log whatever its
+    ``nlp_log_level``)."""
+    if not on:
+        yield
+        return
+    sys.stdout.flush()
+    fd = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            yield
+    finally:
+        os.dup2(fd, 1)
+        os.close(fd)
+
+
 def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_cand: int,
                 options: dict[str, Any]) -> Any:
     import casadi as ca
@@ -179,7 +209,7 @@ def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_can
     if mode == "bonmin":
         opts = {"print_time": False, "discrete": [False] * n_heading + [True] * n_cand,
                 "bonmin": {"print_level": 0, "bb_log_level": 0, "nlp_log_level": 0,
-                           "hessian_approximation": "limited-memory",
+                           "hessian_approximation": "limited-memory", "max_iter": 500,
                            "time_limit": 120.0, **options}}
         return ca.nlpsol("joint_bonmin", "bonmin", nlp, opts)
     if name == "ipopt":
@@ -195,9 +225,9 @@ def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_can
     else:
         qp_opts.update({"print_iter": False, "print_header": False, "print_info": False})
     sqp = {"print_time": False, "qpsol": qp, "qpsol_options": qp_opts,
-           "hessian_approximation": "limited-memory", "max_iter": 200, "print_header": False,
+           "hessian_approximation": "limited-memory", "max_iter": 300, "print_header": False,
            "print_iteration": False, "print_status": False, "error_on_fail": False,
-           "tol_pr": 1e-7, "tol_du": 1e-6, **options}
+           "tol_pr": 1e-7, "tol_du": 1e-5, **options}
     return ca.nlpsol(f"joint_sqp_{qp}", "sqpmethod", nlp, sqp)
 
 
@@ -210,7 +240,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                    min_spacing: float | None = None,
                    forbidden: Sequence[tuple[float, float]] = (), polish_rounds: int = 3,
                    solver_options: dict[str, Any] | None = None,
-                   init: Literal["even", "schedule"] = "even",
+                   init: Literal["even", "schedule"] = "even", binarize: bool = True,
                    **planner_kw: Any) -> JointOCPResult:
     """Plan headings and ``budget`` pings (default ``planning.ping_budget``) as one OCP.
 
@@ -280,107 +310,116 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                             f"pings on the {cand.size} candidate steps of ping_stride {stride} "
                             f"(min_spacing {spacing:g} s), received {K}")
 
+    pair = _PAIRS[objective]
     # ------------------------------------------------------------------ the joint NLP
     # The heading OCP's NLP (x: headings/positions/turn rates; p: belief, sensors, heading0,
     # speed0, objective scale, sign) with its ping slice replaced by the weights S·w.
     nlp_h = planner._nlp
     xh, Ph = nlp_h["x"], nlp_h["p"]
     nh, ng = int(xh.size1()), int(nlp_h["g"].size1())
-    fg = ca.Function("heading_fg", [xh, Ph], [nlp_h["f"], nlp_h["g"]])
     sl = planner.layout.slices()["ping"]
     w = ca.MX.sym("w", cand.size)
     q = ca.MX.sym("q", Ph.size1())
     Sel = np.zeros((planner.K + 1, cand.size))
     Sel[cand, np.arange(cand.size)] = 1.0
     p_expr = ca.vertcat(q[:sl.start], ca.mtimes(ca.DM(Sel), w), q[sl.stop:])
-    f, g = fg(xh, p_expr)
+    f, g = ca.substitute([nlp_h["f"], nlp_h["g"]], [Ph], [p_expr])  # inlined, no call node
     A = _spacing_matrix(cand, gap)
     g_all = ca.vertcat(g, ca.sum1(w), *([ca.mtimes(ca.DM(A), w)] if A.size else []))
-    nlp = {"x": ca.vertcat(xh, w), "p": q, "f": f, "g": g_all}
+    mu = ca.MX.sym("mu")  # weight of the binarising penalty Σ w(1 − w) (0: the relaxation)
+    nlp = {"x": ca.vertcat(xh, w), "p": ca.vertcat(q, mu), "g": g_all,
+           "f": f + mu * ca.sum1(w * (1 - w))}
     solver = _nlp_solver(nlp_solver, nlp, mode, nh, cand.size, dict(solver_options or {}))
 
     obs = scenario.observer
     heading0 = float(course_speed(initial_velocity(obs))[0])
     speed0 = planner.speed0
     planner._precheck(bel, heading0, speed0)
-    from tmaplan.planning.objectives import plan_bearing_information
-
     pvec = planner.layout.vector(bel, plan_bearing_information(scenario, bel.t, planner.K))
     lbh, ubh, lbgh, ubgh = planner._bounds(heading0)
-    lbx = np.concatenate([lbh, np.zeros(cand.size)])
-    ubx = np.concatenate([ubh, np.ones(cand.size)])
-    lbg = np.concatenate([lbgh, [K], np.full(A.shape[0], -np.inf)])
-    ubg = np.concatenate([ubgh, [K], np.ones(A.shape[0])])
-    w0 = np.full(cand.size, K / cand.size)
-    f_eval = ca.Function("joint_f", [nlp["x"], q], [f])
-    best: tuple[float, Any, str, float, float] | None = None
-    iters = 0
+    bounds = {"lbx": np.concatenate([lbh, np.zeros(cand.size)]),
+              "ubx": np.concatenate([ubh, np.ones(cand.size)]),
+              "lbg": np.concatenate([lbgh, [K], np.full(A.shape[0], -np.inf)]),
+              "ubg": np.concatenate([ubgh, [K], np.ones(A.shape[0])])}
     t_nlp = time.perf_counter()
-    # start: the pingless heading plan (the alternating method's first block) and weights
-    # spread evenly (or, with ``init="schedule"``, the pings scheduled along it)
+    # start: the pingless heading plan (the alternating method's first block) with the
+    # weights spread evenly (``init="schedule"``: the pings scheduled along it)
     plan0 = planner.solve(bel, heading0=heading0, speed0=speed0)
-    starts = [(np.asarray(plan0.warm["x"]), float(plan0.warm["sign"]))] if plan0.warm else \
-        planner._guesses(heading0, speed0)
+    assert plan0.warm is not None
+    sgn = float(plan0.warm["sign"])
+    w0 = np.full(cand.size, K / cand.size)
     if init == "schedule":
-        s0 = schedule_pings(scenario, budget=K, objective=_PAIRS[objective],  # type: ignore[arg-type]
+        s0 = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                             observer=plan0.observer, belief=bel, min_spacing=min_spacing,
                             forbidden=forbidden, candidate_steps=cand, gap_reference="none")
         w0 = np.isin(cand, s0.steps).astype(float)
-    for xh0, sgn in starts:
-        P = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
-        f0 = float(f_eval(np.concatenate([xh0, w0]), P))
-        P[-2] = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0  # objective scale
-        sol = solver(x0=np.concatenate([xh0, w0]), p=P, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    x = np.concatenate([np.asarray(plan0.warm["x"]), w0])
+    P = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
+    f0 = float(ca.Function("joint_f", [nlp["x"], q], [f])(x, P))
+    P[-2] = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0  # objective scale
+    # μ = 0: the relaxation (or bonmin's MINLP); then, relaxed mode with ``binarize``, a
+    # continuation in μ pushing the weights to {0, 1} while the headings adapt
+    mus = [0.0] + (list(_BINARIZE_MU) if mode == "relaxed" and binarize else [])
+    iters, relaxed_objective = 0, float("nan")
+    status, ok = "not solved", False
+    for k_mu, m in enumerate(mus):
+        with _quiet_stdout(mode == "bonmin"):
+            sol = solver(x0=x, p=np.concatenate([P, [m]]), **bounds)
         stats = solver.stats()
-        status = str(stats.get("return_status", "unknown"))
-        ok = bool(stats.get("success", status in _OK))
+        st = str(stats.get("return_status", "unknown"))
+        good = bool(stats.get("success", st in _OK))
         iters += int(stats.get("iter_count", 0) or 0)
-        fval = float(sol["f"]) * P[-2]
-        key = (0 if ok else 1, fval if np.isfinite(fval) else np.inf)
-        if best is None or key < (0 if best[4] else 1, best[0]):
-            best = (fval, sol, status, sgn, float(ok))
+        if k_mu == 0:
+            status, ok = st, good
+            relaxed_objective = float(sol["f"]) * P[-2]
+        elif not good:  # keep the last successful continuation step
+            break
+        x = np.asarray(sol["x"]).reshape(-1)
+        if np.max(np.minimum(x[nh:], 1 - x[nh:])) < 1e-3:
+            break
     nlp_seconds = time.perf_counter() - t_nlp
-    assert best is not None
-    fval, sol, status, sgn, okf = best
-    x = np.asarray(sol["x"]).reshape(-1)
+    lam_x = np.asarray(sol["lam_x"]).reshape(-1)[:nh]
+    lam_g = np.asarray(sol["lam_g"]).reshape(-1)[:ng]
+    okf = ok
     u = np.clip(x[nh:], 0.0, 1.0)
     lam_x = np.asarray(sol["lam_x"]).reshape(-1)[:nh]
     lam_g = np.asarray(sol["lam_g"]).reshape(-1)[:ng]
 
     # ------------------------------------------------------------- round and polish
     t_pol = time.perf_counter()
-    pair = _PAIRS[objective]
     if mode == "bonmin":
         rounded = sorted(int(c) for c in cand[u > 0.5])
     else:
         rounded = _round(u, cand, K, gap)[0]
     if len(rounded) != K or not _spacing_ok(rounded, gap):
         rounded = _round(u, cand, K, gap)[0]
+    # the NLP's headings with the rounded pings: the point polishing starts from
     P_fix = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
-    P_fix[sl] = Sel @ u
+    P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)
     warm = {"x": x[:nh], "lam_x": lam_x, "lam_g": lam_g, "sign": sgn,
             "shape": (planner.transcription, planner.n, planner.n_arcs)}
     plan = planner._make_plan(x[:nh], P_fix, bel.t, np.asarray(obs.position, float), speed0,
                               status, bool(okf), iters, nlp_seconds, warm, status)
-    relaxed_objective = float(plan.objective)
-    steps = list(rounded)
-    best_pair: tuple[float, HeadingPlan, list[int]] | None = None
+    rounded_objective = PingEvaluator(scenario, plan.observer, bel, pair).value(rounded)
+    # (a failed NLP's point may violate the heading constraints: any polished pair wins)
+    best: tuple[float, HeadingPlan, list[int]] = (
+        rounded_objective if okf else float("inf"), plan, list(rounded))
     for _ in range(rounds):
-        plan = planner.solve(bel, warm_start=plan, ping_steps=steps, raise_on_failure=False)
-        ev = PingEvaluator(scenario, plan.observer, bel, pair)
-        v_steps = ev.value(steps)
-        if best_pair is not None and not v_steps < best_pair[0]:
-            break
-        best_pair = (v_steps, plan, list(steps))
+        # headings with the pings fixed, then the pings along the new track; each block
+        # is kept only if it lowers the objective of the pair
+        plan = planner.solve(bel, warm_start=best[1], ping_steps=best[2],
+                             raise_on_failure=False)
+        if plan.success:
+            v = PingEvaluator(scenario, plan.observer, bel, pair).value(best[2])
+            if v < best[0] * (1 - 1e-9):
+                best = (v, plan, best[2])
         sched = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
-                               observer=plan.observer, belief=bel, min_spacing=min_spacing,
+                               observer=best[1].observer, belief=bel, min_spacing=min_spacing,
                                forbidden=forbidden, gap_reference="none")
-        if sched.objective < v_steps and sorted(sched.steps.tolist()) != sorted(steps):
-            steps = sched.steps.tolist()
-            continue
-        break
-    assert best_pair is not None
-    _, plan, steps = best_pair
+        if not sched.objective < best[0] * (1 - 1e-9):
+            break
+        best = (sched.objective, best[1], sched.steps.tolist())
+    _, plan, steps = best
     # certificate of the ping part on the final track (and the scheduler's pings if better)
     cert = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                           observer=plan.observer, belief=bel, min_spacing=min_spacing,
@@ -398,7 +437,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         heading=plan, pings=final, objective=float(final.objective),
         lower_bound=float(final.lower_bound), gap=float(final.gap),
         relaxed_objective=relaxed_objective, weights=u, candidate_steps=cand,
-        rounded_steps=np.asarray(rounded, int), mode=mode,
+        rounded_steps=np.asarray(rounded, int), rounded_objective=float(rounded_objective),
+        mode=mode,
         nlp_solver="bonmin" if mode == "bonmin" else nlp_solver, status=status,
         success=bool(okf), iterations=iters, seconds=time.perf_counter() - t_start,
         nlp_seconds=nlp_seconds, polish_seconds=time.perf_counter() - t_pol)

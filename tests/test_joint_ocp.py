@@ -90,3 +90,30 @@ def test_sqp_osqp_solves_the_relaxation(default, prior, relaxed):
 def test_invalid_arguments_name_the_field(default, prior, kw, field):
     with pytest.raises(PlanningError, match=field):
         plan_joint_ocp(default, belief=prior, **({"ping_stride": STRIDE} | SMALL | kw))
+
+
+@pytest.mark.parametrize("method", ["ocp", "alternating"])
+def test_cli_plan_with_joint_pings(capsys, method):
+    import json
+
+    from tmaplan.cli import main
+
+    rc = main(["plan", "default", "--horizon", "900", "--control-interval", "180", "--starts",
+               "1", "--objective", "mean-range-bound", "--pings", "2", "--ping-stride", "12",
+               "--joint", method, "--no-figure", "--json", "-"])
+    assert rc == 0
+    d = json.loads(capsys.readouterr().out)["pings"]
+    assert d["method"] == method and len(d["ping_steps"]) == 2
+    assert {"status", "seconds"} <= set(d["solver"])
+    assert d["lower_bound"] <= d["objective"]
+    assert d["gap"] == pytest.approx((d["objective"] - d["lower_bound"]) / d["objective"])
+
+
+def test_cli_joint_pings_need_a_closed_form_objective(capsys):
+    from tmaplan.cli import main
+
+    rc = main(["plan", "default", "--horizon", "900", "--control-interval", "180", "--starts",
+               "1", "--objective", "logdet", "--pings", "1", "--no-figure", "--json", "-"])
+    assert rc == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "objective" in err[0]

@@ -85,7 +85,7 @@ def test_sqp_osqp_solves_the_relaxation(default, prior, relaxed):
     ({"budget": 9}, "budget"), ({"budget": 1, "ping_stride": 0}, "ping_stride"),
     ({"budget": 1, "ping_stride": 2.0}, "ping_stride"), ({"budget": 1, "mode": "exact"}, "mode"),
     ({"budget": 1, "nlp_solver": "cplex"}, "nlp_solver"),
-    ({"budget": 1, "polish_rounds": 0}, "polish_rounds"),
+    ({"budget": 1, "polish_rounds": 0}, "polish_rounds"), ({"budget": 1, "init": "x"}, "init"),
 ])
 def test_invalid_arguments_name_the_field(default, prior, kw, field):
     with pytest.raises(PlanningError, match=field):

@@ -133,7 +133,7 @@ class JointOCPResult:
     nlp_seconds : float
         Of ``seconds``, in the joint NLP [s].
     polish_seconds : float
-        Of ``seconds``, in polishing and certifying [s].
+        Of ``seconds``, in rounding, polishing and certifying [s].
     """
 
     heading: HeadingPlan
@@ -240,6 +240,34 @@ def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_can
     return ca.nlpsol(f"joint_sqp_{qp}", "sqpmethod", nlp, sqp)
 
 
+def _solve_nlp(solver: Any, x: np.ndarray, P: np.ndarray, mus: Sequence[float],
+               bounds: dict[str, np.ndarray], nh: int, quiet: bool) -> dict[str, Any]:
+    """μ = 0: the relaxation (or bonmin's MINLP); then a continuation in μ of the penalty
+    μ·Σ w(1 − w) pushing the weights to {0, 1} while the headings adapt. Status, success and
+    objective are the μ = 0 solve's; ``x`` the last successful one's."""
+    out: dict[str, Any] = {"iters": 0}
+    for k, m in enumerate(mus):
+        with _quiet_stdout(quiet):
+            sol = solver(x0=x, p=np.concatenate([P, [m]]), **bounds)
+        try:
+            stats = solver.stats()
+        except RuntimeError:  # casadi's sqpmethod has no status after some QP failures
+            stats = {"return_status": "unknown (no solver status)", "success": False}
+        st = str(stats.get("return_status", "unknown"))
+        good = bool(stats.get("success", st in _OK))
+        out["iters"] += int(stats.get("iter_count", 0) or 0)
+        if k == 0:
+            out.update(status=st, ok=good, f=float(sol["f"]))
+        elif not good:  # keep the last successful continuation step
+            break
+        x = np.asarray(sol["x"]).reshape(-1)
+        out.update(x=x, lam_x=np.asarray(sol["lam_x"]).reshape(-1),
+                   lam_g=np.asarray(sol["lam_g"]).reshape(-1))
+        if np.max(np.minimum(x[nh:], 1 - x[nh:]), initial=0.0) < 1e-3:
+            break
+    return out
+
+
 def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                    objective: Literal["range-bound", "mean-range-bound",
                                       "mean-position-bound"] = "mean-range-bound",
@@ -249,7 +277,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                    min_spacing: float | None = None,
                    forbidden: Sequence[tuple[float, float]] = (), polish_rounds: int = 3,
                    solver_options: dict[str, Any] | None = None,
-                   init: Literal["even", "schedule"] = "even", binarize: bool = True,
+                   init: Literal["even", "schedule", "both"] = "both", binarize: bool = True,
                    **planner_kw: Any) -> JointOCPResult:
     """Plan headings and ``budget`` pings (default ``planning.ping_budget``) as one OCP.
 
@@ -277,14 +305,21 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         Heading re-solve / ping schedule rounds after rounding (≥ 1).
     solver_options : dict, optional
         Extra options of the joint NLP solver (IPOPT, sqpmethod or bonmin).
+    init : {"both", "even", "schedule"}
+        Start of the NLP: the pingless heading plan with the weights spread evenly, or on the
+        pings scheduled along it; "both" solves from each and keeps the better polished pair.
+    binarize : bool
+        Relaxed mode: after the relaxation, the continuation in μ of the penalty
+        μ·Σ w(1 − w) (weights to {0, 1}) before rounding.
     **planner_kw
         Passed to :class:`HeadingPlanner` (``horizon``, ``control_interval``, ``n_starts``).
 
     Raises
     ------
     PlanningError
-        Invalid ``budget``, ``ping_stride``, ``mode``, ``nlp_solver`` or ``objective``; more
-        pings than the strided candidates or the spacing allow; no range sensor.
+        Invalid ``budget``, ``ping_stride``, ``mode``, ``nlp_solver``, ``init`` or
+        ``objective``; more pings than the strided candidates or the spacing allow; no range
+        sensor.
     """
     import casadi as ca
 
@@ -294,6 +329,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                             f"{objective!r}")
     if mode not in JOINT_MODES:
         raise PlanningError(f"mode: expected one of {JOINT_MODES}, received {mode!r}")
+    if init not in ("both", "even", "schedule"):
+        raise PlanningError(f"init: expected 'both', 'even' or 'schedule', received {init!r}")
     if nlp_solver not in JOINT_NLP_SOLVERS:
         raise PlanningError(f"nlp_solver: expected one of {JOINT_NLP_SOLVERS}, received "
                             f"{nlp_solver!r}")
@@ -350,88 +387,71 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
               "ubx": np.concatenate([ubh, np.ones(cand.size)]),
               "lbg": np.concatenate([lbgh, [K], np.full(A.shape[0], -np.inf)]),
               "ubg": np.concatenate([ubgh, [K], np.ones(A.shape[0])])}
+    # starts: the pingless heading plan (the alternating method's first block) with the
+    # weights spread evenly ("even") or on the pings scheduled along it ("schedule")
     t_nlp = time.perf_counter()
-    # start: the pingless heading plan (the alternating method's first block) with the
-    # weights spread evenly (``init="schedule"``: the pings scheduled along it)
     plan0 = planner.solve(bel, heading0=heading0, speed0=speed0)
     assert plan0.warm is not None
     sgn = float(plan0.warm["sign"])
-    w0 = np.full(cand.size, K / cand.size)
-    if init == "schedule":
+    P = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
+    f0 = float(ca.Function("joint_f", [nlp["x"], q], [f])(
+        np.concatenate([plan0.warm["x"], np.full(cand.size, K / cand.size)]), P))
+    P[-2] = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0  # objective scale
+    starts: dict[str, np.ndarray] = {}
+    if init in ("even", "both"):
+        starts["even"] = np.full(cand.size, K / cand.size)
+    if init in ("schedule", "both"):
         s0 = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                             observer=plan0.observer, belief=bel, min_spacing=min_spacing,
                             forbidden=forbidden, candidate_steps=cand, gap_reference="none")
-        w0 = np.isin(cand, s0.steps).astype(float)
-    x = np.concatenate([np.asarray(plan0.warm["x"]), w0])
-    P = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
-    f0 = float(ca.Function("joint_f", [nlp["x"], q], [f])(x, P))
-    P[-2] = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0  # objective scale
-    # μ = 0: the relaxation (or bonmin's MINLP); then, relaxed mode with ``binarize``, a
-    # continuation in μ pushing the weights to {0, 1} while the headings adapt
-    mus = [0.0] + (list(_BINARIZE_MU) if mode == "relaxed" and binarize else [])
-    iters, relaxed_objective = 0, float("nan")
-    status, ok = "not solved", False
-    for k_mu, m in enumerate(mus):
-        with _quiet_stdout(mode == "bonmin"):
-            sol = solver(x0=x, p=np.concatenate([P, [m]]), **bounds)
-        try:
-            stats = solver.stats()
-        except RuntimeError:  # casadi's sqpmethod has no status after some QP failures
-            stats = {"return_status": "unknown (no solver status)", "success": False}
-        st = str(stats.get("return_status", "unknown"))
-        good = bool(stats.get("success", st in _OK))
-        iters += int(stats.get("iter_count", 0) or 0)
-        if k_mu == 0:
-            status, ok = st, good
-            relaxed_objective = float(sol["f"]) * P[-2]
-        elif not good:  # keep the last successful continuation step
-            break
-        x = np.asarray(sol["x"]).reshape(-1)
-        if np.max(np.minimum(x[nh:], 1 - x[nh:])) < 1e-3:
-            break
+        starts["schedule"] = np.isin(cand, s0.steps).astype(float)
     nlp_seconds = time.perf_counter() - t_nlp
-    lam_x = np.asarray(sol["lam_x"]).reshape(-1)[:nh]
-    lam_g = np.asarray(sol["lam_g"]).reshape(-1)[:ng]
-    okf = ok
-    u = np.clip(x[nh:], 0.0, 1.0)
-    lam_x = np.asarray(sol["lam_x"]).reshape(-1)[:nh]
-    lam_g = np.asarray(sol["lam_g"]).reshape(-1)[:ng]
-
-    # ------------------------------------------------------------- round and polish
-    t_pol = time.perf_counter()
-    if mode == "bonmin":
-        rounded = sorted(int(c) for c in cand[u > 0.5])
-    else:
-        rounded = _round(u, cand, K, gap)[0]
-    if len(rounded) != K or not _spacing_ok(rounded, gap):
-        rounded = _round(u, cand, K, gap)[0]
-    # the NLP's headings with the rounded pings: the point polishing starts from
-    P_fix = np.concatenate([pvec, [heading0, speed0, 1.0, sgn]])
-    P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)
-    warm = {"x": x[:nh], "lam_x": lam_x, "lam_g": lam_g, "sign": sgn,
-            "shape": (planner.transcription, planner.n, planner.n_arcs)}
-    plan = planner._make_plan(x[:nh], P_fix, bel.t, np.asarray(obs.position, float), speed0,
-                              status, bool(okf), iters, nlp_seconds, warm, status)
-    rounded_objective = PingEvaluator(scenario, plan.observer, bel, pair).value(rounded)
-    # (a failed NLP's point may violate the heading constraints: any polished pair wins)
-    best: tuple[float, HeadingPlan, list[int]] = (
-        rounded_objective if okf else float("inf"), plan, list(rounded))
-    for _ in range(rounds):
-        # headings with the pings fixed, then the pings along the new track; each block
-        # is kept only if it lowers the objective of the pair
-        plan = planner.solve(bel, warm_start=best[1], ping_steps=best[2],
-                             raise_on_failure=False)
-        if plan.success:
-            v = PingEvaluator(scenario, plan.observer, bel, pair).value(best[2])
-            if v < best[0] * (1 - 1e-9):
-                best = (v, plan, best[2])
-        sched = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
-                               observer=best[1].observer, belief=bel, min_spacing=min_spacing,
-                               forbidden=forbidden, gap_reference="none")
-        if not sched.objective < best[0] * (1 - 1e-9):
-            break
-        best = (sched.objective, best[1], sched.steps.tolist())
-    _, plan, steps = best
+    mus = [0.0] + (list(_BINARIZE_MU) if mode == "relaxed" and binarize else [])
+    tried = []
+    for w0 in starts.values():
+        t1 = time.perf_counter()
+        run = _solve_nlp(solver, np.concatenate([plan0.warm["x"], w0]), P, mus, bounds, nh,
+                         quiet=mode == "bonmin")
+        nlp_seconds += time.perf_counter() - t1
+        x = run["x"]
+        u = np.clip(x[nh:], 0.0, 1.0)
+        # round: bonmin's binaries, else the largest weights respecting the spacing
+        rounded = sorted(int(c) for c in cand[u > 0.5]) if mode == "bonmin" else []
+        if len(rounded) != K or not _spacing_ok(rounded, gap):
+            rounded = _round(u, cand, K, gap)[0]
+        # the NLP's headings with the rounded pings: the point polishing starts from
+        P_fix = P.copy()
+        P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)
+        warm = {"x": x[:nh], "lam_x": run["lam_x"][:nh], "lam_g": run["lam_g"][:ng],
+                "sign": sgn, "shape": (planner.transcription, planner.n, planner.n_arcs)}
+        plan = planner._make_plan(x[:nh], np.concatenate([P_fix[:-2], [1.0, sgn]]), bel.t,
+                                  np.asarray(obs.position, float), speed0, run["status"],
+                                  run["ok"], run["iters"], nlp_seconds, warm, run["status"])
+        r_obj = PingEvaluator(scenario, plan.observer, bel, pair).value(rounded)
+        # (a failed NLP's point may violate the heading constraints: any polished pair wins)
+        best: tuple[float, HeadingPlan, list[int]] = (
+            r_obj if run["ok"] else float("inf"), plan, list(rounded))
+        for _ in range(rounds):
+            # headings with the pings fixed, then the pings along the new track; each block
+            # is kept only if it lowers the objective of the pair
+            plan = planner.solve(bel, warm_start=best[1], ping_steps=best[2],
+                                 raise_on_failure=False)
+            if plan.success:
+                v = PingEvaluator(scenario, plan.observer, bel, pair).value(best[2])
+                if v < best[0] * (1 - 1e-9):
+                    best = (v, plan, best[2])
+            sched = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
+                                   observer=best[1].observer, belief=bel,
+                                   min_spacing=min_spacing, forbidden=forbidden,
+                                   gap_reference="none")
+            if not sched.objective < best[0] * (1 - 1e-9):
+                break
+            best = (sched.objective, best[1], sched.steps.tolist())
+        tried.append((0 if run["ok"] else 1, best[0], best, run, u, rounded, r_obj))
+    _, _, (_, plan, steps), run, u, rounded, rounded_objective = min(
+        tried, key=lambda t: (t[0], t[1]))
+    status, okf, iters = run["status"], run["ok"], sum(t[3]["iters"] for t in tried)
+    relaxed_objective = run["f"] * P[-2]
     # certificate of the ping part on the final track (and the scheduler's pings if better)
     cert = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                           observer=plan.observer, belief=bel, min_spacing=min_spacing,
@@ -453,4 +473,4 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         mode=mode,
         nlp_solver="bonmin" if mode == "bonmin" else nlp_solver, status=status,
         success=bool(okf), iterations=iters, seconds=time.perf_counter() - t_start,
-        nlp_seconds=nlp_seconds, polish_seconds=time.perf_counter() - t_pol)
+        nlp_seconds=nlp_seconds, polish_seconds=time.perf_counter() - t_start - nlp_seconds)

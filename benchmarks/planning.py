@@ -147,7 +147,7 @@ def joint(budgets: list[int]) -> None:
     ref = None
     for solver in ("ipopt", "sqp-osqp", "sqp-qrqp"):
         r = plan_joint_ocp(sc, budget=2, belief=b, ping_stride=4, nlp_solver=solver,
-                           binarize=False, **kw)
+                           binarize=False, init="even", **kw)
         ref = ref or r
         print(f"  {solver:9s} NLP {r.nlp_seconds:6.2f} s ({r.nlp_seconds / ref.nlp_seconds:5.2f}"
               f" x ipopt), {r.iterations:4d} it, {r.status}, relaxed objective "

@@ -36,18 +36,19 @@ casadi's active-set qrqp, ``"ipopt"`` (default) the interior-point method. Measu
 ping stride 4, K = 2, relaxation without the binarising continuation; 2 shared cores)::
 
     solver     NLP time    iterations  relaxed objective
-    ipopt       1.79 s         64      101.6551 m
-    sqp-osqp   11.68 s        144      101.6551 m   (6.5 x ipopt)
-    sqp-qrqp   43.98 s        142      101.6551 m   (24.5 x ipopt)
+    ipopt       1.62 s         64      101.6551 m
+    sqp-osqp   11.48 s        144      101.6551 m   (7.1 x ipopt)
+    sqp-qrqp   39.46 s        142      101.6551 m   (24.4 x ipopt)
 
 (times include the pingless heading solve that starts every method, ≈ 0.5 s). With the exact
 Hessian instead of BFGS, sqpmethod + OSQP made 100 iterations in 65 s without converging
 (``convexify_strategy="regularize"``) or failed at the first QP (``"eigen-reflect"``). So OSQP
-is the right QP solver for the SQP (3.8 x faster than qrqp on the same iterates: the QPs have
-a dense Hessian block and ≈ 170 constraints, where qrqp's dense active-set steps are slow),
-but for this one-shot solve the SQP itself is not the right method: IPOPT converges in fewer,
-cheaper iterations and stays the default. Where an SQP step is the right tool — one QP per
-re-planning instant of a real-time iteration — the same QP structure favours OSQP.
+is the better QP solver of the two for this SQP (3.4 x faster than qrqp over as many
+iterations; each QP has 135 variables, a dense BFGS Hessian and 289 constraints, 176 of them
+keep-out inequalities), but for this one-shot solve the SQP itself is not the right method:
+IPOPT converges in fewer, cheaper iterations and stays the default. ``"sqp-osqp"`` is kept as
+an option (tested) for setups where one QP per solve is what is wanted, e.g. warm-started
+re-planning; that use is not measured here.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ The heading OCP of :class:`tmaplan.planning.heading.HeadingPlanner` (direct mult
 closed-form PCRB objective) gets the ping weights as decision variables: a ping at step k adds
 ``w_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]`` of the closed-form recursion (brehard2005, eq. 51),
 exactly as in the scheduler (:mod:`tmaplan.planning.pings`). Over the candidate steps c_i
-(every ``ping_stride``-th allowed step, outside the forbidden windows) the NLP is
+(every ``ping_stride``-th allowed step, outside the forbidden windows) the NLP is::
 
     minimise   f(ω, w)   (the closed-form objective, e.g. the mean range bound [m])
     subject to the heading dynamics, |ω| ≤ ω_max, keep-out range (the heading OCP),

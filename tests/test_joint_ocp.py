@@ -118,3 +118,12 @@ def test_cli_joint_pings_need_a_closed_form_objective(capsys):
     assert rc == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "objective" in err[0]
+
+
+def test_forbidden_window_and_spacing_hold(default, prior):
+    # no ping in the first 5 min (where the unconstrained plan pings, at step 1), 4 min apart
+    r = plan_joint_ocp(default, budget=2, belief=prior, ping_stride=STRIDE,
+                       forbidden=[(0.0, 300.0)], min_spacing=240.0, **SMALL)
+    assert np.all(r.candidate_steps * 15.0 > 300.0)
+    assert np.all(r.pings.times > 300.0) and np.all(np.diff(r.pings.times) >= 240.0)
+    assert r.lower_bound <= r.objective

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.experiments import (
     Candidate,
     candidate_manoeuvres,
@@ -78,7 +78,7 @@ def test_a_constant_cost_has_no_correlation():
 
 def test_rank_correlations_need_three_candidates():
     tta, fre = _ordered_runs(C=2)
-    with pytest.raises(ScenarioError, match="field 'candidates': expected >= 3"):
+    with pytest.raises(ArgumentError, match="field 'candidates': expected >= 3"):
         rank_correlations({"x": np.arange(2.0)}, tta, fre, censor=1.0)
 
 
@@ -95,7 +95,7 @@ def test_candidate_family(scenario):
     assert {np.sign(p.angle) for p in turns} == {-1.0, 1.0}
     assert len({p.time for p in turns}) >= 3
     assert any(c.family == "zigzag" for c in cands)
-    with pytest.raises(ScenarioError, match="field 'candidates'"):
+    with pytest.raises(ArgumentError, match="field 'candidates'"):
         candidate_manoeuvres(scenario, 2)
 
 

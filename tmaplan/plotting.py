@@ -17,7 +17,7 @@ __all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_geometry", 
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
-               **kw: object) -> tuple[Figure, np.ndarray]:
+               **kw: Any) -> tuple[Figure, np.ndarray]:
     """A figure with an Agg canvas and a 2-D array of axes."""
     fig = Figure(figsize=size, layout="constrained")
     FigureCanvasAgg(fig)
@@ -65,7 +65,8 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
             b = m.values[i]
             p0 = obs[k]
             length = np.hypot(*(sim.relative[k, :2])) / unit * 1.15
-            if m.relative is not None and sim.scenario.sensors[m.sensor].ambiguity == "pi":
+            if m.relative is not None and getattr(sim.scenario.sensors[m.sensor], "ambiguity",
+                                                  "none") == "pi":
                 length = rng_max  # both directions are possible: draw the full line
                 ax.plot([p0[0] - length * np.sin(b), p0[0] + length * np.sin(b)],
                         [p0[1] - length * np.cos(b), p0[1] + length * np.cos(b)],

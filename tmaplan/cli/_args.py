@@ -37,7 +37,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError, UnitError
+from tmaplan.errors import ArgumentError, UnitError
 from tmaplan.units import to_si
 
 __all__ = [
@@ -265,8 +265,8 @@ def minutes(seconds: float | Sequence[float] | np.ndarray, digits: int = 1) -> s
 # --------------------------------------------------------------------------------------------
 
 
-def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
-    return ScenarioError(flag, constraint, received, source=scenario.name)
+def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ArgumentError:
+    return ArgumentError(flag, constraint, received, source=scenario.name)
 
 
 def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
@@ -385,7 +385,7 @@ def _truth_note(verb: str, scenario: Any) -> None:
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
-    Raises :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
+    Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
     of this problem on its grid; ``track`` estimator/bound combinations

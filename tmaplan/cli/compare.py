@@ -19,6 +19,7 @@ from tmaplan.cli._args import (
     open_fraction,
 )
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import load
 
@@ -29,9 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``compare``."""
     add_problem_argument(parser)
     parser.add_argument("--policies", default="straight,single-turn,zigzag",
-                        help="comma-separated MANOEUVRE[+PING] (manoeuvres: straight, "
-                             "single-turn, zigzag, planned, receding, leg-turn-leg, lead-lag; "
-                             "pings: no-ping, uniform, scheduled, scheduled-terminal, adaptive)")
+                        help=f"comma-separated MANOEUVRE[+PING] (manoeuvres: "
+                             f"{', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)})")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")

@@ -19,7 +19,7 @@ from tmaplan.cli._args import (
     add_seed_argument,
     integer,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
@@ -64,7 +64,7 @@ def _with_lines(scenario: Scenario, n: int) -> Scenario:
     """The scenario with only the first ``n`` lines of its frequency sensors (0: none)."""
     available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
     if n < 0 or n > available:
-        raise ScenarioError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
+        raise ArgumentError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
     if n == available:
         return scenario
     sensors = tuple(s if s.kind != "frequency" else
@@ -102,9 +102,9 @@ def _figure(res: Any, path: Path) -> None:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
     if args.runs < 1:
-        raise ScenarioError("--runs", ">= 1", args.runs)
+        raise ArgumentError("--runs", ">= 1", args.runs)
     if args.particles < 2:
-        raise ScenarioError("--particles", ">= 2", args.particles)
+        raise ArgumentError("--particles", ">= 2", args.particles)
     scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     turn: Any = getattr(args, "turn_direction", "auto")
     if turn != "auto":
         if estimator != "mle":
-            raise ScenarioError("--turn-direction", "only with --estimator mle", turn)
+            raise ArgumentError("--turn-direction", "only with --estimator mle", turn)
         estimator = MLEConfig(turn_direction=turn)
     res = monte_carlo(scenario, estimator, runs=args.runs, seed=args.seed,
                       n_particles=args.particles, progress=progress,

@@ -392,13 +392,13 @@ def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndar
     over their truths, tracks and pings
     (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.errors import ScenarioError
+    from tmaplan.errors import ArgumentError
     from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
 
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
                                             np.stack([r.target for r in runs]),
                                             [r.ping_steps for r in runs])
-    except (np.linalg.LinAlgError, ScenarioError):
+    except (np.linalg.LinAlgError, ArgumentError):
         pos = rng = np.full(scenario.n_steps + 1, np.nan)
     return {"bound_position": pos, "bound_range": rng}

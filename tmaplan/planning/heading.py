@@ -325,9 +325,10 @@ class HeadingPlanner:
 
         key = "warm" if warm else "cold"
         if key not in self._solvers:
-            ipopt = {"print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
-                     "acceptable_tol": 1e-5, "hessian_approximation": "limited-memory",
-                     "limited_memory_max_history": 20}
+            ipopt: dict[str, Any] = {
+                "print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
+                "acceptable_tol": 1e-5, "hessian_approximation": "limited-memory",
+                "limited_memory_max_history": 20}
             if warm:
                 ipopt.update({"warm_start_init_point": "yes", "warm_start_bound_push": 1e-6,
                               "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-4})
@@ -468,7 +469,7 @@ class HeadingPlanner:
             solver = self._solver(use_warm)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,
                                   "ubg": ubg}
-            if use_warm:
+            if duals is not None:
                 kw.update(lam_x0=duals["lam_x"], lam_g0=duals["lam_g"])
             sol = solver(**kw)
             stats = solver.stats()

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -89,7 +89,7 @@ class Zigzag:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the zig-zag course schedule."""
         if not self.leg_duration > 0:
-            raise ScenarioError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+            raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
         end = scenario.time.t0 + scenario.time.horizon
@@ -159,8 +159,8 @@ def offline_plan(scenario: Scenario, objective: str | None) -> Any:
     if key not in _PLAN_CACHE:
         from tmaplan.planning import plan_heading
 
-        kw = {} if objective is None else {"objective": objective}
-        _PLAN_CACHE[key] = plan_heading(scenario, **kw)
+        _PLAN_CACHE[key] = (plan_heading(scenario) if objective is None
+                            else plan_heading(scenario, objective=objective))
     return _PLAN_CACHE[key]
 
 

@@ -62,11 +62,14 @@ class Combined:
 
     def resolve(self, scenario: Scenario) -> Combined:
         """The same policy with its offline parts computed (the heading plan of
-        :class:`Planned`, the schedule of :class:`ScheduledPings` along the track the manoeuvre
-        nominally flies), so that the controllers of all runs share them."""
+        :class:`Planned`, the real-time iteration model of :class:`Receding`, the schedule of
+        :class:`ScheduledPings` along the track the manoeuvre nominally flies), so that the
+        controllers of all runs share them."""
         man, ping = self.manoeuvre, self.ping
         if isinstance(man, Planned) and man.plan is None:
             man = dataclasses.replace(man, plan=offline_plan(scenario, man.objective))
+        if isinstance(man, Receding):
+            man = man.resolve(scenario)
         if isinstance(ping, ScheduledPings) and ping.steps is None:
             steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
                                       ping.objective, man.nominal_track(scenario))

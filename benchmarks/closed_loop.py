@@ -30,8 +30,7 @@ from threadpoolctl import threadpool_limits
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import paired_difference, run_metrics
-from tmaplan.experiments import resolve_policies
-from tmaplan.policies import Combined, Receding
+from tmaplan.policies import Combined, Receding, parse_policy
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import draw_truth
 
@@ -54,11 +53,14 @@ for _name in ("init", "predict", "update"):
 
 
 def _policies(scenario, names, path):
+    """Resolved policies (timed: the campaign's once-only work); ``old``: IPOPT re-plans."""
     t = time.perf_counter()
-    pols = resolve_policies(scenario, names)
-    for k, p in pols.items():
-        if isinstance(p, Combined) and isinstance(p.manoeuvre, Receding) and path == "old":
-            pols[k] = Combined(manoeuvre=Receding(real_time=False), ping=p.ping).resolve(scenario)
+    pols = {}
+    for spec in names:
+        p = parse_policy(spec, scenario)
+        if isinstance(p.manoeuvre, Receding) and path == "old":
+            p = Combined(manoeuvre=Receding(real_time=False), ping=p.ping)
+        pols[spec] = p.resolve(scenario)
     return pols, time.perf_counter() - t
 
 

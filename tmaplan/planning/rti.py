@@ -136,10 +136,19 @@ class RealTimeIteration:
         Step lengths tried: 1, ½, … (``backtracks + 1`` of them) before the fallback.
     constraint_tol : float
         Constraint violation treated as satisfied [dimensionless: (range/keep-out)² − 1].
+    steps : int
+        SQP steps per re-plan (1: the real-time iteration; more steps stop at the first
+        rejected one, the fallback only applies when the first is rejected).
+    rescale : bool
+        Divide the objective by its value at the start of each re-plan (the model Hessian was
+        computed for the objective divided by its value at the reference plan), so that the
+        step keeps its length as the objective shrinks along the run; False: the reference
+        scale throughout.
     """
 
     def __init__(self, planner: HeadingPlanner, model: RTIModel, *, qpsol: str = "daqp",
-                 backtracks: int = 2, constraint_tol: float = 1e-6) -> None:
+                 backtracks: int = 2, constraint_tol: float = 1e-6, steps: int = 1,
+                 rescale: bool = True) -> None:
         import casadi as ca
 
         _check_planner(planner)
@@ -152,6 +161,10 @@ class RealTimeIteration:
         self.planner, self.model, self.qpsol = planner, model, qpsol
         self.backtracks = max(0, int(backtracks))
         self.constraint_tol = float(constraint_tol)
+        if int(steps) < 1:
+            raise ScenarioError("steps", ">= 1", steps)
+        self.steps = int(steps)
+        self.rescale = bool(rescale)
         w, P, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
         self._eval = ca.Function("rti_eval", [w, P], [f, ca.gradient(f, w), g, ca.jacobian(g, w)])
         self._merit = ca.Function("rti_merit", [w, P], [f, g])
@@ -255,12 +268,25 @@ class RealTimeIteration:
         lbw, ubw, lbg, ubg = pl._bounds(heading0)
         x_prev, _ = pl._shift_warm(prev, belief.t, heading0, speed0)
         x0 = pl._direct_w(np.clip(np.asarray(x_prev)[self._u], -1, 1), heading0, speed0)
+        if self.rescale:
+            # the model Hessian belongs to the objective divided by its value at the
+            # reference; divide by the value at the start instead (curvature relative to value)
+            f_start = float(self._merit(x0, np.concatenate([P[:-2], [1.0, 1.0]]))[0])
+            if np.isfinite(f_start) and abs(f_start) > 0:
+                P[-2] = abs(f_start)
         accepted, reason = self._step(x0, P, lbw, ubw, lbg, ubg)
+        for _ in range(self.steps - 1):
+            if accepted is None:
+                break
+            more, _ = self._step(accepted[0], P, lbw, ubw, lbg, ubg)
+            if more is None:
+                break
+            accepted = more
         if accepted is not None:
             x1, status = accepted
             warm = {"x": x1, "lam_x": np.zeros_like(x1), "lam_g": np.zeros(lbg.size),
                     "sign": 1.0, "shape": ("direct", pl.n, pl.n_arcs),
-                    "scale": self.model.scale}
+                    "scale": float(P[-2])}
             plan = pl._make_plan(x1, P, belief.t, p0, speed0, status, True, 1,
                                  time.perf_counter() - t_start, warm, status)
             return dataclasses.replace(plan, solver=f"rti-{self.qpsol}")

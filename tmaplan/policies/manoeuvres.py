@@ -207,6 +207,12 @@ class Receding:
         re-plan (the first one cold, from the filter's belief).
     qpsol : str
         QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
+    rti_steps : int
+        SQP steps per re-plan of the real-time iteration.
+    full_every : int
+        With ``real_time``: every ``full_every``-th re-plan (the first included) is a full
+        IPOPT solve warm-started from the previous plan (the first from the offline plan), the
+        others are real-time iteration steps; 0: real-time iteration steps only.
     rti : RTIModel, optional
         The offline plan and the Hessian model of the real-time iteration
         (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
@@ -219,6 +225,8 @@ class Receding:
     max_particles: int = 2000
     real_time: bool = True
     qpsol: str = "daqp"
+    rti_steps: int = 1
+    full_every: int = 3
     rti: Any = dataclasses.field(default=None, compare=False, repr=False)
     name: str = "receding"
 
@@ -255,7 +263,7 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -
 
 
 _RTI_MODEL_CACHE: dict[tuple[Scenario, str | None, float | None], Any] = {}
-_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, str], Any] = {}
+_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, str, int], Any] = {}
 
 
 def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
@@ -278,10 +286,10 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
 
     model = policy.rti if policy.rti is not None else _rti_model(scenario, policy.objective,
                                                                  policy.horizon)
-    key = (scenario, policy.objective, policy.horizon, policy.qpsol)
+    key = (scenario, policy.objective, policy.horizon, policy.qpsol, policy.rti_steps)
     if key not in _RTI_CACHE:
         _RTI_CACHE[key] = RealTimeIteration(_planner(scenario, policy.objective, policy.horizon),
-                                            model, qpsol=policy.qpsol)
+                                            model, qpsol=policy.qpsol, steps=policy.rti_steps)
     return _RTI_CACHE[key].with_model(model)
 
 
@@ -318,7 +326,11 @@ class _RecedingController:
         b = Belief.from_samples(belief.particles[idx], t=t)
         entry: dict[str, Any] = {"t": t}
         try:
-            if self.rti is not None:
+            n_full = self.policy.full_every
+            if self.rti is not None and n_full > 0 and len(self.log) % n_full == 0:
+                plan = self.planner.solve(b, heading0=belief.heading, position0=belief.position,
+                                          warm_start=self.plan or self.rti.model.plan)
+            elif self.rti is not None:
                 plan = self.rti.solve(b, previous=self.plan, heading0=belief.heading,
                                       position0=belief.position)
             else:

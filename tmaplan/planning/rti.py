@@ -142,13 +142,14 @@ class RealTimeIteration:
     rescale : bool
         Divide the objective by its value at the start of each re-plan (the model Hessian was
         computed for the objective divided by its value at the reference plan), so that the
-        step keeps its length as the objective shrinks along the run; False: the reference
-        scale throughout.
+        step keeps its length as the objective shrinks along the run; False (default: it
+        localised sooner in paired closed-loop runs on ``default``): the reference scale
+        throughout.
     """
 
     def __init__(self, planner: HeadingPlanner, model: RTIModel, *, qpsol: str = "daqp",
                  backtracks: int = 2, constraint_tol: float = 1e-6, steps: int = 1,
-                 rescale: bool = True) -> None:
+                 rescale: bool = False) -> None:
         import casadi as ca
 
         _check_planner(planner)

@@ -123,3 +123,12 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     again = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                             filter_rng=np.random.default_rng(2), n_particles=300)
     assert np.array_equal(res.turn_rate, again.turn_rate)
+
+
+def test_receding_rti_policy_name_takes_only_rti_steps(small):
+    from tmaplan.policies import Receding, parse_policy
+
+    pol = parse_policy("receding-rti+uniform", small[0])
+    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_every == 0
+    assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
+        .manoeuvre.full_every == 3

@@ -30,7 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_problem_argument(parser)
     parser.add_argument("--policies", default="straight,single-turn,zigzag",
                         help="comma-separated MANOEUVRE[+PING] (manoeuvres: straight, "
-                             "single-turn, zigzag, planned, receding, leg-turn-leg, lead-lag; "
+                             "single-turn, zigzag, planned, receding, receding-rti, "
+                             "leg-turn-leg, lead-lag; "
                              "pings: no-ping, uniform, scheduled, scheduled-terminal, adaptive)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")

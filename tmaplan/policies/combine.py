@@ -119,8 +119,8 @@ def best_zigzag(scenario: Scenario) -> Zigzag:
 
 _TACTICS: dict[str, type[LegTurnLeg] | type[LeadLag]] = {"leg-turn-leg": LegTurnLeg,
                                                          "lead-lag": LeadLag}
-_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding", "leg-turn-leg",
-               "lead-lag"}
+_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding", "receding-rti",
+               "leg-turn-leg", "lead-lag"}
 _PINGS = {"no-ping", "uniform", "scheduled", "scheduled-terminal", "adaptive"}
 
 
@@ -129,7 +129,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres: straight, single-turn and zigzag (the best of the baseline grids of
     :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`), planned,
-    receding. Pings: no-ping, uniform, scheduled (offline schedule minimising the mean range
+    receding, receding-rti (real-time-iteration steps only, no periodic IPOPT solve).
+    Pings: no-ping, uniform, scheduled (offline schedule minimising the mean range
     bound over the horizon), scheduled-terminal (minimising the terminal range bound),
     adaptive.
 
@@ -154,6 +155,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         man = Planned()
     elif name in _TACTICS:
         man = _TACTICS[name]()
+    elif name == "receding-rti":
+        man = Receding(full_every=0, name="receding-rti")
     else:
         man = Receding()
     ping: Policy = NoPing()

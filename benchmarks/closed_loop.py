@@ -125,8 +125,13 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default"):
                 d = paired_difference(vals, "new", "old", label, censor=cen)
                 print(f"{'':<22}paired new-old {label}: {d.mean:+.1f} "
                       f"[{d.ci_low:+.1f}, {d.ci_high:+.1f}] (n={d.n})")
+    per_run = {p: sum(float(np.mean([x[0] for x in rows[p][n]])) for n in names) for p in paths}
+    for p in paths:
+        print(f"all {len(names)} policies, {p}: {per_run[p]:.2f} s per run (campaign of R runs on "
+              f"W workers: about setup {setup[p]:.0f} s + R x {per_run[p]:.2f} s / W)")
     if len(paths) == 2:
-        print(f"campaign setup new/old: {setup['new'] / setup['old']:.2f}")
+        print(f"campaign setup new/old: {setup['new'] / setup['old']:.2f}; seconds per run of "
+              f"all policies new/old: {per_run['new'] / per_run['old']:.3f}")
 
 
 def step_profile(problem="default"):

@@ -85,10 +85,14 @@ class CampaignSpec:
     def _meta(self) -> dict[str, Any]:
         from tmaplan import __version__
 
-        return {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
+        meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
                 "format": FORMAT, "tmaplan_version": __version__}
+        if any(p.startswith("receding") for p in self.policies):
+            # runs stored before re-plans became real-time iterations are not reused
+            meta["replan"] = "rti"
+        return meta
 
 
 def resolve_policies(scenario: Scenario, specs: Sequence[str]) -> dict[str, Policy]:

@@ -14,8 +14,8 @@ range error, with 95 % t intervals, and the ratio new/old of the seconds per run
 the same process. ``--step`` profiles one re-plan step (objective/gradient/Jacobian, exact
 Hessian, condensing, QP per solver) against the IPOPT re-solve.
 
-Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--particles 3000]
-     [--policies straight,planned,receding] [--step]
+Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
+     [--particles 3000] [--policies straight,planned,receding] [--step]
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def _policies(scenario, names, path):
     return pols, time.perf_counter() - t
 
 
-def closed_loop(paths, names, runs, particles, seed=0, problem="default"):
+def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0):
     sc = load_problem(problem)
     rows = defaultdict(lambda: defaultdict(list))
     metric = defaultdict(lambda: defaultdict(list))
@@ -73,7 +73,7 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default"):
         pols, setup[path] = _policies(sc, names, path)
         print(f"[{path}] campaign setup (offline plans, schedules, RTI model): "
               f"{setup[path]:.1f} s")
-        for i in range(runs):
+        for i in range(first_run, first_run + runs):
             s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
             with threadpool_limits(limits=1):
                 target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
@@ -195,6 +195,7 @@ def main():
     ap.add_argument("--runs", type=int, default=4)
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--first-run", type=int, default=0, help="index of the first Monte Carlo run")
     ap.add_argument("--policies", default="straight,planned,receding")
     ap.add_argument("--step", action="store_true", help="profile one re-plan step")
     a = ap.parse_args()
@@ -202,7 +203,8 @@ def main():
         step_profile()
         return
     paths = ("old", "new") if a.path == "both" else (a.path,)
-    closed_loop(paths, a.policies.split(","), a.runs, a.particles, seed=a.seed)
+    closed_loop(paths, a.policies.split(","), a.runs, a.particles, seed=a.seed,
+                first_run=a.first_run)
 
 
 if __name__ == "__main__":

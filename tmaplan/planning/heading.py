@@ -113,6 +113,9 @@ class HeadingPlan:
     seconds : float
         Wall time of the solve [s].
     message : str
+    solver : str
+        What produced the plan: ``"ipopt"``, or ``"rti-qrqp"`` / ``"rti-osqp"`` for a
+        real-time iteration step (:mod:`tmaplan.planning.rti`).
     """
 
     __repr__ = short_repr
@@ -131,6 +134,7 @@ class HeadingPlan:
     iterations: int
     seconds: float
     message: str = ""
+    solver: str = "ipopt"
     warm: dict[str, Any] | None = dataclasses.field(default=None, repr=False, compare=False)
 
 
@@ -439,21 +443,9 @@ class HeadingPlanner:
             IPOPT did not converge from any start.
         """
         t_start = time.perf_counter()
-        obs = self.scenario.observer
-        if heading0 is None:
-            heading0 = float(course_speed(initial_velocity(obs))[0])
-        speed0 = self.speed0 if speed0 is None else float(speed0)
-        p0 = np.asarray(obs.position if position0 is None else position0, float)
+        heading0, speed0, p0 = self._start_state(heading0, speed0, position0)
         self._precheck(belief, heading0, speed0)
-        ping = np.zeros(self.K + 1)
-        st = np.asarray(list(ping_steps), int)
-        if st.size:
-            if self._ping_scale == 0.0:
-                raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
-                                    "has no range sensor")
-            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
-        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
-        pvec = self.layout.vector(belief, bearing, ping)
+        pvec = self._parameters(belief, ping_steps)
         lbw, ubw, lbg, ubg = self._bounds(heading0)
         if warm_start is not None:
             x0, duals = self._shift_warm(warm_start, belief.t, heading0, speed0)
@@ -503,10 +495,32 @@ class HeadingPlanner:
         x = np.asarray(sol["x"]).reshape(-1)
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,
-                "shape": (self.transcription, self.n, self.n_arcs)}
+                "shape": (self.transcription, self.n, self.n_arcs), "scale": scale}
         return self._make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
                                belief.t, p0, speed0, status, success, iters, seconds, warm,
                                ", ".join(statuses))
+
+    def _start_state(self, heading0: float | None, speed0: float | None,
+                     position0: np.ndarray | None) -> tuple[float, float, np.ndarray]:
+        """(heading [rad], speed [m/s], position [m]) with the scenario's defaults."""
+        obs = self.scenario.observer
+        if heading0 is None:
+            heading0 = float(course_speed(initial_velocity(obs))[0])
+        speed0 = self.speed0 if speed0 is None else float(speed0)
+        p0 = np.asarray(obs.position if position0 is None else position0, float)
+        return float(heading0), speed0, p0
+
+    def _parameters(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
+        """The objective's parameter vector (:class:`ParamLayout`) for a belief and pings."""
+        ping = np.zeros(self.K + 1)
+        st = np.asarray(list(ping_steps), int)
+        if st.size:
+            if self._ping_scale == 0.0:
+                raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
+                                    "has no range sensor")
+            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
+        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
+        return self.layout.vector(belief, bearing, ping)
 
     def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
         if self.keep_out <= 0:

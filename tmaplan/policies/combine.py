@@ -64,11 +64,14 @@ class Combined:
 
     def resolve(self, scenario: Scenario) -> Combined:
         """The same policy with its offline parts computed (the heading plan of
-        :class:`Planned`, the schedule of :class:`ScheduledPings` along the track the manoeuvre
-        nominally flies), so that the controllers of all runs share them."""
+        :class:`Planned`, the real-time iteration model of :class:`Receding`, the schedule of
+        :class:`ScheduledPings` along the track the manoeuvre nominally flies), so that the
+        controllers of all runs share them."""
         man, ping = self.manoeuvre, self.ping
         if isinstance(man, Planned) and man.plan is None:
             man = dataclasses.replace(man, plan=offline_plan(scenario, man.objective))
+        if isinstance(man, Receding):
+            man = man.resolve(scenario)
         if isinstance(ping, ScheduledPings) and ping.steps is None:
             steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
                                       ping.objective, man.nominal_track(scenario))
@@ -124,6 +127,7 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "zigzag": best_zigzag,
     "planned": lambda sc: Planned(),
     "receding": lambda sc: Receding(),
+    "receding-rti": lambda sc: Receding(full_every=0, name="receding-rti"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }
@@ -143,7 +147,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
     baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
-    planned, receding, leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    planned, receding, receding-rti (real-time-iteration steps only, no periodic IPOPT
+    solve), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.consistency import (
     FilterOptions,
     MonitorConfig,
@@ -159,9 +159,9 @@ def test_ping_gate_and_config_validation():
     far = Measurement(kind="range", value=13_000.0, sigma=50.0, ping=True)
     assert np.array_equal(pf.update(st, [far], np.random.default_rng(9)).particles, st.particles)
     for kw in ({"bearing_clutter": 1.0}, {"ping_gate": 0.0}):
-        with pytest.raises(ScenarioError):
+        with pytest.raises(ArgumentError):
             PFConfig(n_particles=10, dt=1.0, q=0.0, **kw)
-    with pytest.raises(ScenarioError, match="alpha"):
+    with pytest.raises(ArgumentError, match="alpha"):
         MonitorConfig(alpha=0.0)
     assert FilterOptions.robust().label() == "robust" and FilterOptions.plain().monitor is None
 

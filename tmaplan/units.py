@@ -34,7 +34,7 @@ __all__ = [
     "KNOT",
     "NMI",
     "format_quantity",
-    "quantity",
+    "si_validator",
     "to_si",
     "to_si_vector",
     "ureg",
@@ -273,26 +273,22 @@ def format_quantity(value_si: float, unit: str, digits: int = 4) -> str:
     return f"{number} {unit}"
 
 
-def quantity(dimension: str, **constraints: Any) -> Any:
-    """A pydantic-validated float field in ``dimension`` (a plain SI number or a string with a
-    unit, converted by :func:`to_si`), finite, with pydantic ``Field`` constraints
-    (``gt``, ``ge``, ``le``, ...).
+
+def si_validator(dimension: str) -> Any:
+    """A pydantic ``BeforeValidator`` converting a field in ``dimension`` with :func:`to_si`
+    (a plain SI number or a string with a unit; a bool is refused by name), for annotations
+    ``Annotated[float, si_validator("time"), Field(...)]``.
 
     Parameters
     ----------
     dimension
         One of :data:`DIMENSIONS`.
-    **constraints
-        Passed to :func:`pydantic.Field`.
 
     Returns
     -------
-    typing.Annotated
-        ``Annotated[float, BeforeValidator(...), Field(...)]`` for dataclass annotations.
+    pydantic.BeforeValidator
     """
-    from typing import Annotated
-
-    from pydantic import BeforeValidator, Field
+    from pydantic import BeforeValidator
 
     _check_dimension(dimension)
 
@@ -301,4 +297,4 @@ def quantity(dimension: str, **constraints: Any) -> Any:
             return to_si(value, dimension, info.field_name or "value")
         return value
 
-    return Annotated[float, BeforeValidator(convert), Field(allow_inf_nan=False, **constraints)]
+    return BeforeValidator(convert)

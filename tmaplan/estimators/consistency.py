@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from scipy import optimize, stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
 from tmaplan.geometry import wrap_angle
 
@@ -176,24 +176,24 @@ class MonitorConfig:
         for name in ("window", "lookback", "holdoff", "outliers"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < (0 if name == "holdoff" else 1):
-                raise ScenarioError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
+                raise ArgumentError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
         if not 0.0 < self.alpha < 0.5:
-            raise ScenarioError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
+            raise ArgumentError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
         if self.cusum_alpha is not None and not 0.0 < self.cusum_alpha < 0.5:
-            raise ScenarioError("monitor.cusum_alpha", "a probability in (0, 0.5)",
+            raise ArgumentError("monitor.cusum_alpha", "a probability in (0, 0.5)",
                                 self.cusum_alpha)
         if not self.kappa > 0:
-            raise ScenarioError("monitor.kappa", "> 0", self.kappa)
+            raise ArgumentError("monitor.kappa", "> 0", self.kappa)
         if not (0 <= self.velocity_fraction and 0 <= self.range_fraction
                 and self.velocity_fraction + self.range_fraction <= 1):
-            raise ScenarioError("monitor.velocity_fraction",
+            raise ArgumentError("monitor.velocity_fraction",
                                 "fractions >= 0 with velocity + range fractions <= 1",
                                 (self.velocity_fraction, self.range_fraction))
         if not 0.0 < self.rejuvenation_weight < 1.0:
-            raise ScenarioError("monitor.rejuvenation_weight", "in (0, 1)",
+            raise ArgumentError("monitor.rejuvenation_weight", "in (0, 1)",
                                 self.rejuvenation_weight)
         if not self.q_boost >= 1:
-            raise ScenarioError("monitor.q_boost", ">= 1", self.q_boost)
+            raise ArgumentError("monitor.q_boost", ">= 1", self.q_boost)
 
     @property
     def bearing_threshold(self) -> float:

@@ -31,14 +31,14 @@ Example::
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import ConfigDict
+from pydantic import ConfigDict, Field
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle, wrap_half_angle
-from tmaplan.units import quantity
+from tmaplan.units import si_validator
 
 __all__ = [
     "Dropout",
@@ -50,19 +50,21 @@ __all__ = [
 ]
 
 _CONFIG = ConfigDict(extra="forbid", arbitrary_types_allowed=False)
-_frozen = _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)
 
-Probability = quantity("dimensionless", ge=0.0, le=1.0)
-WildProbability = quantity("dimensionless", ge=0.0, lt=1.0)
-Spread = quantity("angle", gt=0.0, le=math.pi)
-Bias = quantity("angle", ge=-math.pi / 2, le=math.pi / 2)
-Angle = quantity("angle")
-NonNegTime = quantity("time", ge=0.0)
-PositiveTime = quantity("time", gt=0.0)
-NonNegSpeed = quantity("speed", ge=0.0)
+Probability = Annotated[float, si_validator("dimensionless"),
+                        Field(allow_inf_nan=False, ge=0.0, le=1.0)]
+WildProbability = Annotated[float, si_validator("dimensionless"),
+                            Field(allow_inf_nan=False, ge=0.0, lt=1.0)]
+Spread = Annotated[float, si_validator("angle"), Field(allow_inf_nan=False, gt=0.0, le=math.pi)]
+Bias = Annotated[float, si_validator("angle"),
+                 Field(allow_inf_nan=False, ge=-math.pi / 2, le=math.pi / 2)]
+Angle = Annotated[float, si_validator("angle"), Field(allow_inf_nan=False)]
+PositiveTime = Annotated[float, si_validator("time"), Field(allow_inf_nan=False, gt=0.0)]
+NonNegTime = Annotated[float, si_validator("time"), Field(allow_inf_nan=False, ge=0.0)]
+NonNegSpeed = Annotated[float, si_validator("speed"), Field(allow_inf_nan=False, ge=0.0)]
 
 
-@_frozen
+@_pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)
 class Dropout:
     """A sensor fade: no measurement of ``sensors`` at grid instants in [start, end).
 
@@ -81,7 +83,7 @@ class Dropout:
     sensors: Literal["all", "bearing", "range"] = "all"
 
 
-@_frozen
+@_pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)
 class TargetManoeuvre:
     """An unmodelled change of the target's course and/or speed.
 
@@ -106,7 +108,7 @@ class TargetManoeuvre:
     speed: NonNegSpeed | None = None
 
 
-@_frozen
+@_pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)
 class Faults:
     """Faults applied to the truth and the measurements of a simulated run (module docstring).
 

@@ -16,11 +16,11 @@ import dataclasses
 from typing import Annotated, Any, Literal, TypeVar, cast, dataclass_transform
 
 import numpy as np
-from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, ConfigDict, Field
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
 from tmaplan.models.faults import Faults
-from tmaplan.units import to_si
+from tmaplan.units import si_validator
 
 __all__ = [
     "BearingSensor",
@@ -58,13 +58,7 @@ def _frozen(cls: type[_T]) -> type[_T]:
     return cast("type[_T]", _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls))
 
 
-def _unit(dimension: str) -> BeforeValidator:
-    def convert(value: Any, info: Any) -> Any:
-        if isinstance(value, str | int | float) and not isinstance(value, bool):
-            return to_si(value, dimension, info.field_name or "value")
-        return value
-
-    return BeforeValidator(convert)
+_unit = si_validator  # SI number or string with a unit; a bool is refused by name
 
 
 _FINITE = Field(allow_inf_nan=False)

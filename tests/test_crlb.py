@@ -128,13 +128,13 @@ def _fd_rows(model, theta, t, obs_p, obs_v, kind):
     return np.stack(cols, axis=-1)
 
 
-@pytest.mark.parametrize("which", ["cv", "multi-leg", "constant-turn"])
+@pytest.mark.parametrize("which", ["ncv", "multi-leg", "constant-turn"])
 @pytest.mark.parametrize("kind", ["bearing", "range", "range-rate"])
 def test_analytic_gradients_match_finite_differences(which, kind):
     t = np.linspace(0.0, 900.0, 37)
     obs_p = np.stack([4.0 * t, 1000.0 + 2.0 * t], axis=-1)
     obs_v = np.tile([4.0, 2.0], (t.size, 1))
-    if which == "cv":
+    if which == "ncv":
         model, theta = cv_model(300.0), np.array([6000.0, 12000.0, -3.0, 1.5])
     elif which == "multi-leg":
         model = multi_leg_model([250.0, 610.0], t_ref=100.0)

@@ -70,11 +70,11 @@ class TMAData:
 
     Attributes
     ----------
-    model : {"cv", "multi-leg", "constant-turn"}
+    model : {"ncv", "multi-leg", "constant-turn"}
     leg_starts : ndarray, shape (m,)
         Start times of legs 2..m+1 [s] (multi-leg).
     t0 : float
-        Reference time of the cv / multi-leg position parameters [s].
+        Reference time of the ncv / multi-leg position parameters [s].
     b_times, b_values, b_sigma : ndarray, shape (nb,)
         Bearing times [s], values [rad], std [rad].
     b_obs : ndarray, shape (nb, 2)
@@ -286,13 +286,13 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
     measurements : sequence of MeasurementSet
         From :func:`tmaplan.simulate.simulate`.
     observer : ObserverTrack
-    model : {"cv", "multi-leg", "constant-turn"}, optional
-        Default: from ``scenario.target.model`` ("ncv" → "cv").
+    model : {"ncv", "multi-leg", "constant-turn"}, optional
+        Default: from ``scenario.target.model`` (the scenario's model name).
     frequencies : int, optional
         Use only the first ``frequencies`` lines (0 = bearings only); default all.
     """
     t = scenario.target
-    mdl: Model = model or ("cv" if t.model == "ncv" else t.model)
+    mdl: Model = model or t.model
     legs = np.array([leg.start for leg in t.legs], float) if mdl == "multi-leg" else np.zeros(0)
     e2 = np.zeros((0, 2))
     b = [m for m in measurements if m.kind == "bearing"]
@@ -339,7 +339,7 @@ def tma_data(scenario: Scenario, measurements: Sequence[MeasurementSet],
 def true_parameters(scenario: Scenario, track: TrackModel, n_lines: int = 0) -> np.ndarray:
     """The scenario's true θ in ``track``'s parametrisation, then its first ``n_lines`` tones.
 
-    cv / multi-leg: the position at ``track.t_ref`` and one velocity per leg of ``track``
+    ncv / multi-leg: the position at ``track.t_ref`` and one velocity per leg of ``track``
     (the scenario's legs starting at ``track.change_times``); constant turn:
     ``[x_C, y_C, ρ_C, φ, ω]`` (clavard2013).
     """

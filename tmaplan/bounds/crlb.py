@@ -75,7 +75,7 @@ class CRLBResult:
     Attributes
     ----------
     model : str
-        "cv", "multi-leg" or "constant-turn".
+        "ncv", "multi-leg" or "constant-turn".
     parameters : tuple of str
         Names of the estimated parameters (motion parameters, then tones ``f0[p]``).
     units : tuple of str
@@ -334,7 +334,7 @@ def scenario_data(
         Number of frequency lines to use (the first N tones of the scenario's frequency
         sensors; 0 = none). Default: all lines in the scenario.
     t_ref : float, optional
-        Reference time of the position parameters (cv, multi-leg) [s]; default t0.
+        Reference time of the position parameters (ncv, multi-leg) [s]; default t0.
 
     Returns
     -------
@@ -416,7 +416,7 @@ def crlb(scenario: Scenario, *, frequencies: int | None = None,
     frequencies : int, optional
         Use the first N frequency lines (0 = bearings/ranges only). Default: all lines.
     t_ref : float, optional
-        Reference time of the cv/multi-leg position parameters [s] (default t0). The
+        Reference time of the ncv/multi-leg position parameters [s] (default t0). The
         final-time quantities do not depend on it.
 
     Returns

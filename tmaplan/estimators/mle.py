@@ -32,7 +32,7 @@ those of a both-senses search (a 21 % mixture with the clockwise mirror; tests/t
 
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
-* ``cv``: ``[x, y, v_x, v_y]`` at t0;
+* ``ncv``: ``[x, y, v_x, v_y]`` at t0;
 * ``multi-leg``: ``[x, y]`` at t0 and one velocity per leg (leg start times known);
 * ``constant-turn``: clavard2013's ``Z = [x_C, y_C, ρ_C, φ, ω]`` with ``P(t) = P_C + ρ_C[sin(ωt+φ),
   cos(ωt+φ)]``.
@@ -155,7 +155,7 @@ class MLEConfig:
 
     Attributes
     ----------
-    model : {"auto", "cv", "multi-leg", "constant-turn"}
+    model : {"auto", "ncv", "multi-leg", "constant-turn"}
         "auto": from the scenario's target model.
     gn_iterations : int
         Gauss–Newton iterations before Levenberg–Marquardt (10 in clavard2013).
@@ -191,7 +191,7 @@ class MLEConfig:
         stays in the sense).
     """
 
-    model: Literal["auto", "cv", "multi-leg", "constant-turn"] = "auto"
+    model: Literal["auto", "ncv", "multi-leg", "constant-turn"] = "auto"
     gn_iterations: int = 10
     max_nfev: int = 200
     grid_ranges: tuple[float, ...] = (2e3, 4e3, 6e3, 9e3, 13e3, 18e3, 25e3, 35e3)

@@ -1,16 +1,16 @@
 """Deterministic target-track models and measurement Jacobians (batch CRLB and batch MLE).
 
-The one implementation of the cv / multi-leg / constant-turn parametrisations: the batch CRLB
+The one implementation of the ncv / multi-leg / constant-turn parametrisations: the batch CRLB
 (:mod:`tmaplan.bounds.crlb`) and the batch maximum-likelihood estimator
 (:mod:`tmaplan.estimators.mle`) both evaluate tracks and Jacobians here.
 
 A *track model* maps a parameter vector ``θ`` to the target position and velocity at given
 times, with analytic Jacobians ``∂p/∂θ`` and ``∂v/∂θ``:
 
-* ``cv``            — constant velocity, ``θ = [x, y, v_x, v_y]`` at a reference time.
+* ``ncv``           — (nearly) constant velocity, ``θ = [x, y, v_x, v_y]`` at a reference time.
 * ``multi-leg``     — piecewise constant velocity with known change times,
   ``θ = [x, y, v_x¹, v_y¹, …, v_x^ℓ, v_y^ℓ]`` (lecadre1997 eq. 24; position at the
-  reference time, then one velocity per leg; ``cv`` is the one-leg case).
+  reference time, then one velocity per leg; ``ncv`` is the one-leg case).
 * ``constant-turn`` — clavard2013's circle ``θ = [x_C, y_C, ρ_C, φ, ω]``.
 
 Measurement Jacobians (rows ``∂h_k/∂θ``) are formed by the chain rule from the relative
@@ -47,7 +47,7 @@ __all__ = [
     "relative_kinematics",
 ]
 
-ModelKind = Literal["cv", "multi-leg", "constant-turn"]
+ModelKind = Literal["ncv", "multi-leg", "constant-turn"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -56,13 +56,13 @@ class TrackModel:
 
     Attributes
     ----------
-    kind : {"cv", "multi-leg", "constant-turn"}
+    kind : {"ncv", "multi-leg", "constant-turn"}
     names : tuple of str
         Parameter names, in order.
     units : tuple of str
         SI unit of each parameter.
     t_ref : float
-        Reference time [s] of the position parameters (cv, multi-leg); unused for
+        Reference time [s] of the position parameters (ncv, multi-leg); unused for
         constant-turn (whose phase refers to t = 0 of the scenario clock, clavard2013).
     change_times : tuple of float
         Velocity change times [s] (multi-leg), increasing; leg j+1 starts at
@@ -190,7 +190,7 @@ class TrackModel:
 
 def cv_model(t_ref: float = 0.0) -> TrackModel:
     """Constant-velocity model ``[x, y, v_x, v_y]`` at ``t_ref`` [s]."""
-    return TrackModel(kind="cv", names=("x", "y", "vx", "vy"), units=("m", "m", "m/s", "m/s"),
+    return TrackModel(kind="ncv", names=("x", "y", "vx", "vy"), units=("m", "m", "m/s", "m/s"),
                       t_ref=float(t_ref))
 
 

@@ -24,6 +24,7 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
 from tmaplan.plotting import plot_plan
+from tmaplan.policies.plan_starts import plan_from_prior
 from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
@@ -42,7 +43,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "unit ('1 min')")
     parser.add_argument("--transcription", choices=("direct", "bang-bang"), default="direct")
     parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=4,
-                        help="multi-start initial guesses (default 4)")
+                        help="built-in initial guesses of the bang-bang transcription "
+                             "(default 4); the direct one starts from straight, the tactics "
+                             "and the best single turns as well")
     add_figure_arguments(parser)
 
 
@@ -53,7 +56,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                              control_interval=args.control_interval,
                              transcription=args.transcription, n_starts=args.starts)
     belief = Belief.from_prior(scenario)
-    plan = planner.solve(belief)
+    plan = (plan_from_prior(scenario, planner=planner) if args.transcription == "direct"
+            else planner.solve(belief))
     ev = ObjectiveEvaluator(scenario, planner.objective, n_steps=planner.K, belief=belief)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K,
                               evaluator=ev)
@@ -64,7 +68,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "range_bound": plan.range_bound, "range_bound_times": plan.observer.times,
         "baselines": {k: v[0].objective for k, v in base.items()},
         "baseline_params": {k: v[0].params for k, v in base.items()},
-        "solver": {"status": plan.status, "seconds": plan.seconds,
+        "solver": {"status": plan.status, "seconds": plan.seconds, "message": plan.message,
                    "iterations": plan.iterations, "transcription": plan.transcription},
         "observer": {"times": plan.observer.times, "position": plan.observer.position,
                      "velocity": plan.observer.velocity,

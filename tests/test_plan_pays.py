@@ -1,0 +1,117 @@
+"""Does the plan pay? (issue 13, item 3): the default objective, the multi-started plan and the
+paired campaign of ``planned`` against the baselines (tmaplan.evaluation.plan_check).
+
+The fast tests exercise the code path at a tiny size and check the pieces against independent
+computations; the ``slow`` tests are the issue's "Done when" inequalities at ≥ 100 paired runs
+(``benchmarks/planning_pays.py`` prints the same table, quoted in the README).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from tmaplan.errors import ScenarioError
+from tmaplan.experiments import plan_campaign, planned_differences, tune_single_turn
+from tmaplan.models.observer import turn_rate_track
+from tmaplan.planning import HeadingPlanner, single_turn_track
+from tmaplan.planning.objectives import DEFAULT_OBJECTIVE
+from tmaplan.policies import CLOSED_LOOP_OBJECTIVE, Planned, Receding
+from tmaplan.policies.plan_starts import start_programs, turn_program
+from tmaplan.scenario import load_problem
+
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_problem("default")
+
+
+def test_one_default_objective_everywhere(scenario):
+    from tmaplan.scenario import Planning
+
+    assert CLOSED_LOOP_OBJECTIVE == DEFAULT_OBJECTIVE == "expected-time-to-accuracy"
+    assert Planning().objective == DEFAULT_OBJECTIVE
+    for name in ("default", "bow-closing", "contact-astern"):
+        assert load_problem(name).planning.objective == DEFAULT_OBJECTIVE
+    assert HeadingPlanner(scenario).objective.name == DEFAULT_OBJECTIVE
+    assert Planned().objective == Receding().objective == DEFAULT_OBJECTIVE
+
+
+def test_turn_program_reproduces_a_single_turn(scenario):
+    planner = HeadingPlanner(scenario)
+    # a turn starting on a control node and lasting whole intervals at the maximum rate
+    u_max = scenario.observer.turn_rate_max
+    angle = 4 * planner.Tc * u_max
+    track = single_turn_track(scenario, angle, 10 * planner.Tc)
+    u = turn_program(track, planner)
+    expect = np.zeros(planner.n)
+    expect[10:14] = 1.0
+    np.testing.assert_allclose(u, expect, atol=1e-9)
+    back = turn_rate_track(track.position[0], float(track.heading[0]), float(track.speed[0]),
+                           np.repeat(u * u_max, planner.m), scenario.time.dt)
+    np.testing.assert_allclose(back.position, track.position, atol=1e-6)
+
+
+def test_start_programs_cover_the_baselines(scenario):
+    planner = HeadingPlanner(scenario)
+    st = start_programs(scenario, planner, n_turns=2)
+    assert {"straight", "leg-turn-leg", "leg-turn-leg:mirrored", "lead-lag",
+            "lead-lag:mirrored", "single-turn:0", "single-turn:1"} <= set(st)
+    np.testing.assert_array_equal(st["straight"], 0.0)
+    np.testing.assert_array_equal(st["lead-lag:mirrored"], -st["lead-lag"])
+    assert all(u.shape == (planner.n,) and np.all(np.abs(u) <= 1.0) for u in st.values())
+
+
+def test_planner_rejects_starts_of_the_wrong_shape(scenario):
+    from tmaplan.errors import PlanningError
+    from tmaplan.planning import Belief
+
+    planner = HeadingPlanner(scenario, horizon=600.0)
+    with pytest.raises(PlanningError, match="starts"):
+        planner.solve(Belief.from_prior(scenario), starts=[np.zeros(planner.n + 1)])
+
+
+def test_planned_differences_match_an_independent_paired_t_interval():
+    import types
+
+    rng = np.random.default_rng(3)
+    camp = types.SimpleNamespace(  # the three fields planned_differences reads
+        policies=("planned", "straight", "turn"), times=np.arange(0.0, 301.0, 15.0),
+        summary={"planned": {"time_to_accuracy_runs": rng.uniform(0, 300, 30)},
+                 "straight": {"time_to_accuracy_runs": np.full(30, np.inf)},
+                 "turn": {"time_to_accuracy_runs": rng.uniform(0, 300, 30)}})
+    d = planned_differences(camp)
+    assert set(d) == {"straight", "turn"}
+    censor = 300.0 + 15.0
+    a = camp.summary["planned"]["time_to_accuracy_runs"]
+    for name in ("straight", "turn"):
+        x = camp.summary[name]["time_to_accuracy_runs"]
+        b = np.where(np.isfinite(x), x, censor)
+        ref = stats.ttest_rel(a, b).confidence_interval(0.95)
+        assert d[name].mean == pytest.approx(np.mean(a - b))
+        assert (d[name].ci_low, d[name].ci_high) == pytest.approx((ref.low, ref.high))
+    with pytest.raises(ScenarioError, match="reference"):
+        planned_differences(camp, reference="nope")
+
+
+def test_tuning_and_plan_campaign_code_path_at_tiny_size():
+    import dataclasses
+
+    sc = load_problem("default")
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0),
+                    planning=dataclasses.replace(sc.planning, horizon=900.0))
+    tuned, scores = tune_single_turn(sc, runs=2, seed=1000, n_particles=200,
+                                     angles=(90.0,), fractions=(0.25, 0.5))
+    assert len(scores) == 4 and tuned.name == "tuned-turn"
+    assert scores[min(scores, key=scores.get)] == min(scores.values())
+    camp = plan_campaign(sc, runs=2, n_particles=200, tuned=tuned)
+    assert camp.policies == ("planned", "straight", "single-turn", "leg-turn-leg", "lead-lag",
+                             "tuned-turn")
+    d = planned_differences(camp)
+    assert set(d) == set(camp.policies) - {"planned"}
+    assert all(v.n == 2 and np.isfinite(v.mean) for v in d.values())
+    with pytest.raises(ScenarioError, match="fractions"):
+        tune_single_turn(sc, runs=1, fractions=(1.5,))

@@ -19,8 +19,14 @@ import time
 
 import numpy as np
 
-from tmaplan.experiments import plan_campaign, planned_differences, tune_single_turn
+from tmaplan.experiments import (
+    plan_campaign,
+    planned_differences,
+    select_plan,
+    tune_single_turn,
+)
 from tmaplan.policies.manoeuvres import offline_plan
+from tmaplan.policies.plan_starts import plan_candidates
 from tmaplan.scenario import load_problem
 
 
@@ -32,6 +38,9 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--receding", action="store_true", help="also fly receding (slow)")
+    ap.add_argument("--select-runs", type=int, default=0,
+                    help="also fly planned-mc: the OCP local optimum with the best Monte Carlo "
+                         "time to accuracy on this many runs of the planner's seeds (2000)")
     a = ap.parse_args()
     for name in a.problems.split(","):
         t = time.perf_counter()
@@ -39,8 +48,14 @@ def main() -> None:
         plan = offline_plan(sc, None)
         tuned, _ = tune_single_turn(sc, runs=a.tune_runs, n_particles=a.particles,
                                     workers=a.workers)
+        selected = None
+        if a.select_runs > 0:
+            pick, selected, scores = select_plan(sc, plan_candidates(sc), runs=a.select_runs,
+                                                 n_particles=a.particles, workers=a.workers)
+            print(f"{name}: planned-mc = local optimum from start {pick!r} (selection means "
+                  + ", ".join(f"{k} {v / 60:.1f}" for k, v in scores.items()) + " min)")
         camp = plan_campaign(sc, runs=a.runs, n_particles=a.particles, tuned=tuned,
-                             receding=a.receding, workers=a.workers)
+                             receding=a.receding, selected=selected, workers=a.workers)
         print(f"{name}: {a.runs} paired runs, {a.particles} particles, objective "
               f"{sc.planning.objective if sc.planning else '?'}; plan cost {plan.objective:.4f} "
               f"({plan.message}); tuned turn {np.degrees(tuned.angle):+.0f} deg at "

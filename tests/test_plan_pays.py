@@ -13,12 +13,18 @@ import pytest
 from scipy import stats
 
 from tmaplan.errors import ScenarioError
-from tmaplan.experiments import plan_campaign, planned_differences, tune_single_turn
+from tmaplan.experiments import (
+    plan_campaign,
+    planned_differences,
+    select_plan,
+    tune_single_turn,
+)
 from tmaplan.models.observer import turn_rate_track
 from tmaplan.planning import HeadingPlanner, single_turn_track
 from tmaplan.planning.objectives import DEFAULT_OBJECTIVE
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE, Planned, Receding
-from tmaplan.policies.plan_starts import start_programs, turn_program
+from tmaplan.policies.manoeuvres import offline_plan
+from tmaplan.policies.plan_starts import plan_candidates, start_programs, turn_program
 from tmaplan.scenario import load_problem
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -115,3 +121,13 @@ def test_tuning_and_plan_campaign_code_path_at_tiny_size():
     assert all(v.n == 2 and np.isfinite(v.mean) for v in d.values())
     with pytest.raises(ScenarioError, match="fractions"):
         tune_single_turn(sc, runs=1, fractions=(1.5,))
+    # the planner's Monte Carlo choice among the OCP's distinct local optima
+    plans = plan_candidates(sc)
+    objs = [p.objective for p in plans.values()]
+    assert objs == sorted(objs) and len(set(np.round(objs, 6))) == len(objs)
+    assert min(objs) == pytest.approx(offline_plan(sc, None).objective)
+    two = dict(list(plans.items())[:2])
+    name, plan, scores = select_plan(sc, two, runs=2, seed=2000, n_particles=200)
+    assert plan is two[name] and scores[name] == min(scores.values())
+    camp = plan_campaign(sc, runs=2, n_particles=200, selected=plan)
+    assert "planned-mc" in camp.policies

@@ -7,6 +7,10 @@ The checks of the README section "Which objective plans, and does the plan pay?"
   own (``seed`` different from the evaluation's), the one with the smallest mean censored
   time to accuracy kept. It is the strongest simple baseline a user could tune, and it never
   sees the evaluation seeds;
+* :func:`select_plan`: the planner's own use of Monte Carlo — among the distinct local
+  optima of the multi-started OCP (:func:`tmaplan.policies.plan_starts.plan_candidates`),
+  the one whose closed-loop mean time to accuracy on the *planner's* seeds is smallest (the
+  cost ranks broad families of manoeuvres well but not its own nearby local optima);
 * :func:`plan_campaign`: one paired campaign (common random numbers, truths from the prior)
   of ``planned`` against ``straight``, the single turn the planning cost itself picks as best
   (:func:`tmaplan.policies.best_single_turn`), every practitioner tactic
@@ -41,7 +45,7 @@ from tmaplan.policies import (
 from tmaplan.scenario import Scenario
 
 __all__ = ["TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign", "planned_differences",
-           "tune_single_turn"]
+           "select_plan", "tune_single_turn"]
 
 #: Course changes of the Monte Carlo tuning grid [deg] (both sides).
 TUNE_ANGLES = (60.0, 90.0, 120.0, 150.0)
@@ -107,17 +111,62 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
     return grid[best], scores
 
 
+def select_plan(scenario: Scenario, plans: Mapping[str, Any], *, runs: int = 24,
+                seed: int = 2000, n_particles: int = 3000, accuracy: float = 0.1,
+                workers: int = 1) -> tuple[str, Any, dict[str, float]]:
+    """The plan of ``plans`` with the smallest mean censored time to accuracy in closed loop.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    plans : mapping
+        Name -> ``HeadingPlan`` (e.g. :func:`tmaplan.policies.plan_starts.plan_candidates`).
+    runs : int
+        Paired runs (truths from the prior) on the planner's seeds.
+    seed : int
+        Root seed of the selection runs; keep it apart from the evaluation's and the tuning's.
+    n_particles, accuracy, workers :
+        As for :func:`tmaplan.experiments.run_campaign`.
+
+    Returns
+    -------
+    name : str
+    plan : HeadingPlan
+    scores : dict
+        Name -> mean censored time to accuracy [s].
+    """
+    if not plans:
+        raise ScenarioError("plans", "at least one plan", 0)
+    if int(runs) < 1:
+        raise ScenarioError("runs", ">= 1", runs)
+    if len(plans) == 1:
+        (name, plan), = plans.items()
+        return name, plan, {}
+    pols = {f"plan:{k}": Combined(manoeuvre=Planned(plan=v)) for k, v in plans.items()}
+    spec = CampaignSpec(scenario=scenario, policies=tuple(pols), runs=int(runs), seed=seed,
+                        n_particles=n_particles, accuracy=accuracy)
+    camp = run_campaign(spec, workers=workers, policies=pols)
+    c = _censor(scenario)
+    scores = {}
+    for k in plans:
+        t = camp.summary[f"plan:{k}"]["time_to_accuracy_runs"]
+        scores[k] = float(np.mean(np.where(np.isfinite(t), t, c)))
+    best = min(scores, key=lambda k: scores[k])
+    return best, plans[best], scores
+
+
 def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
                   n_particles: int = 3000, accuracy: float = 0.1,
                   tuned: SingleTurn | None = None, receding: bool = False,
-                  objective: str | None = None, workers: int = 1,
+                  objective: str | None = None, selected: Any = None, workers: int = 1,
                   out_dir: str | Path | None = None) -> CampaignResult:
     """Paired campaign of ``planned`` against the baselines (see the module docstring).
 
     Policies: ``planned`` (the multi-started offline plan of ``objective``, default the
     scenario's), ``straight``, ``single-turn`` (the best single turn by the planning cost),
-    ``leg-turn-leg``, ``lead-lag``, ``tuned-turn`` (if ``tuned`` is given) and ``receding``
-    (if ``receding``).
+    ``leg-turn-leg``, ``lead-lag``, ``tuned-turn`` (if ``tuned`` is given), ``planned-mc``
+    (the plan ``selected`` by :func:`select_plan`, if given) and ``receding`` (if
+    ``receding``).
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
@@ -133,6 +182,9 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     }
     if tuned is not None:
         pols["tuned-turn"] = Combined(manoeuvre=tuned)
+    if selected is not None:
+        pols["planned-mc"] = Combined(manoeuvre=Planned(objective=obj, plan=selected,
+                                                        name="planned-mc"))
     if receding:
         pols["receding"] = Combined(manoeuvre=Receding(objective=obj))
     spec = CampaignSpec(scenario=scenario, policies=tuple(pols), runs=int(runs), seed=seed,

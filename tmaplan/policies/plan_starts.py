@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
     from tmaplan.scenario import Scenario
 
-__all__ = ["plan_from_prior", "start_programs", "turn_program"]
+__all__ = ["plan_candidates", "plan_from_prior", "start_programs", "turn_program"]
 
 
 def turn_program(track: ObserverTrack, planner: HeadingPlanner) -> np.ndarray:
@@ -99,6 +99,28 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
     """
     import dataclasses
 
+    plans = plan_candidates(scenario, objective, n_turns=n_turns, planner=planner,
+                            **planner_kw)
+    name = min(plans, key=lambda k: plans[k].objective)
+    return dataclasses.replace(
+        plans[name], iterations=sum(p.iterations for p in plans.values()),
+        seconds=sum(p.seconds for p in plans.values()),
+        message=f"best of the multi-start: {name}")
+
+
+def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int = 3,
+                    planner: HeadingPlanner | None = None, tol: float = 1e-4,
+                    **planner_kw: Any) -> dict[str, HeadingPlan]:
+    """Every distinct local optimum of the multi-start (start name -> plan), best cost first.
+
+    Solutions whose costs agree within ``tol`` (relative) are one optimum, kept under the
+    first start that reached it. Arguments as :func:`plan_from_prior`.
+
+    Raises
+    ------
+    SolverError
+        If IPOPT converged from none of the starts.
+    """
     from tmaplan.planning.belief import Belief
     from tmaplan.planning.heading import HeadingPlanner
 
@@ -108,21 +130,21 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
             kw["objective"] = objective
         planner = HeadingPlanner(scenario, **kw)
     belief = Belief.from_prior(scenario)
-    best: tuple[float, str, HeadingPlan] | None = None
-    iters, seconds = 0, 0.0
+    found: list[tuple[str, HeadingPlan]] = []
     for name, u in start_programs(scenario, planner, n_turns=n_turns).items():
         try:
             plan = planner.solve(belief, starts=[u], raise_on_failure=False)
         except PlanningError:
             continue
-        iters += plan.iterations
-        seconds += plan.seconds
-        if not plan.success or not np.isfinite(plan.objective):
-            continue
-        if best is None or plan.objective < best[0]:
-            best = (plan.objective, name, plan)
-    if best is None:
+        if plan.success and np.isfinite(plan.objective):
+            found.append((name, plan))
+    if not found:
         raise SolverError("ipopt", "no start converged",
                           f"heading OCP from the prior ({scenario.name})")
-    return dataclasses.replace(best[2], iterations=iters, seconds=seconds,
-                               message=f"best of the multi-start: {best[1]}")
+    found.sort(key=lambda np_: np_[1].objective)
+    out: dict[str, HeadingPlan] = {}
+    for name, plan in found:
+        if all(abs(plan.objective - q.objective) > tol * max(abs(q.objective), 1e-12)
+               for q in out.values()):
+            out[name] = plan
+    return out

@@ -457,6 +457,7 @@ class HeadingPlanner:
         pvec = self.layout.vector(belief, bearing, ping)
         lbw, ubw, lbg, ubg = self._bounds(heading0)
         guesses: list[tuple[np.ndarray, float]]
+        duals: dict[str, Any] | None
         if warm_start is not None:
             x0, duals = self._shift_warm(warm_start, belief.t, heading0, speed0)
             sgn = float(warm_start.warm.get("sign", 1.0)) if warm_start.warm else 1.0
@@ -480,7 +481,7 @@ class HeadingPlanner:
             solver = self._solver(use_warm)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,
                                   "ubg": ubg}
-            if use_warm:
+            if duals is not None:
                 kw.update(lam_x0=duals["lam_x"], lam_g0=duals["lam_g"])
             sol = solver(**kw)
             stats = solver.stats()

@@ -210,7 +210,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
     return Objective("time-to-accuracy", ((1.0, term),), int(samples))
 
 
-def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 48, width: float = 0.25,
+def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: float = 0.25,
                               turn_weight: float = 0.02) -> Objective:
     """Expected time to ``accuracy`` relative range accuracy over prior draws, as a fraction
     of the horizon, plus a small turn penalty (dimensionless, minimised).
@@ -224,7 +224,9 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 48, width: f
     information (a prior spanning 5–25 km averages information of very different draws).
     ``turn_weight·mean_k (u_k/u_max)²`` (:func:`turn_penalty`) removes loops that buy
     nothing. Unlike ``time-to-accuracy`` (τ = accuracy/2, 16 draws, no penalty) it counts a
-    draw localised at the accuracy the Monte Carlo metric uses.
+    draw localised at the accuracy the Monte Carlo metric uses. 128 draws, because the
+    optimiser exploits a small fixed sample: on ``contact-astern`` the plan optimised on 48
+    draws predicts 19.6 min on them and 21.3 min on 400 fresh draws (README).
     """
     if not 0 < accuracy < 1:
         raise ScenarioError("accuracy", "in (0, 1)", accuracy)
@@ -295,7 +297,7 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "relative-range-crlb": lambda: relative_range_crlb("terminal", max(samples, 16)),
         "mean-relative-range-crlb": lambda: relative_range_crlb("mean", max(samples, 16)),
         "time-to-accuracy": lambda: time_to_accuracy(0.1, max(samples, 16)),
-        "expected-time-to-accuracy": lambda: expected_time_to_accuracy(0.1, max(samples, 48)),
+        "expected-time-to-accuracy": lambda: expected_time_to_accuracy(0.1, max(samples, 128)),
     }
     if name not in OBJECTIVE_NAMES:
         raise ScenarioError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)

@@ -212,19 +212,20 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
 
 def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: float = 0.25,
                               turn_weight: float = 0.02) -> Objective:
-    """Expected time to ``accuracy`` relative range accuracy over prior draws, as a fraction
-    of the horizon, plus a small turn penalty (dimensionless, minimised).
+    """Expected time to ``accuracy`` relative range accuracy over prior draws, plus a small
+    turn penalty [s] (minimised).
 
     For each of ``samples`` belief draws s (a deterministic relative track, lecadre1997's
     batch setting), ρ_ks = σ_r/r at step k is the relative range std of the draw's own batch
     bearings CRLB with prior information (:func:`relative_range_crlb_graph`, lecadre1997
     eq. 64–65); the draw's smooth time to accuracy is ``Σ_k σ((ρ_ks − τ)/(w τ))`` steps
     (σ logistic, τ = ``accuracy``, relative width w), and the term is its mean over draws
-    divided by K + 1: the *expected time of each draw*, not the time of the averaged
-    information (a prior spanning 5–25 km averages information of very different draws).
-    ``turn_weight·mean_k (u_k/u_max)²`` (:func:`turn_penalty`) removes loops that buy
-    nothing. Unlike ``time-to-accuracy`` (τ = accuracy/2, 16 draws, no penalty) it counts a
-    draw localised at the accuracy the Monte Carlo metric uses. 128 draws, because the
+    times dt: the *expected time of each draw*, not the time of the averaged information (a
+    prior spanning 5–25 km averages information of very different draws); a draw never
+    localised counts the whole horizon + dt. ``turn_weight·(K+1)·dt·mean_k (u_k/u_max)²``
+    (:func:`turn_penalty`, in the same unit) removes loops that buy nothing. Unlike
+    ``time-to-accuracy`` (τ = accuracy/2, 16 draws, no penalty) it counts a draw localised
+    at the accuracy the Monte Carlo metric uses. 128 draws, because the
     optimiser exploits a small fixed sample: on ``contact-astern`` the plan optimised on 48
     draws predicts 19.6 min on them and 21.3 min on 400 fresh draws (README).
     """
@@ -242,13 +243,19 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
         rel = relative_range_crlb_graph(ctx)
         z = (rel - tau) / (width * tau)
         sig = 0.5 * (1.0 + ca.tanh(0.5 * z))
-        return ca.sum1(ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
+        span = float(ctx.times[-1]) + ctx.dt  # (K + 1)·dt
+        return span * ca.sum1(ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
 
-    obj = Objective("expected-time-to-accuracy", ((1.0, term),), int(samples))
+    def penalty(ctx: PlanContext) -> Any:
+        import casadi as ca
+
+        u = ctx.turn_rate / ctx.turn_rate_max
+        return (float(ctx.times[-1]) + ctx.dt) * ca.sum1(u * u) / u.shape[0]
+
+    terms: tuple[tuple[float, Term], ...] = ((1.0, term),)
     if turn_weight > 0:
-        pen = turn_penalty(turn_weight)
-        obj = Objective(obj.name, obj.terms + pen.terms, obj.n_samples)
-    return obj
+        terms += ((float(turn_weight), penalty),)
+    return Objective("expected-time-to-accuracy", terms, int(samples))
 
 
 def position_bound(reduce: str = "terminal") -> Objective:

@@ -7,8 +7,14 @@ Prints measured numbers and ratios against baselines measured in the same run:
 * issue 14: for K = 1..6 on `default` and `brehard2005-s1`, each method's objective, certified
   lower bound (cvxpy relaxation or enumeration), relative gap and time. Long (the exact method
   may use its time limit at large K): a benchmark, not a test.
+* issue 14 items 4-5 (``--joint``): the joint heading + ping OCP
+  (:func:`tmaplan.planning.plan_joint_ocp`) against the alternating method
+  (:func:`tmaplan.planning.plan_joint`) on `default`, K = 1..3: objective, certified ping gap,
+  seconds; bonmin on a small case; the relaxed OCP's NLP solved by IPOPT, casadi's SQP with
+  OSQP and with qrqp (time ratios against IPOPT).
 
 Run: python benchmarks/planning.py [--only-certified] [--budgets 1,2,3] [--time-limit 600]
+     python benchmarks/planning.py --joint
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import time
 
-from tmaplan.planning import Belief, HeadingPlanner, schedule_pings
+from tmaplan.planning import Belief, HeadingPlanner, plan_joint, plan_joint_ocp, schedule_pings
 from tmaplan.scenario import load_problem
 
 
@@ -98,6 +104,58 @@ def certified(problems: list[str], budgets: list[int], time_limit: float) -> Non
                       f"{r.status} / {r.gap_reference}; pings {r.steps.tolist()}", flush=True)
 
 
+def _certified_alternating(sc, b, k, kw):
+    """The alternating plan, its time, and the certificate of its pings on its track."""
+    t0 = time.perf_counter()
+    alt = plan_joint(sc, budget=k, belief=b, **kw)
+    secs = time.perf_counter() - t0
+    cert = schedule_pings(sc, budget=k, observer=alt.heading.observer, belief=b)
+    lb = min(cert.lower_bound, alt.objective)
+    return alt, secs, lb, (alt.objective - lb) / alt.objective
+
+
+def joint(budgets: list[int]) -> None:
+    """Issue 14 items 4-5: joint OCP vs alternating; SQP with OSQP/qrqp vs IPOPT."""
+    sc = load_problem("default")
+    b = Belief.from_prior(sc)
+    schedule_pings(sc, budget=1, belief=b)  # compiles the closed-form kernel
+    cases = [("default 45 min, 22 x 120 s, stride 4", {"control_interval": 120.0,
+                                                       "n_starts": 1}, 4, ("relaxed",)),
+             ("default 15 min, 5 x 180 s, stride 12", {"horizon": 900.0,
+                                                       "control_interval": 180.0,
+                                                       "n_starts": 1}, 12,
+              ("relaxed", "bonmin"))]
+    print("joint heading + ping plan (mean-range-bound; gap: certified on the pings along the "
+          "returned track; time without the certificate for alternating)")
+    print(f"{'case':38s} {'K':>2s} {'method':12s} {'objective':>10s} {'bound':>10s} "
+          f"{'gap %':>6s} {'time s':>7s}  pings / notes")
+    for label, kw, stride, modes in cases:
+        for k in budgets:
+            alt, ta, lb, gap = _certified_alternating(sc, b, k, kw)
+            print(f"{label:38s} {k:2d} {'alternating':12s} {alt.objective:10.3f} {lb:10.3f} "
+                  f"{100 * gap:6.2f} {ta:7.2f}  {alt.pings.steps.tolist()} "
+                  f"({alt.iterations} rounds)", flush=True)
+            for m in modes:
+                r = plan_joint_ocp(sc, budget=k, belief=b, ping_stride=stride, mode=m, **kw)
+                print(f"{label:38s} {k:2d} {'joint-' + m:12s} {r.objective:10.3f} "
+                      f"{r.lower_bound:10.3f} {100 * r.gap:6.2f} {r.seconds:7.2f}  "
+                      f"{r.pings.steps.tolist()} (NLP {r.nlp_seconds:.2f} s, {r.status}, "
+                      f"relaxed {r.relaxed_objective:.3f}, rounded {r.rounded_objective:.3f}; "
+                      f"joint/alternating objective {r.objective / alt.objective:.4f}, "
+                      f"time {r.seconds / ta:.1f})", flush=True)
+    # item 5: the relaxed OCP (no binarising continuation) by three NLP solvers
+    print("relaxed joint OCP (default 45 min, stride 4, K = 2): NLP solvers")
+    kw = {"control_interval": 120.0, "n_starts": 1}
+    ref = None
+    for solver in ("ipopt", "sqp-osqp", "sqp-qrqp"):
+        r = plan_joint_ocp(sc, budget=2, belief=b, ping_stride=4, nlp_solver=solver,
+                           binarize=False, init="even", **kw)
+        ref = ref or r
+        print(f"  {solver:9s} NLP {r.nlp_seconds:6.2f} s ({r.nlp_seconds / ref.nlp_seconds:5.2f}"
+              f" x ipopt), {r.iterations:4d} it, {r.status}, relaxed objective "
+              f"{r.relaxed_objective:.4f} m (ipopt {ref.relaxed_objective:.4f})", flush=True)
+
+
 if __name__ == "__main__":
     import argparse
 
@@ -107,7 +165,11 @@ if __name__ == "__main__":
     ap.add_argument("--time-limit", type=float, default=600.0,
                     help="exact method's time limit per run [s]")
     ap.add_argument("--only-certified", action="store_true")
+    ap.add_argument("--joint", action="store_true", help="only the joint OCP section")
     a = ap.parse_args()
+    if a.joint:
+        joint([int(x) for x in a.budgets.split(",") if int(x) <= 3])
+        raise SystemExit(0)
     if not a.only_certified:
         heading()
         pings()

@@ -82,15 +82,17 @@ def test_out_must_be_a_directory(tmp_path, capsys):
 
 # ------------------------------------------------------------------ estimator applicability
 APPLICABILITY = [
-    # sharma2024's target has q = 1e-3 m²/s³: ≈1.4 km drift over 30 min against 10 m ranges
+    # sharma2024 has one bearing (at t = 0): the MLE is built on bearings
     (["track", "sharma2024-range-only", "--estimator", "mle", "--runs", "2"],
-     ["mle fits one deterministic track", "use --estimator range-only or pf"]),
+     ["mle (the batch MLE of clavard2013) needs at least 4 bearing measurements",
+      "sharma2024-range-only has 1", "use --estimator range-only or pf"]),
     (["track", "gordon1993-bot", "--estimator", "mle"], ["use --estimator pf"]),
     (["track", "default", "--bound", "prior"], ["field '--bound'", "use --bound truth"]),
     (["track", "clavard2013-halfturn-cw", "--estimator", "mle", "--bound", "prior"],
      ["with --estimator mle"]),
     (["track", "default", "--estimator", "range-only"],
-     ["range-only tracking (sharma2024) needs range measurements", "default has 0"]),
+     ["range-only (range-only tracking of sharma2024) needs at least 3 range",
+      "default has 0"]),
 ]
 
 

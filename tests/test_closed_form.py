@@ -16,7 +16,7 @@ from tmaplan.bounds.closed_form import (
     side_density_gaussian,
 )
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem, measurement_steps
@@ -365,7 +365,7 @@ def test_without_compiler_falls_back_to_reference(monkeypatch):
         m.evaluate_schedules(U, backend="compiled")
     with pytest.raises(RuntimeError, match="no working C compiler"):
         m.evaluate(backend="compiled")
-    with pytest.raises(ScenarioError, match="backend"):
+    with pytest.raises(ArgumentError, match="backend"):
         m.evaluate_schedules(U, backend="fortran")
 
 

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
 from scipy import stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.experiments import (
     Candidate,
     candidate_manoeuvres,
@@ -78,7 +79,7 @@ def test_a_constant_cost_has_no_correlation():
 
 def test_rank_correlations_need_three_candidates():
     tta, fre = _ordered_runs(C=2)
-    with pytest.raises(ScenarioError, match="field 'candidates': expected >= 3"):
+    with pytest.raises(ArgumentError, match="field 'candidates': expected >= 3"):
         rank_correlations({"x": np.arange(2.0)}, tta, fre, censor=1.0)
 
 
@@ -95,7 +96,7 @@ def test_candidate_family(scenario):
     assert {np.sign(p.angle) for p in turns} == {-1.0, 1.0}
     assert len({p.time for p in turns}) >= 3
     assert any(c.family == "zigzag" for c in cands)
-    with pytest.raises(ScenarioError, match="field 'candidates'"):
+    with pytest.raises(ArgumentError, match="field 'candidates'"):
         candidate_manoeuvres(scenario, 2)
 
 
@@ -196,4 +197,8 @@ def test_rank_costs_cli_json(tmp_path):
     assert all(isinstance(c["spearman_ci"], list) and len(c["spearman_ci"]) == 2
                for c in d["costs"])
     assert (tmp_path / "default_rank_costs.png").stat().st_size > 0
-    assert "Rank correlations" in (tmp_path / "rank-costs.html").read_text()
+    text = (tmp_path / "rank-costs.html").read_text()
+    assert "Rank correlations" in text
+    # display units and the small-sample warning (2 runs), no SI candidate names
+    assert "final range RMSE [km]" in text and "Warning: small sample" in text
+    assert not re.search(r"@\d+(\.\d+)?s<", text) and "np.float64(" not in text

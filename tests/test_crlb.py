@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from tmaplan.bounds.batch_fim import batch_data, fisher_information
 from tmaplan.bounds.crlb import (
     BearingData,
     FrequencyData,
@@ -15,11 +16,10 @@ from tmaplan.bounds.crlb import (
     crlb,
     crlb_from_data,
     cv_model,
-    fisher_information,
     multi_leg_model,
 )
 from tmaplan.bounds.fimdet import fim_bearings
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError
 from tmaplan.models.target import constant_turn_state
 from tmaplan.models.tracks import (
     bearing_rows,
@@ -162,8 +162,8 @@ def test_cv_fim_matches_relative_state_fim():
     t = np.arange(0.0, 1200.0, 20.0)
     obs = np.stack([5.0 * t, np.where(t > 600, 3.0 * (t - 600), 0.0)], axis=-1)
     theta = np.array([4000.0, 15000.0, -2.0, -1.0])
-    F, _ = fisher_information(cv_model(200.0), theta, bearings=[
-        BearingData(times=t, observer_position=obs, sigma=0.01)])
+    F = fisher_information(batch_data(cv_model(200.0), bearings=[
+        BearingData(times=t, observer_position=obs, sigma=0.01)]), theta)
     pos, _ = cv_model(200.0).track(theta, t)
     F_rel = fim_bearings(pos - obs, t, 0.01, t_ref=200.0)
     # the absolute state at t_ref = 200 s maps to the relative one by a translation
@@ -176,9 +176,9 @@ def test_multileg_reduces_to_cv_when_legs_merge():
     obs = np.stack([6.0 * t, np.where(t > 500, -4.0 * (t - 500), 0.0)], axis=-1)
     theta = np.array([5000.0, 14000.0, -3.0, 1.0])
     bd = [BearingData(times=t, observer_position=obs, sigma=0.02)]
-    F_cv, _ = fisher_information(cv_model(0.0), theta, bearings=bd)
-    F_ml, _ = fisher_information(multi_leg_model([420.0]), np.r_[theta, theta[2:]],
-                                 bearings=bd)
+    F_cv = fisher_information(batch_data(cv_model(0.0), bearings=bd), theta)
+    F_ml = fisher_information(batch_data(multi_leg_model([420.0]), bearings=bd),
+                              np.r_[theta, theta[2:]])
     M = np.zeros((6, 4))
     M[:4, :4] = np.eye(4)
     M[4:, 2:] = np.eye(2)
@@ -255,12 +255,12 @@ def test_bad_input_errors():
     with pytest.raises(ObservabilityError, match="too few measurements"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t[:4], observer_position=obs[:4], sigma=SIG)])
-    with pytest.raises(ScenarioError, match="sigma"):
+    with pytest.raises(ArgumentError, match="sigma"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=obs, sigma=0.0)])
     bad = obs.copy()
     bad[3, 0] = np.nan
-    with pytest.raises(ScenarioError, match="finite"):
+    with pytest.raises(ArgumentError, match="finite"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=bad, sigma=SIG)])
     track, _ = constant_turn_model().track(Z, t)
@@ -269,7 +269,7 @@ def test_bad_input_errors():
     with pytest.raises(ObservabilityError, match="observer is at the target"):
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=at, sigma=SIG)])
-    with pytest.raises(ScenarioError, match="frequencies"):
+    with pytest.raises(ArgumentError, match="frequencies"):
         crlb(load_problem("clavard2013-halfturn-cw"), frequencies=5)
     # motionless observer, bearings only: homothety (clavard2013 Result 2) -> singular
     with pytest.raises(ObservabilityError, match="singular"):
@@ -285,7 +285,7 @@ def test_bad_input_errors():
             BearingData(times=t, observer_position=centre, sigma=SIG)], frequencies=fc)
     fd = FrequencyData(times=t, observer_position=obs, observer_velocity=np.tile([5.0, 0], (
         t.size, 1)), f0=np.array([3000.0]), sigma=np.array([-1.0]))
-    with pytest.raises(ScenarioError, match="sigma"):
+    with pytest.raises(ArgumentError, match="sigma"):
         crlb_from_data(constant_turn_model(), Z, bearings=[ok], frequencies=fd)
 
 

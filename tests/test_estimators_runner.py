@@ -9,7 +9,7 @@ import pytest
 from oracles.cartesian_pcrb import cartesian_pcrb
 
 from tmaplan.cli import main
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators import Track, monte_carlo, run
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
@@ -30,7 +30,7 @@ def test_run_returns_frozen_track() -> None:
 
 def test_unknown_estimator_is_a_named_error() -> None:
     sc = load_problem("clavard2013-halfturn-cw")
-    with pytest.raises(ScenarioError, match="estimator"):
+    with pytest.raises(ArgumentError, match="estimator"):
         run("kalman", sc, simulate(sc, None))  # type: ignore[arg-type]
 
 

@@ -13,7 +13,7 @@ import pytest
 from tmaplan.errors import PlanningError
 from tmaplan.evaluation.metrics import paired_difference, time_to_accuracy
 from tmaplan.evaluation.records import RunRecord, scenario_hash
-from tmaplan.experiments import CampaignSpec, run_campaign, run_one
+from tmaplan.experiments import CampaignSpec, resolve_policies, run_campaign, run_one
 from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
 from tmaplan.report import write_report
 from tmaplan.scenario import dump, load_problem, loads
@@ -201,3 +201,18 @@ def test_every_policy_satisfies_the_policy_protocol(scenario):
         assert isinstance(p, Policy) and not isinstance(p, ManoeuvrePolicy), p
         assert isinstance(p.controller(scenario), Controller)
     assert Combined(manoeuvre=Straight(), ping=UniformPings()).name == "straight+uniform"
+
+
+@pytest.mark.timeout(400)
+def test_receding_campaign_identical_for_any_backend(scenario):
+    """The real-time-iteration receding policy: its model is computed once in the parent and
+    shipped to the workers; serial, 2 processes and Dask give the same results."""
+    spec = _spec(scenario, runs=2, policies=("receding",))
+    pols = resolve_policies(scenario, spec.policies)
+    serial = run_campaign(spec, policies=pols)
+    for other in (run_campaign(spec, workers=2, backend="processes", policies=pols),
+                  run_campaign(spec, workers=2, backend="dask", policies=pols)):
+        assert json.dumps(other.to_json()["policies"]["receding"]["rmse_range"]) == \
+            json.dumps(serial.to_json()["policies"]["receding"]["rmse_range"])
+        assert np.array_equal(other.summary["receding"]["time_to_accuracy_runs"],
+                              serial.summary["receding"]["time_to_accuracy_runs"])

@@ -26,7 +26,7 @@ from tmaplan.bounds.fimdet import (
     single_leg_det,
     single_leg_small_rate_constant,
 )
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError
 
 
 def _G(ph, t):
@@ -263,9 +263,9 @@ def test_bad_inputs():
     t, rel = _manoeuvre_geometry()
     b = np.arctan2(rel[:, 0], rel[:, 1])
     b[5] = np.nan
-    with pytest.raises(ScenarioError, match="bearings"):
+    with pytest.raises(ArgumentError, match="bearings"):
         logdet_fim_from_bearings(b, t, 0.01, 1e4)
-    with pytest.raises(ScenarioError, match="sigma"):
+    with pytest.raises(ArgumentError, match="sigma"):
         logdet_fim_bearings(rel, t, 0.0)
     with pytest.raises(ObservabilityError, match="too few"):
         logdet_fim_bearings(rel[:3], t[:3], 0.01)
@@ -273,7 +273,7 @@ def test_bad_inputs():
     rel0[4] = 0.0
     with pytest.raises(ObservabilityError, match="observer is at the target"):
         logdet_fim_bearings(rel0, t, 0.01)
-    with pytest.raises(ScenarioError):
+    with pytest.raises(ArgumentError):
         single_leg_det(0.1, 7)
 
 

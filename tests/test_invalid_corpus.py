@@ -2,17 +2,21 @@
 
 Each file in ``tests/data/invalid`` starts with ``# expect-field: F`` and ``# expect: TEXT``;
 loading it must raise ScenarioError whose one-line message names F and contains TEXT, and the
-CLI must exit non-zero with that line and no traceback.
+CLI must exit non-zero with that line and no traceback. ``tests/data/invalid_cli/cases.toml``
+holds command lines that cannot work (an estimator without its measurements, a bound not
+defined for it, turning policies without a turn-rate limit): each is refused with one line.
 """
 
 from __future__ import annotations
 
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
 
+from tmaplan.cli import main
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import load
 
@@ -49,3 +53,24 @@ def test_cli_reports_one_line(tmp_path):
     assert proc.returncode == 1
     err = proc.stderr.strip().splitlines()
     assert len(err) == 1 and _expect(path)[0] in err[0]
+
+
+# ------------------------------------------------------------ command lines that cannot work
+CLI_DIR = Path(__file__).parent / "data" / "invalid_cli"
+CLI_CASES = tomllib.loads((CLI_DIR / "cases.toml").read_text(encoding="utf-8"))["case"]
+
+
+@pytest.mark.parametrize("case", CLI_CASES, ids=[c["id"] for c in CLI_CASES])
+def test_invalid_command_line(case, capsys, tmp_path):
+    argv = [a.replace("{data}", str(CLI_DIR)) for a in case["argv"]]
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"tmaplan {argv[0]}: error:"), err
+    for text in case["expect"]:
+        assert text in err[0], err[0]
+
+
+def test_cli_corpus_covers_every_estimator():
+    named = {c["argv"][c["argv"].index("--estimator") + 1] for c in CLI_CASES
+             if "--estimator" in c["argv"]}
+    assert named == {"mle", "pf", "pf-bearings", "range-only"}

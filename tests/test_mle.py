@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators import MLEConfig, fisher_information, mle, state_track, tma_data
 from tmaplan.estimators.mle import acceptance_threshold, residuals
 from tmaplan.scenario import load_problem
@@ -126,7 +126,7 @@ def test_too_few_measurements_raise_named_error() -> None:
 
     d = dataclasses.replace(d, b_times=d.b_times[:4], b_values=d.b_values[:4],
                             b_sigma=d.b_sigma[:4], b_obs=d.b_obs[:4])
-    with pytest.raises(ScenarioError, match="measurements"):
+    with pytest.raises(ArgumentError, match="measurements"):
         mle(d)
 
 
@@ -187,13 +187,13 @@ def test_turn_direction_restricts_the_search() -> None:
     acw = mle(d, MLEConfig(turn_direction="anticlockwise"))
     assert acw.params[4] < 0 and 0.05 < acw.cost < 0.2 and acw.success
     # A start of the wrong sense is refused with a named error; a model without a turn too.
-    with pytest.raises(ScenarioError, match=r"initial\[4\]"):
+    with pytest.raises(ArgumentError, match=r"initial\[4\]"):
         mle(d, initial=acw.params)
     sim = simulate(load_problem("ristic-bot-moderate"), np.random.default_rng(0))
     dcv = tma_data(load_problem("ristic-bot-moderate"), sim.measurements, sim.observer)
-    with pytest.raises(ScenarioError, match="turn_direction"):
+    with pytest.raises(ArgumentError, match="turn_direction"):
         mle(dcv, MLEConfig(turn_direction="clockwise"))
-    with pytest.raises(ScenarioError, match="turn_direction"):
+    with pytest.raises(ArgumentError, match="turn_direction"):
         MLEConfig(turn_direction="starboard")  # type: ignore[arg-type]
 
 

@@ -12,7 +12,7 @@ from tmaplan.bounds.observability import (
     rank_test,
     switch_time_scan,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.models.target import constant_turn_state
 from tmaplan.scenario import load_problem
 
@@ -177,9 +177,9 @@ def test_scenario_level_verdicts():
 def test_bad_inputs():
     b = _brg(_source(), _observer(20.0))
     b[3] = np.nan
-    with pytest.raises(ScenarioError, match="bearings"):
+    with pytest.raises(ArgumentError, match="bearings"):
         rank_test(b, T)
-    with pytest.raises(ScenarioError, match="at least"):
+    with pytest.raises(ArgumentError, match="at least"):
         rank_test(np.zeros(3), np.arange(3.0))
-    with pytest.raises(ScenarioError, match="frequencies"):
+    with pytest.raises(ArgumentError, match="frequencies"):
         observability(load_problem("clavard2013-halfturn-cw"), frequencies=6)

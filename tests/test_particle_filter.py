@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators import (
     DegeneracyWarning,
     Measurement,
@@ -249,7 +249,7 @@ def test_frequency_update_rao_blackwellised_tone() -> None:
 
 
 def test_bad_config_raises_named_field() -> None:
-    with pytest.raises(ScenarioError, match="n_particles"):
+    with pytest.raises(ArgumentError, match="n_particles"):
         PFConfig(n_particles=1, dt=1.0, q=0.0)
 
 

@@ -18,7 +18,7 @@ from tmaplan.bounds.pcrb import (
     monte_carlo_pcrb,
     range_score,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import cart_to_lpc, lpc_to_cart
 from tmaplan.models.sensors import bearing_loglik, doppler_frequency, range_loglik
 from tmaplan.models.target import ncv_matrices
@@ -183,7 +183,7 @@ def test_gordon_benchmark_runs_in_cartesian():
 
 def test_errors():
     sc = load_problem("brehard2005-s1")
-    with pytest.raises(ScenarioError, match="coords"):
+    with pytest.raises(ArgumentError, match="coords"):
         monte_carlo_pcrb(sc, samples=10, rng=RNG, coords="polar")  # type: ignore[arg-type]
     with pytest.raises(ScenarioError, match=r"target\.q"):
         monte_carlo_pcrb(sc.replace(target=dataclasses.replace(sc.target, q=0.0)), samples=10,

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.experiments import (
     plan_campaign,
     planned_differences,
@@ -99,7 +99,7 @@ def test_planned_differences_match_an_independent_paired_t_interval():
         ref = stats.ttest_rel(a, b).confidence_interval(0.95)
         assert d[name].mean == pytest.approx(np.mean(a - b))
         assert (d[name].ci_low, d[name].ci_high) == pytest.approx((ref.low, ref.high))
-    with pytest.raises(ScenarioError, match="reference"):
+    with pytest.raises(ArgumentError, match="reference"):
         planned_differences(camp, reference="nope")
 
 
@@ -119,7 +119,7 @@ def test_tuning_and_plan_campaign_code_path_at_tiny_size():
     d = planned_differences(camp)
     assert set(d) == set(camp.policies) - {"planned"}
     assert all(v.n == 2 and np.isfinite(v.mean) for v in d.values())
-    with pytest.raises(ScenarioError, match="fractions"):
+    with pytest.raises(ArgumentError, match="fractions"):
         tune_single_turn(sc, runs=1, fractions=(1.5,))
     # the planner's Monte Carlo choice among the OCP's distinct local optima
     plans = plan_candidates(sc)

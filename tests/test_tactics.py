@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import wrap_angle
 from tmaplan.policies import (
     BeliefView,
@@ -158,7 +158,7 @@ def test_tactics_are_manoeuvre_policies_named_for_the_cli(scenario):
 ])
 def test_bad_tactic_parameters_give_a_one_line_error(scenario, policy, field):
     for make in (policy.controller, policy.nominal_track):
-        with pytest.raises(ScenarioError) as exc:
+        with pytest.raises(ArgumentError) as exc:
             make(scenario)
         msg = str(exc.value)
         assert f"field '{field}'" in msg and "expected" in msg and "\n" not in msg

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 __all__ = [
+    "ArgumentError",
     "EstimationError",
     "ObservabilityError",
     "PlanningError",
@@ -24,19 +25,19 @@ class TmaplanError(Exception):
     """Base class of every error raised on purpose by tmaplan."""
 
 
-class ScenarioError(TmaplanError, ValueError):
-    """A scenario (file, dict or dataclass) is invalid.
+class ArgumentError(TmaplanError, ValueError):
+    """A function argument, configuration value or command-line value is invalid.
 
     Parameters
     ----------
     field
-        Dotted path of the offending field, e.g. ``"sensors[0].sigma"``.
+        Name of the offending argument or flag, e.g. ``"samples"`` or ``"--runs"``.
     expected
-        What a valid value looks like, e.g. ``"> 0"``.
+        What a valid value looks like, e.g. ``">= 2"``.
     received
         The value that was given.
     source
-        Where the scenario came from (file name or problem name), if known.
+        The scenario (file name or problem name) the value was used with, if any.
     """
 
     def __init__(
@@ -53,6 +54,15 @@ class ScenarioError(TmaplanError, ValueError):
         self.source = source
         where = f"{source}: " if source else ""
         super().__init__(f"{where}field '{field}': expected {expected}, received {received!r}")
+
+
+class ScenarioError(ArgumentError):
+    """A scenario (file, dict or dataclass) is invalid: ``field`` is the dotted path of the
+    offending scenario field, e.g. ``"sensors[0].sigma"``; ``source`` the file or problem name.
+
+    The message names the field, the expected and the received value (see
+    :class:`ArgumentError`, of which this is the scenario case).
+    """
 
 
 class UnitError(ScenarioError):

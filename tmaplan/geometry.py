@@ -1,7 +1,7 @@
 """Angle conventions and coordinate maps: the single home of both.
 
 Conventions (docs/conventions.md)
---------------------------
+---------------------------------
 * Frame: x = East, y = North, metres.
 * Bearings, courses and headings are measured from North, clockwise:
   ``β = atan2(Δx, Δy)`` in (−π, π] rad.

@@ -17,7 +17,7 @@ __all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_geometry", 
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
-               **kw: object) -> tuple[Figure, np.ndarray]:
+               **kw: Any) -> tuple[Figure, np.ndarray]:
     """A figure with an Agg canvas and a 2-D array of axes."""
     fig = Figure(figsize=size, layout="constrained")
     FigureCanvasAgg(fig)
@@ -65,7 +65,8 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
             b = m.values[i]
             p0 = obs[k]
             length = np.hypot(*(sim.relative[k, :2])) / unit * 1.15
-            if m.relative is not None and sim.scenario.sensors[m.sensor].ambiguity == "pi":
+            if m.relative is not None and getattr(sim.scenario.sensors[m.sensor], "ambiguity",
+                                                  "none") == "pi":
                 length = rng_max  # both directions are possible: draw the full line
                 ax.plot([p0[0] - length * np.sin(b), p0[0] + length * np.sin(b)],
                         [p0[1] - length * np.cos(b), p0[1] + length * np.cos(b)],
@@ -80,7 +81,7 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
     ax.set_ylabel(f"North [{lab}]")
     ax.set_title(f"{sim.scenario.name}: geometry and bearings")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
+    ax.legend(loc="best", framealpha=0.6)
     lo = np.minimum(tgt.min(0), obs.min(0))
     hi = np.maximum(tgt.max(0), obs.max(0))
     pad = 0.1 * (hi - lo).max() + 1e-9
@@ -168,7 +169,7 @@ def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,
     ax.set_xlabel("East [km]")
     ax.set_ylabel("North [km]")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best", framealpha=0.6)
     ax.set_title("planned track over the prior")
     y = np.arange(len(names), dtype=float)
     bars = bx.barh(y, best, height=0.5, color=[f"C{i}" for i in range(len(names))], alpha=0.8)
@@ -181,7 +182,7 @@ def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,
     bx.set_title(f"optimised functional (smaller is better):\n{label}", fontsize=10)
     bx.grid(True, axis="x", alpha=0.3)
     if any(len(lst) > 1 for lst in base.values()):
-        bx.legend(fontsize=7, loc="lower right")
+        bx.legend(fontsize=7, loc="best", framealpha=0.6)
     save_figure(fig, path)
     return fig
 
@@ -232,6 +233,6 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     ax.set_title(f"{scenario.name}: {res.budget} pings, {res.status} ({gap})\noptimised: "
                  f"{label} ({'mean over the horizon: thin lines' if mean else 'last step: dots'})",
                  fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best", framealpha=0.6)
     save_figure(fig, path)
     return fig

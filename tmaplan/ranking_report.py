@@ -4,25 +4,40 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tmaplan.plotting import new_figure, save_figure
+from tmaplan.report_tables import sample_warning
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from tmaplan.evaluation.cost_ranking import CostRankingResult
 
-__all__ = ["plot_cost_ranking", "write_ranking_report"]
+__all__ = ["candidate_label", "plot_cost_ranking", "write_ranking_report"]
 
 _MARKERS = {"straight": "s", "single-turn": "o", "zigzag": "^", "tactic": "D", "planned": "*"}
 
 
 def _ci(ci: tuple[float, float]) -> str:
     return "–" if not np.all(np.isfinite(ci)) else f"[{ci[0]:+.2f}, {ci[1]:+.2f}]"
+
+
+def candidate_label(name: str) -> str:
+    """A candidate's name in display units: ``"single-turn:+60deg@900s"`` ->
+    ``"single-turn +60° at 15 min"``, ``"zigzag:+30deg,leg600s"`` -> ``"zigzag +30°, legs
+    of 10 min"`` (other names unchanged)."""
+    def mins(m: re.Match[str]) -> str:
+        return f"{float(m.group(1)) / 60:.3g} min"
+
+    out = re.sub(r"^(single-turn|zigzag):", r"\1 ", name)
+    out = re.sub(r"([+-]?\d+(?:\.\d+)?)deg", r"\1°", out)
+    out = re.sub(r"@(\d+(?:\.\d+)?)s$", lambda m: f" at {mins(m)}", out)
+    return re.sub(r",leg(\d+(?:\.\d+)?)s$", lambda m: f", legs of {mins(m)}", out)
 
 
 def _num(x: float) -> str:
@@ -60,7 +75,7 @@ def plot_cost_ranking(result: CostRankingResult, path: str | Path) -> Figure:
         if i % ncols == 0:
             ax.set_ylabel("MC mean time to accuracy [min]", fontsize=7)
         ax.set_xlabel("cost (minimised)", fontsize=7)
-    axes.flat[0].legend(fontsize=6)
+    axes.flat[0].legend(fontsize=6, loc="best", framealpha=0.6)
     fig.suptitle(f"{result.problem}: cost functionals against closed-loop Monte Carlo "
                  f"({len(result.candidates)} candidates, {result.campaign.spec.runs} runs)",
                  fontsize=10)
@@ -86,9 +101,10 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
         for c in result.costs)
     order = np.argsort(result.time_to_accuracy, kind="stable")
     cands = "".join(
-        f"<tr><td style='text-align:left'>{html.escape(result.candidates[i])}</td>"
+        f"<tr><td style='text-align:left'>{html.escape(candidate_label(result.candidates[i]))}"
+        "</td>"
         f"<td>{result.families[i]}</td><td>{result.time_to_accuracy[i] / 60:.1f}</td>"
-        f"<td>{result.final_range_rmse[i]:.0f}</td></tr>" for i in order)
+        f"<td>{result.final_range_rmse[i] / 1000:.2f}</td></tr>" for i in order)
     img = ""
     if figure is not None:
         b64 = base64.b64encode(Path(figure).read_bytes()).decode("ascii")
@@ -100,6 +116,7 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
 <html lang="en"><head><meta charset="utf-8"><title>tmaplan rank-costs: {result.problem}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
+.warning{{background:#fff4e0;border-left:4px solid #e69500;padding:.5em 1em}}
 img{{max-width:100%}}</style></head><body>
 <h1>Cost functionals against closed-loop Monte Carlo: {html.escape(result.problem)}</h1>
 <p>{len(result.candidates)} candidate manoeuvres flown in closed loop, {spec.runs} paired runs
@@ -111,13 +128,14 @@ bootstrap percentile 95 % (runs and candidates resampled). Default objective of
 <code>tmaplan plan</code>: <code>{html.escape(result.default_objective)}</code>; of the
 closed-loop policies: <code>{html.escape(result.closed_loop_objective)}</code>.</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
+{sample_warning(spec.runs)}
 <h2>Rank correlations</h2>
 <table><tr><th>cost</th><th>Spearman ρ (time to accuracy)</th><th>95 % CI</th>
 <th>Kendall τ</th><th>Spearman ρ (final range RMSE)</th><th>95 % CI</th></tr>{rows}</table>
 <h2>Figure</h2>{img}
 <h2>Candidates (best first)</h2>
 <table><tr><th>candidate</th><th>family</th><th>mean time to accuracy [min]</th>
-<th>final range RMSE [m]</th></tr>{cands}</table>
+<th>final range RMSE [km]</th></tr>{cands}</table>
 <h2>Left out</h2><ul>{skipped}</ul>
 </body></html>
 """

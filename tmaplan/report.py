@@ -9,15 +9,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tmaplan.display import scenario_text
 from tmaplan.plotting import new_figure, save_figure
-from tmaplan.scenario import dump
+from tmaplan.report_tables import differences_html, results_table, sample_warning
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from tmaplan.experiments import CampaignResult
 
-__all__ = ["BOUND_NAME", "comparison_figures", "efficiency", "rmse_figure", "write_report"]
+__all__ = ["BOUND_NAME", "comparison_figures", "efficiency", "line_style", "outside_legend",
+           "rmse_figure", "write_report"]
 
 
 #: What the dotted curves of the RMSE figure are (figure title, report caption).
@@ -62,25 +64,49 @@ def efficiency(result: CampaignResult) -> dict[str, dict[str, float]]:
     return out
 
 
+#: Line styles cycled over the policies, so that overlapping curves stay distinguishable (never
+#: dotted: dotted curves are the bounds).
+_STYLES = ("-", "--", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2, 2, 2)))
+
+
+def line_style(i: int) -> dict[str, Any]:
+    """Colour, dash, width and z-order of the ``i``-th policy's curve.
+
+    Later policies are drawn thinner and on top of earlier ones with their own dash pattern, so
+    a curve that coincides with another (``planned`` and ``planned+scheduled`` share the
+    own-ship track until the first ping) stays visible around it.
+    """
+    return {"color": f"C{i % 10}", "ls": _STYLES[i % len(_STYLES)],
+            "lw": max(1.0, 3.2 - 0.45 * i), "zorder": 2 + i}
+
+
+def outside_legend(ax: Any, ncol: int = 2, **kw: Any) -> None:
+    """Legend below the axes (never over the data)."""
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=ncol, fontsize=7,
+              frameon=False, **kw)
+
+
 def rmse_figure(result: CampaignResult) -> Figure:
     """Position and range RMSE per policy (solid) with the truth-conditioned PCRB over the
     same runs (dotted, :data:`BOUND_NAME`) and the efficiency of :func:`efficiency` in the
     legends."""
     t_min = result.times / 60.0
     eff = efficiency(result)
-    fig, axes = new_figure(1, 2, size=(12.0, 4.8))
+    n = len(result.policies)
+    fig, axes = new_figure(1, 2, size=(12.0, 5.2 + 0.18 * ((n + 1) // 2)))
     for i, name in enumerate(result.policies):
         s = result.summary[name]
-        c = f"C{i % 10}"
+        st = line_style(i)
+        c = st["color"]
         e = eff[name]
-        axes[0, 0].semilogy(t_min, s["rmse_position"], color=c,
+        axes[0, 0].semilogy(t_min, s["rmse_position"], **st,
                             label=f"{name} (RMSE/PCRB final {e['final_position']:.2g})")
-        axes[0, 1].semilogy(t_min, s["rmse_range"], color=c,
+        axes[0, 1].semilogy(t_min, s["rmse_range"], **st,
                             label=f"{name} (final {e['final_range']:.2g}, mean "
                                   f"{e['mean_range']:.2g})")
         for ax, key in ((axes[0, 0], "bound_position"), (axes[0, 1], "bound_range")):
             if key in s and np.any(np.isfinite(s[key])):
-                ax.semilogy(t_min, s[key], color=c, ls=":", lw=1.2)
+                ax.semilogy(t_min, s[key], color=c, ls=":", lw=1.2, zorder=st["zorder"])
     axes[0, 0].set_title("position RMSE (solid) and PCRB (dotted)")
     axes[0, 1].set_title("range RMSE (solid) and PCRB (dotted)")
     fig.suptitle(f"dotted: {BOUND_NAME}; legend: filter efficiency RMSE/PCRB", fontsize=9)
@@ -88,7 +114,7 @@ def rmse_figure(result: CampaignResult) -> Figure:
         ax.set_xlabel("time [min]")
         ax.set_ylabel("[m]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        outside_legend(ax, ncol=1 if n < 4 else 2)
     return fig
 
 
@@ -103,7 +129,7 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
     out = Path(out_dir)
     paths: dict[str, Path] = {"rmse": save_figure(rmse_figure(result), out / "rmse.png")}
 
-    fig, axes = new_figure(size=(7.0, 6.0))
+    fig, axes = new_figure(size=(9.0, 6.0))
     ax = axes[0, 0]
     first = result.examples[result.policies[0]]
     tgt = np.asarray(first.target) / 1000
@@ -112,32 +138,34 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
     for i, name in enumerate(result.policies):
         ex = result.examples[name]
         obs = np.asarray(ex.observer) / 1000
-        ax.plot(obs[:, 0], obs[:, 1], color=f"C{i % 10}", label=name)
+        st = line_style(i)
+        ax.plot(obs[:, 0], obs[:, 1], **st, label=name)
         pk = np.asarray(ex.ping_steps, int)
         if pk.size:
-            ax.plot(obs[pk, 0], obs[pk, 1], "*", color=f"C{i % 10}", ms=9)
+            ax.plot(obs[pk, 0], obs[pk, 1], "*", color=st["color"], ms=9,
+                    zorder=st["zorder"] + 20)
     ax.plot(0, 0, "o", color="0.3")
     ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("East [km]")
     ax.set_ylabel("North [km]")
     ax.set_title("example tracks (run 0; stars: pings)")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
     paths["tracks"] = save_figure(fig, out / "tracks.png")
 
-    fig, axes = new_figure(size=(7.0, 4.6))
+    fig, axes = new_figure(size=(9.0, 4.6))
     ax = axes[0, 0]
     grid = result.times - result.times[0]
     for i, name in enumerate(result.policies):
         t = result.summary[name]["time_to_accuracy_runs"]
         frac = [(t <= g).mean() for g in grid]
-        ax.step(grid / 60, frac, where="post", color=f"C{i % 10}", label=name)
+        ax.step(grid / 60, frac, where="post", **line_style(i), label=name)
     ax.set_xlabel("time [min]")
     ax.set_ylabel("fraction of runs localised")
     ax.set_title(f"time to range accuracy ({result.spec.accuracy:.0%} of range, for good)")
-    ax.set_ylim(0, 1.02)
+    ax.set_ylim(-0.03, 1.03)  # curves at 0 and 1 stay visible
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
     paths["time_to_accuracy"] = save_figure(fig, out / "time_to_accuracy.png")
     return paths
 
@@ -146,10 +174,6 @@ _CAPTIONS = {"rmse": (f"Position and range RMSE over the runs (solid) and, dotte
                      f"{BOUND_NAME}: the bound the filter can approach. Legend: the "
                      "filter's efficiency, RMSE / PCRB at the last step (range: also the mean "
                      "over the horizon); 1 is efficient.")}
-
-
-def _fmt_time(x: float) -> str:
-    return "never" if not np.isfinite(x) else f"{x / 60:.1f} min"
 
 
 def write_report(result: CampaignResult, out_dir: str | Path, *, command: str,
@@ -172,29 +196,7 @@ def write_report(result: CampaignResult, out_dir: str | Path, *, command: str,
     out = Path(out_dir)
     figs = dict(figures or {})
     figs.update(comparison_figures(result, out))
-    rows = []
     eff = efficiency(result)
-    for name in result.policies:
-        s = result.summary[name]
-        rows.append(
-            "<tr>" + "".join(f"<td>{v}</td>" for v in (
-                html.escape(name), _fmt_time(s["time_to_accuracy"]),
-                f"{s['reached_fraction']:.0%}", f"{s['final_range_rmse']:.0f}",
-                f"{s['rmse_position'][-1]:.0f}",
-                f"{np.degrees(s['rmse_course'][-1]):.0f}", f"{s['rmse_speed'][-1]:.2f}",
-                f"{eff[name]['final_position']:.2g} / {eff[name]['final_range']:.2g}",
-                f"{eff[name]['mean_range']:.2g}",
-                f"{s['divergence_rate']:.0%}",
-                f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}")) + "</tr>")
-    drows = []
-    for d in result.differences:
-        unit = 60.0 if d.metric == "time_to_accuracy" else 1.0
-        u = "min" if d.metric == "time_to_accuracy" else "m"
-        drows.append(
-            f"<tr><td>{html.escape(d.a)} − {html.escape(d.b)}</td><td>{d.metric}</td>"
-            f"<td>{d.mean / unit:+.2f} {u}</td>"
-            f"<td>[{d.ci_low / unit:+.2f}, {d.ci_high / unit:+.2f}] {u}</td>"
-            f"<td>{'yes' if d.excludes_zero else 'no'}</td></tr>")
     imgs = []
     for name, p in figs.items():
         b64 = base64.b64encode(Path(p).read_bytes()).decode("ascii")
@@ -207,6 +209,7 @@ def write_report(result: CampaignResult, out_dir: str | Path, *, command: str,
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title or 'tmaplan report')}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
+.warning{{background:#fff4e0;border-left:4px solid #e69500;padding:.5em 1em}}
 img{{max-width:100%}}pre{{background:#f6f6f6;padding:1em;overflow-x:auto}}</style>
 <script>window.addEventListener("load",function(){{var im=document.images,n=0;
 for(var i=0;i<im.length;i++){{if(im[i].complete&&im[i].naturalWidth>0)n++;}}
@@ -214,28 +217,24 @@ document.body.setAttribute("data-images-loaded",n);
 document.body.setAttribute("data-images-total",im.length);}});</script></head>
 <body>
 <h1>{html.escape(title or 'tmaplan policy comparison')}</h1>
-<p>{spec.runs} Monte Carlo runs, seed {spec.seed}, {spec.n_particles} particles; truths drawn
+<p>{spec.runs} Monte Carlo run{'s' if spec.runs != 1 else ''}, seed {spec.seed},
+{spec.n_particles} particles; truths drawn
 from the {'prior' if spec.truth == 'prior' else 'scenario'}; the same truth and noise for
 every policy in a run (paired comparison). Localised = relative range error below
 {spec.accuracy:.0%} and staying there. Wall time {result.seconds:.0f} s
 ({len(result.computed_runs)} runs computed now, {len(result.loaded_runs)} loaded from disk).</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
+{sample_warning(spec.runs)}
 {extra_html}
 <h2>Results</h2>
-<table><tr><th>policy</th><th>median time to accuracy</th><th>localised</th>
-<th>final range RMSE [m]</th><th>final position RMSE [m]</th><th>final course RMSE [°]</th>
-<th>final speed RMSE [m/s]</th><th>RMSE / PCRB final (position / range)</th>
-<th>range RMSE / PCRB, mean over time</th><th>diverged</th>
-<th>pings</th><th>re-plan [s]</th></tr>
-{''.join(rows)}</table>
-<h2>Paired differences (95 % confidence intervals)</h2>
-<p>Time to accuracy is censored at the horizon for runs that never get there.</p>
-<table><tr><th>pair</th><th>metric</th><th>mean</th><th>95 % CI</th><th>excludes 0</th></tr>
-{''.join(drows)}</table>
+{results_table(result, eff)}
+<h2>Paired differences</h2>
+{differences_html(result)}
 <h2>Figures</h2>
 {''.join(imgs)}
 <h2>Scenario</h2>
-<pre>{html.escape(dump(spec.scenario))}</pre>
+<p>The scenario file of this report, in display units (a valid scenario file).</p>
+<pre>{html.escape(scenario_text(spec.scenario))}</pre>
 </body></html>
 """
     path = out / "report.html"

@@ -13,8 +13,7 @@ and the received value.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar, cast, dataclass_transform
 
 import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field
@@ -49,42 +48,42 @@ __all__ = [
 ]
 
 _CONFIG = ConfigDict(extra="forbid", arbitrary_types_allowed=False)
+_T = TypeVar("_T")
 
 
-def _frozen(cls: type) -> type:
-    return _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls)
+@dataclass_transform(frozen_default=True, kw_only_default=True)
+def _frozen(cls: type[_T]) -> type[_T]:
+    return cast("type[_T]", _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls))
 
 
-def _unit(dimension: str) -> Callable[[Any, Any], Any]:
+def _unit(dimension: str) -> BeforeValidator:
     def convert(value: Any, info: Any) -> Any:
         if isinstance(value, str | int | float) and not isinstance(value, bool):
             return to_si(value, dimension, info.field_name or "value")
         return value
 
-    return convert
+    return BeforeValidator(convert)
 
 
-def _q(dimension: str, **constraints: Any) -> Any:
-    return Annotated[float, BeforeValidator(_unit(dimension)), Field(allow_inf_nan=False,
-                                                                     **constraints)]
-
-
-Length = _q("length")
-PositiveLength = _q("length", gt=0)
-NonNegLength = _q("length", ge=0)
-Time = _q("time")
-PositiveTime = _q("time", gt=0)
-NonNegTime = _q("time", ge=0)
-Angle = _q("angle")
-PositiveAngle = _q("angle", gt=0)
-NonNegAngle = _q("angle", ge=0)
-Speed = _q("speed")
-NonNegSpeed = _q("speed", ge=0)
-PositiveSpeed = _q("speed", gt=0)
-AngularRate = _q("angular_rate")
-PositiveAngularRate = _q("angular_rate", gt=0)
-PositiveFrequency = _q("frequency", gt=0)
-NonNegProcessNoise = _q("process_noise", ge=0)
+_FINITE = Field(allow_inf_nan=False)
+_POS = Field(allow_inf_nan=False, gt=0)
+_NONNEG = Field(allow_inf_nan=False, ge=0)
+Length = Annotated[float, _unit("length"), _FINITE]
+PositiveLength = Annotated[float, _unit("length"), _POS]
+NonNegLength = Annotated[float, _unit("length"), _NONNEG]
+Time = Annotated[float, _unit("time"), _FINITE]
+PositiveTime = Annotated[float, _unit("time"), _POS]
+NonNegTime = Annotated[float, _unit("time"), _NONNEG]
+Angle = Annotated[float, _unit("angle"), _FINITE]
+PositiveAngle = Annotated[float, _unit("angle"), _POS]
+NonNegAngle = Annotated[float, _unit("angle"), _NONNEG]
+Speed = Annotated[float, _unit("speed"), _FINITE]
+NonNegSpeed = Annotated[float, _unit("speed"), _NONNEG]
+PositiveSpeed = Annotated[float, _unit("speed"), _POS]
+AngularRate = Annotated[float, _unit("angular_rate"), _FINITE]
+PositiveAngularRate = Annotated[float, _unit("angular_rate"), _POS]
+PositiveFrequency = Annotated[float, _unit("frequency"), _POS]
+NonNegProcessNoise = Annotated[float, _unit("process_noise"), _NONNEG]
 NonNegInt = Annotated[int, Field(ge=0, strict=True)]
 PositiveInt = Annotated[int, Field(gt=0, strict=True)]
 Vec2Length = tuple[Length, Length]
@@ -561,9 +560,7 @@ class Scenario:
         return new
 
 
-# --------------------------------------------------------------------------------------------
-# Measurement steps
-# --------------------------------------------------------------------------------------------
+# -- Measurement steps -----------------------------------------------------------------------
 
 
 def measurement_steps(sensor: Any, grid: TimeGrid) -> np.ndarray:

@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.sensors import doppler_frequency
@@ -125,6 +126,8 @@ class Simulation:
     measurements : tuple of MeasurementSet
         One per sensor, in scenario order.
     """
+
+    __repr__ = short_repr
 
     scenario: Scenario
     times: np.ndarray

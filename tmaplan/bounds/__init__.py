@@ -3,7 +3,9 @@
 Modules (import them directly; this package imports nothing on purpose, so that importing one
 bound does not pay for the others):
 
-* :mod:`tmaplan.bounds.crlb` — batch Fisher information / CRLB of a deterministic target track
+* :mod:`tmaplan.bounds.batch_fim` — the batch data type (:class:`~tmaplan.bounds.batch_fim.TMAData`)
+  and Fisher information of a deterministic target track, shared by the CRLB and the MLE.
+* :mod:`tmaplan.bounds.crlb` — batch CRLB of a deterministic target track
   (constant velocity, multi-leg, constant turn; bearings, frequency lines, range pings).
 * :mod:`tmaplan.bounds.fimdet` — exact ``log det FIM`` of a bearing sequence and lecadre1997's
   bearing-rate approximations.

@@ -160,7 +160,8 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
     if not valid.all():
         bad = inp.times[~valid]
         msg = (f"{scenario.name}: side assumption (brehard2005 eq. 27) violated at "
-               f"{(~valid).sum()} steps between t = {bad.min():.0f} s and {bad.max():.0f} s "
+               f"{(~valid).sum()} steps between t = {bad.min() / 60:.1f} and "
+               f"{bad.max() / 60:.1f} min "
                f"(max κ = {kappa.max():.3g} > {side_tol}): the true bearing reaches the wrap "
                "point, the β bound is not valid there")
         warnings.warn(msg, SideAssumptionWarning, stacklevel=2)

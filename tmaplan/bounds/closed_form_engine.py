@@ -23,7 +23,7 @@ of the ping information (eq. 51) from the exact second moments.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 
@@ -38,10 +38,12 @@ from tmaplan.bounds._lpc_terms import (
     tichavsky_step,
     unpack_sym,
 )
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.models.target import ncv_matrices
 
 if TYPE_CHECKING:
+    from typing_extensions import Buffer
+
     from tmaplan.models.observer import ObserverTrack
 
 __all__ = [
@@ -180,7 +182,7 @@ class ClosedFormEngine:
         K = observer.position.shape[0] - 1
         bearing_info = np.asarray(bearing_info, float)
         if bearing_info.shape != (K + 1,):
-            raise ScenarioError("bearing_info", f"shape ({K + 1},)", bearing_info.shape)
+            raise ArgumentError("bearing_info", f"shape ({K + 1},)", bearing_info.shape)
         A, Q = ncv_matrices(float(dt), float(q))
         dv = observer.velocity_increments
         c = -np.hstack([dt * dv, dv])
@@ -288,11 +290,11 @@ class ClosedFormEngine:
         u = np.atleast_2d(np.asarray(u, float))
         K = self.n_steps
         if u.shape[1] != K + 1:
-            raise ScenarioError("u", f"shape (S, {K + 1})", u.shape)
+            raise ArgumentError("u", f"shape (S, {K + 1})", u.shape)
         if reduce not in (None, "mean", "terminal"):
-            raise ScenarioError("reduce", "None, 'mean' or 'terminal'", reduce)
+            raise ArgumentError("reduce", "None, 'mean' or 'terminal'", reduce)
         if quantity not in ("range", "position"):
-            raise ScenarioError("quantity", "'range' or 'position'", quantity)
+            raise ArgumentError("quantity", "'range' or 'position'", quantity)
         scale = self._ping_scale(u)
         J = self._start_entries(u[:, 0], scale)
         kernel = _schedule_backend(backend if quantity == "range" or backend == "numpy"
@@ -498,7 +500,7 @@ _ACC_CACHE: dict[tuple[int, int], Any] = {}
 def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple[Any, Any]:
     """Step functions for numeric evaluation: compiled C when available, else the casadi VM."""
     if backend not in ("auto", "compiled", "casadi"):
-        raise ScenarioError("backend", "'auto', 'compiled' or 'casadi'", backend)
+        raise ArgumentError("backend", "'auto', 'compiled' or 'casadi'", backend)
     if backend != "casadi":
         fns = compiled_step_functions(A, Q)
         if fns is not None:
@@ -511,7 +513,7 @@ def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple
 
 def _schedule_backend(backend: str) -> Any:
     if backend not in ("auto", "compiled", "numpy"):
-        raise ScenarioError("backend", "'auto', 'compiled' or 'numpy'", backend)
+        raise ArgumentError("backend", "'auto', 'compiled' or 'numpy'", backend)
     if backend == "numpy":
         return None
     kernel = schedule_kernel()
@@ -534,12 +536,12 @@ def _call(fn: Any, args: list[np.ndarray]) -> list[np.ndarray]:
         a = np.asarray(a, dtype=float)
         a = np.ascontiguousarray(a.T if a.ndim == 2 else a)  # column-major bytes
         keep.append(a)
-        buf.set_arg(i, memoryview(a))
+        buf.set_arg(i, memoryview(cast("Buffer", a)))
     outs = []
     for i in range(fn.n_out()):
         rows, cols = fn.size_out(i)
         o = np.empty((cols, rows))
-        buf.set_res(i, memoryview(o))
+        buf.set_res(i, memoryview(cast("Buffer", o)))
         outs.append(o)
     run()
     if buf.ret() != 0:

@@ -1,15 +1,9 @@
-"""Batch Fisher information and Cramér–Rao lower bound of a deterministic target track.
+"""Batch Cramér–Rao lower bound of a deterministic target track.
 
-The target track is a deterministic function of a parameter vector θ (constant velocity,
-multi-leg with known change times, or clavard2013's constant turn, see
-:mod:`tmaplan.models.tracks`). Measurements are independent Gaussian:
-
-* bearings ``β_k = atan2(d_x, d_y) + ε``, σ_β [rad];
-* range pings ``R_k + ε``, σ_R [m];
-* P frequency lines ``f_p (1 − Ṙ_k/c) + ε`` with unknown emitted tones ``f_p`` (nuisance
-  parameters appended to θ), σ_fp [Hz] (clavard2013 eq. 3, multi-line form).
-
-The FIM is ``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (clavard2013 eq. 11, docs/errata.md) with analytic rows.
+The track models are those of :mod:`tmaplan.models.tracks` (constant velocity, multi-leg with
+known change times, clavard2013's constant turn); the measurement model (bearings, range pings,
+P frequency lines with unknown tones as nuisance parameters) and the Fisher information
+``Σ_k J_kᵀ Σ_k⁻¹ J_k`` (clavard2013 eq. 11, docs/errata.md) are :mod:`tmaplan.bounds.batch_fim`.
 With frequency lines the full (dim + P) FIM is inverted; its trajectory block equals the
 Schur-complement form of clavard2013 eq. (16) (checked in the tests).
 
@@ -29,15 +23,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import linalg
 
-# The measurement sets and the Fisher information live in their own module; re-exported here
-# (the public home of the API).
-from tmaplan.bounds._crlb_fim import (
+from tmaplan.bounds.batch_fim import (
     BearingData,
     FrequencyData,
     RangeData,
+    TMAData,
+    batch_data,
     fisher_information,
+    true_parameters,
 )
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
@@ -59,7 +54,6 @@ __all__ = [
     "crlb",
     "crlb_from_data",
     "cv_model",
-    "fisher_information",
     "multi_leg_model",
     "scenario_data",
 ]
@@ -191,26 +185,46 @@ def _invert(fim: np.ndarray, names: Sequence[str],
     return 0.5 * (cov + cov.T), cond
 
 
-def _physical_scales(model: TrackModel, theta: np.ndarray, bearings: Sequence[BearingData],
-                     ranges: Sequence[RangeData],
-                     frequencies: FrequencyData | None) -> np.ndarray:
+def _observed(data: TMAData) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(kind, times, observer positions) of each non-empty measurement kind."""
+    sets = [("bearings", data.b_times, data.b_obs), ("ranges", data.r_times, data.r_obs),
+            ("frequencies", data.f_times, data.f_obs)]
+    return [s for s in sets if s[1].size and (s[0] != "frequencies" or data.n_lines)]
+
+
+def _check_geometry(data: TMAData, theta: np.ndarray) -> dict[str, int]:
+    """Measurement counts; raises when they are too few or the observer is at the target."""
+    model, counts = data.track, data.counts
+    if theta.shape != (model.dim,) or not np.all(np.isfinite(theta)):
+        raise ArgumentError("theta", f"{model.dim} finite parameters {model.names}", theta)
+    for field, t, p in _observed(data):
+        r = range_of(model.track(theta, t)[0] - p)
+        # "at the target": within a millionth of the largest range (1 cm at 10 km)
+        if np.min(r) <= 1e-6 * max(1.0, float(np.max(r))):
+            k = int(np.argmin(r))
+            raise ObservabilityError(
+                f"{field}: the observer is at the target at t = {t[k]:g} s (range {r[k]:.3g} "
+                "m); bearings and range rates are undefined there")
+    dim, total = data.n_params, sum(counts.values())
+    if total < dim:
+        raise ObservabilityError(
+            f"too few measurements: {total} scalar measurements for {dim} unknown parameters "
+            f"({', '.join(model.names)}{', tones' if data.n_lines else ''}); need at least "
+            f"{dim}")
+    return counts
+
+
+def _physical_scales(data: TMAData, theta: np.ndarray) -> np.ndarray:
     """Typical size of each parameter: mean range L for lengths, L/T for speeds, 1 rad,
     1/T for rates (T = observation span), the line's σ for tones."""
-    ts, ps = [], []
-    for m in (*bearings, *ranges, *([frequencies] if frequencies is not None else [])):
-        t = np.asarray(m.times, float).reshape(-1)
-        if t.size:
-            ts.append(t)
-            ps.append(np.asarray(m.observer_position, float))
-    t = np.concatenate(ts)
-    pos, _ = model.track(theta, t)
-    L = max(float(np.mean(np.linalg.norm(pos - np.concatenate(ps), axis=-1))), 1e-9)
+    sets = _observed(data)
+    t = np.concatenate([s[1] for s in sets])
+    pos, _ = data.track.track(theta, t)
+    L = max(float(np.mean(np.linalg.norm(pos - np.concatenate([s[2] for s in sets]),
+                                         axis=-1))), 1e-9)
     T = max(float(np.ptp(t)), 1e-9)
     per_unit = {"m": L, "m/s": L / T, "rad": 1.0, "rad/s": 1.0 / T}
-    out = [per_unit[u] for u in model.units]
-    if frequencies is not None:
-        out += list(np.asarray(frequencies.sigma, float).reshape(-1))
-    return np.asarray(out)
+    return np.asarray([per_unit[u] for u in data.track.units] + list(data.f_sigma))
 
 
 def crlb_from_data(
@@ -232,7 +246,7 @@ def crlb_from_data(
     theta : ndarray, shape (dim,)
         True motion parameters (SI).
     bearings, ranges, frequencies
-        Measurement sets, see :func:`fisher_information`.
+        Measurement sets, see :func:`tmaplan.bounds.batch_fim.batch_data`.
     final_time : float, optional
         t_N [s] (default: the last measurement time).
     final_observer_position : ndarray, shape (2,), optional
@@ -249,34 +263,28 @@ def crlb_from_data(
     ------
     ObservabilityError
         Singular FIM, too few measurements, observer at the target.
-    ScenarioError
+    ArgumentError
         Non-positive or non-finite noise, NaN inputs.
     """
     theta = np.asarray(theta, dtype=float)
-    fim, counts = fisher_information(model, theta, bearings=bearings, ranges=ranges,
-                                     frequencies=frequencies)
-    n_tones = fim.shape[0] - model.dim
+    data = batch_data(model, bearings=bearings, ranges=ranges, frequencies=frequencies)
+    counts = _check_geometry(data, theta)
+    n_tones = data.n_lines
     names = tuple(model.names) + tuple(f"f0[{q}]" for q in range(n_tones))
     units = tuple(model.units) + ("Hz",) * n_tones
     values = np.concatenate([theta, [] if frequencies is None
-                             else np.asarray(frequencies.f0, float).reshape(-1)])
-    cov, cond = _invert(fim, names, _physical_scales(model, theta, bearings, ranges,
-                                                     frequencies))
+                             else np.asarray(frequencies.f0, float).reshape(-1)[:n_tones]])
+    fim = fisher_information(data, values)
+    cov, cond = _invert(fim, names, _physical_scales(data, theta))
 
     # final time and observer position
-    sets: list[tuple[np.ndarray, np.ndarray]] = [(np.asarray(b.times, float).reshape(-1),
-                                                  np.asarray(b.observer_position, float))
-                                                 for b in (*bearings, *ranges)]
-    if frequencies is not None:
-        sets.append((np.asarray(frequencies.times, float).reshape(-1),
-                     np.asarray(frequencies.observer_position, float)))
-    sets = [s for s in sets if s[0].size]
+    sets = [(s[1], s[2]) for s in _observed(data)]
     t_last = max(float(np.max(s[0])) for s in sets)
     t_n = t_last if final_time is None else float(final_time)
     if final_observer_position is None:
         cand = [s[1][np.argmax(s[0])] for s in sets if np.isclose(np.max(s[0]), t_n)]
         if not cand:
-            raise ScenarioError("final_observer_position", f"given when final_time ({t_n} s) "
+            raise ArgumentError("final_observer_position", f"given when final_time ({t_n} s) "
                                 "is not a measurement time", None)
         obs_n = cand[0]
     else:
@@ -334,7 +342,6 @@ def scenario_data(
         ``data`` holds keyword arguments for :func:`crlb_from_data`.
     """
     from tmaplan.models.observer import observer_track
-    from tmaplan.models.target import initial_velocity
     from tmaplan.scenario import (
         BearingSensor,
         FrequencySensor,
@@ -349,23 +356,13 @@ def scenario_data(
     t_ref = float(grid.t0 if t_ref is None else t_ref)
     if tgt.model == "constant-turn":
         model = constant_turn_model()
-        theta = np.array([tgt.centre[0], tgt.centre[1], tgt.radius, tgt.phase, tgt.omega],
-                         dtype=float)
     else:
-        p0 = np.asarray(tgt.position, float)
-        v0 = initial_velocity(tgt)
         legs = tgt.legs if tgt.model == "multi-leg" else ()
-        ct = [float(leg.start) for leg in legs]
-        vels = [v0] + [initial_velocity(leg) for leg in legs]
-        model = multi_leg_model(ct, t_ref=float(grid.t0))
-        theta = np.concatenate([p0, *vels])
-        if t_ref != float(grid.t0):  # move the position parameters to t_ref
-            pos, _ = model.track(theta, np.array([t_ref]))
-            model = dataclasses.replace(model, t_ref=t_ref)
-            theta = np.concatenate([pos[0], theta[2:]])
+        model = multi_leg_model([float(leg.start) for leg in legs], t_ref=t_ref)
         if tgt.q > 0.0:
             notes.append(f"target process noise q = {tgt.q:g} m²/s³ ignored: the batch CRLB "
                          "is for a deterministic track (use `tmaplan bound` for the PCRB)")
+    theta = true_parameters(scenario, model)
     obs = observer_track(scenario.observer, grid)
     bearings: list[BearingData] = []
     ranges: list[RangeData] = []
@@ -393,7 +390,7 @@ def scenario_data(
     n_avail = len(lines_f0)
     n_lines = n_avail if frequencies is None else int(frequencies)
     if n_lines < 0 or n_lines > n_avail:
-        raise ScenarioError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
+        raise ArgumentError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
                             "scenario)", frequencies, source=scenario.name)
     freq = None
     if n_lines and freq_sensor is not None:

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds._lpc_terms import ldl
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError
 
 __all__ = [
     "SINGLE_LEG_COEFFICIENTS",
@@ -81,15 +81,15 @@ def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndar
     rel = np.asarray(rel_pos, dtype=float)
     t = np.asarray(times, dtype=float)
     if rel.ndim < 2 or rel.shape[-1] != 2:
-        raise ScenarioError("rel_pos", "relative positions of shape (..., n, 2) [m]", rel.shape)
+        raise ArgumentError("rel_pos", "relative positions of shape (..., n, 2) [m]", rel.shape)
     n = rel.shape[-2]
     if t.shape != (n,):
-        raise ScenarioError("times", f"shape ({n},) [s]", t.shape)
+        raise ArgumentError("times", f"shape ({n},) [s]", t.shape)
     if not np.all(np.isfinite(rel)) or not np.all(np.isfinite(t)):
-        raise ScenarioError("rel_pos", "finite positions and times (no NaN)", "nan/inf")
+        raise ArgumentError("rel_pos", "finite positions and times (no NaN)", "nan/inf")
     s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,))
     if np.any(~np.isfinite(s) | (s <= 0)):
-        raise ScenarioError("sigma", "bearing noise std > 0 [rad]", float(np.min(s)))
+        raise ArgumentError("sigma", "bearing noise std > 0 [rad]", float(np.min(s)))
     if n < 4:
         raise ObservabilityError(f"too few bearings: {n} for the 4 relative-state parameters "
                                  "(need at least 4)")
@@ -108,7 +108,8 @@ def _rows(rel: np.ndarray, tau: np.ndarray, s: np.ndarray, r2: np.ndarray) -> np
 
 
 def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) -> np.ndarray:
-    """FIM of ``X(t_ref) = [r_x, r_y, v_x, v_y]`` from bearings of a CV relative track.
+    """FIM of ``X(t_ref) = [r_x, r_y, v_x, v_y]`` from bearings of a CV relative track
+    (:func:`fim_bearings_generic`, the planner's form, on numpy arrays).
 
     Parameters
     ----------
@@ -126,9 +127,11 @@ def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) ->
     ndarray, shape (..., 4, 4)
         [1/m², 1/(m·m/s), 1/(m/s)²].
     """
-    rel, t, s, r2 = _check_bearing_inputs(rel_pos, times, sigma)
-    rows = _rows(rel, t - float(t_ref), s, r2)
-    return np.einsum("...ni,...nj->...ij", rows, rows)
+    rel, t, s, _ = _check_bearing_inputs(rel_pos, times, sigma)
+    steps = (-1,) + (1,) * (rel.ndim - 2)  # steps along axis 0, batch axes after
+    F = fim_bearings_generic(np.moveaxis(rel[..., 0], -1, 0), np.moveaxis(rel[..., 1], -1, 0),
+                             (t - float(t_ref)).reshape(steps), (1.0 / s**2).reshape(steps))
+    return np.moveaxis(np.array(F), (0, 1), (-2, -1))
 
 
 def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
@@ -187,14 +190,14 @@ def logdet_fim_from_bearings(bearings: Any, times: Any, sigma: Any, ranges: Any)
     """
     b = np.asarray(bearings, dtype=float)
     if b.ndim != 1:
-        raise ScenarioError("bearings", "a 1-D array of bearings [rad]", b.shape)
+        raise ArgumentError("bearings", "a 1-D array of bearings [rad]", b.shape)
     bad = ~np.isfinite(b)
     if np.any(bad):
-        raise ScenarioError("bearings", "finite bearings [rad]",
+        raise ArgumentError("bearings", "finite bearings [rad]",
                             f"{b[np.argmax(bad)]} at index {int(np.argmax(bad))}")
     r = np.broadcast_to(np.asarray(ranges, dtype=float), b.shape)
     if np.any(~np.isfinite(r) | (r <= 0)):
-        raise ScenarioError("ranges", "finite ranges > 0 [m]", float(np.min(r)))
+        raise ArgumentError("ranges", "finite ranges > 0 [m]", float(np.min(r)))
     rel = r[:, None] * np.stack([np.sin(b), np.cos(b)], axis=-1)
     return float(logdet_fim_bearings(rel, times, sigma))
 
@@ -359,7 +362,7 @@ def single_leg_det(rate: Any, n: int) -> np.ndarray:
     n : int
     """
     if n not in SINGLE_LEG_COEFFICIENTS:
-        raise ScenarioError("n", f"one of {sorted(SINGLE_LEG_COEFFICIENTS)}", n)
+        raise ArgumentError("n", f"one of {sorted(SINGLE_LEG_COEFFICIENTS)}", n)
     x = np.asarray(rate, dtype=float)
     c = SINGLE_LEG_COEFFICIENTS[n]
     poly = sum(cj * np.cos(2 * j * x) for j, cj in enumerate(c))
@@ -368,7 +371,7 @@ def single_leg_det(rate: Any, n: int) -> np.ndarray:
 
 def _subsets(n: int) -> np.ndarray:
     if n > MAX_SUBSET_SAMPLES:
-        raise ScenarioError("samples", f"at most {MAX_SUBSET_SAMPLES} samples for a subset "
+        raise ArgumentError("samples", f"at most {MAX_SUBSET_SAMPLES} samples for a subset "
                             "(Cauchy–Binet) enumeration; use logdet_fim_bearings instead", n)
     if n < 4:
         raise ObservabilityError(f"too few samples: {n} (need at least 4)")
@@ -397,7 +400,7 @@ def _leg_times(leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
     """Model A (docs/errata.md): samples t = 0..N−1; time spent on each leg, shape (N, L)."""
     lengths = [int(x) for x in leg_lengths]
     if not lengths or any(x < 1 for x in lengths):
-        raise ScenarioError("leg_lengths", "positive sample counts per leg", leg_lengths)
+        raise ArgumentError("leg_lengths", "positive sample counts per leg", leg_lengths)
     n = sum(lengths)
     t = np.arange(n, dtype=float)
     ends = np.cumsum(lengths)[:-1] - 1.0  # leg j ends at its last sample
@@ -421,7 +424,7 @@ def model_a_phases(rates: Any, leg_lengths: Sequence[int]) -> tuple[np.ndarray, 
     t, tau = _leg_times(leg_lengths)
     x = np.asarray(rates, dtype=float)
     if x.shape[-1] != tau.shape[1]:
-        raise ScenarioError("rates", f"one rate per leg ({tau.shape[1]})", x.shape)
+        raise ArgumentError("rates", f"one rate per leg ({tau.shape[1]})", x.shape)
     return t, np.einsum("nl,...l->...n", tau, x)
 
 
@@ -549,7 +552,7 @@ def logdet_bearing_rate_approx(rates: Any, leg_lengths: Sequence[int], sigma: fl
         Sampling period [s].
     """
     if not (sigma > 0 and rng_ > 0 and dt > 0):
-        raise ScenarioError("sigma/range/dt", "positive values", (sigma, rng_, dt))
+        raise ArgumentError("sigma/range/dt", "positive values", (sigma, rng_, dt))
     p = bearing_rate_det_approx(rates, leg_lengths)
     with np.errstate(divide="ignore"):
         return np.log(p) + 4.0 * np.log(dt) - 8.0 * np.log(sigma * rng_)

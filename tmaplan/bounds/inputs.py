@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state
@@ -127,7 +127,7 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
                             "no range sensor", source=scenario.name)
     if steps.size and (steps.min() < 0 or steps.max() > K):
-        raise ScenarioError("ping_steps", f"steps in [0, {K}]", steps.tolist(),
+        raise ArgumentError("ping_steps", f"steps in [0, {K}]", steps.tolist(),
                             source=scenario.name)
     steps = np.unique(steps)
     weight[steps] = 1.0 / sigma**2 if sigma else 0.0
@@ -243,7 +243,7 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
     K = grid.n_steps
     obs = observer if observer is not None else observer_track(scenario.observer, grid)
     if obs.position.shape[0] != K + 1:
-        raise ScenarioError("observer", f"a track with {K + 1} steps",
+        raise ArgumentError("observer", f"a track with {K + 1} steps",
                             f"{obs.position.shape[0]} steps", source=scenario.name)
     A, Q = ncv_matrices(grid.dt, float(scenario.target.q))
     dv = obs.velocity_increments
@@ -264,7 +264,7 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
         _check_prior_range_support(scenario)
     n = int(prior_samples) if prior_samples is not None else scenario.prior.samples
     if n < 10:
-        raise ScenarioError("prior_samples", ">= 10", n, source=scenario.name)
+        raise ArgumentError("prior_samples", ">= 10", n, source=scenario.name)
     rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
     X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
     cov_lpc = None

@@ -31,8 +31,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of
+from tmaplan.models.target import circle_parameters
 from tmaplan.models.tracks import constant_turn_model
 
 if TYPE_CHECKING:
@@ -116,20 +117,20 @@ def _check_bearings(bearings: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
     b = np.asarray(bearings, dtype=float).reshape(-1)
     t = np.asarray(times, dtype=float).reshape(-1)
     if b.shape != t.shape:
-        raise ScenarioError("bearings", f"one bearing per time ({t.size})", b.size)
+        raise ArgumentError("bearings", f"one bearing per time ({t.size})", b.size)
     bad = ~np.isfinite(b)
     if np.any(bad):
-        raise ScenarioError("bearings", "finite bearings [rad]",
+        raise ArgumentError("bearings", "finite bearings [rad]",
                             f"{b[np.argmax(bad)]} at index {int(np.argmax(bad))}")
     if not np.all(np.isfinite(t)):
-        raise ScenarioError("times", "finite times [s]", "nan/inf")
+        raise ArgumentError("times", "finite times [s]", "nan/inf")
     return b, t
 
 
 def _leg_tau(t: np.ndarray, change_times: Sequence[float]) -> np.ndarray:
     ct = np.asarray(change_times, dtype=float).reshape(-1)
     if ct.size and np.any(np.diff(ct) <= 0):
-        raise ScenarioError("change_times", "strictly increasing times [s]", ct)
+        raise ArgumentError("change_times", "strictly increasing times [s]", ct)
     edges = np.concatenate([[t[0]], ct, [np.inf]])
     return np.clip(t[:, None], edges[:-1], edges[1:]) - edges[:-1]
 
@@ -204,7 +205,7 @@ def rank_test(bearings: Any, times: Any, *, change_times: Sequence[float] = (),
     n_legs = len(change_times) + 1
     dim = 2 * n_legs + 2
     if b.size < dim:
-        raise ScenarioError("bearings", f"at least {dim} bearings for {dim} unknowns", b.size)
+        raise ArgumentError("bearings", f"at least {dim} bearings for {dim} unknowns", b.size)
     O = observability_matrix(b, t, change_times=change_times)
     rank, sv = numerical_rank(O, rtol)
     man = [float(x) for x in observer_manoeuvre_times if t[0] < x < t[-1]]
@@ -271,7 +272,7 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
     b, t = _check_bearings(bearings, times)
     obs = np.asarray(observer_position, dtype=float)
     if obs.shape != (t.size, 2) or not np.all(np.isfinite(obs)):
-        raise ScenarioError("observer_position", f"finite, shape ({t.size}, 2)", obs.shape)
+        raise ArgumentError("observer_position", f"finite, shape ({t.size}, 2)", obs.shape)
     h = np.stack([np.cos(b), -np.sin(b)], axis=-1)
     z = np.sum(h * obs, axis=-1)
     cands = np.asarray(candidates, dtype=float)
@@ -289,7 +290,7 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
         if np.max(np.linalg.norm(pos - obs, axis=-1)) < 1e-6 * scale:
             degenerate[i] = True
             continue
-        res[i] = float(np.linalg.norm(O @ p - z) / max(np.linalg.norm(z), 1e-300))
+        res[i] = float(np.linalg.norm(O @ p - z) / max(float(np.linalg.norm(z)), 1e-300))
     best = float(cands[int(np.argmin(res))]) if np.any(np.isfinite(res)) else float("nan")
     return SwitchScanResult(candidates=cands, residuals=res, degenerate=degenerate, best=best)
 
@@ -326,7 +327,12 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     ObservabilityResult
         ``expected_rank = 5 + P``.
     """
-    from tmaplan.bounds.crlb import BearingData, FrequencyData, fisher_information
+    from tmaplan.bounds.batch_fim import (
+        BearingData,
+        FrequencyData,
+        batch_data,
+        fisher_information,
+    )
 
     t = np.asarray(times, dtype=float).reshape(-1)
     pos = np.asarray(observer_position, dtype=float)
@@ -337,8 +343,9 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     if len(f0):
         freq = FrequencyData(times=t, observer_position=pos, observer_velocity=vel,
                              f0=np.asarray(f0, float), sigma=np.asarray(sigma_f, float), c=c)
-    fim, _ = fisher_information(model, theta, bearings=[BearingData(
-        times=t, observer_position=pos, sigma=sigma)], frequencies=freq)
+    fim = fisher_information(batch_data(model, bearings=[BearingData(
+        times=t, observer_position=pos, sigma=sigma)], frequencies=freq),
+        np.r_[theta, np.asarray(f0, float)])
     dim = fim.shape[0]
     # Physical scales (not the unit diagonal: an exactly uninformed parameter, e.g. ρ_C for
     # an observer at the centre, would be blown up to a unit column): lengths by the mean
@@ -399,7 +406,7 @@ def ct_vs_cv_test(bearings: Any, times: Any, observer_position: Any, *,
     b, t = _check_bearings(bearings, times)
     obs = np.asarray(observer_position, dtype=float)
     if obs.shape != (t.size, 2) or not np.all(np.isfinite(obs)):
-        raise ScenarioError("observer_position", f"finite, shape ({t.size}, 2)", obs.shape)
+        raise ArgumentError("observer_position", f"finite, shape ({t.size}, 2)", obs.shape)
     O = observability_matrix(b, t)
     z = np.sum(np.stack([np.cos(b), -np.sin(b)], axis=-1) * obs, axis=-1)
     rank_o, sv = numerical_rank(O, rtol)
@@ -475,9 +482,9 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
                 c = s.c
         n = len(f0) if frequencies is None else int(frequencies)
         if not 0 <= n <= len(f0):
-            raise ScenarioError("frequencies", f"an integer in [0, {len(f0)}]", frequencies,
+            raise ArgumentError("frequencies", f"an integer in [0, {len(f0)}]", frequencies,
                                 source=scenario.name)
-        theta = [tgt.centre[0], tgt.centre[1], tgt.radius, tgt.phase, tgt.omega]
+        theta = list(circle_parameters(tgt))
         return ct_observability(times, obs.position[steps], obs.velocity[steps], theta,
                                 sigma=bsens[0].sigma, f0=f0[:n], sigma_f=sf[:n], c=c,
                                 **({} if rtol is None else {"rtol": rtol}))

@@ -37,8 +37,15 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import PCRBInputs, prepare
-from tmaplan.errors import ObservabilityError, ScenarioError
-from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart, wrap_angle, wrap_half_angle
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
+from tmaplan.geometry import (
+    bearing_of,
+    jacobian_cart_wrt_lpc_from_cart,
+    range_of,
+    wrap_angle,
+    wrap_half_angle,
+)
 from tmaplan.models.prior import relative_prior_samples
 
 if TYPE_CHECKING:
@@ -114,6 +121,8 @@ class PCRBResult:
         module and the closed form) or realisations of the scenario's true track
         (:func:`tmaplan.estimators.truth_bound.truth_conditioned_pcrb`, ristic2004, ch. 6).
     """
+
+    __repr__ = short_repr
 
     times: np.ndarray
     coords: Coords
@@ -202,7 +211,7 @@ def _bearing_grad(X: np.ndarray, coords: Coords) -> np.ndarray:
 
 
 def _range_grad(X: np.ndarray, coords: Coords) -> np.ndarray:
-    r = np.hypot(X[..., 0], X[..., 1])
+    r = range_of(X)
     z = np.zeros(X.shape[:-1])
     if coords == "lpc":
         return np.stack([z, r, z, z], axis=-1)
@@ -210,7 +219,7 @@ def _range_grad(X: np.ndarray, coords: Coords) -> np.ndarray:
 
 
 def _range_rate_grad(X: np.ndarray, coords: Coords) -> np.ndarray:
-    r = np.hypot(X[..., 0], X[..., 1])
+    r = range_of(X)
     rdot = (X[..., 0] * X[..., 2] + X[..., 1] * X[..., 3]) / r
     z = np.zeros(X.shape[:-1])
     if coords == "lpc":  # ṙ = e^{ln r}·(ṙ/r): ∂/∂ln r = ṙ, ∂/∂(ṙ/r) = r
@@ -228,9 +237,9 @@ def bearing_score(z: np.ndarray | float, X: np.ndarray, sigma: float,
     With ``ambiguity="pi"`` the density is brehard2005 eq. 71's 3-term wrapped Gaussian, whose
     β-derivative is the weighted residual of eq. 104 (third line) without its hard switch.
     """
-    b = np.arctan2(X[..., 0], X[..., 1])
+    b = bearing_of(X, ambiguity)
     if ambiguity == "pi":
-        d = np.asarray(z) - wrap_half_angle(b)
+        d = np.asarray(z) - b
         terms = np.stack([d, d - np.pi, d + np.pi], axis=0)
         ll = -0.5 * (terms / sigma) ** 2
         w = np.exp(ll - ll.max(axis=0))
@@ -243,7 +252,7 @@ def bearing_score(z: np.ndarray | float, X: np.ndarray, sigma: float,
 def range_score(z: np.ndarray | float, X: np.ndarray, sigma: float,
                 coords: Coords = "lpc") -> np.ndarray:
     """Score of a range ping ``z = r + v``, v ~ N(0, σ²) [m], shape (..., 4)."""
-    r = np.hypot(X[..., 0], X[..., 1])
+    r = range_of(X)
     return ((np.asarray(z) - r) / sigma**2)[..., None] * _range_grad(X, coords)
 
 
@@ -262,7 +271,7 @@ def frequency_score(z: np.ndarray, X: np.ndarray, f0: np.ndarray, sigma: np.ndar
         Sound speed [m/s].
     """
     f0, sigma = np.asarray(f0, float), np.asarray(sigma, float)
-    r = np.hypot(X[..., 0], X[..., 1])
+    r = range_of(X)
     rdot = (X[..., 0] * X[..., 2] + X[..., 1] * X[..., 3]) / r
     f = f0 * (1.0 - rdot[..., None] / c)
     s = ((np.asarray(z) - f) / sigma**2 * (-f0 / c)).sum(axis=-1)
@@ -310,7 +319,7 @@ def measurement_information(X: np.ndarray, step: int, inputs: PCRBInputs,
 
 # -------------------------------------------------------------------------- Monte Carlo
 def _side_density_samples(X: np.ndarray, ambiguity: str, eps: float = 0.05) -> float:
-    b = np.arctan2(X[:, 0], X[:, 1])
+    b = bearing_of(X)
     if ambiguity == "pi":
         near = np.abs(wrap_half_angle(b)) > np.pi / 2 - eps
     else:
@@ -358,15 +367,17 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
     Raises
     ------
     ScenarioError
-        Bad inputs (no prior, ``q = 0`` in LPC, mass at zero range, ...).
+        Bad scenario fields (no prior, ``q = 0`` in LPC, mass at zero range, ...).
+    ArgumentError
+        Bad arguments (``coords``, ``samples``, ``ping_steps``).
     ObservabilityError
         A non-positive-definite information matrix.
     """
     t_start = time.perf_counter()
     if coords not in ("cartesian", "lpc"):
-        raise ScenarioError("coords", "'cartesian' or 'lpc'", coords, source=scenario.name)
+        raise ArgumentError("coords", "'cartesian' or 'lpc'", coords, source=scenario.name)
     if not isinstance(samples, int | np.integer) or samples < 2:
-        raise ScenarioError("samples", "an integer >= 2", samples, source=scenario.name)
+        raise ArgumentError("samples", "an integer >= 2", samples, source=scenario.name)
     inp = prepare(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, lpc=coords == "lpc")
     K, A, Q = inp.n_steps, inp.A, inp.Q

@@ -1,8 +1,10 @@
 """Command line interface ``tmaplan`` (docs/cli.md).
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
-``add_arguments(parser)``, ``run(args) -> dict | None`` and, for a verb without a problem
-argument that works on a fixed problem, ``PROBLEM`` (its name); the returned dict is written as JSON
+``add_arguments(parser)``, ``run(args) -> dict | None``, optionally ``FINITE`` (payload
+quantities that must not be NaN, :mod:`tmaplan.cli._finite`: a NaN there is an error, never exit
+0) and, for a verb without a problem argument that works on a fixed problem, ``PROBLEM`` (its
+name); the returned dict is written as JSON
 to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
 Argument types, limits and the up-front checks that need the scenario live in
 :mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
@@ -23,6 +25,7 @@ import numpy as np
 
 from tmaplan import __version__
 from tmaplan.cli._args import OneLineParser, UsageError, preflight
+from tmaplan.cli._finite import require_finite
 from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
@@ -130,6 +133,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             problem = scenario.name
             preflight(args, scenario)
         payload = modules[args.verb].run(args)
+        require_finite(payload, getattr(modules[args.verb], "FINITE", ()), source=problem)
         if isinstance(payload, dict) and problem is not None:
             payload.setdefault("problem", problem)
         if args.json is not None and payload is not None:

@@ -37,7 +37,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError, UnitError
+from tmaplan.errors import ArgumentError, ScenarioError, UnitError
+from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
 from tmaplan.units import to_si
 
 __all__ = [
@@ -78,9 +79,6 @@ MAX_DURATION = 7 * 86400.0
 """Largest value of a time flag [s] (one week)."""
 MAX_PLAN_STEPS = 1440
 """Largest planning horizon of ``tmaplan plan`` in grid steps (6 h at dt = 15 s)."""
-MLE_DRIFT_RATIO_MAX = 10.0
-"""``track --estimator mle`` is refused when the target's process noise moves it by more than
-this many times the finest measurement noise over the horizon (see :func:`preflight`)."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -265,8 +263,12 @@ def minutes(seconds: float | Sequence[float] | np.ndarray, digits: int = 1) -> s
 # --------------------------------------------------------------------------------------------
 
 
-def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
-    return ScenarioError(flag, constraint, received, source=scenario.name)
+def _flag_error(flag: str, constraint: str, received: Any, scenario: Any) -> ArgumentError:
+    return ArgumentError(flag, constraint, received, source=scenario.name)
+
+
+def _scenario_error(field: str, constraint: str, received: Any, scenario: Any) -> ScenarioError:
+    return ScenarioError(field, constraint, received, source=scenario.name)
 
 
 def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
@@ -293,6 +295,11 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
 
 
 def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
+    if scenario.prior is None:
+        raise _scenario_error("prior", "a [prior] table: the PCRB starts from the prior "
+                              "information (J₀ = P₀⁻¹); add one or use `tmaplan crlb "
+                              f"{scenario.name}` for the batch CRLB of a deterministic track",
+                              None, scenario)
     if args.ping_every is not None and args.ping_every < scenario.time.dt:
         raise _flag_error("--ping-every", f">= dt = {scenario.time.dt:g} s",
                           _seconds_text(args.ping_every), scenario)
@@ -308,63 +315,33 @@ def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
         read_observer_plan(args.observer_plan, scenario)
 
 
-def _resolution(scenario: Any) -> tuple[float, str]:
-    """Finest measurement noise of the scenario in metres along its truth, and its name."""
-    from tmaplan.scenario import measurement_steps
-    from tmaplan.simulate import simulate
-
-    rel = simulate(scenario, None).relative
-    r = np.hypot(rel[:, 0], rel[:, 1])
-    best = (math.inf, "")
-    for sen in scenario.sensors:
-        steps = measurement_steps(sen, scenario.time)
-        if not steps.size:
-            continue
-        if sen.kind == "bearing":
-            r_min = float(np.min(r[steps]))
-            best = min(best, (sen.sigma * r_min, f"bearing noise {np.degrees(sen.sigma):.3g}° "
-                              f"at {r_min / 1e3:.3g} km"))
-        elif sen.kind == "range":
-            best = min(best, (sen.sigma, f"range noise {sen.sigma:g} m"))
-    return best
-
-
 def _check_track(args: argparse.Namespace, scenario: Any) -> None:
-    from tmaplan.scenario import measurement_steps
+    from tmaplan.estimators.applicability import check_applicable
 
-    est = args.estimator
-    if args.bound == "prior" and est == "mle":
-        raise _flag_error("--bound", "'truth' (the default) with --estimator mle: the MLE is "
-                          "compared with the batch CRLB at the truth, --bound chooses the "
-                          "filters' PCRB", args.bound, scenario)
-    if args.bound == "prior":
-        raise _flag_error("--bound", "'truth' (the default): the prior-averaged PCRB gives a "
-                          "position bound only, its range bound would print as NaN; use "
-                          "--bound truth (the PCRB along each run's truth, ristic2004 ch. 6) "
-                          "or `tmaplan bound P --method monte-carlo` for the prior average",
-                          args.bound, scenario)
-    if est == "range-only":
-        n = sum(measurement_steps(s, scenario.time).size for s in scenario.sensors_of("range"))
-        if n < 3:
-            raise _flag_error("--estimator", "an estimator that applies: range-only tracking "
-                              "(sharma2024) needs range measurements at every scan, "
-                              f"{scenario.name} has {n}; use pf, pf-bearings or mle",
-                              est, scenario)
-    if est == "mle" and scenario.target.model != "constant-turn" and scenario.target.q > 0:
-        t = scenario.time.horizon
-        drift = math.sqrt(scenario.target.q * t**3 / 3.0)
-        res, what = _resolution(scenario)
-        if drift > MLE_DRIFT_RATIO_MAX * res:
-            alt = "range-only or pf" if scenario.sensors_of("range") and any(
-                s.every is not None for s in scenario.sensors_of("range")) else "pf"
-            raise _flag_error(
-                "--estimator",
-                f"an estimator that applies: mle fits one deterministic track (clavard2013), "
-                f"but the target's process noise q = {scenario.target.q:g} m^2/s^3 moves it "
-                f"by {drift:.0f} m (1σ) over the {t / 60:g} min horizon, "
-                f"{drift / res:.0f}× the finest measurement ({what}; limit "
-                f"{MLE_DRIFT_RATIO_MAX:g}×): its χ² test would reject every run (NaN RMSE); "
-                f"use --estimator {alt}", est, scenario)
+    # the flags' own constraints first, then whether the estimator applies at all
+    turn = getattr(args, "turn_direction", "auto")
+    if turn != "auto" and args.estimator != "mle":
+        raise _flag_error("--turn-direction", "only with --estimator mle", turn, scenario)
+    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if getattr(args, "frequencies", 0) > available:
+        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
+                          args.frequencies, scenario)
+    check_applicable(args.estimator, scenario, bound=args.bound, cli=True)
+
+
+def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
+    if scenario.prior is None:
+        raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
+                              "particle filter, which starts from the prior (and --truth prior "
+                              "draws the truths from it); add one (see the README's example)",
+                              None, scenario)
+    turning = [p.strip() for p in args.policies.split(",")
+               if p.strip() and p.strip().split("+")[0] != "straight"]
+    if turning and scenario.observer.turn_rate_max is None:
+        raise _scenario_error("observer.turn_rate_max", "a turn-rate limit of the own ship "
+                              "(e.g. turn_rate_max = \"0.5 deg/s\" in [observer]) for the "
+                              f"turning policies {', '.join(turning)}, or --policies "
+                              "straight[+PING] only", None, scenario)
 
 
 #: Verbs whose results depend on the prior (the others do not read it).
@@ -385,10 +362,11 @@ def _truth_note(verb: str, scenario: Any) -> None:
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
-    Raises :class:`tmaplan.errors.ScenarioError` naming the flag for: ``plan --horizon`` /
+    Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
-    of this problem on its grid; ``track`` estimator/bound combinations
+    of this problem on its grid; ``compare`` turning policies without
+    ``observer.turn_rate_max``; ``track`` estimator/bound combinations
     that cannot give a number (``--bound prior`` (no range bound; with ``mle``: not used),
     ``range-only`` without ranges, ``mle`` on a target whose process noise drifts more than
     :data:`MLE_DRIFT_RATIO_MAX` times the finest measurement noise over the horizon, the
@@ -397,7 +375,7 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     or ``course_mode = "true"``): every run of a verb that uses the prior says so.
     """
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
-             "schedule": _check_schedule}.get(args.verb)
+             "schedule": _check_schedule, "compare": _check_compare}.get(args.verb)
     if check is not None:
         check(args, scenario)
     _truth_note(args.verb, scenario)

@@ -31,10 +31,13 @@ from tmaplan.cli._args import (
     integer,
     step_list,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
 
 HELP = "posterior Cramér-Rao bound over time (closed form in LPC or Monte Carlo)"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("range_std[-1]", "position_std[-1]")
 
 _LPC_LABELS = ("β [rad]", "ln r [-]", "β̇ [rad/s]", "ṙ/r [1/s]")
 _CART_LABELS = ("r_x [m]", "r_y [m]", "v_x [m/s]", "v_y [m/s]")
@@ -85,7 +88,7 @@ def ping_steps_from_args(scenario: Scenario, every: float | None,
                             "no range sensor", source=scenario.name)
     if every is not None:
         if not every > 0:
-            raise ScenarioError("--ping-every", "> 0 s", every)
+            raise ArgumentError("--ping-every", "> 0 s", every)
         sensor = dataclasses.replace(ranges[0], steps=(), period=float(every), every=None)
         return measurement_steps(sensor, scenario.time).tolist()
     if isinstance(steps, list):
@@ -93,7 +96,7 @@ def ping_steps_from_args(scenario: Scenario, every: float | None,
     try:
         return [int(x) for x in str(steps).split(",") if x.strip()]
     except ValueError as exc:
-        raise ScenarioError("--ping-steps", "comma-separated integers", steps) from exc
+        raise ArgumentError("--ping-steps", "comma-separated integers", steps) from exc
 
 
 def resolve_over(method: str, coords: str, over: str | None) -> str:
@@ -102,7 +105,7 @@ def resolve_over(method: str, coords: str, over: str | None) -> str:
     if over is None:
         return "truth" if method == "monte-carlo" and coords == "cartesian" else "prior"
     if over == "truth" and (method != "monte-carlo" or coords != "cartesian"):
-        raise ScenarioError("--over", "'prior' with --method closed-form or --coords lpc (the "
+        raise ArgumentError("--over", "'prior' with --method closed-form or --coords lpc (the "
                             "truth-conditioned PCRB, ristic2004 ch. 6, is the Monte Carlo "
                             "Cartesian one)", over)
     return over
@@ -116,7 +119,7 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
 
     if method == "closed-form":
         if coords != "lpc":
-            raise ScenarioError("--coords", "lpc for the closed form (docs/cli.md)", coords)
+            raise ArgumentError("--coords", "lpc for the closed form (docs/cli.md)", coords)
         return closed_form_pcrb(scenario, ping_steps=pings)
     if over == "truth":
         return truth_conditioned_pcrb(scenario, samples=samples,
@@ -153,7 +156,7 @@ def _figure(results: list[Any], path: Path, title: str) -> None:
         ax.set_xlabel("time [s]")
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
-    axes.flat[0].legend()
+    axes.flat[0].legend(loc="best", framealpha=0.6)
     fig.suptitle(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -166,7 +169,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     scenario = load(args.problem)
     coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
     if args.samples < 2:
-        raise ScenarioError("--samples", ">= 2", args.samples)
+        raise ArgumentError("--samples", ">= 2", args.samples)
     over = resolve_over(args.method, coords, getattr(args, "over", None))
     pings = ping_steps_from_args(scenario, args.ping_every, args.ping_steps)
     with warnings.catch_warnings(record=True) as caught:

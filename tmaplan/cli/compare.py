@@ -18,20 +18,24 @@ from tmaplan.cli._args import (
     integer,
     open_fraction,
 )
+from tmaplan.cli._finite import require_finite
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.report import efficiency, write_report
 from tmaplan.scenario import load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``compare``."""
     add_problem_argument(parser)
     parser.add_argument("--policies", default="straight,single-turn,zigzag",
-                        help="comma-separated MANOEUVRE[+PING] (manoeuvres: straight, "
-                             "single-turn, zigzag, planned, receding, leg-turn-leg, lead-lag; "
-                             "pings: no-ping, uniform, scheduled, scheduled-terminal, adaptive)")
+                        help=f"comma-separated MANOEUVRE[+PING] (manoeuvres: "
+                             f"{', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)})")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
@@ -71,6 +75,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         payload["policies"][name]["efficiency"] = e
     payload["report"] = str(report)
     payload["directory"] = str(result.directory)
+    require_finite(payload, FINITE, source=scenario.name,
+                   why=f"report written to {report}, runs kept in {result.directory}")
     if not quiet:
         for name in result.policies:
             s = result.summary[name]

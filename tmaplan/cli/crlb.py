@@ -22,6 +22,9 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
 
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("final_range_std",)
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """``P`` (problem name or .toml path), ``--frequencies N``, ``--out``, ``--no-figure``."""
@@ -51,7 +54,7 @@ def _figure(scenario: Scenario, res: CRLBResult, path: Path) -> None:
     ax.add_patch(Ellipse(tuple(np.asarray(res.final_position, float) / 1e3), 2 * half[1],
                          2 * half[0], angle=angle, fill=False, color="k", lw=1.4,
                          label=f"CRLB 2σ at t_N = {res.final_time / 60:g} min"))
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="best", fontsize=8, framealpha=0.6)
     ax.set_title(f"{scenario.name}: batch CRLB, range std {res.final_range_std / 1e3:.3g} km")
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)

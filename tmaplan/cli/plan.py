@@ -21,13 +21,19 @@ from tmaplan.cli._args import (
 )
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.heading import HeadingPlanner
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
+from tmaplan.planning.joint import plan_joint
+from tmaplan.planning.joint_ocp import plan_joint_ocp
 from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
-from tmaplan.plotting import plot_plan
+from tmaplan.planning.pings import schedule_pings
+from tmaplan.plotting import objective_label, plot_plan
 from tmaplan.policies.plan_starts import plan_from_prior
 from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("objective",)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,6 +52,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="built-in initial guesses of the bang-bang transcription "
                              "(default 4); the direct one starts from straight, the tactics "
                              "and the best single turns as well")
+    parser.add_argument("--pings", type=integer(0), default=0, metavar="K",
+                        help="plan K range pings with the headings (default 0: headings only)")
+    parser.add_argument("--joint", choices=("ocp", "alternating"), default="ocp",
+                        help="with --pings: one OCP (relaxed, rounded, polished, certified on "
+                             "its pings) or alternating heading/ping blocks (default ocp)")
+    parser.add_argument("--ping-stride", type=integer(1), default=1, metavar="N",
+                        help="--joint ocp: candidate ping steps every N steps (default 1)")
     add_figure_arguments(parser)
 
 
@@ -56,8 +69,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                              control_interval=args.control_interval,
                              transcription=args.transcription, n_starts=args.starts)
     belief = Belief.from_prior(scenario)
-    plan = (plan_from_prior(scenario, planner=planner) if args.transcription == "direct"
-            else planner.solve(belief))
+    pings = _joint(args, scenario, belief) if args.pings > 0 else None
+    if pings is not None:
+        plan = pings[0]
+    elif args.transcription == "direct":
+        plan = plan_from_prior(scenario, planner=planner)
+    else:
+        plan = planner.solve(belief)
     ev = ObjectiveEvaluator(scenario, planner.objective, n_steps=planner.K, belief=belief)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K,
                               evaluator=ev)
@@ -75,12 +93,20 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                      "mean_velocity": plan.observer.mean_velocity,
                      "heading": plan.observer.heading, "speed": plan.observer.speed},
     }
+    if pings is not None:
+        payload["pings"] = pings[1]
     if args.json != "-":
-        print(f"{scenario.name}: {planner.objective.name} = {plan.objective:.4g} over "
+        if pings is not None:
+            pj = pings[1]
+            print(f"{scenario.name}: {args.pings} ping(s) at {minutes(pj['ping_times'])} "
+                  f"({args.joint}): objective {pj['objective']:.4g} m, lower bound "
+                  f"{pj['lower_bound']:.4g} m, gap {100 * pj['gap']:.2f} %")
+        print(f"{scenario.name}: {objective_label(planner.objective.name)} = "
+              f"{plan.objective:.4g} over "
               f"{minutes(plan.times[-1] - plan.times[0], 0)} ({plan.status}, solved in "
               f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():
-            print(f"  baseline {k:<12} {v:.4g}")
+            print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))
     if not args.no_figure:
         path = Path(args.out) / f"{scenario.name}_plan.png"
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
@@ -88,3 +114,31 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.json != "-":
             print(f"wrote {path}")
     return payload
+
+
+def _joint(args: argparse.Namespace, scenario: Any,
+           belief: Belief) -> tuple[HeadingPlan, dict[str, Any]]:
+    """``--pings K``: the joint plan (``--joint``) and its JSON (``objective``,
+    ``lower_bound``, ``gap``, ``solver``)."""
+    pl = scenario.planning
+    objective = args.objective or (pl.objective if pl is not None else "range-bound")
+    kw = {"horizon": args.horizon, "control_interval": args.control_interval,
+          "transcription": args.transcription, "n_starts": args.starts}
+    if args.joint == "ocp":
+        r = plan_joint_ocp(scenario, budget=args.pings,
+                           objective=objective,  # type: ignore[arg-type]
+                           ping_stride=args.ping_stride, belief=belief, **kw)
+        return r.heading, {"method": "ocp", **r.payload()}
+    j = plan_joint(scenario, budget=args.pings, objective=objective,  # type: ignore[arg-type]
+                   belief=belief, **kw)
+    # the certificate of the alternating plan's pings along its track
+    cert = schedule_pings(scenario, budget=args.pings,
+                          objective=j.pings.objective_name,  # type: ignore[arg-type]
+                          observer=j.heading.observer, belief=belief)
+    lb = min(cert.lower_bound, j.objective)
+    return j.heading, {"method": "alternating", "objective": j.objective,
+                       "lower_bound": lb, "gap": (j.objective - lb) / j.objective,
+                       "ping_steps": j.pings.steps, "ping_times": j.pings.times,
+                       "budget": args.pings,
+                       "solver": {"status": j.pings.status, "seconds": j.seconds,
+                                  "rounds": j.iterations}}

@@ -19,7 +19,7 @@ from tmaplan.cli._args import (
     integer,
     open_fraction,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.experiments import rank_costs
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.scenario import load
@@ -66,7 +66,7 @@ def _plans(text: str) -> tuple[str, ...] | None:
     names = tuple(x.strip() for x in t.split(",") if x.strip())
     bad = [n for n in names if n not in OBJECTIVE_NAMES]
     if bad or not names:
-        raise ScenarioError("--plans", f"'all', 'none' or names of {', '.join(OBJECTIVE_NAMES)}",
+        raise ArgumentError("--plans", f"'all', 'none' or names of {', '.join(OBJECTIVE_NAMES)}",
                             text)
     return names
 

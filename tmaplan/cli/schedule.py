@@ -20,7 +20,7 @@ from tmaplan.cli._args import (
     integer,
     minutes,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
@@ -28,6 +28,9 @@ from tmaplan.plotting import plot_schedule
 from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("objective",)
 
 _TRACK_KEYS = ("times", "position", "velocity", "mean_velocity", "heading", "speed")
 
@@ -59,12 +62,12 @@ def read_observer_plan(path: str | Path, scenario: Scenario) -> ObserverTrack:
 
     Raises
     ------
-    ScenarioError
+    ArgumentError
         Naming ``--observer-plan`` and the file: unreadable or not JSON, no ``observer``
         track, a plan of another problem, or a track not on the scenario's time grid.
     """
-    def err(expected: str, received: Any) -> ScenarioError:
-        return ScenarioError("--observer-plan", expected, received, source=str(path))
+    def err(expected: str, received: Any) -> ArgumentError:
+        return ArgumentError("--observer-plan", expected, received, source=str(path))
 
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))

@@ -19,7 +19,8 @@ from tmaplan.cli._args import (
     add_seed_argument,
     integer,
 )
-from tmaplan.errors import ScenarioError
+from tmaplan.cli._finite import require_finite
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
@@ -28,6 +29,9 @@ from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import Scenario, load
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
+
+#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,7 +68,7 @@ def _with_lines(scenario: Scenario, n: int) -> Scenario:
     """The scenario with only the first ``n`` lines of its frequency sensors (0: none)."""
     available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
     if n < 0 or n > available:
-        raise ScenarioError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
+        raise ArgumentError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
     if n == available:
         return scenario
     sensors = tuple(s if s.kind != "frequency" else
@@ -92,7 +96,7 @@ def _figure(res: Any, path: Path) -> None:
         eff = res.rmse_position[-1] / res.bound_position[-1]
     ax.set_title(f"{res.problem}: final RMSE / bound = {eff:.2f}")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    ax.legend(loc="best", framealpha=0.6)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -102,9 +106,9 @@ def _figure(res: Any, path: Path) -> None:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
     if args.runs < 1:
-        raise ScenarioError("--runs", ">= 1", args.runs)
+        raise ArgumentError("--runs", ">= 1", args.runs)
     if args.particles < 2:
-        raise ScenarioError("--particles", ">= 2", args.particles)
+        raise ArgumentError("--particles", ">= 2", args.particles)
     scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
@@ -124,7 +128,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     turn: Any = getattr(args, "turn_direction", "auto")
     if turn != "auto":
         if estimator != "mle":
-            raise ScenarioError("--turn-direction", "only with --estimator mle", turn)
+            raise ArgumentError("--turn-direction", "only with --estimator mle", turn)
         estimator = MLEConfig(turn_direction=turn)
     res = monte_carlo(scenario, estimator, runs=args.runs, seed=args.seed,
                       n_particles=args.particles, progress=progress,
@@ -149,12 +153,16 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         fig = Path(args.out) / f"track_{scenario.name}_{args.estimator}{suffix}.png"
         _figure(res, fig)
         payload["figure"] = str(fig)
+    counts = {s: res.statuses.count(s) for s in dict.fromkeys(res.statuses)}
+    require_finite(payload, FINITE, source=scenario.name,
+                   why="run statuses: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
     if not quiet:
-        print(f"{scenario.name}: {args.estimator}, {res.runs} runs, {res.seconds:.1f} s")
+        runs = f"{res.runs} run{'s' if res.runs != 1 else ''}"
+        print(f"{scenario.name}: {args.estimator}, {runs}, {res.seconds:.1f} s")
         print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
               f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
         print(f"  final range RMSE {res.rmse_range[-1]:.1f} m, bound {res.bound_range[-1]:.1f} m")
-        if args.estimator == "mle":
+        if args.estimator == "mle" and scenario.target.model == "constant-turn":
             print(f"  sense of turn searched: {payload['turn_direction']}; "
                   f"{res.ambiguous_runs} run(s) with an indistinguishable alternative "
                   "solution")

@@ -9,6 +9,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from tmaplan.estimators.applicability import (
+    APPLICABILITY,
+    Applicability,
+    applicable_estimators,
+    check_applicable,
+)
 from tmaplan.estimators.filter import Filter, FilterRun, FilterState, drive
 from tmaplan.estimators.gvm_moments import (
     GvM2,
@@ -76,7 +82,9 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "APPLICABILITY",
     "ESTIMATORS",
+    "Applicability",
     "BearingsInit",
     "DegeneracyWarning",
     "Estimator",
@@ -100,6 +108,8 @@ __all__ = [
     "TMAData",
     "Track",
     "acceptance_threshold",
+    "applicable_estimators",
+    "check_applicable",
     "dirac_mixture",
     "drive",
     "estimator_for",

@@ -38,7 +38,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import gammaln
 
-from tmaplan.errors import EstimationError, ScenarioError
+from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.geometry import mp_to_cart, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -168,7 +168,7 @@ def fit_rmp(z: np.ndarray, tau: np.ndarray, sigma: float, *,
     z = np.asarray(z, float)
     tau = np.asarray(tau, float)
     if z.shape != tau.shape or z.shape[0] < 3:
-        raise ScenarioError("bearings", "at least 3 bearings with matching times", z.shape)
+        raise ArgumentError("bearings", "at least 3 bearings with matching times", z.shape)
     wrap = wrap_half_angle if ambiguity == "pi" else wrap_angle
     # Modified linear estimate, eqs. (15)-(17) with the corrected mapping of eq. (16).
     ref = z[np.argmin(np.abs(tau))]
@@ -288,7 +288,7 @@ def initialise_from_bearings(
 
     Raises
     ------
-    ScenarioError
+    ArgumentError
         On invalid inputs (too few bearings, bad range interval).
     EstimationError
         If the Gauss–Newton fit fails to produce a finite estimate.
@@ -296,10 +296,10 @@ def initialise_from_bearings(
     t = np.asarray(times, float)
     z = np.asarray(bearings, float)
     if not 0 < r_min < r_max:
-        raise ScenarioError("r_min/r_max", "0 < r_min < r_max [m]", (r_min, r_max))
+        raise ArgumentError("r_min/r_max", "0 < r_min < r_max [m]", (r_min, r_max))
     n = t.shape[0]
     if n < 2 * k_min + 1:
-        raise ScenarioError("bearings", f"at least {2 * k_min + 1} bearings", n)
+        raise ArgumentError("bearings", f"at least {2 * k_min + 1} bearings", n)
     delta = float(dt) if dt is not None else float(np.median(np.diff(t)))
     k_hi = (n - 1) // 2 if k_max is None else min(k_max, (n - 1) // 2)
     chi3 = stats.chi2.ppf(1 - alpha, 3)

@@ -6,7 +6,9 @@ weighted least-squares problem, minimised as in clavard2013 §III.2: a coarse gr
 start, ten Gauss–Newton iterations, then Levenberg–Marquardt (``scipy.optimize.least_squares``)
 up to convergence, with parameter scaling (``x_scale``: km-scale positions, 1e-3 rad/s turn
 rates). Residual Jacobians are analytic (clavard2013, checked against finite
-differences in the tests).
+differences in the tests). The data (:class:`TMAData`), the residuals and the Fisher information
+behind the covariance are those of the batch CRLB, :mod:`tmaplan.bounds.batch_fim`
+(re-exported here).
 
 Acceptance test (clavard2013). The paper accepts the estimate when
 ``C(Ẑ) < N − 5 + 3√(2N − 10)`` (bearings only) and
@@ -45,22 +47,15 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
-from tmaplan.errors import ScenarioError
-
-# The measurement model (data, kinematics, residuals, FIM, acceptance threshold) lives in its
-# own module; its names are re-exported here (the public home of the API).
-from tmaplan.estimators._mle_models import (
+from tmaplan.bounds.batch_fim import (
     Model,  # noqa: F401
     TMAData,
-    _positions,
-    acceptance_threshold,
     fisher_information,
-    kinematics,
     residuals,
-    state_track,
     tma_data,
-    track_model,
 )
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -75,6 +70,78 @@ __all__ = [
     "state_track",
     "tma_data",
 ]
+
+
+# --------------------------------------------------------------------------------------------
+# Parameter vectors -> tracks (the residuals and FIM are in tmaplan.bounds.batch_fim)
+# --------------------------------------------------------------------------------------------
+
+
+def kinematics(data: TMAData, theta: np.ndarray, t: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Target position and velocity and their Jacobians w.r.t. the geometric parameters.
+
+    Parameters
+    ----------
+    data : TMAData
+    theta : ndarray, shape (n_geom,)
+    t : ndarray, shape (n,)
+        Times [s].
+
+    Returns
+    -------
+    P, V : ndarray, shape (n, 2)
+        [m], [m/s].
+    dP, dV : ndarray, shape (n, 2, n_geom)
+    """
+    model = data.track
+    th = np.asarray(theta, float)[: data.n_geom]
+    t = np.asarray(t, float)
+    P, V = model.track(th, t)
+    dP, dV = model.jacobian(th, t)
+    return P, V, dP, dV
+
+
+def _positions(data: TMAData, th: np.ndarray, t: np.ndarray, *, velocity: bool = False
+               ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Batched positions (and velocities) for many parameter vectors, shape (G, n, 2)."""
+    P, V = data.track.track_many(np.asarray(th, float)[:, : data.n_geom], t)
+    return (P, V) if velocity else P
+
+
+def acceptance_threshold(data: TMAData) -> float:
+    """clavard2013's acceptance threshold, generalised as in the module notes."""
+    ng = data.n_geom
+    dofs = []
+    if data.b_times.size:
+        dofs.append(data.b_times.size - ng)
+    if data.r_times.size:
+        dofs.append(data.r_times.size - ng)
+    for _ in range(data.n_lines):
+        dofs.append(data.f_times.size - ng - 1)
+    d = np.maximum(np.asarray(dofs, float), 1.0)
+    return float(d.sum() + 3.0 * np.sqrt(2.0 * d).sum())
+
+
+def state_track(data: TMAData, params: np.ndarray, covariance: np.ndarray | None,
+                times: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Absolute target states ``[x, y, v_x, v_y]`` implied by the parameters, and their
+    covariance by the delta method.
+
+    Returns
+    -------
+    states : ndarray, shape (n, 4)
+    covs : ndarray, shape (n, 4, 4) or None
+    """
+    ng = data.n_geom
+    P, V, dP, dV = kinematics(data, np.asarray(params)[:ng], np.asarray(times, float))
+    S = np.concatenate([P, V], axis=1)
+    if covariance is None:
+        return S, None
+    J = np.concatenate([dP, dV], axis=1)  # (n, 4, ng)
+    C = np.asarray(covariance)[:ng, :ng]
+    return S, J @ C @ J.transpose(0, 2, 1)
+
 
 
 # --------------------------------------------------------------------------------------------
@@ -139,13 +206,13 @@ class MLEConfig:
 
     def __post_init__(self) -> None:
         if self.turn_direction not in ("auto", "either", "clockwise", "anticlockwise"):
-            raise ScenarioError("turn_direction",
+            raise ArgumentError("turn_direction",
                                 "'auto', 'either', 'clockwise' or 'anticlockwise'",
                                 self.turn_direction)
         if self.init not in ("multistart", "paper"):
-            raise ScenarioError("init", "'multistart' or 'paper'", self.init)
+            raise ArgumentError("init", "'multistart' or 'paper'", self.init)
         if not isinstance(self.n_starts, int | np.integer) or self.n_starts < 1:
-            raise ScenarioError("n_starts", "an integer >= 1", self.n_starts)
+            raise ArgumentError("n_starts", "an integer >= 1", self.n_starts)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -180,6 +247,8 @@ class MLEResult:
         mirror-turn near-ambiguity of the clavard2013 half turn, noise-free cost 0.10).
     """
 
+    __repr__ = short_repr
+
     model: str
     names: tuple[str, ...]
     params: np.ndarray
@@ -207,7 +276,7 @@ class MLEResult:
 
 def _names(data: TMAData) -> tuple[str, ...]:
     """The batch CRLB's names (:mod:`tmaplan.models.tracks`), then the tones ``f0[p]``."""
-    return track_model(data).names + tuple(f"f0[{p}]" for p in range(data.n_lines))
+    return data.track.names + tuple(f"f0[{p}]" for p in range(data.n_lines))
 
 
 def _scale(data: TMAData, theta: np.ndarray) -> np.ndarray:
@@ -225,7 +294,7 @@ def _grid(data: TMAData, config: MLEConfig) -> np.ndarray:
     elif data.r_times.size:
         t1, b1, o1 = data.r_times[0], 0.0, data.r_obs[0]
     else:
-        raise ScenarioError("measurements", "bearings or ranges for a batch estimate", None)
+        raise ArgumentError("measurements", "bearings or ranges for a batch estimate", None)
     r0 = np.asarray(config.grid_ranges, float)
     crs = np.arange(config.grid_courses) * 2 * np.pi / config.grid_courses
     spd = np.asarray(config.grid_speeds, float)
@@ -345,7 +414,7 @@ def _sense(data: TMAData, config: MLEConfig) -> int:
     if name == "either":
         return 0
     if data.model != "constant-turn":
-        raise ScenarioError("turn_direction", f"'auto' or 'either' for a '{data.model}' model",
+        raise ArgumentError("turn_direction", f"'auto' or 'either' for a '{data.model}' model",
                             name)
     return 1 if name == "clockwise" else -1
 
@@ -371,7 +440,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     t_start = _time.perf_counter()
     n_meas = data.b_times.size + data.r_times.size + data.f_times.size * data.n_lines
     if n_meas < data.n_params + 1:
-        raise ScenarioError("measurements", f"more than {data.n_params} measurements for a "
+        raise ArgumentError("measurements", f"more than {data.n_params} measurements for a "
                             f"'{data.model}' batch estimate", n_meas)
     sense = _sense(data, cfg)
     if initial is not None:
@@ -379,7 +448,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
         if init.size == data.n_geom and data.n_lines:
             init = np.concatenate([init, data.f_values.mean(axis=0)])
         if sense and init[4] * sense <= 0:
-            raise ScenarioError("initial[4] (omega)", f"{'>' if sense > 0 else '<'} 0 for a "
+            raise ArgumentError("initial[4] (omega)", f"{'>' if sense > 0 else '<'} 0 for a "
                                 f"{_SENSE_NAMES[sense]} turn", float(init[4]))
         starts = [init]
     else:

@@ -3,7 +3,7 @@
 State per particle: ``X = target − observer = [r_x, r_y, v_x, v_y]`` (m, m, m/s, m/s), with the
 relative dynamics of docs/conventions.md ``X_{k+1} = F X_k − H Δv_k + w_k``, ``H = [dt·I; I]``,
 ``w ~ N(0, Q)`` (``tmaplan.models.target.ncv_matrices``). brehard2004 prints ``+H U_t`` in eq. (2)
- but ``−H U_t`` in eq. (95); for a relative state the observer increment enters with
+but ``−H U_t`` in eq. (95); for a relative state the observer increment enters with
 a minus sign (docs/errata.md), which is what :func:`predict` implements.
 
 The API is explicit and stateless: a frozen :class:`PFConfig`, a frozen :class:`PFState` (arrays
@@ -52,7 +52,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators._pf_kernels import (
     _bearing_ll,
     _dynamics,
@@ -66,6 +66,7 @@ from tmaplan.estimators._pf_kernels import (
     _weighted_cov,
     systematic_resample,
 )
+from tmaplan.geometry import range_of
 from tmaplan.simulate import Measurement
 
 if TYPE_CHECKING:
@@ -148,20 +149,20 @@ class PFConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.n_particles, int | np.integer) or self.n_particles < 2:
-            raise ScenarioError("n_particles", "an integer >= 2", self.n_particles)
+            raise ArgumentError("n_particles", "an integer >= 2", self.n_particles)
         if not self.dt > 0:
-            raise ScenarioError("dt", "> 0 s", self.dt)
+            raise ArgumentError("dt", "> 0 s", self.dt)
         if not self.q >= 0:
-            raise ScenarioError("q", ">= 0 m²/s³", self.q)
+            raise ArgumentError("q", ">= 0 m²/s³", self.q)
         if self.variant not in ("bootstrap", "regularised", "resample-move"):
-            raise ScenarioError("variant", "'bootstrap', 'regularised' or 'resample-move'",
+            raise ArgumentError("variant", "'bootstrap', 'regularised' or 'resample-move'",
                                 self.variant)
         if int(self.move_steps) < 0:
-            raise ScenarioError("move_steps", ">= 0", self.move_steps)
+            raise ArgumentError("move_steps", ">= 0", self.move_steps)
         if not 0.0 <= self.ess_threshold <= 1.0:
-            raise ScenarioError("ess_threshold", "in [0, 1]", self.ess_threshold)
+            raise ArgumentError("ess_threshold", "in [0, 1]", self.ess_threshold)
         if self.noise not in ("float32", "float64"):
-            raise ScenarioError("noise", "'float32' or 'float64'", self.noise)
+            raise ArgumentError("noise", "'float32' or 'float64'", self.noise)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -315,9 +316,9 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
     state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
     for m in measurements:
         if m.ping:
-            r = np.hypot(state.particles[:, 0], state.particles[:, 1])
+            r = range_of(state.particles)
             # spread of the cloud about the measurement (a confident but wrong cloud is wide)
-            spread = float(np.sqrt(max(state.weights @ (r - float(m.value)) ** 2, 0.0)))
+            spread = float(np.sqrt(max(float(state.weights @ (r - float(m.value)) ** 2), 0.0)))
             total = 1.0 / float(m.sigma) ** 2
             p = 1.0 / max(spread / 2.0, float(m.sigma)) ** 2
             precisions: list[float] = []
@@ -349,7 +350,7 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         elif m.kind == "frequency":
             c, fm, fv = _frequency_update(X, m, fm, fv)
         else:
-            raise ScenarioError("measurement.kind", "'bearing', 'range' or 'frequency'",
+            raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'",
                                 m.kind)
         ll = np.asarray(c, dtype=float) if ll is None else ll + c
     assert ll is not None
@@ -512,7 +513,7 @@ class ParticleFilter:
         """State from given relative particles, shape (N, 4) (equal weights by default)."""
         X = np.array(particles, dtype=float, copy=True, order="F")  # column-major layout
         if X.ndim != 2 or X.shape[1] != 4 or not np.isfinite(X).all():
-            raise ScenarioError("particles", "a finite (N, 4) array", getattr(X, "shape", X))
+            raise ArgumentError("particles", "a finite (N, 4) array", getattr(X, "shape", X))
         n = X.shape[0]
         lw = (np.full(n, -np.log(n)) if log_weights is None
               else np.asarray(log_weights, float) - logsumexp(log_weights))

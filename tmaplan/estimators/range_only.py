@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.gvm_moments import (
     dirac_mixture,
     gvm2_from_gaussian,
@@ -147,21 +147,21 @@ class RangeOnlyConfig:
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
-            raise ScenarioError("dt", "> 0 s", self.dt)
+            raise ArgumentError("dt", "> 0 s", self.dt)
         if not self.q >= 0:
-            raise ScenarioError("q", ">= 0 m²/s³", self.q)
+            raise ArgumentError("q", ">= 0 m²/s³", self.q)
         if self.mode not in ("mixture", "moments", "dirac"):
-            raise ScenarioError("mode", "'mixture', 'moments' or 'dirac'", self.mode)
+            raise ArgumentError("mode", "'mixture', 'moments' or 'dirac'", self.mode)
         if self.component_cov not in ("exact", "paper"):
-            raise ScenarioError("component_cov", "'exact' or 'paper'", self.component_cov)
+            raise ArgumentError("component_cov", "'exact' or 'paper'", self.component_cov)
         if self.moments not in ("grid", "series"):
-            raise ScenarioError("moments", "'grid' or 'series'", self.moments)
+            raise ArgumentError("moments", "'grid' or 'series'", self.moments)
         if int(self.max_components) < 1:
-            raise ScenarioError("max_components", ">= 1", self.max_components)
+            raise ArgumentError("max_components", ">= 1", self.max_components)
         if int(self.max_sectors) < 1:
-            raise ScenarioError("max_sectors", ">= 1", self.max_sectors)
+            raise ArgumentError("max_sectors", ">= 1", self.max_sectors)
         if not self.sagitta > 0:
-            raise ScenarioError("sagitta", "> 0 (multiple of σ_r)", self.sagitta)
+            raise ArgumentError("sagitta", "> 0 (multiple of σ_r)", self.sagitta)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

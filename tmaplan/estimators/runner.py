@@ -22,16 +22,28 @@ import dataclasses
 import time as _time
 import warnings
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_checkable
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    ClassVar,
+    Literal,
+    Protocol,
+    get_args,
+    runtime_checkable,
+)
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.bounds.batch_fim import tma_data
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.estimators.applicability import APPLICABILITY, Applicability
 from tmaplan.estimators.filter import Filter, drive
 from tmaplan.estimators.init_bearings import initialise_from_bearings
-from tmaplan.estimators.mle import MLEConfig, mle, state_track, tma_data
+from tmaplan.estimators.mle import MLEConfig, mle, state_track
 from tmaplan.estimators.particle_filter import DegeneracyWarning, ParticleFilter, PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig, RangeOnlyFilter
+from tmaplan.geometry import bearing_of, range_of
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.simulate import Measurement, MeasurementSet, Simulation, measurement_batches
 
@@ -49,8 +61,10 @@ __all__ = [
     "run_prior",
 ]
 
-ESTIMATORS = ("pf", "pf-bearings", "mle", "range-only")
+#: Estimator names (CLI ``track --estimator``); each is built by :data:`_NAMED` below, where a
+#: new filter is named.
 EstimatorName = Literal["pf", "pf-bearings", "mle", "range-only"]
+ESTIMATORS: tuple[str, ...] = get_args(EstimatorName)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -82,6 +96,8 @@ class Track:
         Estimator-specific result: MLEResult, BearingsInit (``pf-bearings``) or the filter's
         last state.
     """
+
+    __repr__ = short_repr
 
     estimator: str
     times: np.ndarray
@@ -120,7 +136,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
         if p.mean is not None:
             return scenario
         mean = truth + np.asarray(p.std, float) * rng.standard_normal(4)
-        return scenario.replace(prior=dataclasses.replace(p, mean=tuple(float(x) for x in mean)))
+        m0, m1, m2, m3 = (float(x) for x in mean)
+        return scenario.replace(prior=dataclasses.replace(p, mean=(m0, m1, m2, m3)))
     rel = truth[:2] - np.asarray(scenario.observer.position, float)
     changes: dict[str, Any] = {}
     if p.bearing_mean is None:
@@ -129,10 +146,10 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
             if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0:
                 z0 = float(ms.values[0])
         if z0 is None:
-            z0 = float(np.arctan2(rel[0], rel[1]) + p.bearing_std * rng.standard_normal())
+            z0 = float(bearing_of(rel) + p.bearing_std * rng.standard_normal())
         changes["bearing_mean"] = z0
     if p.range_mean is None:
-        r = float(np.hypot(*rel)) + float(p.range_std or 0.0) * rng.standard_normal()
+        r = float(range_of(rel)) + float(p.range_std or 0.0) * rng.standard_normal()
         lo = max(p.range_min, 1e-3)
         hi = p.range_max if p.range_max is not None else np.inf
         changes["range_mean"] = float(np.clip(r, lo, hi))
@@ -142,7 +159,7 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
                                          * rng.standard_normal(2))
     if p.velocity_distribution == "speed-course" and p.speed_distribution == "normal" \
             and p.speed_mean is None:
-        s = float(np.hypot(*v)) + p.speed_std * rng.standard_normal()
+        s = float(range_of(v)) + p.speed_std * rng.standard_normal()
         changes["speed_mean"] = float(max(s, p.speed_min))
     return scenario.replace(prior=dataclasses.replace(p, **changes))
 
@@ -211,6 +228,11 @@ class FilterEstimator:
         """The filter's sensor kinds; bearings for the bearings-only start."""
         return frozenset({"bearing"}) if self.init == "bearings" else self.filter.applies_to
 
+    @property
+    def applicability(self) -> Applicability | None:
+        """What it applies to (:mod:`tmaplan.estimators.applicability`)."""
+        return APPLICABILITY.get(self.name)
+
     def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
                  observer: ObserverTrack, rng: np.random.Generator) -> Track:
         """Filter the run; NaN before the first estimate."""
@@ -246,7 +268,7 @@ class FilterEstimator:
                        dv: np.ndarray, rng: np.random.Generator) -> tuple[Any, int, Any]:
         """Particle cloud of the bearings-only initialisation, its batch end and details."""
         if not isinstance(self.filter, ParticleFilter):
-            raise ScenarioError("init", "'prior' for a filter other than the particle filter",
+            raise ArgumentError("init", "'prior' for a filter other than the particle filter",
                                 self.init)
         b = [m for m in meas if m.kind == "bearing"]
         steps, z = b[0].steps, b[0].values
@@ -280,6 +302,11 @@ class MLEEstimator:
     def applies_to(self) -> frozenset[str]:
         """Bearings (frequency lines are optional)."""
         return frozenset({"bearing"})
+
+    @property
+    def applicability(self) -> Applicability:
+        """What it applies to (:mod:`tmaplan.estimators.applicability`)."""
+        return APPLICABILITY["mle"]
 
     def estimate(self, scenario: Scenario, meas: Sequence[MeasurementSet], obs: ObserverTrack,
                  rng: np.random.Generator) -> Track:
@@ -326,20 +353,21 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
 
     Raises
     ------
-    ScenarioError
-        Unknown name, or a scenario without a sensor the estimator applies to.
+    ArgumentError
+        Unknown name (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the
+        estimator applies to).
     """
     qf = float(scenario.target.q if q is None else q)
     if isinstance(estimator, str):
         if estimator not in _NAMED:
-            raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
+            raise ArgumentError("estimator", f"one of {', '.join(ESTIMATORS)}", estimator)
         est = _NAMED[estimator](scenario, n_particles, qf, r_min, r_max)
     elif type(estimator) in _CONFIGURED:
         est = _CONFIGURED[type(estimator)](estimator)
     elif isinstance(estimator, Estimator):
         est = estimator
     else:
-        raise ScenarioError("estimator", f"one of {', '.join(ESTIMATORS)}, a configuration "
+        raise ArgumentError("estimator", f"one of {', '.join(ESTIMATORS)}, a configuration "
                             "or an Estimator", type(estimator).__name__)
     if not any(s.kind in est.applies_to for s in scenario.sensors):
         raise ScenarioError("sensors", f"a {' or '.join(sorted(est.applies_to))} sensor for "

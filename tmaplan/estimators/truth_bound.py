@@ -31,7 +31,8 @@ import numpy as np
 
 from tmaplan.bounds.inputs import information_rates, prepare
 from tmaplan.bounds.pcrb import PCRBResult, conditional_information
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
+from tmaplan.geometry import range_of
 from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import RangeSensor
@@ -83,7 +84,7 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
     K = scenario.n_steps
     R = X.shape[0]
     if X.shape[1] != K + 1:
-        raise ScenarioError("relative", f"{K + 1} steps (the grid of {scenario.name})",
+        raise ArgumentError("relative", f"{K + 1} steps (the grid of {scenario.name})",
                             f"{X.shape[1]} steps")
     F, Q = ncv_matrices(scenario.time.dt, scenario.target.q)
     P0 = prior_relative_moments(scenario)[1] if prior_cov is None else np.asarray(prior_cov)
@@ -105,7 +106,7 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
             J += w_r[:, k, None, None] * conditional_information(X[:, k], 0.0, 1.0)
         C = np.linalg.inv(J)
         cov[k] = C.mean(axis=0)
-        u = X[:, k, :2] / np.hypot(X[:, k, 0], X[:, k, 1])[:, None]
+        u = X[:, k, :2] / range_of(X[:, k])[:, None]
         rvar[k] = np.mean(np.einsum("ri,rij,rj->r", u, C[:, :2, :2], u))
     return cov, rvar
 
@@ -188,7 +189,7 @@ def truth_conditioned_pcrb(scenario: Scenario, *, samples: int, rng: np.random.G
     """
     t_start = time.perf_counter()
     if not isinstance(samples, int | np.integer) or samples < 2:
-        raise ScenarioError("samples", "an integer >= 2", samples, source=scenario.name)
+        raise ArgumentError("samples", "an integer >= 2", samples, source=scenario.name)
     inp = prepare(scenario, ping_steps=ping_steps, observer=observer, lpc=False)
     base = target_track(scenario.target, scenario.time, None)
     K = scenario.n_steps

@@ -28,6 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
@@ -68,6 +69,8 @@ class CampaignSpec:
         Relative range error that counts as localised.
     """
 
+    __repr__ = short_repr
+
     scenario: Scenario
     policies: tuple[str, ...]
     runs: int
@@ -85,10 +88,14 @@ class CampaignSpec:
     def _meta(self) -> dict[str, Any]:
         from tmaplan import __version__
 
-        return {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
+        meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
                 "format": FORMAT, "tmaplan_version": __version__}
+        if any(p.startswith("receding") for p in self.policies):
+            # runs stored before re-plans became real-time iterations are not reused
+            meta["replan"] = "rti"
+        return meta
 
 
 def resolve_policies(scenario: Scenario, specs: Sequence[str]) -> dict[str, Policy]:
@@ -173,6 +180,8 @@ class CampaignResult:
         Which runs were computed now and which were loaded from disk.
     seconds : float
     """
+
+    __repr__ = short_repr
 
     spec: CampaignSpec
     times: np.ndarray
@@ -260,6 +269,24 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
     return summary, tuple(diffs)
 
 
+_SHIPPED: dict[str, Any] = {}
+
+
+def _ship(spec: CampaignSpec, policies: Mapping[str, Policy]) -> None:
+    """Process-pool initializer: keep the campaign's shared inputs in the worker."""
+    _SHIPPED["args"] = (spec, policies)
+
+
+def _run_shipped(fn: Callable[..., RunRecord], run: int) -> RunRecord:
+    spec, policies = _SHIPPED["args"]
+    return fn(spec, policies, run)
+
+
+def _run_packed(fn: Callable[..., RunRecord], shared: tuple[CampaignSpec, Mapping[str, Policy]],
+                run: int) -> RunRecord:
+    return fn(shared[0], shared[1], run)
+
+
 def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
                   fn: Callable[..., RunRecord], spec: CampaignSpec,
                   policies: Mapping[str, Policy], todo: list[int]
@@ -268,8 +295,11 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
         for i in todo:
             yield i, fn(spec, policies, i)
     elif backend == "processes":
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as ex:
-            futs = {ex.submit(fn, spec, policies, i): i for i in todo}
+        # the spec and the resolved policies (offline plans, schedules, RTI models) are
+        # shipped to each worker once, by the pool's initializer, not with every run
+        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
+                                 initializer=_ship, initargs=(spec, policies)) as ex:
+            futs = {ex.submit(_run_shipped, fn, i): i for i in todo}
             for f in as_completed(futs):
                 yield futs[f], f.result()
     elif backend == "dask":
@@ -284,7 +314,9 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
         else:
             client = Client(scheduler)
         try:
-            dfuts = [client.submit(fn, spec, policies, i, pure=False,
+            # shipped once to every worker (broadcast), then referenced by each run
+            [shared] = client.scatter([(spec, policies)], broadcast=True)
+            dfuts = [client.submit(_run_packed, fn, shared, i, pure=False,
                                    key=f"run-{spec.key()}-{i}") for i in todo]
             index = {f.key: i for f, i in zip(dfuts, todo)}
             for df in d_as_completed(dfuts):
@@ -392,13 +424,13 @@ def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndar
     over their truths, tracks and pings
     (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.errors import ScenarioError
+    from tmaplan.errors import ArgumentError
     from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
 
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
                                             np.stack([r.target for r in runs]),
                                             [r.ping_steps for r in runs])
-    except (np.linalg.LinAlgError, ScenarioError):
+    except (np.linalg.LinAlgError, ArgumentError):
         pos = rng = np.full(scenario.n_steps + 1, np.nan)
     return {"bound_position": pos, "bound_range": rng}

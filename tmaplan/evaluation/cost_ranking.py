@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.policies import (
@@ -143,7 +144,7 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
     from tmaplan.policies.manoeuvres import offline_plan
 
     if int(n) < 3:
-        raise ScenarioError("candidates", ">= 3 (a rank correlation needs three)", n)
+        raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", n)
     fixed = [Candidate(name="straight", family="straight", policy=Straight()),
              Candidate(name="leg-turn-leg", family="tactic", policy=LegTurnLeg()),
              Candidate(name="lead-lag", family="tactic", policy=LeadLag())]
@@ -154,7 +155,7 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
         if len(fixed) >= n:
             break
         if obj not in OBJECTIVE_NAMES:
-            raise ScenarioError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
+            raise ArgumentError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
                                 obj)
         canon = make_objective(obj).name
         if canon in seen:
@@ -242,7 +243,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
     for name in OBJECTIVE_NAMES:
         try:
             ev = ObjectiveEvaluator(scenario, name, belief=belief)
-        except (PlanningError, ScenarioError, NotImplementedError) as exc:
+        except (PlanningError, ArgumentError, NotImplementedError) as exc:
             skipped[name] = str(exc)
             continue
         costs[name] = _objective_cost(ev)
@@ -377,7 +378,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
     fre = np.asarray(fre, float)
     C, R = tta.shape
     if C < 3:
-        raise ScenarioError("candidates", ">= 3 (a rank correlation needs three)", C)
+        raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", C)
     m_tta, m_fre = _metrics(tta, fre, censor)
     out = []
     for name, v in costs.items():
@@ -440,6 +441,8 @@ class CostRankingResult:
     campaign : CampaignResult
     seconds : float
     """
+
+    __repr__ = short_repr
 
     problem: str
     candidates: tuple[str, ...]
@@ -523,7 +526,7 @@ def rank_costs(scenario: Scenario, *, candidates: int | Sequence[Candidate] = 40
     else:
         cands, skipped = tuple(candidates), {}
     if len(cands) < 3:
-        raise ScenarioError("candidates", ">= 3 (a rank correlation needs three)", len(cands))
+        raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", len(cands))
     names = [c.name for c in cands]
     if len(set(names)) != len(names):
         raise PlanningError("candidate names must be unique")

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import stats
 
-from tmaplan.geometry import wrap_angle
+from tmaplan.geometry import course_speed, range_of, wrap_angle
 
 __all__ = [
     "PairedDifference",
@@ -111,16 +111,16 @@ def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
     -------
     RunMetrics
     """
-    pos_err = np.hypot(*(estimate[:, :2] - truth[:, :2]).T)
-    r_true = np.hypot(*truth[:, :2].T)
-    r_est = np.hypot(*estimate[:, :2].T)
+    pos_err = range_of(estimate[:, :2] - truth[:, :2])
+    r_true = range_of(truth)
+    r_est = range_of(estimate)
     rng_err = np.abs(r_est - r_true)
     rel = rng_err / r_true
     v_true = truth[:, 2:] + observer_velocity
     v_est = estimate[:, 2:] + observer_velocity
-    course_err = np.abs(wrap_angle(np.arctan2(v_est[:, 0], v_est[:, 1])
-                                   - np.arctan2(v_true[:, 0], v_true[:, 1])))
-    speed_err = np.abs(np.hypot(*v_est.T) - np.hypot(*v_true.T))
+    (c_est, s_est), (c_true, s_true) = course_speed(v_est), course_speed(v_true)
+    course_err = np.abs(wrap_angle(c_est - c_true))
+    speed_err = np.abs(s_est - s_true)
     finite = bool(np.all(np.isfinite(estimate)))
     return RunMetrics(
         position_error=pos_err, range_error=rng_err, rel_range_error=rel,

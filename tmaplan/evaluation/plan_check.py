@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference
 from tmaplan.policies import (
@@ -89,12 +89,12 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
         Grid point name -> mean censored time to accuracy [s].
     """
     if int(runs) < 1:
-        raise ScenarioError("runs", ">= 1", runs)
+        raise ArgumentError("runs", ">= 1", runs)
     t0, H = scenario.time.t0, scenario.time.horizon
     grid: dict[str, SingleTurn] = {}
     for f in fractions:
         if not 0.0 < float(f) < 1.0:
-            raise ScenarioError("fractions", "values in (0, 1)", f)
+            raise ArgumentError("fractions", "values in (0, 1)", f)
         for a in angles:
             for s in (1.0, -1.0):
                 grid[f"turn:{s * a:+g}deg@{f * H:g}s"] = SingleTurn(
@@ -136,9 +136,9 @@ def select_plan(scenario: Scenario, plans: Mapping[str, Any], *, runs: int = 24,
         Name -> mean censored time to accuracy [s].
     """
     if not plans:
-        raise ScenarioError("plans", "at least one plan", 0)
+        raise ArgumentError("plans", "at least one plan", 0)
     if int(runs) < 1:
-        raise ScenarioError("runs", ">= 1", runs)
+        raise ArgumentError("runs", ">= 1", runs)
     if len(plans) == 1:
         (name, plan), = plans.items()
         return name, plan, {}
@@ -200,7 +200,7 @@ def planned_differences(camp: CampaignResult, reference: str = "planned", *,
     interval of :func:`tmaplan.evaluation.metrics.paired_difference`.
     """
     if reference not in camp.policies:
-        raise ScenarioError("reference", f"one of {', '.join(camp.policies)}", reference)
+        raise ArgumentError("reference", f"one of {', '.join(camp.policies)}", reference)
     t = camp.times
     censor = float(t[-1] - t[0] + (t[1] - t[0]))
     tta: Mapping[str, Any] = {k: camp.summary[k]["time_to_accuracy_runs"]

@@ -19,12 +19,16 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
-from tmaplan.estimators.mle import MLEConfig, state_track, tma_data
+from tmaplan.bounds.batch_fim import fisher_information, tma_data, true_parameters
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError
+from tmaplan.estimators.applicability import check_applicable
+from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
 from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.geometry import range_of
 from tmaplan.simulate import simulate
 
 if TYPE_CHECKING:
@@ -50,30 +54,16 @@ def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -
 
 def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.ndarray]:
     """Position and range std of the batch CRLB at the truth, per step [m]."""
-    from tmaplan.estimators.mle import fisher_information
-
     sim = simulate(scenario, None)
     model = None if config.model == "auto" else config.model
     data = tma_data(scenario, sim.measurements, sim.observer, model=model,
                     frequencies=config.frequencies)
-    t = scenario.target
-    if data.model == "constant-turn":
-        geom = np.array([*t.centre, t.radius, t.phase, t.omega], float)
-    else:
-        # cv / multi-leg: truth = initial position and one velocity per leg
-        vel = [sim.target[0, 2:]] + [sim.target[np.searchsorted(scenario.times, s), 2:]
-                                     for s in data.leg_starts]
-        geom = np.concatenate([sim.target[0, :2], *vel])
-    f0 = []
-    if data.n_lines:
-        fs = next(s for s in scenario.sensors if s.kind == "frequency")
-        f0 = list(fs.f0[: data.n_lines])
-    p = np.concatenate([geom, f0])
+    p = true_parameters(scenario, data.track, data.n_lines)
     C = np.linalg.inv(fisher_information(data, p))
     S, Cs = state_track(data, p, C, scenario.times)
     assert Cs is not None
     rel = S[:, :2] - sim.observer.position
-    u = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
+    u = rel / range_of(rel)[:, None]
     return (np.sqrt(np.trace(Cs[:, :2, :2], axis1=1, axis2=2)),
             np.sqrt(np.einsum("ki,kij,kj->k", u, Cs[:, :2, :2], u)))
 
@@ -116,6 +106,8 @@ class MonteCarloResult:
         MLE: runs whose estimate has a statistically indistinguishable distinct alternative
         (:attr:`tmaplan.estimators.mle.MLEResult.alternatives`); 0 for the filters.
     """
+
+    __repr__ = short_repr
 
     problem: str
     estimator: str
@@ -169,7 +161,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         true trajectory with ``J_0 = P_0⁻¹`` (prior centred on the truth), averaged over the
         runs (ristic2004, ch. 6); "prior" is the PCRB averaged over trajectories
         drawn from the prior (optimistic before an unobservable geometry becomes observable).
-        The MLE always uses the CRLB at the truth.
+        The MLE always uses the CRLB at the truth ("prior" is refused for it).
     bound_samples : int
         Monte Carlo samples of the prior-averaged PCRB.
     progress : callable(done, total), optional
@@ -179,11 +171,18 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     Returns
     -------
     MonteCarloResult
+
+    Raises
+    ------
+    ScenarioError
+        An estimator / bound that cannot give a number on this scenario
+        (:func:`tmaplan.estimators.applicability.check_applicable`).
     """
     if runs < 1:
-        raise ScenarioError("runs", ">= 1", runs)
+        raise ArgumentError("runs", ">= 1", runs)
     est = estimator_for(estimator, scenario, n_particles=n_particles,
                         **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
+    check_applicable(est, scenario, bound=bound)
     t0 = _time.perf_counter()
     K = scenario.n_steps
     err_pos = np.full((runs, K + 1), np.nan)
@@ -201,9 +200,8 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         statuses.append(tr.status)
         ambiguous += bool(getattr(tr.details, "ambiguous", False))
         e = tr.estimates - sim.relative
-        err_pos[i] = np.hypot(e[:, 0], e[:, 1])
-        err_rng[i] = np.hypot(tr.estimates[:, 0], tr.estimates[:, 1]) - np.hypot(
-            sim.relative[:, 0], sim.relative[:, 1])
+        err_pos[i] = range_of(e)
+        err_rng[i] = range_of(tr.estimates) - range_of(sim.relative)
         with np.errstate(invalid="ignore"):
             try:
                 sol = np.linalg.solve(tr.covariances, e[..., None])[..., 0]
@@ -224,7 +222,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
         elif bound is True or bound == "truth":
             (b, br), kind = truth_bounds(scenario, truths), "truth"
         else:
-            raise ScenarioError("bound", "True, False, 'truth' or 'prior'", bound)
+            raise ArgumentError("bound", "True, False, 'truth' or 'prior'", bound)
     else:
         b = br = np.full(K + 1, np.nan)
     used = np.array([s not in ("rejected", "failed") for s in statuses])

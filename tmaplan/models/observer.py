@@ -14,7 +14,9 @@ import dataclasses
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from tmaplan.display import short_repr
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.target import initial_velocity
 
@@ -44,6 +46,8 @@ class ObserverTrack:
         [m/s].
     """
 
+    __repr__ = short_repr
+
     times: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
@@ -62,7 +66,7 @@ class ObserverTrack:
         return np.diff(self.mean_velocity, axis=0)
 
 
-def arc_displacement(heading: np.ndarray, turn_rate: np.ndarray, speed: np.ndarray,
+def arc_displacement(heading: ArrayLike, turn_rate: ArrayLike, speed: ArrayLike,
                      dt: float) -> np.ndarray:
     """Exact displacement over ``dt`` at constant speed and turn rate.
 
@@ -144,8 +148,8 @@ def observer_track(observer: Observer, grid: TimeGrid) -> ObserverTrack:
     ObserverTrack
     """
     v0 = initial_velocity(observer)
-    heading0, speed0 = course_speed(v0)
-    heading0, speed0 = float(heading0), float(speed0)
+    course0, spd0 = course_speed(v0)
+    heading0, speed0 = float(course0), float(spd0)
     p0 = np.asarray(observer.position, float)
     if observer.turn_rates:
         return turn_rate_track(p0, heading0, speed0, np.asarray(observer.turn_rates), grid.dt,
@@ -177,16 +181,15 @@ def observer_track(observer: Observer, grid: TimeGrid) -> ObserverTrack:
             psi = psi + delta
         else:
             duration = abs(delta) / float(leg.turn_rate)
-            rate = np.sign(delta) * float(leg.turn_rate)
+            rate = float(np.sign(delta)) * float(leg.turn_rate)
             segments.append((t, t + duration, psi, rate, spd))
             psi, t = psi + delta, t + duration
     segments.append((t, max(t, t_end_all) + grid.dt, psi, 0.0, spd))
 
     # positions at segment starts
     seg_pos = [p0]
-    for s0, s1, ps, r, sp in segments[:-1]:
-        seg_pos.append(seg_pos[-1] + arc_displacement(np.array(ps), np.array(r),
-                                                      np.array(sp), s1 - s0))
+    for s0, s1, psi0, r, v in segments[:-1]:
+        seg_pos.append(seg_pos[-1] + arc_displacement(psi0, r, v, s1 - s0))
     seg_pos_a = np.array(seg_pos)
     starts = np.array([seg[0] for seg in segments])
     idx = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(segments) - 1)

@@ -15,7 +15,7 @@ from scipy import stats
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
-from tmaplan.models.target import constant_turn_state, initial_velocity
+from tmaplan.models.target import circle_state, initial_velocity
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Prior, Scenario
@@ -28,8 +28,7 @@ def true_initial_state(scenario: Scenario) -> np.ndarray:
     """Absolute true target state at t0, shape (4,) [m, m, m/s, m/s]."""
     t = scenario.target
     if t.model == "constant-turn":
-        return constant_turn_state(t.centre, t.radius, t.phase, t.omega,
-                                   np.array([scenario.time.t0]))[0]
+        return circle_state(t, np.array([scenario.time.t0]))[0]
     return np.concatenate([np.asarray(t.position, float), initial_velocity(t)])
 
 

@@ -8,13 +8,17 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from tmaplan.errors import ScenarioError
 from tmaplan.geometry import velocity_from_course
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Target, TimeGrid
 
 __all__ = [
+    "circle_parameters",
+    "circle_state",
     "constant_turn_state",
     "initial_velocity",
     "ncv_matrices",
@@ -47,7 +51,7 @@ def ncv_matrices(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def constant_turn_state(
-    centre: np.ndarray, radius: float, phase: float, omega: float, t: np.ndarray
+    centre: ArrayLike, radius: ArrayLike, phase: ArrayLike, omega: ArrayLike, t: ArrayLike
 ) -> np.ndarray:
     """Position and velocity of clavard2013's constant-turn source.
 
@@ -72,22 +76,37 @@ def constant_turn_state(
     ndarray, shape (..., n, 4)
         ``[x, y, v_x, v_y]`` per time.
     """
-    t = np.asarray(t, dtype=float)
-    centre = np.asarray(centre, dtype=float)
-    radius = np.asarray(radius, dtype=float)[..., None]
-    omega = np.asarray(omega, dtype=float)[..., None]
-    u = omega * t + np.asarray(phase, dtype=float)[..., None]
+    tt = np.asarray(t, dtype=float)
+    ctr = np.asarray(centre, dtype=float)
+    rho = np.asarray(radius, dtype=float)[..., None]
+    w = np.asarray(omega, dtype=float)[..., None]
+    u = w * tt + np.asarray(phase, dtype=float)[..., None]
     s, c = np.sin(u), np.cos(u)
     out = np.stack(
         [
-            centre[..., 0, None] + radius * s,
-            centre[..., 1, None] + radius * c,
-            radius * omega * c,
-            -radius * omega * s,
+            ctr[..., 0, None] + rho * s,
+            ctr[..., 1, None] + rho * c,
+            rho * w * c,
+            -rho * w * s,
         ],
         axis=-1,
     )
     return out
+
+
+def circle_parameters(target: Target) -> tuple[float, float, float, float, float]:
+    """``(x_C, y_C, ρ_C, φ, ω)`` [m, m, m, rad, rad/s] of a constant-turn target."""
+    c, r, phi, w = target.centre, target.radius, target.phase, target.omega
+    if c is None or r is None or phi is None or w is None:
+        raise ScenarioError("target", "centre, radius, phase and omega (constant-turn model)",
+                            "a missing one")
+    return float(c[0]), float(c[1]), float(r), float(phi), float(w)
+
+
+def circle_state(target: Target, t: ArrayLike) -> np.ndarray:
+    """:func:`constant_turn_state` of a constant-turn :class:`~tmaplan.scenario.Target`."""
+    cx, cy, r, phi, w = circle_parameters(target)
+    return constant_turn_state((cx, cy), r, phi, w, t)
 
 
 def initial_velocity(obj: object) -> np.ndarray:
@@ -155,8 +174,7 @@ def target_track(target: Target, grid: TimeGrid, rng: np.random.Generator | None
     """
     times = grid.times
     if target.model == "constant-turn":
-        return constant_turn_state(target.centre, target.radius, target.phase, target.omega,
-                                   times)
+        return circle_state(target, times)
     p0 = np.asarray(target.position, float)
     v0 = initial_velocity(target)
     if target.model == "multi-leg":

@@ -33,7 +33,7 @@ from typing import Literal
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import range_of
 
 __all__ = [
@@ -201,7 +201,7 @@ def multi_leg_model(change_times: Sequence[float], t_ref: float = 0.0) -> TrackM
     """
     ct = tuple(float(x) for x in change_times)
     if any(b <= a for a, b in itertools.pairwise(ct)) or not np.all(np.isfinite(ct)):
-        raise ScenarioError("change_times", "finite, strictly increasing times [s]", ct)
+        raise ArgumentError("change_times", "finite, strictly increasing times [s]", ct)
     names = ["x", "y"]
     for j in range(len(ct) + 1):
         names += [f"vx[{j}]", f"vy[{j}]"]

@@ -1,7 +1,8 @@
 """Observer planning: heading OCP (casadi), active-ping scheduling, joint plans, baselines.
 
 See :mod:`tmaplan.planning.heading`, :mod:`tmaplan.planning.pings`,
-:mod:`tmaplan.planning.joint`, :mod:`tmaplan.planning.baselines`,
+:mod:`tmaplan.planning.joint`, :mod:`tmaplan.planning.joint_ocp`,
+:mod:`tmaplan.planning.baselines`,
 :mod:`tmaplan.planning.objectives` and :mod:`tmaplan.planning.belief`.
 """
 
@@ -20,6 +21,7 @@ from tmaplan.planning.baselines import (
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner, plan_heading
 from tmaplan.planning.joint import JointPlan, plan_joint
+from tmaplan.planning.joint_ocp import JointOCPResult, plan_joint_ocp
 from tmaplan.planning.objectives import (
     OBJECTIVE_NAMES,
     PING_OBJECTIVES,
@@ -47,6 +49,7 @@ __all__ = [
     "Belief",
     "HeadingPlan",
     "HeadingPlanner",
+    "JointOCPResult",
     "JointPlan",
     "Objective",
     "ObjectiveEvaluator",
@@ -60,6 +63,7 @@ __all__ = [
     "ping_candidates",
     "plan_heading",
     "plan_joint",
+    "plan_joint_ocp",
     "position_bound",
     "range_bound",
     "schedule_pings",

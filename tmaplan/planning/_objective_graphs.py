@@ -33,7 +33,7 @@ from tmaplan.bounds.closed_form_engine import (
     pack_symmetric,
 )
 from tmaplan.bounds.fimdet import fim_bearings_generic, inverse_quadratic_generic, logdet_generic
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError
 from tmaplan.scenario import RangeSensor
 
 if TYPE_CHECKING:
@@ -91,7 +91,7 @@ class ParamLayout:
         ping = np.zeros(K1) if ping is None else np.asarray(ping, float)
         bearing = np.asarray(bearing, float)
         if bearing.shape != (K1,) or ping.shape != (K1,):
-            raise ScenarioError("bearing/ping", f"shape ({K1},)", (bearing.shape, ping.shape))
+            raise ArgumentError("bearing/ping", f"shape ({K1},)", (bearing.shape, ping.shape))
         return np.concatenate([x0, pack_symmetric(belief.lpc_information()),
                                pack_symmetric(belief.cartesian_information()), smp, bearing,
                                ping])

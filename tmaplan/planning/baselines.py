@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
@@ -60,6 +61,8 @@ class Baseline:
         [m].
     track : ObserverTrack
     """
+
+    __repr__ = short_repr
 
     name: str
     params: dict[str, float]
@@ -174,7 +177,7 @@ def evaluate_baselines(scenario: Scenario, objective: str | Objective = "range-b
     ev = evaluator or ObjectiveEvaluator(scenario, objective, n_steps=n_steps, belief=belief)
     K = ev.n_steps
     H = K * scenario.time.dt
-    kw = {"n_steps": K, "heading0": heading0, "speed": speed}
+    kw: dict[str, Any] = {"n_steps": K, "heading0": heading0, "speed": speed}
     out: dict[str, list[Baseline]] = {"straight": [], "single-turn": [], "zigzag": []}
 
     def add(name: str, params: dict[str, float], track: ObserverTrack) -> None:
@@ -306,7 +309,7 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
                                                        "max_iter": 500}})
     results = []
     for x0 in starts:
-        kw = {"x0": x0, "lbx": lbx, "ubx": ubx}
+        kw: dict[str, Any] = {"x0": x0, "lbx": lbx, "ubx": ubx}
         if switch == "free":
             kw.update(lbg=0.0, ubg=0.0)
         sol = solver(**kw)

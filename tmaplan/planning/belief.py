@@ -22,7 +22,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.bounds.inputs import lpc_prior_information
+from tmaplan.display import short_repr
 from tmaplan.errors import ObservabilityError, PlanningError
+from tmaplan.geometry import range_of
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -52,6 +54,8 @@ class Belief:
     t : float
         Time of the belief [s].
     """
+
+    __repr__ = short_repr
 
     mean: np.ndarray
     cov: np.ndarray
@@ -185,7 +189,7 @@ class Belief:
             X = np.random.default_rng(7).multivariate_normal(self.mean, self.cov,
                                                              size=_GAUSS_SAMPLES)
             w = None
-        keep = np.hypot(X[:, 0], X[:, 1]) > MIN_RANGE
+        keep = range_of(X) > MIN_RANGE
         X = X[keep]
         if w is not None:
             w = w[keep]
@@ -204,7 +208,7 @@ class Belief:
 
     def mean_range(self) -> float:
         """Range of the mean relative position [m]."""
-        return float(np.hypot(self.mean[0], self.mean[1]))
+        return float(range_of(self.mean))
 
 
 def _check_cov(cov: np.ndarray) -> None:

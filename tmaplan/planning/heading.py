@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
@@ -113,7 +114,12 @@ class HeadingPlan:
     seconds : float
         Wall time of the solve [s].
     message : str
+    solver : str
+        What produced the plan: ``"ipopt"``, or ``"rti-qrqp"`` / ``"rti-osqp"`` for a
+        real-time iteration step (:mod:`tmaplan.planning.rti`).
     """
+
+    __repr__ = short_repr
 
     times: np.ndarray
     heading: np.ndarray
@@ -129,6 +135,7 @@ class HeadingPlan:
     iterations: int
     seconds: float
     message: str = ""
+    solver: str = "ipopt"
     warm: dict[str, Any] | None = dataclasses.field(default=None, repr=False, compare=False)
 
 
@@ -326,9 +333,10 @@ class HeadingPlanner:
 
         key = "warm" if warm else "cold"
         if key not in self._solvers:
-            ipopt = {"print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
-                     "acceptable_tol": 1e-5, "hessian_approximation": "limited-memory",
-                     "limited_memory_max_history": 20}
+            ipopt: dict[str, Any] = {
+                "print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
+                "acceptable_tol": 1e-5, "hessian_approximation": "limited-memory",
+                "limited_memory_max_history": 20}
             if warm:
                 ipopt.update({"warm_start_init_point": "yes", "warm_start_bound_push": 1e-6,
                               "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-4})
@@ -440,21 +448,9 @@ class HeadingPlanner:
             IPOPT did not converge from any start.
         """
         t_start = time.perf_counter()
-        obs = self.scenario.observer
-        if heading0 is None:
-            heading0 = float(course_speed(initial_velocity(obs))[0])
-        speed0 = self.speed0 if speed0 is None else float(speed0)
-        p0 = np.asarray(obs.position if position0 is None else position0, float)
+        heading0, speed0, p0 = self._start_state(heading0, speed0, position0)
         self._precheck(belief, heading0, speed0)
-        ping = np.zeros(self.K + 1)
-        st = np.asarray(list(ping_steps), int)
-        if st.size:
-            if self._ping_scale == 0.0:
-                raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
-                                    "has no range sensor")
-            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
-        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
-        pvec = self.layout.vector(belief, bearing, ping)
+        pvec = self._parameters(belief, ping_steps)
         lbw, ubw, lbg, ubg = self._bounds(heading0)
         guesses: list[tuple[np.ndarray, float]]
         duals: dict[str, Any] | None
@@ -512,10 +508,32 @@ class HeadingPlanner:
         x = np.asarray(sol["x"]).reshape(-1)
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,
-                "shape": (self.transcription, self.n, self.n_arcs)}
+                "shape": (self.transcription, self.n, self.n_arcs), "scale": scale}
         return self._make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
                                belief.t, p0, speed0, status, success, iters, seconds, warm,
                                ", ".join(statuses))
+
+    def _start_state(self, heading0: float | None, speed0: float | None,
+                     position0: np.ndarray | None) -> tuple[float, float, np.ndarray]:
+        """(heading [rad], speed [m/s], position [m]) with the scenario's defaults."""
+        obs = self.scenario.observer
+        if heading0 is None:
+            heading0 = float(course_speed(initial_velocity(obs))[0])
+        speed0 = self.speed0 if speed0 is None else float(speed0)
+        p0 = np.asarray(obs.position if position0 is None else position0, float)
+        return float(heading0), speed0, p0
+
+    def _parameters(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
+        """The objective's parameter vector (:class:`ParamLayout`) for a belief and pings."""
+        ping = np.zeros(self.K + 1)
+        st = np.asarray(list(ping_steps), int)
+        if st.size:
+            if self._ping_scale == 0.0:
+                raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
+                                    "has no range sensor")
+            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
+        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
+        return self.layout.vector(belief, bearing, ping)
 
     def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
         if self.keep_out <= 0:

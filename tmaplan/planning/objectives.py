@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 import numpy as np
 
 from tmaplan.bounds.inputs import information_rates
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.models.target import ncv_matrices
 
 # The parameter layout, the plan context and the shared casadi graphs live in their own
@@ -145,7 +145,7 @@ def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanCon
     """Objective of a per-step quantity (K+1, n) averaged over its n columns, at the last step
     (``reduce="terminal"``, named ``names[0]``) or averaged over the steps ("mean")."""
     if reduce not in ("terminal", "mean"):
-        raise ScenarioError("reduce", "'terminal' or 'mean'", reduce)
+        raise ArgumentError("reduce", "'terminal' or 'mean'", reduce)
 
     def term(ctx: PlanContext) -> Any:
         import casadi as ca
@@ -182,7 +182,7 @@ def relative_range_crlb(reduce: str = "mean", samples: int = 16) -> Objective:
     over ``samples`` belief samples and (``reduce="mean"``) over the horizon, which rewards
     localising early; ``"terminal"``: at the last step (dimensionless, minimised)."""
     if int(samples) < 1:
-        raise ScenarioError("samples", ">= 1", samples)
+        raise ArgumentError("samples", ">= 1", samples)
     return _over_steps(reduce, ("relative-range-crlb", "mean-relative-range-crlb"),
                        relative_range_crlb_graph, int(samples))
 
@@ -196,7 +196,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
     until the relative range bound crosses τ, made differentiable (dimensionless, minimised).
     """
     if not 0 < accuracy < 1:
-        raise ScenarioError("accuracy", "in (0, 1)", accuracy)
+        raise ArgumentError("accuracy", "in (0, 1)", accuracy)
     tau = 0.5 * float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
@@ -230,11 +230,11 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
     draws predicts 19.6 min on them and 21.3 min on 400 fresh draws (README).
     """
     if not 0 < accuracy < 1:
-        raise ScenarioError("accuracy", "in (0, 1)", accuracy)
+        raise ArgumentError("accuracy", "in (0, 1)", accuracy)
     if int(samples) < 1:
-        raise ScenarioError("samples", ">= 1", samples)
+        raise ArgumentError("samples", ">= 1", samples)
     if not width > 0:
-        raise ScenarioError("width", "> 0", width)
+        raise ArgumentError("width", "> 0", width)
     tau = float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
@@ -272,7 +272,7 @@ def logdet(samples: int = 1) -> Objective:
         1: at the belief mean; n > 1: averaged over n deterministic belief samples.
     """
     if int(samples) < 1:
-        raise ScenarioError("samples", ">= 1", samples)
+        raise ArgumentError("samples", ">= 1", samples)
     return Objective("logdet", ((-1.0, logdet_graph),), int(samples))
 
 
@@ -307,7 +307,7 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "expected-time-to-accuracy": lambda: expected_time_to_accuracy(0.1, max(samples, 128)),
     }
     if name not in OBJECTIVE_NAMES:
-        raise ScenarioError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)
+        raise ArgumentError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)
     return table[name]()
 
 

@@ -206,7 +206,7 @@ def _expand(tree: _Tree, budget: int, steps: list[tuple[int, ...]], p: np.ndarra
         # last ping left: buffer by last-ping step for the block-dominance bound
         lb = C + tree.tail_all[p]
         keep = lb < state["best"] * (1 - 1e-12)
-        for i in np.flatnonzero(keep):
+        for i in np.flatnonzero(keep).tolist():
             state["buffer"].setdefault(int(p[i]), []).append((steps[i], M[i], float(C[i])))
         state["buffered"] += int(keep.sum())
         if state["buffered"] > MAX_BUFFER:  # bounded memory: flush (smaller blocks, same bound)

@@ -54,7 +54,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -246,7 +246,7 @@ class Relaxation:
         scale = float(ev.evaluate(np.zeros((1, K + 1)))[0])
         self.scale = scale if np.isfinite(scale) and scale > 0 else 1.0
         self.problem = cp.Problem(cp.Minimize(cp.sum(cp.hstack(terms)) / self.scale), cons)
-        assert self.problem.is_dcp(dpp=True)
+        assert cast(Any, self.problem).is_dcp(dpp=True)  # cvxpy's decorator hides `dpp`
         self.build_seconds = time.perf_counter() - t0
         self._results: dict[float, RelaxationResult] = {}
 

@@ -30,7 +30,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.models.observer import ObserverTrack, observer_track
 
 # The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
@@ -107,6 +108,8 @@ class PingSchedule:
         Optimal weights of the relaxation (empty when it was not solved).
     """
 
+    __repr__ = short_repr
+
     steps: np.ndarray
     times: np.ndarray
     objective: float
@@ -145,7 +148,7 @@ class PingEvaluator:
     def __init__(self, scenario: Scenario, observer: ObserverTrack, belief: Belief,
                  objective: str = "mean-range-bound") -> None:
         if objective not in PING_OBJECTIVES:
-            raise ScenarioError("objective", f"one of {', '.join(PING_OBJECTIVES)}", objective)
+            raise ArgumentError("objective", f"one of {', '.join(PING_OBJECTIVES)}", objective)
         self.objective = objective
         sig = ping_sigma(scenario)
         if sig is None:
@@ -275,6 +278,7 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     uniform = float(ev.value(uni))
     lb, ref, bound_s = float("nan"), "none", 0.0
     u_rel = np.zeros(0)
+    steps: list[int]
     if budget == 0:
         steps, val, lb, ref = [], no_ping, no_ping, "enumeration"
     else:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import numpy as np
 
 from tmaplan.errors import ScenarioError
-from tmaplan.geometry import wrap_angle
+from tmaplan.geometry import course_speed, range_of, wrap_angle
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -88,9 +88,9 @@ class BeliefView:
 
     def range_stats(self) -> tuple[float, float]:
         """Posterior mean and std of the range [m]."""
-        r = np.hypot(self.particles[:, 0], self.particles[:, 1])
+        r = range_of(self.particles)
         m = float(self.weights @ r)
-        return m, float(np.sqrt(max(self.weights @ (r - m) ** 2, 0.0)))
+        return m, float(np.sqrt(max(float(self.weights @ (r - m) ** 2), 0.0)))
 
 
 @runtime_checkable
@@ -144,6 +144,6 @@ def _initial_course(scenario: Scenario) -> float:
     from tmaplan.models.target import initial_velocity
 
     v = initial_velocity(scenario.observer)
-    return float(np.arctan2(v[0], v[1]))
+    return float(course_speed(v)[0])
 
 

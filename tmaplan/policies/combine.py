@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from tmaplan.errors import PlanningError
@@ -35,7 +36,8 @@ from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["Combined", "best_single_turn", "best_zigzag", "parse_policy"]
+__all__ = ["MANOEUVRES", "PINGS", "Combined", "best_single_turn", "best_zigzag",
+           "parse_policy"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -62,11 +64,14 @@ class Combined:
 
     def resolve(self, scenario: Scenario) -> Combined:
         """The same policy with its offline parts computed (the heading plan of
-        :class:`Planned`, the schedule of :class:`ScheduledPings` along the track the manoeuvre
-        nominally flies), so that the controllers of all runs share them."""
+        :class:`Planned`, the real-time iteration model of :class:`Receding`, the schedule of
+        :class:`ScheduledPings` along the track the manoeuvre nominally flies), so that the
+        controllers of all runs share them."""
         man, ping = self.manoeuvre, self.ping
         if isinstance(man, Planned) and man.plan is None:
             man = dataclasses.replace(man, plan=offline_plan(scenario, man.objective))
+        if isinstance(man, Receding):
+            man = man.resolve(scenario)
         if isinstance(ping, ScheduledPings) and ping.steps is None:
             steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
                                       ping.objective, man.nominal_track(scenario))
@@ -114,21 +119,38 @@ def best_zigzag(scenario: Scenario) -> Zigzag:
                   start=scenario.time.t0)
 
 
-_TACTICS: dict[str, type[LegTurnLeg] | type[LeadLag]] = {"leg-turn-leg": LegTurnLeg,
-                                                         "lead-lag": LeadLag}
-_MANOEUVRES = {"straight", "single-turn", "zigzag", "planned", "receding", "leg-turn-leg",
-               "lead-lag"}
-_PINGS = {"no-ping", "uniform", "scheduled", "scheduled-terminal", "adaptive"}
+#: The manoeuvre policies by CLI name (``compare --policies MANOEUVRE[+PING]``): a new
+#: manoeuvre policy is named here.
+MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
+    "straight": lambda sc: Straight(),
+    "single-turn": best_single_turn,
+    "zigzag": best_zigzag,
+    "planned": lambda sc: Planned(),
+    "receding": lambda sc: Receding(),
+    "receding-rti": lambda sc: Receding(full_every=0, name="receding-rti"),
+    "leg-turn-leg": lambda sc: LegTurnLeg(),
+    "lead-lag": lambda sc: LeadLag(),
+}
+#: The ping policies by CLI name: a new ping policy is named here.
+PINGS: dict[str, Callable[[], Policy]] = {
+    "no-ping": NoPing,
+    "uniform": UniformPings,
+    "scheduled": ScheduledPings,
+    "scheduled-terminal": lambda: ScheduledPings(objective="terminal-range-bound",
+                                                 name="scheduled-terminal"),
+    "adaptive": AdaptivePings,
+}
 
 
 def parse_policy(spec: str, scenario: Scenario) -> Combined:
     """Policy from a CLI name: ``manoeuvre[+ping]``, e.g. ``receding+scheduled``.
 
-    Manoeuvres: straight, single-turn and zigzag (the best of the baseline grids of
-    :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`), planned,
-    receding. Pings: no-ping, uniform, scheduled (offline schedule minimising the mean range
-    bound over the horizon), scheduled-terminal (minimising the terminal range bound),
-    adaptive.
+    Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
+    baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
+    planned, receding, receding-rti (real-time-iteration steps only, no periodic IPOPT
+    solve), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    scheduled (offline schedule minimising the mean range bound over the horizon),
+    scheduled-terminal (minimising the terminal range bound), adaptive.
 
     Raises
     ------
@@ -136,30 +158,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         For an unknown name (the message lists the valid ones).
     """
     parts = spec.strip().split("+")
-    if len(parts) > 2 or parts[0] not in _MANOEUVRES or (len(parts) == 2
-                                                         and parts[1] not in _PINGS):
+    if len(parts) > 2 or parts[0] not in MANOEUVRES or (len(parts) == 2
+                                                        and parts[1] not in PINGS):
         raise PlanningError(f"unknown policy {spec!r}: expected MANOEUVRE[+PING] with MANOEUVRE "
-                            f"in {sorted(_MANOEUVRES)} and PING in {sorted(_PINGS)}")
-    name = parts[0]
-    if name == "straight":
-        man: ManoeuvrePolicy = Straight()
-    elif name == "single-turn":
-        man = best_single_turn(scenario)
-    elif name == "zigzag":
-        man = best_zigzag(scenario)
-    elif name == "planned":
-        man = Planned()
-    elif name in _TACTICS:
-        man = _TACTICS[name]()
-    else:
-        man = Receding()
-    ping: Policy = NoPing()
-    if len(parts) == 2:
-        pings: dict[str, Policy] = {
-            "no-ping": NoPing(), "uniform": UniformPings(), "scheduled": ScheduledPings(),
-            "scheduled-terminal": ScheduledPings(objective="terminal-range-bound",
-                                                 name="scheduled-terminal"),
-            "adaptive": AdaptivePings()}
-        ping = pings[parts[1]]
-    return Combined(manoeuvre=man, ping=ping)
-
+                            f"in {sorted(MANOEUVRES)} and PING in {sorted(PINGS)}")
+    ping = PINGS[parts[1]]() if len(parts) == 2 else NoPing()
+    return Combined(manoeuvre=MANOEUVRES[parts[0]](scenario), ping=ping)

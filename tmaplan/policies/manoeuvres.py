@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -89,7 +89,7 @@ class Zigzag:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the zig-zag course schedule."""
         if not self.leg_duration > 0:
-            raise ScenarioError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+            raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
         end = scenario.time.t0 + scenario.time.horizon
@@ -200,17 +200,45 @@ class Receding:
         Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
     max_particles : int
         Particles passed to the planner as belief samples (a systematic subsample).
+    real_time : bool
+        Re-plan by one warm-started SQP step (:class:`tmaplan.planning.rti.RealTimeIteration`,
+        milliseconds) from the previous plan, the first one from the offline plan from the
+        prior, with a full IPOPT solve as the fallback; False: a full IPOPT solve at every
+        re-plan (the first one cold, from the filter's belief).
+    qpsol : str
+        QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
+    rti_steps : int
+        SQP steps per re-plan of the real-time iteration.
+    full_every : int
+        With ``real_time``: every ``full_every``-th re-plan (the first included) is a full
+        IPOPT solve warm-started from the previous plan (the first from the offline plan), the
+        others are real-time iteration steps; 0: real-time iteration steps only.
+    rti : RTIModel, optional
+        The offline plan and the Hessian model of the real-time iteration
+        (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
+        (:meth:`resolve` computes it once per campaign, so that workers receive it).
     """
 
     replan_interval: float | None = None
     horizon: float | None = None
     objective: str | None = CLOSED_LOOP_OBJECTIVE
     max_particles: int = 2000
+    real_time: bool = True
+    qpsol: str = "daqp"
+    rti_steps: int = 1
+    full_every: int = 3
+    rti: Any = dataclasses.field(default=None, compare=False, repr=False)
     name: str = "receding"
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller owning a planner built once for the whole run."""
         return _RecedingController(self, scenario)
+
+    def resolve(self, scenario: Scenario) -> Receding:
+        """The same policy with the real-time iteration's model computed (once per campaign)."""
+        if not self.real_time or self.rti is not None:
+            return self
+        return dataclasses.replace(self, rti=_rti_model(scenario, self.objective, self.horizon))
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The offline plan from the prior: the receding controller's first plan."""
@@ -234,6 +262,37 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -
     return _PLANNER_CACHE[key]
 
 
+_RTI_MODEL_CACHE: dict[tuple[Scenario, str | None, float | None], Any] = {}
+_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, str, int], Any] = {}
+
+
+def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
+    """The real-time iteration's model at the offline plan from the prior (cached)."""
+    key = (scenario, objective, horizon)
+    if key not in _RTI_MODEL_CACHE:
+        from tmaplan.planning import Belief
+        from tmaplan.planning.rti import reference_model
+
+        planner = _planner(scenario, objective, horizon)
+        prior = Belief.from_prior(scenario)
+        plan = offline_plan(scenario, objective) if horizon is None else planner.solve(prior)
+        _RTI_MODEL_CACHE[key] = reference_model(planner, plan, prior)
+    return _RTI_MODEL_CACHE[key]
+
+
+def _rti(policy: Receding, scenario: Scenario) -> Any:
+    """The policy's real-time iteration (casadi functions built once per process)."""
+    from tmaplan.planning.rti import RealTimeIteration
+
+    model = policy.rti if policy.rti is not None else _rti_model(scenario, policy.objective,
+                                                                 policy.horizon)
+    key = (scenario, policy.objective, policy.horizon, policy.qpsol, policy.rti_steps)
+    if key not in _RTI_CACHE:
+        _RTI_CACHE[key] = RealTimeIteration(_planner(scenario, policy.objective, policy.horizon),
+                                            model, qpsol=policy.qpsol, steps=policy.rti_steps)
+    return _RTI_CACHE[key].with_model(model)
+
+
 class _RecedingController:
     def __init__(self, policy: Receding, scenario: Scenario) -> None:
         pl = scenario.planning
@@ -245,6 +304,7 @@ class _RecedingController:
         self.policy = policy
         self.scenario = scenario
         self.planner = _planner(scenario, policy.objective, policy.horizon)
+        self.rti = _rti(policy, scenario) if policy.real_time else None
         self.u_max, self.dt = _turn_limits(scenario)
         self.plan: Any = None
         self.playback: _TurnRatePlayback | None = None
@@ -266,9 +326,17 @@ class _RecedingController:
         b = Belief.from_samples(belief.particles[idx], t=t)
         entry: dict[str, Any] = {"t": t}
         try:
-            plan = self.planner.solve(b, heading0=belief.heading, position0=belief.position,
-                                      warm_start=self.plan)
-            entry.update(status=plan.status, success=True)
+            n_full = self.policy.full_every
+            if self.rti is not None and n_full > 0 and len(self.log) % n_full == 0:
+                plan = self.planner.solve(b, heading0=belief.heading, position0=belief.position,
+                                          warm_start=self.plan or self.rti.model.plan)
+            elif self.rti is not None:
+                plan = self.rti.solve(b, previous=self.plan, heading0=belief.heading,
+                                      position0=belief.position)
+            else:
+                plan = self.planner.solve(b, heading0=belief.heading,
+                                          position0=belief.position, warm_start=self.plan)
+            entry.update(status=plan.status, success=True, solver=plan.solver)
             self.plan = plan
             self.playback = _TurnRatePlayback(plan, self.scenario)
         except PlanningError as exc:  # keep flying the previous plan

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from tmaplan.policies._base import Action, BeliefView, Controller
 
 if TYPE_CHECKING:
+    from tmaplan.planning.objectives import PingObjectiveName
     from tmaplan.scenario import Scenario
 
 __all__ = ["AdaptivePings", "NoPing", "ScheduledPings", "UniformPings"]
@@ -55,8 +56,8 @@ class ScheduledPings:
     """Ping at the steps of an offline schedule (``tmaplan.planning.schedule_pings``)."""
 
     budget: int | None = None
-    method: str = "relaxed"
-    objective: str = "mean-range-bound"
+    method: Literal["exact", "relaxed", "greedy"] = "relaxed"
+    objective: PingObjectiveName = "mean-range-bound"
     steps: tuple[int, ...] | None = None
     name: str = "scheduled"
 
@@ -72,13 +73,13 @@ class ScheduledPings:
 _SCHEDULE_CACHE: dict[tuple[Any, ...], np.ndarray] = {}
 
 
-def _offline_schedule(scenario: Scenario, budget: int, method: str, objective: str,
+def _offline_schedule(scenario: Scenario, budget: int,
+                      method: Literal["exact", "relaxed", "greedy"],
+                      objective: PingObjectiveName,
                       track: Any = None) -> np.ndarray:
     """Offline ping schedule from the prior along ``track`` (default: the scripted track)."""
-    from tmaplan.scenario import dump
-
     tkey = None if track is None else np.asarray(track.position).tobytes()
-    key = (dump(scenario), budget, method, objective, tkey)
+    key = (scenario, budget, method, objective, tkey)  # a frozen Scenario hashes its fields
     if key not in _SCHEDULE_CACHE:
         from tmaplan.planning import schedule_pings
 

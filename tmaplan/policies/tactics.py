@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
-from tmaplan.geometry import wrap_angle
+from tmaplan.errors import ArgumentError
+from tmaplan.geometry import bearing_of, wrap_angle
 from tmaplan.policies._base import (
     Action,
     BeliefView,
@@ -110,7 +110,7 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
     ``β = atan2(r_x, r_y)``), both in the relative state ``[r_x, r_y, v_x, v_y]``.
     """
     p, w = belief.particles, belief.weights
-    b = np.arctan2(p[:, 0], p[:, 1])
+    b = bearing_of(p)
     beta = float(np.arctan2(w @ np.sin(b), w @ np.cos(b)))
     r2 = np.maximum(p[:, 0] ** 2 + p[:, 1] ** 2, 1.0)
     rate = float(w @ ((p[:, 1] * p[:, 2] - p[:, 0] * p[:, 3]) / r2))
@@ -124,7 +124,7 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
 
 def _check_angle(field: str, value: float) -> float:
     if not (np.isfinite(value) and 0.0 < value < np.pi):
-        raise ScenarioError(field, "an angle in (0, 180) deg", value)
+        raise ArgumentError(field, "an angle in (0, 180) deg", value)
     return float(value)
 
 
@@ -133,7 +133,7 @@ def _check_time(field: str, value: float | None, scenario: Scenario, default: fl
     t0, H = scenario.time.t0, scenario.time.horizon
     v = default * H if value is None else float(value)
     if not (np.isfinite(v) and 0.0 < v < H):
-        raise ScenarioError(field, f"a time after t0 in (0, {H:g}) s", value)
+        raise ArgumentError(field, f"a time after t0 in (0, {H:g}) s", value)
     return t0 + v
 
 
@@ -149,7 +149,7 @@ def _prior_line_of_sight(scenario: Scenario, t: float, track: ObserverTrack
     rel = m[:2] + vt * (t - scenario.time.t0) - (track.position[k] - track.position[0])
     v = vt - track.velocity[k]
     r2 = max(float(rel @ rel), 1.0)
-    return float(np.arctan2(rel[0], rel[1])), float((rel[1] * v[0] - rel[0] * v[1]) / r2)
+    return float(bearing_of(rel)), float((rel[1] * v[0] - rel[0] * v[1]) / r2)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -254,7 +254,7 @@ class LeadLag:
         t_lag = _check_time("lead-lag.lag_time", self.lag_time, scenario, 0.5)
         t0 = scenario.time.t0
         if not (np.isfinite(self.lead_time) and 0.0 <= self.lead_time < t_lag - t0):
-            raise ScenarioError("lead-lag.lead_time", f"a time after t0 in [0, {t_lag - t0:g}) s"
+            raise ArgumentError("lead-lag.lead_time", f"a time after t0 in [0, {t_lag - t0:g}) s"
                                 " (before the lag leg)", self.lead_time)
         return t0 + float(self.lead_time), t_lag
 

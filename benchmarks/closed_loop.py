@@ -1,0 +1,211 @@
+"""Closed-loop benchmark (issue 15): where the time of one run goes, per policy, old vs new path.
+
+Per policy, seconds per run split into planning (the controller's re-plans), filtering (the
+particle filter's init, predict and update) and the rest (simulation, metrics), for
+
+* ``old``: today's re-planning path, a full IPOPT solve per re-plan (the first one cold, 4
+  starts), ``Receding(real_time=False)``;
+* ``new``: the real-time iteration, one condensed SQP step per re-plan from the shifted
+  previous plan (``Receding()``, :mod:`tmaplan.planning.rti`), IPOPT only as the fallback.
+
+Both paths run on the same truths and noise (common random numbers, the campaign's seeds), so
+the script also reports the paired difference new − old of the time to accuracy and of the final
+range error, with 95 % t intervals, and the ratio new/old of the seconds per run, measured in
+the same process. ``--step`` profiles one re-plan step (objective/gradient/Jacobian, exact
+Hessian, condensing, QP per solver) against the IPOPT re-solve.
+
+Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
+     [--particles 3000] [--policies straight,planned,receding] [--step]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import defaultdict
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from tmaplan.estimators.particle_filter import ParticleFilter
+from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.metrics import paired_difference, run_metrics
+from tmaplan.policies import Combined, Receding, parse_policy
+from tmaplan.scenario import load_problem
+from tmaplan.simulate import draw_truth
+
+_FILTER_SECONDS = [0.0]
+
+
+def _timed(fn):
+    def wrapper(*args, **kw):
+        t = time.perf_counter()
+        try:
+            return fn(*args, **kw)
+        finally:
+            _FILTER_SECONDS[0] += time.perf_counter() - t
+    return wrapper
+
+
+# benchmark-only instrumentation: time the filter's three operations
+for _name in ("init", "predict", "update"):
+    setattr(ParticleFilter, _name, _timed(getattr(ParticleFilter, _name)))
+
+
+def _policies(scenario, names, path):
+    """Resolved policies (timed: the campaign's once-only work); ``old``: IPOPT re-plans."""
+    t = time.perf_counter()
+    pols = {}
+    for spec in names:
+        p = parse_policy(spec, scenario)
+        if isinstance(p.manoeuvre, Receding) and path == "old":
+            p = Combined(manoeuvre=Receding(real_time=False), ping=p.ping)
+        pols[spec] = p.resolve(scenario)
+    return pols, time.perf_counter() - t
+
+
+def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0):
+    sc = load_problem(problem)
+    rows = defaultdict(lambda: defaultdict(list))
+    metric = defaultdict(lambda: defaultdict(list))
+    setup = {}
+    for path in paths:
+        pols, setup[path] = _policies(sc, names, path)
+        print(f"[{path}] campaign setup (offline plans, schedules, RTI model): "
+              f"{setup[path]:.1f} s")
+        for i in range(first_run, first_run + runs):
+            s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+            with threadpool_limits(limits=1):
+                target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
+                for name, pol in pols.items():
+                    _FILTER_SECONDS[0] = 0.0
+                    t = time.perf_counter()
+                    res = run_closed_loop(sc, pol, target,
+                                          noise_rng=np.random.default_rng(s_noise),
+                                          filter_rng=np.random.default_rng(s_filter),
+                                          n_particles=particles)
+                    total = time.perf_counter() - t
+                    plan = sum(e["seconds"] for e in res.replans)
+                    r = rows[path][name]
+                    r.append((total, plan, _FILTER_SECONDS[0], [e["seconds"] for e in res.replans],
+                              [e.get("solver", "-") for e in res.replans]))
+                    m = run_metrics(res.times, res.truth, res.estimate,
+                                    res.observer.mean_velocity, accuracy=0.1,
+                                    n_pings=len(res.ping_steps))
+                    metric[name]["tta", path].append(m.time_to_accuracy)
+                    metric[name]["fre", path].append(m.final_range_error)
+    print(f"\n{problem}: {runs} runs, {particles} particles, 1 thread (shared machine: ratios "
+          "are the figures to read)")
+    print(f"{'policy':<22}{'path':<5}{'s/run':>8}{'plan':>8}{'filter':>8}{'rest':>8}"
+          f"{'median re-plan ms':>19}  solvers")
+    for name in names:
+        for path in paths:
+            r = rows[path][name]
+            tot, pl, fl = (float(np.mean([x[j] for x in r])) for j in range(3))
+            rp = [s for x in r for s in x[3]]
+            med = f"{1000 * np.median(rp):.1f}" if rp else "-"
+            sol = defaultdict(int)
+            for x in r:
+                for s in x[4]:
+                    sol[s] += 1
+            print(f"{name:<22}{path:<5}{tot:8.2f}{pl:8.2f}{fl:8.2f}{tot - pl - fl:8.2f}"
+                  f"{med:>19}  {dict(sol) if sol else ''}")
+        if len(paths) == 2:
+            old = np.mean([x[0] for x in rows["old"][name]])
+            new = np.mean([x[0] for x in rows["new"][name]])
+            rp_o = [s for x in rows["old"][name] for s in x[3]]
+            rp_n = [s for x in rows["new"][name] for s in x[3]]
+            extra = (f", median re-plan new/old {np.median(rp_n) / np.median(rp_o):.4f}"
+                     if rp_o and rp_n else "")
+            print(f"{'':<22}new/old seconds per run {new / old:.3f}{extra}")
+            censor = float(sc.times[-1] - sc.times[0] + sc.time.dt)
+            for key, label, cen in (("tta", "time to accuracy [s]", censor),
+                                    ("fre", "final range error [m]", None)):
+                vals = {p: np.array(metric[name][key, p]) for p in paths}
+                d = paired_difference(vals, "new", "old", label, censor=cen)
+                print(f"{'':<22}paired new-old {label}: {d.mean:+.1f} "
+                      f"[{d.ci_low:+.1f}, {d.ci_high:+.1f}] (n={d.n})")
+    per_run = {p: sum(float(np.mean([x[0] for x in rows[p][n]])) for n in names) for p in paths}
+    for p in paths:
+        print(f"all {len(names)} policies, {p}: {per_run[p]:.2f} s per run (campaign of R runs on "
+              f"W workers: about setup {setup[p]:.0f} s + R x {per_run[p]:.2f} s / W)")
+    if len(paths) == 2:
+        print(f"campaign setup new/old: {setup['new'] / setup['old']:.2f}; seconds per run of "
+              f"all policies new/old: {per_run['new'] / per_run['old']:.3f}")
+
+
+def step_profile(problem="default"):
+    """Where the time of one re-plan goes (one RTI step against the IPOPT re-solve)."""
+    import casadi as ca
+
+    from tmaplan.planning import Belief, HeadingPlanner
+    from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
+    from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
+
+    sc = load_problem(problem)
+    prior = Belief.from_prior(sc)
+    planner = HeadingPlanner(sc, objective=CLOSED_LOOP_OBJECTIVE)
+    plan = planner.solve(prior)
+    t = time.perf_counter()
+    model = reference_model(planner, plan, prior)
+    t_model = time.perf_counter() - t
+    later = Belief.from_samples(prior.samples[:2000], t=sc.planning.replan_interval)
+
+    def best(fn, n=5):
+        ts = []
+        for _ in range(n):
+            t = time.perf_counter()
+            out = fn()
+            ts.append(time.perf_counter() - t)
+        return 1000 * min(ts), out
+
+    with threadpool_limits(limits=1):
+        print(f"one re-plan on {problem} ({CLOSED_LOOP_OBJECTIVE}, {planner.n} intervals, "
+              f"{planner.K} steps), best of 5 [ms]:")
+        rti = RealTimeIteration(planner, model)
+        P = np.concatenate([planner._parameters(later, ()), [0.0, planner.speed0, model.scale,
+                                                             1.0]])
+        x0 = plan.warm["x"]
+        lbw, ubw, lbg, ubg = planner._bounds(0.0)
+        t_ev, _ = best(lambda: rti._eval(x0, P))
+        t_cd, (_, _, qp) = best(lambda: rti._condensed(x0, P, lbw, ubw, lbg, ubg))
+        nlp = planner._nlp
+        lam = ca.MX.sym("lam", nlp["g"].shape[0])
+        hfn = ca.Function("h", [nlp["x"], nlp["p"], lam],
+                          [ca.hessian(nlp["f"] + ca.dot(lam, nlp["g"]), nlp["x"])[0]])
+        t_h, _ = best(lambda: hfn(x0, P, plan.warm["lam_g"]), 1)
+        print(f"  objective + gradient + constraint Jacobian : {t_ev:8.2f}")
+        print(f"  condensing (incl. the evaluation above)    : {t_cd:8.2f}")
+        print(f"  exact Lagrangian Hessian (MX, per re-plan)  : {t_h:8.1f}  (not used: the "
+              f"RTI model's Hessian is computed once, {t_model:.1f} s)")
+        whole = {}
+        for q in QP_SOLVERS:
+            r = RealTimeIteration(planner, model, qpsol=q)
+            t_qp, _ = best(lambda r=r: r._qp(**qp))
+            whole[q], _ = best(lambda r=r: r.solve(later, previous=plan))
+            print(f"  condensed QP {q:<6}: {t_qp:8.2f}   whole RTI re-plan: {whole[q]:8.2f}")
+        t_ip, _ = best(lambda: planner.solve(later, warm_start=plan), 3)
+        print(f"  IPOPT warm re-solve (today's path)         : {t_ip:8.1f}   RTI (daqp)/IPOPT "
+              f"{whole['daqp'] / t_ip:.4f}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--path", choices=("old", "new", "both"), default="both")
+    ap.add_argument("--runs", type=int, default=4)
+    ap.add_argument("--particles", type=int, default=3000)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--first-run", type=int, default=0, help="index of the first Monte Carlo run")
+    ap.add_argument("--policies", default="straight,planned,receding")
+    ap.add_argument("--step", action="store_true", help="profile one re-plan step")
+    a = ap.parse_args()
+    if a.step:
+        step_profile()
+        return
+    paths = ("old", "new") if a.path == "both" else (a.path,)
+    closed_loop(paths, a.policies.split(","), a.runs, a.particles, seed=a.seed,
+                first_run=a.first_run)
+
+
+if __name__ == "__main__":
+    main()

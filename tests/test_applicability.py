@@ -1,0 +1,125 @@
+"""Estimator applicability (tmaplan.estimators.applicability) through the API, and the output
+guard that turns a NaN result into an error (tmaplan.cli._finite)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.cli._finite import require_finite
+from tmaplan.errors import ArgumentError, EstimationError
+from tmaplan.estimators import ESTIMATORS, MLEConfig, estimator_for
+from tmaplan.estimators.applicability import (
+    APPLICABILITY,
+    applicable_estimators,
+    check_applicable,
+)
+from tmaplan.evaluation.tracking import monte_carlo
+from tmaplan.scenario import load_problem
+
+
+def test_every_estimator_declares_what_it_applies_to():
+    assert set(APPLICABILITY) == set(ESTIMATORS)
+    sc = load_problem("clavard2013-halfturn-cw")
+    for name in ("pf", "pf-bearings", "mle"):
+        est = estimator_for(name, sc, n_particles=10)
+        assert est.applicability is APPLICABILITY[name]
+        # the measurement kinds it needs are among the kinds its estimate uses
+        assert APPLICABILITY[name].needs <= est.applies_to
+    assert APPLICABILITY["mle"].bounds == {"crlb"} and APPLICABILITY["pf"].bounds == {"truth"}
+
+
+def test_applicable_estimators_per_problem():
+    assert applicable_estimators(load_problem("sharma2024-range-only")) == ("range-only", "pf")
+    # clavard2013 has no prior: the filters start from one, the PCRB of pf-bearings too
+    assert applicable_estimators(load_problem("clavard2013-halfturn-cw")) == ("mle",)
+    assert applicable_estimators(load_problem("ristic-bot-moderate")) == (
+        "pf", "pf-bearings", "mle")
+    assert "mle" not in applicable_estimators(load_problem("brehard2005-s1"))
+
+
+def test_monte_carlo_refuses_what_cannot_work():
+    sc = load_problem("sharma2024-range-only")
+    with pytest.raises(ArgumentError) as exc:
+        monte_carlo(sc, "mle", runs=2)
+    msg = str(exc.value)
+    assert "field 'estimator'" in msg and "needs at least 4 bearing" in msg
+    assert "use estimator range-only or pf" in msg and "\n" not in msg
+    with pytest.raises(ArgumentError, match=r"field 'bound'.*batch CRLB"):
+        monte_carlo(load_problem("clavard2013-halfturn-cw"), MLEConfig(), runs=1,
+                    bound="prior")
+
+
+def test_prior_bound_of_the_filters_stays_available_in_the_api():
+    # position-only, documented: refused by the CLI (it would print a NaN range bound), not
+    # by the API
+    sc = load_problem("default")
+    check_applicable("pf", sc, bound="prior")
+    with pytest.raises(ArgumentError, match="--bound"):
+        check_applicable("pf", sc, bound="prior", cli=True)
+
+
+def test_require_finite_names_the_quantity():
+    payload = {"rmse": [1.0, math.nan], "ok": [1.0, math.inf], "policies": {
+        "a": {"x": 1.0}, "b": {"x": float("nan")}}}
+    require_finite(payload, ("ok[-1]", "absent", "policies.a.x"))
+    with pytest.raises(EstimationError, match=r"p: result 'rmse\[-1\]' is NaN"):
+        require_finite(payload, ("rmse[-1]",), source="p")
+    with pytest.raises(EstimationError, match=r"result 'policies\.b\.x' is NaN"):
+        require_finite(payload, ("policies.*.x",))
+    require_finite({"rmse": np.array([1.0, 2.0])}, ("rmse[-1]",))
+
+
+def test_track_never_exits_0_with_nan(monkeypatch, capsys):
+    # an estimator that applies but whose every run is rejected: the command fails naming the
+    # quantity instead of printing "RMSE nan m"
+    import tmaplan.cli.track as track
+
+    real = track.monte_carlo
+
+    def all_rejected(*a, **k):
+        res = real(*a, **k)
+        nan = np.full_like(res.rmse_position, np.nan)
+        return dataclasses.replace(res, rmse_position=nan, rmse_range=nan,
+                                   statuses=("rejected",) * res.runs)
+
+    monkeypatch.setattr(track, "monte_carlo", all_rejected)
+    rc = main(["track", "clavard2013-halfturn-cw", "--estimator", "mle", "--runs", "1",
+               "--no-figure"])
+    out = capsys.readouterr()
+    assert rc == 1 and "nan" not in out.out.lower()
+    err = out.err.strip().splitlines()
+    assert len(err) == 1 and "result 'rmse_position[-1]' is NaN" in err[0]
+    assert "run statuses: 1 rejected" in err[0]
+
+
+def test_every_verb_with_numeric_results_declares_them():
+    import importlib
+
+    for verb in ("track", "bound", "crlb", "plan", "schedule", "compare", "demo"):
+        mod = importlib.import_module(f"tmaplan.cli.{verb}")
+        assert mod.FINITE and all(isinstance(p, str) for p in mod.FINITE), verb
+
+
+def test_compare_never_exits_0_with_nan(monkeypatch, capsys, tmp_path):
+    import tmaplan.cli.compare as compare
+
+    real = compare.run_campaign
+
+    def diverged(*a, **k):
+        res = real(*a, **k)
+        res.summary["straight"]["final_range_rmse"] = float("nan")
+        return res
+
+    monkeypatch.setattr(compare, "run_campaign", diverged)
+    rc = main(["compare", "default", "--policies", "straight", "--runs", "1", "--particles",
+               "100", "--out", str(tmp_path)])
+    out = capsys.readouterr()
+    assert rc == 1 and "nan" not in out.out.lower()
+    err = out.err.strip().splitlines()
+    assert len(err) == 1 and "result 'policies.straight.final_range_rmse' is NaN" in err[0]
+    assert "report written to" in err[0]

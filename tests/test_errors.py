@@ -1,0 +1,50 @@
+"""ScenarioError is for scenario fields; bad arguments raise ArgumentError (tmaplan.errors)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.errors import ArgumentError, ScenarioError, TmaplanError
+from tmaplan.planning.objectives import make_objective
+from tmaplan.policies.manoeuvres import Zigzag
+from tmaplan.scenario import from_dict, load_problem
+
+
+def test_hierarchy_and_message() -> None:
+    assert issubclass(ScenarioError, ArgumentError)
+    assert issubclass(ArgumentError, TmaplanError)
+    assert issubclass(ArgumentError, ValueError)
+    err = ArgumentError("samples", ">= 2", 1)
+    assert str(err) == "field 'samples': expected >= 2, received 1"
+    assert (err.field, err.expected, err.received) == ("samples", ">= 2", 1)
+
+
+def test_objective_name_is_an_argument_error() -> None:
+    with pytest.raises(ArgumentError, match="field 'objective'") as exc:
+        make_objective("no-such-objective")
+    assert not isinstance(exc.value, ScenarioError)
+
+
+def test_policy_parameter_is_an_argument_error() -> None:
+    with pytest.raises(ArgumentError, match=r"zigzag\.leg_duration") as exc:
+        Zigzag(leg_duration=0.0, angle=0.5).controller(load_problem("default"))
+    assert not isinstance(exc.value, ScenarioError)
+
+
+def test_cli_value_is_an_argument_error(capsys) -> None:
+    from tmaplan.cli.bound import resolve_over
+
+    with pytest.raises(ArgumentError, match="--over") as exc:
+        resolve_over("closed-form", "lpc", "truth")
+    assert not isinstance(exc.value, ScenarioError)
+    assert main(["bound", "default", "--samples", "1"]) != 0
+    assert "--samples" in capsys.readouterr().err
+
+
+def test_scenario_field_is_a_scenario_error() -> None:
+    with pytest.raises(ScenarioError, match="sigma"):
+        from_dict({"name": "x", "time": {"dt": 1.0, "horizon": 10.0},
+                   "target": {"position": [0.0, 1000.0], "velocity": [0.0, 0.0]},
+                   "observer": {"position": [0.0, 0.0], "velocity": [1.0, 0.0]},
+                   "sensors": [{"kind": "bearing", "sigma": -1.0}]})

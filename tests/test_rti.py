@@ -1,0 +1,134 @@
+"""Real-time iteration re-plans (tmaplan.planning.rti): one condensed SQP step per re-plan."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import PlanningError, ScenarioError, SolverError
+from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, RTIModel, reference_model
+from tmaplan.scenario import load_problem
+
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+
+@pytest.fixture(scope="module")
+def small():
+    """A 15-minute horizon of 15 one-minute intervals on `default`, range-bound objective."""
+    sc = load_problem("default")
+    prior = Belief.from_prior(sc)
+    planner = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0,
+                             control_interval=60.0)
+    plan = planner.solve(prior)
+    return sc, prior, planner, plan, reference_model(planner, plan, prior)
+
+
+def _straight(sc, prior):
+    """The planner's straight-course guess as a plan (IPOPT stopped before its first step)."""
+    p = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0, control_interval=60.0,
+                       n_starts=1, solver_options={"max_iter": 0})
+    return p.solve(prior, raise_on_failure=False)
+
+
+def test_step_at_the_optimum_stays_there(small):
+    _, prior, _, plan, model = small
+    out = RealTimeIteration(small[2], model).solve(prior, previous=plan)
+    assert out.solver == "rti-daqp" and out.success
+    assert out.objective == pytest.approx(plan.objective, rel=1e-6)
+    assert np.allclose(out.turn_rate, plan.turn_rate, atol=1e-4 * small[2].u_max)
+
+
+def test_steps_approach_the_ipopt_solution(small):
+    sc, prior, planner, plan, model = small
+    rti = RealTimeIteration(planner, model)
+    cur = _straight(sc, prior)
+    start = cur.objective
+    values = []
+    for _ in range(8):
+        cur = rti.solve(prior, previous=cur, fallback=False)
+        values.append(cur.objective)
+    assert all(b <= a + 1e-12 for a, b in zip([start, *values], values, strict=False))
+    # most of the way from the straight course to the IPOPT optimum
+    assert values[-1] - plan.objective < 0.1 * (start - plan.objective)
+
+
+def test_rejected_step_falls_back_to_ipopt(small):
+    _, prior, planner, plan, model = small
+    tiny = RTIModel(hessian=model.hessian * 1e-9, scale=model.scale, plan=plan)
+    rti = RealTimeIteration(planner, tiny, backtracks=0)
+    with pytest.raises(SolverError, match="rejected"):
+        rti.solve(prior, previous=plan, fallback=False)
+    out = rti.solve(prior, previous=plan)
+    assert out.solver == "ipopt" and "RTI step rejected" in out.message
+    assert out.objective == pytest.approx(plan.objective, rel=1e-3)
+
+
+@pytest.mark.parametrize("qpsol", QP_SOLVERS)
+def test_every_qp_solver_gives_the_same_step(small, qpsol):
+    sc, prior, planner, _, model = small
+    start = _straight(sc, prior)
+    ref = RealTimeIteration(planner, model).solve(prior, previous=start, fallback=False)
+    out = RealTimeIteration(planner, model, qpsol=qpsol).solve(prior, previous=start,
+                                                               fallback=False)
+    assert out.solver == f"rti-{qpsol}"
+    assert np.allclose(out.turn_rate, ref.turn_rate, atol=1e-6 * planner.u_max)
+
+
+@pytest.mark.parametrize("qpsol", ["daqp", "qrqp"])
+def test_steps_are_bit_reproducible(small, qpsol):
+    sc, prior, planner, _, model = small
+    start = _straight(sc, prior)
+    later = Belief.from_samples(prior.samples[:500], t=120.0)
+    rti = RealTimeIteration(planner, model, qpsol=qpsol)
+    a = rti.solve(later, previous=start, fallback=False)
+    rti.solve(prior, previous=start, fallback=False)  # another problem in between
+    b = rti.solve(later, previous=start, fallback=False)
+    assert np.array_equal(a.turn_rate, b.turn_rate) and a.objective == b.objective
+
+
+def test_bad_configurations_are_rejected(small):
+    sc, prior, planner, plan, model = small
+    with pytest.raises(ScenarioError, match="qpsol"):
+        RealTimeIteration(planner, model, qpsol="nope")
+    bb = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0,
+                        transcription="bang-bang")
+    with pytest.raises(PlanningError, match="direct"):
+        RealTimeIteration(bb, model)
+    other = HeadingPlanner(sc, objective="mean-range-bound", horizon=600.0,
+                           control_interval=60.0)
+    with pytest.raises(ScenarioError, match="hessian"):
+        RealTimeIteration(other, model)
+    with pytest.raises(PlanningError, match="solver state"):
+        reference_model(planner, dataclasses.replace(plan, warm=None), prior)
+
+
+def test_receding_controller_uses_the_real_time_iteration(small):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    rng = np.random.default_rng(3)
+    target = draw_truth(sc, rng, from_prior=True)
+    pol = Receding(objective="mean-range-bound", horizon=900.0).resolve(sc)
+    assert pol.rti is not None and pol.resolve(sc) is pol
+    res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                          filter_rng=np.random.default_rng(2), n_particles=300)
+    solvers = [e.get("solver") for e in res.replans if e["success"]]
+    assert solvers and all(s in ("rti-daqp", "ipopt") for s in solvers)
+    assert solvers.count("rti-daqp") >= len(solvers) // 2
+    again = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                            filter_rng=np.random.default_rng(2), n_particles=300)
+    assert np.array_equal(res.turn_rate, again.turn_rate)
+
+
+def test_receding_rti_policy_name_takes_only_rti_steps(small):
+    from tmaplan.policies import Receding, parse_policy
+
+    pol = parse_policy("receding-rti+uniform", small[0])
+    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_every == 0
+    assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
+        .manoeuvre.full_every == 3

@@ -198,7 +198,7 @@ def test_default_objective_predicts_the_monte_carlo_time_to_accuracy():
 @pytest.mark.slow
 def test_receding_beats_planned_on_default():
     # 20 paired runs (a re-plan every 5 min makes receding ~20× slower than planned);
-    # measured −7.1 [−12.4, −1.8] min (README)
+    # measured −5.1 [−10.2, −0.1] min (README)
     camp = plan_campaign(load_problem("default"), runs=20, seed=0, receding=True)
     d = planned_differences(camp, "receding")
     assert d["planned"].ci_high < 0.0, d["planned"]

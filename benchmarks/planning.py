@@ -38,8 +38,10 @@ def _best_of(fn, n=3):
 def heading() -> None:
     sc = load_problem("default")
     b = Belief.from_prior(sc)
-    p1 = HeadingPlanner(sc, horizon=1800.0, control_interval=15.0, n_starts=1)
-    p4 = HeadingPlanner(sc, horizon=1800.0, control_interval=15.0, n_starts=4)
+    p1 = HeadingPlanner(sc, objective="range-bound", horizon=1800.0, control_interval=15.0,
+                        n_starts=1)
+    p4 = HeadingPlanner(sc, objective="range-bound", horizon=1800.0, control_interval=15.0,
+                        n_starts=4)
     print(f"heading OCP: {p1.n} intervals, {p1.K} steps of {p1.dt:g} s")
     p1.solve(b)  # first call builds the IPOPT instance
     t1, plan = _best_of(lambda: p1.solve(b))

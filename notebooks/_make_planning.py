@@ -54,7 +54,7 @@ plan_cells = [
         "+u_max, 0, −u_max and returns exact switch times. A warm-started re-solve is what the "
         "receding-horizon controller does every cycle."),
     nbf.v4.new_code_cell(
-        "bb = HeadingPlanner(sc, transcription='bang-bang', n_starts=2).solve(belief)\n"
+        "bb = HeadingPlanner(sc, objective='range-bound', transcription='bang-bang', n_starts=2).solve(belief)\n"
         "print('bang-bang', round(bb.objective, 1), 'm, switches at', np.round(bb.switch_times), 's')\n"
         "warm = planner.solve(belief, warm_start=plan)\n"
         "print(f'warm re-solve: {warm.seconds:.3f} s, {warm.iterations} iterations')"),

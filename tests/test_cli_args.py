@@ -199,6 +199,7 @@ def test_schedule_along_a_saved_plan(tmp_path, capsys):
     # `plan --json PLAN.json` then `schedule --observer-plan PLAN.json`: the pings and the
     # bound are those of the API's schedule_pings along the same plan's track.
     from tmaplan.planning import Belief, HeadingPlanner, schedule_pings
+    from tmaplan.policies.plan_starts import plan_from_prior
 
     plan_js, sched_js = tmp_path / "plan.json", tmp_path / "sched.json"
     assert main(["plan", "default", "--horizon", "30 min", "--starts", "1", "--no-figure",
@@ -210,7 +211,7 @@ def test_schedule_along_a_saved_plan(tmp_path, capsys):
     assert d["times"][-1] == pytest.approx(1800.0) and d["observer_plan"] == str(plan_js)
     sc = load_problem("default")
     belief = Belief.from_prior(sc)
-    plan = HeadingPlanner(sc, horizon=1800.0, n_starts=1).solve(belief)
+    plan = plan_from_prior(sc, planner=HeadingPlanner(sc, horizon=1800.0))  # as `plan` does
     np.testing.assert_allclose(p["observer"]["position"], plan.observer.position, atol=1e-6)
     ref = schedule_pings(sc, budget=2, method="greedy", observer=plan.observer, belief=belief)
     assert d["ping_times"] == pytest.approx(ref.times.tolist(), abs=1e-9)

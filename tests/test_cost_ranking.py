@@ -145,10 +145,12 @@ def test_rank_costs_end_to_end_resumes_and_ranks_an_oracle_first(scenario, tmp_p
     assert first.campaign.computed_runs == (0, 1)
     d = first.to_json()
     assert d["candidates"] == 4 and d["problem"] == "default"
-    assert d["default_objective"] == "range-bound"
+    assert d["default_objective"] == "expected-time-to-accuracy"
+    assert d["closed_loop_objective"] == d["default_objective"]
     names = [c["name"] for c in d["costs"]]
     assert {"pcrb-cartesian-range", "expected-crlb-range", "logdet",
             "mean-relative-range-crlb", "time-to-accuracy", "range-bound",
+            "expected-time-to-accuracy",
             "mean-range-bound"} <= set(names)
     assert "terminal-range-bound" not in names           # alias of range-bound
     assert d["skipped"]["cost terminal-range-bound"] == "alias of range-bound"

@@ -22,7 +22,28 @@ from tmaplan.evaluation.cost_ranking import (
     rank_correlations,
     rank_costs,
 )
+from tmaplan.evaluation.plan_check import (
+    plan_campaign,
+    planned_differences,
+    select_plan,
+    tune_single_turn,
+)
 
-__all__ = ["CampaignResult", "CampaignSpec", "Candidate", "CostCorrelation",
-           "CostRankingResult", "candidate_manoeuvres", "cost_functionals",
-           "rank_correlations", "rank_costs", "resolve_policies", "run_campaign", "run_one"]
+__all__ = [
+    "CampaignResult",
+    "CampaignSpec",
+    "Candidate",
+    "CostCorrelation",
+    "CostRankingResult",
+    "candidate_manoeuvres",
+    "cost_functionals",
+    "plan_campaign",
+    "planned_differences",
+    "rank_correlations",
+    "rank_costs",
+    "resolve_policies",
+    "run_campaign",
+    "run_one",
+    "select_plan",
+    "tune_single_turn",
+]

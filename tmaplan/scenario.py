@@ -477,7 +477,8 @@ class Planning:
     """
 
     horizon: PositiveTime | None = None
-    objective: Annotated[str, AfterValidator(_objective_name)] = "range-bound"
+    # tmaplan.planning.objectives.DEFAULT_OBJECTIVE (not imported: no cycle)
+    objective: Annotated[str, AfterValidator(_objective_name)] = "expected-time-to-accuracy"
     ping_budget: NonNegInt = 0
     ping_sigma: PositiveLength | None = None
     ping_min_spacing: NonNegTime = 0.0

@@ -27,6 +27,7 @@ from tmaplan.planning.joint_ocp import plan_joint_ocp
 from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
 from tmaplan.planning.pings import schedule_pings
 from tmaplan.plotting import objective_label, plot_plan
+from tmaplan.policies.plan_starts import plan_from_prior
 from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
@@ -48,7 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "unit ('1 min')")
     parser.add_argument("--transcription", choices=("direct", "bang-bang"), default="direct")
     parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=4,
-                        help="multi-start initial guesses (default 4)")
+                        help="built-in initial guesses of the bang-bang transcription "
+                             "(default 4); the direct one starts from straight, the tactics "
+                             "and the best single turns as well")
     parser.add_argument("--pings", type=integer(0), default=0, metavar="K",
                         help="plan K range pings with the headings (default 0: headings only)")
     parser.add_argument("--joint", choices=("ocp", "alternating"), default="ocp",
@@ -67,7 +70,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                              transcription=args.transcription, n_starts=args.starts)
     belief = Belief.from_prior(scenario)
     pings = _joint(args, scenario, belief) if args.pings > 0 else None
-    plan = planner.solve(belief) if pings is None else pings[0]
+    if pings is not None:
+        plan = pings[0]
+    elif args.transcription == "direct":
+        plan = plan_from_prior(scenario, planner=planner)
+    else:
+        plan = planner.solve(belief)
     ev = ObjectiveEvaluator(scenario, planner.objective, n_steps=planner.K, belief=belief)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K,
                               evaluator=ev)
@@ -78,7 +86,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "range_bound": plan.range_bound, "range_bound_times": plan.observer.times,
         "baselines": {k: v[0].objective for k, v in base.items()},
         "baseline_params": {k: v[0].params for k, v in base.items()},
-        "solver": {"status": plan.status, "seconds": plan.seconds,
+        "solver": {"status": plan.status, "seconds": plan.seconds, "message": plan.message,
                    "iterations": plan.iterations, "transcription": plan.transcription},
         "observer": {"times": plan.observer.times, "position": plan.observer.position,
                      "velocity": plan.observer.velocity,

@@ -35,6 +35,7 @@ from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import (
+    DEFAULT_OBJECTIVE,
     Objective,
     ParamLayout,
     PlanContext,
@@ -145,7 +146,7 @@ class HeadingPlanner:
     ----------
     scenario : Scenario
     objective : str or Objective
-        Default ``scenario.planning.objective`` or "range-bound".
+        Default ``scenario.planning.objective`` or :data:`DEFAULT_OBJECTIVE`.
     horizon : float, optional
         [s]; default ``planning.horizon`` or the scenario's. Rounded to whole intervals.
     control_interval : float, optional
@@ -177,7 +178,7 @@ class HeadingPlanner:
         obs = scenario.observer
         self.scenario = scenario
         if objective is None:
-            objective = pl.objective if pl is not None else "range-bound"
+            objective = pl.objective if pl is not None else DEFAULT_OBJECTIVE
         self.objective = make_objective(objective, samples=logdet_samples)
         if transcription not in ("direct", "bang-bang"):
             raise PlanningError(f"transcription: expected 'direct' or 'bang-bang', received "
@@ -414,7 +415,8 @@ class HeadingPlanner:
     def solve(self, belief: Belief, *, heading0: float | None = None,
               position0: np.ndarray | None = None, speed0: float | None = None,
               warm_start: HeadingPlan | None = None, ping_steps: Sequence[int] = (),
-              raise_on_failure: bool = True) -> HeadingPlan:
+              raise_on_failure: bool = True,
+              starts: Sequence[np.ndarray] | None = None) -> HeadingPlan:
         """Solve the heading OCP for a belief (relative to the observer state at ``belief.t``).
 
         Parameters
@@ -434,6 +436,9 @@ class HeadingPlanner:
             Plan steps with a range ping (enter the closed-form objectives).
         raise_on_failure : bool
             If False, a failed solve is returned with ``success=False`` instead of raising.
+        starts : sequence of ndarray, optional
+            Initial guesses replacing the built-in ones ("direct" only): turn-rate programs
+            ``u_j/u_max`` in [−1, 1], one value per control interval, shape (n,).
 
         Raises
         ------
@@ -447,18 +452,26 @@ class HeadingPlanner:
         self._precheck(belief, heading0, speed0)
         pvec = self._parameters(belief, ping_steps)
         lbw, ubw, lbg, ubg = self._bounds(heading0)
+        guesses: list[tuple[np.ndarray, float]]
+        duals: dict[str, Any] | None
         if warm_start is not None:
             x0, duals = self._shift_warm(warm_start, belief.t, heading0, speed0)
             sgn = float(warm_start.warm.get("sign", 1.0)) if warm_start.warm else 1.0
-            starts = [(x0, sgn)]
+            guesses = [(x0, sgn)]
+        elif starts is not None and self.transcription == "direct":
+            progs = [np.clip(np.asarray(u, float).reshape(-1), -1, 1) for u in starts]
+            if not progs or any(u.shape != (self.n,) for u in progs):
+                raise PlanningError(f"starts: expected turn-rate programs of shape "
+                                    f"({self.n},), received {[u.shape for u in progs]}")
+            duals, guesses = None, [(self._direct_w(u, heading0, speed0), 1.0) for u in progs]
         else:
-            duals, starts = None, self._guesses(heading0, speed0)
-        P0 = np.concatenate([pvec, [heading0, speed0, 1.0, starts[0][1]]])
-        f0 = float(self._f_eval(starts[0][0], P0)[0])
+            duals, guesses = None, self._guesses(heading0, speed0)
+        P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
+        f0 = float(self._f_eval(guesses[0][0], P0)[0])
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
-        for x0, sgn in starts:
+        for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
             use_warm = duals is not None
             solver = self._solver(use_warm)
@@ -491,7 +504,7 @@ class HeadingPlanner:
                     raise PlanningError(msg)
             elif raise_on_failure:
                 raise SolverError("ipopt", status, f"heading OCP ({self.transcription}) did "
-                                  f"not converge from {len(starts)} start(s)")
+                                  f"not converge from {len(guesses)} start(s)")
         x = np.asarray(sol["x"]).reshape(-1)
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,

@@ -22,11 +22,11 @@ __all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "Manoe
 log = logging.getLogger("tmaplan.policies")
 
 #: Planning objective of the closed-loop policies (``planned``, ``receding``) and of the choice
-#: of the best single turn / zig-zag. Scale-free and smooth in time, it tracks the time to a
-#: *relative* range accuracy that the comparison measures; the absolute range bound of
-#: docs/cli.md (the scenario's default ``planning.objective``) rewards closing on the contact
-#: for its own sake and localised more slowly in Monte Carlo trials (see the README).
-CLOSED_LOOP_OBJECTIVE = "mean-relative-range-crlb"
+#: of the best single turn / zig-zag: the default objective of ``tmaplan plan``
+#: (:data:`tmaplan.planning.objectives.DEFAULT_OBJECTIVE`, the expected time to 10 % range
+#: accuracy over prior draws), which ranks manoeuvres as the filter's Monte Carlo time to
+#: accuracy does (``tmaplan rank-costs``, README).
+CLOSED_LOOP_OBJECTIVE = "expected-time-to-accuracy"
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

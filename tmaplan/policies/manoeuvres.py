@@ -153,14 +153,14 @@ _PLAN_CACHE: dict[tuple[Scenario, str | None], Any] = {}
 
 
 def offline_plan(scenario: Scenario, objective: str | None) -> Any:
-    """The heading plan from the prior (``tmaplan.planning.plan_heading``), cached per
-    scenario and objective."""
+    """The heading plan from the prior, multi-started from straight, the tactics and the best
+    single turns (:func:`tmaplan.policies.plan_starts.plan_from_prior`), cached per scenario
+    and objective."""
     key = (scenario, objective)
     if key not in _PLAN_CACHE:
-        from tmaplan.planning import plan_heading
+        from tmaplan.policies.plan_starts import plan_from_prior
 
-        _PLAN_CACHE[key] = (plan_heading(scenario) if objective is None
-                            else plan_heading(scenario, objective=objective))
+        _PLAN_CACHE[key] = plan_from_prior(scenario, objective)
     return _PLAN_CACHE[key]
 
 

@@ -47,7 +47,10 @@ FAULTS: dict[str, str] = {
     "manoeuvre-60deg": 'target_manoeuvres = [{time = "22.5 min", course_change = "60 deg"}]',
 }
 OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
-           "robust": FilterOptions.robust}
+           "robust": FilterOptions.robust,
+           # the presets without their alarm pings (tmaplan.policies.AlarmResponse)
+           "monitored-noping": lambda: FilterOptions(),
+           "robust-noping": lambda: FilterOptions(bearing_clutter=0.05, ping_gate=10.0)}
 
 
 def faulty(name: str, base: Scenario | None = None) -> Scenario:
@@ -139,7 +142,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed = [], [], []
+    det, rec, disturbed, extra = [], [], [], []
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -159,6 +162,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
                    if j + bad[-1] + 1 < times.size else np.inf)
         steps = [a["step"] for a in r1.alarms if a["step"] >= j]
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
+        extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -169,7 +173,9 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "detected_if_disturbed": float(np.mean(det_a[dist] <= w)) if dist.any() else 1.0,
             "recovered_if_disturbed": float(np.mean(rec_a[dist] <= w)) if dist.any() else 1.0,
             "median_detection_s": float(np.median(det_a)),
-            "median_recovery_s": float(np.median(rec_a))}
+            "median_recovery_s": float(np.median(rec_a)),
+            "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
+            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
 
 
 def pairs(*, runs: int, options: list[str], particles: int = 3000, seed: int = 0) -> None:

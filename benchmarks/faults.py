@@ -142,7 +142,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed, extra = [], [], [], []
+    det, rec, disturbed, extra, false = [], [], [], [], []
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -160,9 +160,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         disturbed.append(bad.size > 0)
         rec.append(0.0 if bad.size == 0 else float(times[j + bad[-1] + 1] - times[j])
                    if j + bad[-1] + 1 < times.size else np.inf)
-        steps = [a["step"] for a in r1.alarms if a["step"] >= j]
+        steps = [a["step"] for a in r1.alarms if a["step"] >= j and a["test"] != "probe"]
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
         extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
+        false.append(any(a["step"] >= j and a["test"] != "probe" for a in out[0].alarms))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -175,6 +176,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "median_detection_s": float(np.median(det_a)),
             "median_recovery_s": float(np.median(rec_a)),
             "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
+            "fault_free_alarmed_after_mid": float(np.mean(false)),
             "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
 
 

@@ -14,7 +14,10 @@ at mid-horizon: detection = the first monitor alarm at or after the manoeuvre; t
 *recovered* at t when from t on the position error stays within
 ``max(2 × the paired fault-free run's error, 10 % of range)``, *disturbed* when it is ever
 outside after the manoeuvre; printed: the fractions of runs detected within 5 min, recovered
-within 5 min, and both, the same among the disturbed runs, with the median delays.
+within 5 min, and both, the same among the disturbed runs, with the median delays, the alarm
+pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
+with an alarm after mid-horizon. Options ``monitored-noping`` and ``robust-noping`` are the
+presets without the alarm pings.
 
 ``--pairs`` runs the issue's fault-free criterion: ``planned+scheduled-terminal`` against
 ``planned+uniform`` per filter option, with the paired interval of the final range error.

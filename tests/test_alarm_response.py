@@ -118,3 +118,23 @@ def test_a_course_change_alarm_brings_a_ping_within_the_budget():
         if late and r.alarm_pings.size:
             answered += int(any(p > late[0] for p in r.alarm_pings))
     assert answered >= 2
+
+
+def test_receding_replans_at_once_on_an_alarm():
+    from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+    from tmaplan.policies import Receding
+
+    sc = load_problem("default")
+    st = ParticleFilter(PFConfig(n_particles=500, dt=15.0, q=1e-6)).init(
+        sc, np.random.default_rng(0))
+
+    def belief(k, alarms):
+        return BeliefView(step=k, t=15.0 * k, heading=0.0, position=np.zeros(2),
+                          particles=st.particles, weights=st.weights, pings_used=0,
+                          alarms=alarms)
+
+    for on, expected in ((True, 2), (False, 1)):
+        ctrl = Receding(replan_on_alarm=on).controller(sc)
+        for k, alarms in ((0, 0), (1, 0), (2, 1), (3, 1)):
+            ctrl.act(belief(k, alarms), 15.0 * k)
+        assert len(ctrl.log) == expected

@@ -14,7 +14,10 @@ at mid-horizon: detection = the first monitor alarm at or after the manoeuvre; t
 *recovered* at t when from t on the position error stays within
 ``max(2 × the paired fault-free run's error, 10 % of range)``, *disturbed* when it is ever
 outside after the manoeuvre; printed: the fractions of runs detected within 5 min, recovered
-within 5 min, and both, the same among the disturbed runs, with the median delays.
+within 5 min, and both, the same among the disturbed runs, with the median delays, the alarm
+pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
+with an alarm after mid-horizon. Options ``responsive`` and ``robust-responsive`` add the
+alarm pings (beyond the budget) to ``monitored`` and ``robust``.
 
 ``--pairs`` runs the issue's fault-free criterion: ``planned+scheduled-terminal`` against
 ``planned+uniform`` per filter option, with the paired interval of the final range error.
@@ -26,6 +29,7 @@ Run: python benchmarks/faults.py [--runs 20] [--policies planned+scheduled,reced
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from typing import Any
 
@@ -34,6 +38,7 @@ import numpy as np
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads
 from tmaplan.simulate import draw_truth
 
@@ -47,7 +52,11 @@ FAULTS: dict[str, str] = {
     "manoeuvre-60deg": 'target_manoeuvres = [{time = "22.5 min", course_change = "60 deg"}]',
 }
 OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
-           "robust": FilterOptions.robust}
+           "robust": FilterOptions.robust,
+           # the presets without their alarm pings (tmaplan.policies.AlarmResponse)
+           "responsive": FilterOptions.responsive,
+           "robust-responsive": lambda: dataclasses.replace(FilterOptions.robust(),
+                                                            alarm_response=AlarmResponse())}
 
 
 def faulty(name: str, base: Scenario | None = None) -> Scenario:
@@ -139,7 +148,7 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed = [], [], []
+    det, rec, disturbed, extra, false = [], [], [], [], []
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -157,8 +166,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         disturbed.append(bad.size > 0)
         rec.append(0.0 if bad.size == 0 else float(times[j + bad[-1] + 1] - times[j])
                    if j + bad[-1] + 1 < times.size else np.inf)
-        steps = [a["step"] for a in r1.alarms if a["step"] >= j]
+        steps = [a["step"] for a in r1.alarms if a["step"] >= j and a["test"] != "probe"]
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
+        extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
+        false.append(any(a["step"] >= j and a["test"] != "probe" for a in out[0].alarms))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -169,7 +180,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "detected_if_disturbed": float(np.mean(det_a[dist] <= w)) if dist.any() else 1.0,
             "recovered_if_disturbed": float(np.mean(rec_a[dist] <= w)) if dist.any() else 1.0,
             "median_detection_s": float(np.median(det_a)),
-            "median_recovery_s": float(np.median(rec_a))}
+            "median_recovery_s": float(np.median(rec_a)),
+            "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
+            "fault_free_alarmed_after_mid": float(np.mean(false)),
+            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
 
 
 def pairs(*, runs: int, options: list[str], particles: int = 3000, seed: int = 0) -> None:

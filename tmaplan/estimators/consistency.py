@@ -74,6 +74,7 @@ from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
 from tmaplan.geometry import wrap_angle
 
 if TYPE_CHECKING:
+    from tmaplan.policies.alarms import AlarmResponse
     from tmaplan.scenario import Scenario
     from tmaplan.simulate import Measurement
 
@@ -499,11 +500,15 @@ class FilterOptions:
         :attr:`PFConfig.ping_gate` [σ].
     monitor : MonitorConfig, optional
         None: no monitoring.
+    alarm_response : AlarmResponse, optional
+        The closed loop's answer to the monitor's alarms
+        (:class:`tmaplan.policies.AlarmResponse`; None: none, or no monitor).
     """
 
     bearing_clutter: float = 0.0
     ping_gate: float | None = None
     monitor: MonitorConfig | None = dataclasses.field(default_factory=MonitorConfig)
+    alarm_response: AlarmResponse | None = None
 
     @classmethod
     def plain(cls) -> FilterOptions:
@@ -512,21 +517,31 @@ class FilterOptions:
 
     @classmethod
     def monitored(cls) -> FilterOptions:
-        """Gaussian bearings with the monitor (the closed-loop default)."""
+        """Gaussian bearings with the monitor and its recovery (the closed-loop default); no
+        alarm pings, so a run never uses more pings than the scenario's budget."""
         return cls()
 
     @classmethod
     def robust(cls) -> FilterOptions:
-        """5 % clutter bearings, pings gated at 10 σ, and the monitor."""
+        """5 % clutter bearings, pings gated at 10 σ, the monitor; no alarm pings."""
         return cls(bearing_clutter=0.05, ping_gate=10.0)
 
+    @classmethod
+    def responsive(cls) -> FilterOptions:
+        """:meth:`monitored` plus alarm pings: each alarm is answered with pings from the
+        allowance :attr:`tmaplan.policies.AlarmResponse.extra_pings` *on top of* the
+        scenario's ping budget. Opt-in, because those pings reveal the own ship beyond the
+        budget the user set."""
+        return cls(alarm_response=_default_response())
+
     def label(self) -> str:
-        """Short name: "plain", "monitored", "robust" or the field values."""
-        for name in ("plain", "monitored", "robust"):
+        """Short name: "plain", "monitored", "robust", "responsive" or the field values."""
+        for name in ("plain", "monitored", "robust", "responsive"):
             if self == getattr(FilterOptions, name)():
                 return name
         return (f"clutter={self.bearing_clutter},gate={self.ping_gate},"
-                f"monitor={self.monitor is not None}")
+                f"monitor={self.monitor is not None},"
+                f"alarm_pings={self.alarm_response is not None}")
 
     def build(self, config: PFConfig) -> Any:
         """The filter: a :class:`ParticleFilter` with these likelihood options, monitored if
@@ -534,3 +549,11 @@ class FilterOptions:
         pf = ParticleFilter(dataclasses.replace(config, bearing_clutter=self.bearing_clutter,
                                                 ping_gate=self.ping_gate))
         return pf if self.monitor is None else MonitoredFilter(pf, self.monitor)
+
+
+def _default_response() -> AlarmResponse:
+    """The alarm response of the monitored presets (a run-time import: policies sit above the
+    estimators)."""
+    from tmaplan.policies.alarms import AlarmResponse
+
+    return AlarmResponse()

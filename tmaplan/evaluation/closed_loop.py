@@ -59,6 +59,9 @@ class ClosedLoopRun:
         Track recoveries by the consistency monitor (:mod:`tmaplan.estimators.consistency`).
     alarms : tuple of dict
         The monitor's log (step, test, statistic, threshold, recovered).
+    alarm_pings : ndarray, shape (n,)
+        Steps of the pings added in answer to alarms (:class:`tmaplan.policies.AlarmResponse`),
+        a subset of ``ping_steps``.
     """
 
     times: np.ndarray
@@ -73,6 +76,7 @@ class ClosedLoopRun:
     seconds: float
     recoveries: int = 0
     alarms: tuple[dict[str, Any], ...] = ()
+    alarm_pings: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, int))
 
 
 def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
@@ -95,8 +99,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     filter_q : float, optional
         Filter process-noise intensity [m²/s³] (default: the scenario's, floored at 1e-8).
     options : FilterOptions, optional
-        Robust likelihoods and consistency monitoring (default:
-        :meth:`FilterOptions.monitored`, the monitor on).
+        Robust likelihoods, consistency monitoring and the answer to its alarms (default:
+        :meth:`FilterOptions.monitored`, the monitor on, no alarm pings).
 
     Returns
     -------
@@ -119,6 +123,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     opts = FilterOptions.monitored() if options is None else options
     pf = opts.build(PFConfig(n_particles=n_particles, dt=dt, q=max(q, 1e-8)))
     ctrl = policy.controller(scenario)
+    if opts.monitor is not None and opts.alarm_response is not None:
+        ctrl = opts.alarm_response.wrap(ctrl, scenario)
     pings: list[int] = []
     active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
     rates = np.zeros(K)
@@ -127,7 +133,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         nonlocal heading, pos
         belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
                             particles=state.particles, weights=state.weights,
-                            pings_used=len(pings))
+                            pings_used=len(pings), alarms=len(getattr(state, "log", ())))
         act = ctrl.act(belief, float(times[k]))
         u = float(act.turn_rate)
         if u_max is not None:
@@ -154,4 +160,5 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                          replans=tuple(getattr(ctrl, "log", [])),
                          seconds=time.perf_counter() - t_start,
                          recoveries=int(getattr(fr.state, "recoveries", 0)),
-                         alarms=tuple(getattr(fr.state, "log", ())))
+                         alarms=tuple(getattr(fr.state, "log", ())),
+                         alarm_pings=np.asarray(getattr(ctrl, "alarm_pings", []), dtype=int))

@@ -14,6 +14,7 @@ posterior every ``replan_interval``); practitioner tactics (:mod:`tmaplan.polici
 :class:`LegTurnLeg` (bearing-rate doctrine) and :class:`LeadLag`. Ping policies:
 :class:`NoPing`, :class:`UniformPings`, :class:`ScheduledPings` (offline schedule),
 :class:`AdaptivePings` (ping when the filter's relative range uncertainty calls for it).
+:class:`AlarmResponse` adds pings on the consistency monitor's alarms to any policy.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from tmaplan.policies._base import (
     ManoeuvrePolicy,
     Policy,
 )
+from tmaplan.policies.alarms import AlarmResponder, AlarmResponse
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
 from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
@@ -35,6 +37,8 @@ __all__ = [
     "CLOSED_LOOP_OBJECTIVE",
     "Action",
     "AdaptivePings",
+    "AlarmResponder",
+    "AlarmResponse",
     "BeliefView",
     "Combined",
     "Controller",

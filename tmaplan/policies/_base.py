@@ -65,6 +65,9 @@ class BeliefView:
         Normalised weights.
     pings_used : int
         Pings emitted so far.
+    alarms : int
+        Consistency-monitor alarms so far (:mod:`tmaplan.estimators.consistency`; 0 without
+        a monitor).
     """
 
     step: int
@@ -74,6 +77,7 @@ class BeliefView:
     particles: np.ndarray
     weights: np.ndarray
     pings_used: int
+    alarms: int = 0
 
     @property
     def mean(self) -> np.ndarray:

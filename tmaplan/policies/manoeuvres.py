@@ -217,6 +217,10 @@ class Receding:
         The offline plan and the Hessian model of the real-time iteration
         (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
         (:meth:`resolve` computes it once per campaign, so that workers receive it).
+    replan_on_alarm : bool
+        Re-plan at once from the (recovered) posterior when the consistency monitor raised an
+        alarm since the last step (:attr:`BeliefView.alarms`), not only every
+        ``replan_interval``; a run without alarms is unchanged.
     """
 
     replan_interval: float | None = None
@@ -228,6 +232,7 @@ class Receding:
     rti_steps: int = 1
     full_every: int = 3
     rti: Any = dataclasses.field(default=None, compare=False, repr=False)
+    replan_on_alarm: bool = True
     name: str = "receding"
 
     def controller(self, scenario: Scenario) -> Controller:
@@ -310,9 +315,12 @@ class _RecedingController:
         self.playback: _TurnRatePlayback | None = None
         self.next_replan = scenario.time.t0
         self.log: list[dict[str, Any]] = []
+        self.alarms = 0
 
     def act(self, belief: BeliefView, t: float) -> Action:
-        if t + 1e-9 >= self.next_replan:
+        alarmed = self.policy.replan_on_alarm and belief.alarms > self.alarms
+        self.alarms = belief.alarms
+        if alarmed or t + 1e-9 >= self.next_replan:
             self._replan(belief, t)
             self.next_replan = t + self.interval
         rate = self.playback.rate_at(t) if self.playback is not None else 0.0

@@ -1,0 +1,144 @@
+"""Alarm pings: the closed loop's answer to the consistency monitor (tmaplan.policies.alarms)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError
+from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.evaluation.campaigns import resolve_policies
+from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.policies import Action, AlarmResponse, BeliefView, NoPing
+from tmaplan.scenario import dump, load_problem, loads
+from tmaplan.simulate import draw_truth
+
+
+class _Always:
+    """A ping policy's controller that asks for a ping at every step."""
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        return Action(turn_rate=0.01, ping=True)
+
+
+def _belief(step: int, pings: int, alarms: int) -> BeliefView:
+    return BeliefView(step=step, t=15.0 * step, heading=0.0, position=np.zeros(2),
+                      particles=np.ones((3, 4)), weights=np.full(3, 1 / 3), pings_used=pings,
+                      alarms=alarms)
+
+
+def _drive(ctrl, alarm_steps, n=60):
+    """Step a responder for n steps; alarms raised at ``alarm_steps``; returns ping steps."""
+    pings: list[int] = []
+    for k in range(n):
+        alarms = sum(s <= k for s in alarm_steps)
+        if ctrl.act(_belief(k, len(pings), alarms), 15.0 * k).ping:
+            pings.append(k + 1)
+    return pings
+
+
+def test_an_alarm_pings_at_the_next_step_and_after_the_spacing():
+    sc = load_problem("default")  # dt 15 s, ping spacing 120 s, budget 4
+    ctrl = AlarmResponse(pings=2, extra_pings=0).wrap(NoPing().controller(sc), sc)
+    pings = _drive(ctrl, [10])
+    assert pings == [11, 19] and ctrl.alarm_pings == pings
+    # no alarm: nothing added
+    assert _drive(AlarmResponse().wrap(NoPing().controller(sc), sc), []) == []
+
+
+def test_the_budget_plus_allowance_is_never_exceeded():
+    sc = load_problem("default")
+    for extra in (0, 1, 3):
+        resp = AlarmResponse(pings=3, extra_pings=extra, spacing=15.0)
+        # an alarm at every step and a policy that pings at every step
+        ctrl = resp.wrap(NoPing().controller(sc), sc)
+        assert len(_drive(ctrl, range(60))) == sc.planning.ping_budget + extra
+        ctrl = resp.wrap(_Always(), sc)
+        # every step already pings: nothing added, and the policy's own pings pass
+        assert _drive(ctrl, range(0, 60, 5)) == list(range(1, 61)) and ctrl.alarm_pings == []
+    ctrl = AlarmResponse(pings=1, extra_pings=1).wrap(_Always(), sc)
+    ctrl.alarm_pings.append(0)  # once alarm pings were spent, the cap binds the policy too
+    assert len(_drive(ctrl, [])) == sc.planning.ping_budget + 1
+
+
+def test_alarm_pings_respect_spacing_and_forbidden_windows():
+    sc = load_problem("default")
+    pl = dataclasses.replace(sc.planning, ping_forbidden=((150.0, 300.0),))
+    sc = dataclasses.replace(sc, planning=pl)
+    ctrl = AlarmResponse(pings=1, extra_pings=2).wrap(NoPing().controller(sc), sc)
+    pings = _drive(ctrl, [9])  # wants step 10 (150 s): forbidden until 300 s
+    assert pings == [21]
+
+
+def test_validation():
+    for kw in ({"pings": 0}, {"extra_pings": -1}, {"spacing": 0.0}, {"pings": True}):
+        with pytest.raises(ArgumentError, match="alarm_response"):
+            AlarmResponse(**kw)
+    assert FilterOptions.monitored().label() == "monitored"
+    assert FilterOptions.responsive().label() == "responsive"
+    assert FilterOptions.responsive().alarm_response == AlarmResponse()
+    # the defaults never ping beyond the user's budget
+    assert FilterOptions.monitored().alarm_response is None
+    assert FilterOptions.robust().alarm_response is None
+
+
+def _run(sc, options, i=0, particles=1000):
+    pol = resolve_policies(sc, ["planned+scheduled"])["planned+scheduled"]
+    ss = np.random.SeedSequence(3, spawn_key=(i,)).spawn(3)
+    return run_closed_loop(sc, pol, draw_truth(sc, np.random.default_rng(ss[0])),
+                           noise_rng=np.random.default_rng(ss[1]),
+                           filter_rng=np.random.default_rng(ss[2]), n_particles=particles,
+                           options=options)
+
+
+def test_no_alarm_runs_are_bit_identical_with_and_without_the_response():
+    sc = load_problem("default")
+    silent = FilterOptions.monitored()
+    compared = 0
+    for i in range(3):
+        a, b = _run(sc, FilterOptions.responsive(), i), _run(sc, silent, i)
+        if a.alarms:
+            continue
+        compared += 1
+        assert b.alarms == () and a.alarm_pings.size == 0
+        for f in ("estimate", "covariance", "ping_steps", "turn_rate", "truth"):
+            assert np.array_equal(getattr(a, f), getattr(b, f)), f
+    assert compared >= 2
+
+
+def test_a_course_change_alarm_brings_a_ping_within_the_budget():
+    base = load_problem("default")
+    sc = loads(dump(base) + '\n[faults]\ntarget_manoeuvres = [{time = "22.5 min", '
+               'course_change = "60 deg"}]\n')
+    answered = 0
+    for i in range(3):
+        r = _run(sc, FilterOptions.responsive(), i, particles=2000)
+        cap = sc.planning.ping_budget + AlarmResponse().extra_pings
+        assert r.ping_steps.size <= cap
+        assert set(r.alarm_pings) <= set(r.ping_steps)
+        late = [a["step"] for a in r.alarms if a["step"] >= 90]
+        if late and r.alarm_pings.size:
+            answered += int(any(p > late[0] for p in r.alarm_pings))
+    assert answered >= 2
+
+
+def test_receding_replans_at_once_on_an_alarm():
+    from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+    from tmaplan.policies import Receding
+
+    sc = load_problem("default")
+    st = ParticleFilter(PFConfig(n_particles=500, dt=15.0, q=1e-6)).init(
+        sc, np.random.default_rng(0))
+
+    def belief(k, alarms):
+        return BeliefView(step=k, t=15.0 * k, heading=0.0, position=np.zeros(2),
+                          particles=st.particles, weights=st.weights, pings_used=0,
+                          alarms=alarms)
+
+    for on, expected in ((True, 2), (False, 1)):
+        ctrl = Receding(replan_on_alarm=on).controller(sc)
+        for k, alarms in ((0, 0), (1, 0), (2, 1), (3, 1)):
+            ctrl.act(belief(k, alarms), 15.0 * k)
+        assert len(ctrl.log) == expected

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tmaplan.errors import PlanningError, ScenarioError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, SolverError
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, RTIModel, reference_model
 from tmaplan.scenario import load_problem
@@ -91,15 +91,16 @@ def test_steps_are_bit_reproducible(small, qpsol):
 
 def test_bad_configurations_are_rejected(small):
     sc, prior, planner, plan, model = small
-    with pytest.raises(ScenarioError, match="qpsol"):
+    with pytest.raises(ArgumentError, match="qpsol") as bad:
         RealTimeIteration(planner, model, qpsol="nope")
+    assert not isinstance(bad.value, ScenarioError)  # an argument, not a scenario field
     bb = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0,
                         transcription="bang-bang")
     with pytest.raises(PlanningError, match="direct"):
         RealTimeIteration(bb, model)
     other = HeadingPlanner(sc, objective="mean-range-bound", horizon=600.0,
                            control_interval=60.0)
-    with pytest.raises(ScenarioError, match="hessian"):
+    with pytest.raises(ArgumentError, match="hessian"):
         RealTimeIteration(other, model)
     with pytest.raises(PlanningError, match="solver state"):
         reference_model(planner, dataclasses.replace(plan, warm=None), prior)

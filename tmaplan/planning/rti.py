@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError
 
 if TYPE_CHECKING:
     from tmaplan.planning.belief import Belief
@@ -100,7 +100,7 @@ def reference_model(planner: HeadingPlanner, plan: HeadingPlan, belief: Belief, 
         raise PlanningError("reference_model: plan has no solver state (expected an IPOPT "
                             "plan of this planner)")
     if not 0 < eigen_floor < 1:
-        raise ScenarioError("eigen_floor", "in (0, 1)", eigen_floor)
+        raise ArgumentError("eigen_floor", "in (0, 1)", eigen_floor)
     h0, s0, _ = planner._start_state(heading0, speed0, None)
     scale = float(plan.warm["scale"])
     P = np.concatenate([planner._parameters(belief, ()), [h0, s0, scale, 1.0]])
@@ -156,16 +156,16 @@ class RealTimeIteration:
 
         _check_planner(planner)
         if qpsol not in QP_SOLVERS:
-            raise ScenarioError("qpsol", f"one of {', '.join(QP_SOLVERS)}", qpsol)
+            raise ArgumentError("qpsol", f"one of {', '.join(QP_SOLVERS)}", qpsol)
         nlp = planner._nlp
         n_w = nlp["x"].shape[0]
         if model.hessian.shape != (n_w, n_w):
-            raise ScenarioError("model.hessian", f"shape ({n_w}, {n_w})", model.hessian.shape)
+            raise ArgumentError("model.hessian", f"shape ({n_w}, {n_w})", model.hessian.shape)
         self.planner, self.model, self.qpsol = planner, model, qpsol
         self.backtracks = max(0, int(backtracks))
         self.constraint_tol = float(constraint_tol)
         if int(steps) < 1:
-            raise ScenarioError("steps", ">= 1", steps)
+            raise ArgumentError("steps", ">= 1", steps)
         self.steps = int(steps)
         self.rescale = bool(rescale)
         w, P, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
@@ -195,7 +195,7 @@ class RealTimeIteration:
             return self
         n_w = self.model.hessian.shape[0]
         if model.hessian.shape != (n_w, n_w):
-            raise ScenarioError("model.hessian", f"shape ({n_w}, {n_w})", model.hessian.shape)
+            raise ArgumentError("model.hessian", f"shape ({n_w}, {n_w})", model.hessian.shape)
         out = copy.copy(self)
         out.model = model
         return out

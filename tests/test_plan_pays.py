@@ -202,3 +202,93 @@ def test_receding_beats_planned_on_default():
     camp = plan_campaign(load_problem("default"), runs=20, seed=0, receding=True)
     d = planned_differences(camp, "receding")
     assert d["planned"].ci_high < 0.0, d["planned"]
+
+
+# --------------------------------------------------------------------------------------------
+# random planning problems: the criteria "on geometries you do not see" (plan_general)
+# --------------------------------------------------------------------------------------------
+def test_random_problems_are_valid_distinct_and_reproducible(scenario):
+    import math
+
+    from tmaplan.evaluation.plan_general import ProblemFamily, random_problems
+    from tmaplan.scenario import dump, loads
+
+    fam = ProblemFamily()
+    ps = random_problems(scenario, 6, seed=11)
+    assert [p.name for p in ps] == [f"default-s11-{i}" for i in range(6)]
+    # reproducible, and problem i depends on (seed, i) only
+    assert random_problems(scenario, 6, seed=11) == ps
+    assert random_problems(scenario, 2, seed=11) == ps[:2]
+    assert random_problems(scenario, 1, seed=12)[0] != ps[0]
+    draws = set()
+    for p in ps:
+        assert loads(dump(p)) == p   # a normal scenario: the file format round-trips it
+        rel = math.remainder(p.prior.bearing_mean - p.observer.course, math.tau)
+        r_lo, r_hi = p.prior.range_min, p.prior.range_max
+        own, sigma = p.observer.speed, p.sensors_of("bearing")[0].sigma
+        assert fam.relative_bearing[0] <= rel <= fam.relative_bearing[1]
+        assert fam.range_min[0] <= r_lo <= fam.range_min[1]
+        assert fam.range_ratio[0] <= r_hi / r_lo <= fam.range_ratio[1]
+        assert fam.target_speed_max[0] <= p.prior.speed_max <= fam.target_speed_max[1]
+        assert fam.own_speed[0] <= own <= fam.own_speed[1]
+        assert p.observer.speed_min == p.observer.speed_max == own
+        assert fam.bearing_sigma[0] <= sigma <= fam.bearing_sigma[1]
+        assert p.time.horizon == p.planning.horizon
+        assert fam.horizon[0] <= p.time.horizon <= fam.horizon[1]
+        assert p.time.horizon % fam.horizon_step == 0
+        # the single-run truth is consistent with the prior
+        x, y = np.subtract(p.target.position, p.observer.position)
+        assert np.hypot(x, y) == pytest.approx(0.5 * (r_lo + r_hi))
+        assert math.atan2(x, y) == pytest.approx(p.prior.bearing_mean)
+        # what the base fixes is kept
+        assert p.prior.bearing_std == scenario.prior.bearing_std
+        assert p.planning.objective == scenario.planning.objective
+        draws.add((round(rel, 9), round(r_lo, 6), round(own, 9), round(sigma, 12)))
+    assert len(draws) == len(ps)   # distinct geometries
+
+
+@pytest.mark.parametrize("kwargs,field", [
+    ({"count": 0}, "count"), ({"count": 2.5}, "count"), ({"seed": -1}, "seed"),
+    ({"family": {"range_min": (5e3, 4e3)}}, "range_min"),
+    ({"family": {"range_ratio": (0.5, 2.0)}}, "range_ratio"),
+    ({"family": {"relative_bearing": (0.0, 4.0)}}, "relative_bearing"),
+    ({"family": {"bearing_sigma": (0.0, 0.01)}}, "bearing_sigma"),
+    ({"family": {"own_speed": (3.0,)}}, "own_speed"),
+    ({"family": {"horizon": (610.0, 890.0)}}, "horizon"),
+    ({"family": {"horizon_step": 0.0}}, "horizon_step"),
+])
+def test_random_problems_reject_bad_arguments_naming_the_field(scenario, kwargs, field):
+    from tmaplan.evaluation.plan_general import ProblemFamily, random_problems
+
+    kw = {"count": 2, "seed": 0} | kwargs
+    with pytest.raises(ArgumentError, match=field) as info:
+        if isinstance(kw.get("family"), dict):
+            kw["family"] = ProblemFamily(**kw["family"])
+        random_problems(scenario, kw.pop("count"), **kw)
+    assert info.value.field == field
+
+
+def test_random_problems_need_a_planning_base_and_a_generator():
+    from tmaplan.evaluation.plan_general import random_problem
+
+    with pytest.raises(ArgumentError, match="base"):
+        random_problem(load_problem("brehard2005-s1"), np.random.default_rng(0))
+    with pytest.raises(ArgumentError, match="rng"):
+        random_problem(load_problem("default"), 0)
+
+
+def test_criteria_read_the_ends_of_the_paired_intervals():
+    from tmaplan.evaluation.metrics import PairedDifference
+    from tmaplan.evaluation.plan_general import criteria
+
+    def d(lo, hi):
+        return PairedDifference(a="planned", b="x", metric="t", mean=0.5 * (lo + hi),
+                                ci_low=lo, ci_high=hi, level=0.95, n=10)
+
+    ok = criteria({"straight": d(-90.0, -1.0), "single-turn": d(-90.0, 1.0),
+                   "tuned-turn": d(-10.0, 59.0), "receding": d(1.0, 90.0)})
+    assert ok == {"sooner than straight": True, "sooner than the cost's single turn": False,
+                  "no worse than the tuned turn (+1 min)": True,
+                  "receding beats planned": True}
+    assert criteria({"tuned-turn": d(0.0, 61.0), "receding": d(-1.0, 90.0)}) == {
+        "no worse than the tuned turn (+1 min)": False, "receding beats planned": False}

@@ -28,6 +28,13 @@ from tmaplan.evaluation.plan_check import (
     select_plan,
     tune_single_turn,
 )
+from tmaplan.evaluation.plan_general import (
+    ProblemFamily,
+    criteria,
+    general_check,
+    random_problem,
+    random_problems,
+)
 
 __all__ = [
     "CampaignResult",
@@ -35,10 +42,15 @@ __all__ = [
     "Candidate",
     "CostCorrelation",
     "CostRankingResult",
+    "ProblemFamily",
     "candidate_manoeuvres",
     "cost_functionals",
+    "criteria",
+    "general_check",
     "plan_campaign",
     "planned_differences",
+    "random_problem",
+    "random_problems",
     "rank_correlations",
     "rank_costs",
     "resolve_policies",

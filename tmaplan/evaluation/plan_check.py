@@ -159,14 +159,16 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
                   n_particles: int = 3000, accuracy: float = 0.1,
                   tuned: SingleTurn | None = None, receding: bool = False,
                   objective: str | None = None, selected: Any = None, workers: int = 1,
-                  out_dir: str | Path | None = None) -> CampaignResult:
+                  out_dir: str | Path | None = None, baselines: bool = True) -> CampaignResult:
     """Paired campaign of ``planned`` against the baselines (see the module docstring).
 
     Policies: ``planned`` (the multi-started offline plan of ``objective``, default the
     scenario's), ``straight``, ``single-turn`` (the best single turn by the planning cost),
     ``leg-turn-leg``, ``lead-lag``, ``tuned-turn`` (if ``tuned`` is given), ``planned-mc``
     (the plan ``selected`` by :func:`select_plan`, if given) and ``receding`` (if
-    ``receding``).
+    ``receding``). ``baselines=False`` flies only ``planned`` and what is asked for beyond
+    the baselines (e.g. ``receding − planned`` alone): every policy re-creates run ``i``'s
+    generators from the same seeds, so its runs are those of the full campaign.
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
@@ -174,12 +176,12 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
         scenario.planning.objective if scenario.planning is not None else None)
     pols: dict[str, Policy] = {
         "planned": Combined(manoeuvre=Planned(objective=obj,
-                                              plan=offline_plan(scenario, obj))),
-        "straight": Combined(manoeuvre=Straight()),
-        "single-turn": Combined(manoeuvre=best_single_turn(scenario)),
-        "leg-turn-leg": Combined(manoeuvre=LegTurnLeg()),
-        "lead-lag": Combined(manoeuvre=LeadLag()),
-    }
+                                              plan=offline_plan(scenario, obj)))}
+    if baselines:
+        pols |= {"straight": Combined(manoeuvre=Straight()),
+                 "single-turn": Combined(manoeuvre=best_single_turn(scenario)),
+                 "leg-turn-leg": Combined(manoeuvre=LegTurnLeg()),
+                 "lead-lag": Combined(manoeuvre=LeadLag())}
     if tuned is not None:
         pols["tuned-turn"] = Combined(manoeuvre=tuned)
     if selected is not None:

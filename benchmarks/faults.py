@@ -35,9 +35,10 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.detectability import manoeuvre_detectability
 from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads
 from tmaplan.simulate import draw_truth
@@ -148,7 +149,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed, extra, false = [], [], [], [], []
+    det, rec, disturbed, extra, false, bound = [], [], [], [], [], []
+    sig_b = float(base.sensors_of("bearing")[0].sigma)
+    sig_r = float(base.sensors_of("range")[0].sigma)
+    alpha = (OPTIONS[option]().monitor or MonitorConfig()).alpha
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -170,6 +174,11 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
         extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
         false.append(any(a["step"] >= j and a["test"] != "probe" for a in out[0].alarms))
+        bound.append(manoeuvre_detectability(
+            times=times, own_position=r1.observer.position, target=r1.target,
+            straight=out[0].target, onset=j, window=60.0 * window_min, bearing_sigma=sig_b,
+            bearing_steps=np.arange(1, times.size), ping_steps=r1.ping_steps,
+            range_sigma=sig_r, alpha=alpha))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -177,13 +186,32 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "both": float(np.mean((det_a <= w) & (rec_a <= w))),
             "detected_ever": float(np.mean(np.isfinite(det_a))),
             "disturbed": float(np.mean(disturbed)),
-            "detected_if_disturbed": float(np.mean(det_a[dist] <= w)) if dist.any() else 1.0,
-            "recovered_if_disturbed": float(np.mean(rec_a[dist] <= w)) if dist.any() else 1.0,
+            "detected_if_disturbed": _among(det_a <= w, dist),
+            "recovered_if_disturbed": _among(rec_a <= w, dist),
             "median_detection_s": float(np.median(det_a)),
             "median_recovery_s": float(np.median(rec_a)),
             "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
             "fault_free_alarmed_after_mid": float(np.mean(false)),
-            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
+            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra])),
+            # the ideal tests at the monitor's α (tmaplan.evaluation.detectability)
+            "bound_alpha": alpha,
+            "clairvoyant_pd>=0.5": float(np.mean([b.pd_clairvoyant >= 0.5 for b in bound])),
+            "clairvoyant_pd>=0.9": float(np.mean([b.pd_clairvoyant >= 0.9 for b in bound])),
+            "clairvoyant_mean_pd": float(np.mean([b.pd_clairvoyant for b in bound])),
+            "unknown_state_pd>=0.5": float(np.mean([b.pd_unknown_state >= 0.5
+                                                    for b in bound])),
+            "unknown_state_pd>=0.9": float(np.mean([b.pd_unknown_state >= 0.9
+                                                    for b in bound])),
+            "unknown_state_mean_pd": float(np.mean([b.pd_unknown_state for b in bound])),
+            "detected_if_unknown_state_pd>=0.5": _among(
+                det_a <= w, np.array([b.pd_unknown_state >= 0.5 for b in bound])),
+            "median_lambda": (float(np.median([b.lam_clairvoyant for b in bound])),
+                              float(np.median([b.lam_unknown_state for b in bound])))}
+
+
+def _among(x: np.ndarray, mask: np.ndarray) -> float:
+    """Mean of ``x`` over ``mask`` (nan when empty)."""
+    return float(np.mean(x[mask])) if mask.any() else float("nan")
 
 
 def pairs(*, runs: int, options: list[str], particles: int = 3000, seed: int = 0) -> None:

@@ -16,8 +16,13 @@ at mid-horizon: detection = the first monitor alarm at or after the manoeuvre; t
 outside after the manoeuvre; printed: the fractions of runs detected within 5 min, recovered
 within 5 min, and both, the same among the disturbed runs, with the median delays, the alarm
 pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
-with an alarm after mid-horizon. Options ``responsive`` and ``robust-responsive`` add the
-alarm pings (beyond the budget) to ``monitored`` and ``robust``.
+with an alarm after mid-horizon. Options ``responsive``, ``robust-responsive`` and
+``glr-responsive`` add the alarm pings (beyond the budget) to ``monitored``, ``robust`` and
+``glr`` (the monitor plus the velocity-jump GLR). It also prints the ideal-test bound of
+:mod:`tmaplan.evaluation.detectability` at the monitor's α: the fractions of runs in which the
+clairvoyant test (known state, onset and new velocity) and the unknown-state test (best
+straight track through all measurements) detect within the window with probability ≥ 0.5 and
+≥ 0.9 — no monitor at that α does better.
 
 ``--pairs`` runs the issue's fault-free criterion: ``planned+scheduled-terminal`` against
 ``planned+uniform`` per filter option, with the paired interval of the final range error.
@@ -57,7 +62,11 @@ OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
            # the presets without their alarm pings (tmaplan.policies.AlarmResponse)
            "responsive": FilterOptions.responsive,
            "robust-responsive": lambda: dataclasses.replace(FilterOptions.robust(),
-                                                            alarm_response=AlarmResponse())}
+                                                            alarm_response=AlarmResponse()),
+           # the velocity-jump GLR test on top of the monitor (tmaplan.estimators.manoeuvre_glr)
+           "glr": FilterOptions.glr,
+           "glr-responsive": lambda: dataclasses.replace(FilterOptions.glr(),
+                                                         alarm_response=AlarmResponse())}
 
 
 def faulty(name: str, base: Scenario | None = None) -> Scenario:

@@ -18,7 +18,8 @@ within 5 min, and both, the same among the disturbed runs, with the median delay
 pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
 with an alarm after mid-horizon. Options ``responsive``, ``robust-responsive`` and
 ``glr-responsive`` add the alarm pings (beyond the budget) to ``monitored``, ``robust`` and
-``glr`` (the monitor plus the velocity-jump GLR). It also prints the ideal-test bound of
+``glr`` (the monitor plus the velocity-jump GLR); ``turning`` answers an alarm with a 60°
+own-ship turn instead, ``turning-responsive`` with both. It also prints the ideal-test bound of
 :mod:`tmaplan.evaluation.detectability` at the monitor's α: the fractions of runs in which the
 clairvoyant test (known state, onset and new velocity) and the unknown-state test (best
 straight track through all measurements) detect within the window with probability ≥ 0.5 and
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import time
 from typing import Any
 
@@ -65,6 +67,13 @@ OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
                                                             alarm_response=AlarmResponse()),
            # the velocity-jump GLR test on top of the monitor (tmaplan.estimators.manoeuvre_glr)
            "glr": FilterOptions.glr,
+           # an own-ship turn of 60° on alarm, without / with the alarm pings
+           "turning": lambda: dataclasses.replace(FilterOptions.monitored(),
+                                                  alarm_response=AlarmResponse(
+                                                      pings=0, turn=math.radians(60.0))),
+           "turning-responsive": lambda: dataclasses.replace(
+               FilterOptions.monitored(),
+               alarm_response=AlarmResponse(turn=math.radians(60.0))),
            "glr-responsive": lambda: dataclasses.replace(FilterOptions.glr(),
                                                          alarm_response=AlarmResponse())}
 

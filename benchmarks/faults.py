@@ -16,8 +16,14 @@ at mid-horizon: detection = the first monitor alarm at or after the manoeuvre; t
 outside after the manoeuvre; printed: the fractions of runs detected within 5 min, recovered
 within 5 min, and both, the same among the disturbed runs, with the median delays, the alarm
 pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
-with an alarm after mid-horizon. Options ``responsive`` and ``robust-responsive`` add the
-alarm pings (beyond the budget) to ``monitored`` and ``robust``.
+with an alarm after mid-horizon. Options ``responsive``, ``robust-responsive`` and
+``glr-responsive`` add the alarm pings (beyond the budget) to ``monitored``, ``robust`` and
+``glr`` (the monitor plus the velocity-jump GLR); ``turning`` answers an alarm with a 60°
+own-ship turn instead, ``turning-responsive`` with both. It also prints the ideal-test bound of
+:mod:`tmaplan.evaluation.detectability` at the monitor's α: the fractions of runs in which the
+clairvoyant test (known state, onset and new velocity) and the unknown-state test (best
+straight track through all measurements) detect within the window with probability ≥ 0.5 and
+≥ 0.9 — no monitor at that α does better.
 
 ``--pairs`` runs the issue's fault-free criterion: ``planned+scheduled-terminal`` against
 ``planned+uniform`` per filter option, with the paired interval of the final range error.
@@ -30,14 +36,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import time
 from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.detectability import detection_probability, manoeuvre_detectability
 from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads
 from tmaplan.simulate import draw_truth
@@ -56,7 +64,18 @@ OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
            # the presets without their alarm pings (tmaplan.policies.AlarmResponse)
            "responsive": FilterOptions.responsive,
            "robust-responsive": lambda: dataclasses.replace(FilterOptions.robust(),
-                                                            alarm_response=AlarmResponse())}
+                                                            alarm_response=AlarmResponse()),
+           # the velocity-jump GLR test on top of the monitor (tmaplan.estimators.manoeuvre_glr)
+           "glr": FilterOptions.glr,
+           # an own-ship turn of 60° on alarm, without / with the alarm pings
+           "turning": lambda: dataclasses.replace(FilterOptions.monitored(),
+                                                  alarm_response=AlarmResponse(
+                                                      pings=0, turn=math.radians(60.0))),
+           "turning-responsive": lambda: dataclasses.replace(
+               FilterOptions.monitored(),
+               alarm_response=AlarmResponse(turn=math.radians(60.0))),
+           "glr-responsive": lambda: dataclasses.replace(FilterOptions.glr(),
+                                                         alarm_response=AlarmResponse())}
 
 
 def faulty(name: str, base: Scenario | None = None) -> Scenario:
@@ -148,7 +167,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed, extra, false = [], [], [], [], []
+    det, rec, disturbed, extra, false, bound = [], [], [], [], [], []
+    sig_b = float(base.sensors_of("bearing")[0].sigma)
+    sig_r = float(base.sensors_of("range")[0].sigma)
+    alpha = (OPTIONS[option]().monitor or MonitorConfig()).alpha
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -170,6 +192,13 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
         extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
         false.append(any(a["step"] >= j and a["test"] != "probe" for a in out[0].alarms))
+        bound.append(manoeuvre_detectability(
+            times=times, own_position=r1.observer.position, target=r1.target,
+            straight=out[0].target, onset=j, window=60.0 * window_min, bearing_sigma=sig_b,
+            bearing_steps=np.arange(1, times.size),
+            # the policy's pings, not those answering an alarm (the bound has no alarm)
+            ping_steps=np.setdiff1d(r1.ping_steps, r1.alarm_pings),
+            range_sigma=sig_r, alpha=alpha))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -177,13 +206,37 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "both": float(np.mean((det_a <= w) & (rec_a <= w))),
             "detected_ever": float(np.mean(np.isfinite(det_a))),
             "disturbed": float(np.mean(disturbed)),
-            "detected_if_disturbed": float(np.mean(det_a[dist] <= w)) if dist.any() else 1.0,
-            "recovered_if_disturbed": float(np.mean(rec_a[dist] <= w)) if dist.any() else 1.0,
+            "detected_if_disturbed": _among(det_a <= w, dist),
+            "recovered_if_disturbed": _among(rec_a <= w, dist),
             "median_detection_s": float(np.median(det_a)),
             "median_recovery_s": float(np.median(rec_a)),
             "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
             "fault_free_alarmed_after_mid": float(np.mean(false)),
-            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
+            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra])),
+            # the ideal tests at the monitor's α (tmaplan.evaluation.detectability)
+            "bound_alpha": alpha,
+            "clairvoyant_pd>=0.5": float(np.mean([b.pd_clairvoyant >= 0.5 for b in bound])),
+            "clairvoyant_pd>=0.9": float(np.mean([b.pd_clairvoyant >= 0.9 for b in bound])),
+            "clairvoyant_mean_pd": float(np.mean([b.pd_clairvoyant for b in bound])),
+            "unknown_state_pd>=0.5": float(np.mean([b.pd_unknown_state >= 0.5
+                                                    for b in bound])),
+            "unknown_state_pd>=0.9": float(np.mean([b.pd_unknown_state >= 0.9
+                                                    for b in bound])),
+            "unknown_state_mean_pd": float(np.mean([b.pd_unknown_state for b in bound])),
+            "detected_if_unknown_state_pd>=0.5": _among(
+                det_a <= w, np.array([b.pd_unknown_state >= 0.5 for b in bound])),
+            # the same at a 10× looser test (the bound's dependence on α)
+            "clairvoyant_pd>=0.9_at_10alpha": float(np.mean(detection_probability(
+                np.array([b.lam_clairvoyant for b in bound]), 10 * alpha) >= 0.9)),
+            "unknown_state_pd>=0.9_at_10alpha": float(np.mean(detection_probability(
+                np.array([b.lam_unknown_state for b in bound]), 10 * alpha) >= 0.9)),
+            "median_lambda": (float(np.median([b.lam_clairvoyant for b in bound])),
+                              float(np.median([b.lam_unknown_state for b in bound])))}
+
+
+def _among(x: np.ndarray, mask: np.ndarray) -> float:
+    """Mean of ``x`` over ``mask`` (nan when empty)."""
+    return float(np.mean(x[mask])) if mask.any() else float("nan")
 
 
 def pairs(*, runs: int, options: list[str], particles: int = 3000, seed: int = 0) -> None:

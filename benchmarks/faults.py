@@ -38,11 +38,13 @@ import argparse
 import dataclasses
 import math
 import time
+import warnings
 from typing import Any
 
 import numpy as np
 
 from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
+from tmaplan.estimators.particle_filter import DegeneracyWarning
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.detectability import detection_probability, manoeuvre_detectability
@@ -254,10 +256,12 @@ def bound_only(*, runs: int, policy: str = "planned+scheduled", seed: int = 0,
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         straight = draw_truth(base, np.random.default_rng(ss[0]))
-        r = run_closed_loop(sc, pol, draw_truth(sc, np.random.default_rng(ss[0])),
-                            noise_rng=np.random.default_rng(ss[1]),
-                            filter_rng=np.random.default_rng(ss[2]), n_particles=64,
-                            options=FilterOptions.plain())
+        with warnings.catch_warnings():  # 64 particles degenerate at pings; only the path counts
+            warnings.simplefilter("ignore", DegeneracyWarning)
+            r = run_closed_loop(sc, pol, draw_truth(sc, np.random.default_rng(ss[0])),
+                                noise_rng=np.random.default_rng(ss[1]),
+                                filter_rng=np.random.default_rng(ss[2]), n_particles=64,
+                                options=FilterOptions.plain())
         bound.append(manoeuvre_detectability(
             times=times, own_position=r.observer.position, target=r.target, straight=straight,
             onset=j, window=60.0 * window_min,

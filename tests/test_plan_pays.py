@@ -103,6 +103,25 @@ def test_planned_differences_match_an_independent_paired_t_interval():
         planned_differences(camp, reference="nope")
 
 
+def test_runs_to_exclude_zero_is_the_t_interval_sizing():
+    from tmaplan.evaluation.metrics import paired_difference, runs_to_exclude_zero
+
+    rng = np.random.default_rng(5)
+    x = rng.normal(0.0, 13.0, 100)
+    x -= x.mean()  # mean difference exactly −1 below, SD ≈ 13 (as on `default`)
+    vals = {"a": x - 1.0, "b": np.zeros(100)}
+    d = paired_difference(vals, "a", "b", "t")
+    t = stats.t.ppf(0.975, 99)
+    expect = (t * np.std(vals["a"], ddof=1) / np.mean(vals["a"])) ** 2
+    assert runs_to_exclude_zero(d) == pytest.approx(expect)
+    assert not d.excludes_zero and runs_to_exclude_zero(d) > 100
+    # an interval that already excludes zero needs fewer runs than it has
+    far = paired_difference({"a": x - 10.0, "b": np.zeros(100)}, "a", "b", "t")
+    assert far.excludes_zero and runs_to_exclude_zero(far) < 100
+    zero = paired_difference({"a": np.zeros(3), "b": np.zeros(3)}, "a", "b", "t")
+    assert runs_to_exclude_zero(zero) == float("inf")
+
+
 def test_tuning_and_plan_campaign_code_path_at_tiny_size():
     import dataclasses
 

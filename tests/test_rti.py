@@ -57,8 +57,9 @@ def test_steps_approach_the_ipopt_solution(small):
 
 def test_rejected_step_falls_back_to_ipopt(small):
     _, prior, planner, plan, model = small
-    tiny = RTIModel(hessian=model.hessian * 1e-9, scale=model.scale, plan=plan)
-    rti = RealTimeIteration(planner, tiny, backtracks=0)
+    # a negative-definite model: the convex QP solver fails, the step is rejected
+    bad = RTIModel(hessian=-model.hessian, scale=model.scale, plan=plan)
+    rti = RealTimeIteration(planner, bad, backtracks=0)
     with pytest.raises(SolverError, match="rejected"):
         rti.solve(prior, previous=plan, fallback=False)
     out = rti.solve(prior, previous=plan)
@@ -87,6 +88,25 @@ def test_steps_are_bit_reproducible(small, qpsol):
     rti.solve(prior, previous=start, fallback=False)  # another problem in between
     b = rti.solve(later, previous=start, fallback=False)
     assert np.array_equal(a.turn_rate, b.turn_rate) and a.objective == b.objective
+
+
+def test_model_hessian_is_the_exact_lagrangian_hessian(small):
+    import casadi as ca
+
+    from tmaplan.planning.rti import hessian_columns
+
+    _, prior, planner, plan, _ = small
+    nlp = planner._nlp
+    lam = ca.MX.sym("lam", nlp["g"].shape[0])
+    lag = nlp["f"] + ca.dot(lam, nlp["g"])
+    h0, s0, _ = planner._start_state(None, None, None)
+    P = np.concatenate([planner._parameters(prior, ()), [h0, s0, plan.warm["scale"], 1.0]])
+    args = (plan.warm["x"], P, plan.warm["lam_g"])
+    symbolic = np.asarray(ca.Function("h", [nlp["x"], nlp["p"], lam],
+                                      [ca.hessian(lag, nlp["x"])[0]])(*args))
+    grad = ca.Function("g", [nlp["x"], nlp["p"], lam], [ca.gradient(lag, nlp["x"])])
+    columns = hessian_columns(grad, *args)
+    assert np.abs(columns - symbolic).max() <= 1e-8 * np.abs(symbolic).max()
 
 
 def test_bad_configurations_are_rejected(small):

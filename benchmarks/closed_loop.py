@@ -17,6 +17,7 @@ Hessian, condensing, QP per solver) against the IPOPT re-solve.
 Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
      [--particles 3000] [--policies straight,planned,receding] [--step] [--json OUT]
      python benchmarks/closed_loop.py --pair OLD_JSON NEW_JSON
+     python benchmarks/closed_loop.py --gaps --runs 3   (seed 1000 unless --seed)
 """
 
 from __future__ import annotations
@@ -176,6 +177,48 @@ def pair(old_json, new_json, problem="default"):
                   f"(n={d.n})")
 
 
+def gaps(runs, particles, seed=1000, problem="default"):
+    """How far the optimum moves between re-plans: per re-plan index, the objective of the
+    shifted previous plan (the real-time iteration's start) minus the IPOPT optimum from it,
+    along the new path's runs (tuning seeds, default 1000: not the evaluation seeds)."""
+    from tmaplan.planning import Belief
+    from tmaplan.policies import manoeuvres
+
+    sc = load_problem(problem)
+    pol = parse_policy("receding", sc).resolve(sc)
+    out = defaultdict(list)
+    replan = manoeuvres._RecedingController._replan
+
+    def recorded(self, belief, t):
+        idx = manoeuvres._subsample(belief.weights, self.policy.max_particles)
+        b = Belief.from_samples(belief.particles[idx], t=t)
+        pl = self.planner
+        prev = self.plan or self.rti.model.plan
+        opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)
+        h0, s0, _ = pl._start_state(belief.heading, None, None)
+        x0, _ = pl._shift_warm(prev, t, h0, s0)
+        P = np.concatenate([pl._parameters(b, ()), [h0, s0, 1.0, 1.0]])
+        out[len(self.log)].append(float(pl._f_eval(x0, P)[0]) - opt.objective)
+        return replan(self, belief, t)
+
+    manoeuvres._RecedingController._replan = recorded
+    try:
+        for i in range(runs):
+            s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+            with threadpool_limits(limits=1):
+                target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
+                run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(s_noise),
+                                filter_rng=np.random.default_rng(s_filter), n_particles=particles)
+    finally:
+        manoeuvres._RecedingController._replan = replan
+    print(f"{problem}: objective of the shifted previous plan - IPOPT optimum, {runs} runs "
+          f"(seed {seed})")
+    for k in sorted(out):
+        v = np.array(out[k])
+        print(f"  re-plan {k}: median {np.median(v):8.2f}  mean {v.mean():8.2f}  "
+              f"max {v.max():8.2f}")
+
+
 def step_profile(problem="default"):
     """Where the time of one re-plan goes (one RTI step against the IPOPT re-solve)."""
     import casadi as ca
@@ -240,12 +283,17 @@ def main():
     ap.add_argument("--first-run", type=int, default=0, help="index of the first Monte Carlo run")
     ap.add_argument("--policies", default="straight,planned,receding")
     ap.add_argument("--step", action="store_true", help="profile one re-plan step")
+    ap.add_argument("--gaps", action="store_true",
+                    help="per re-plan index, how far the start is from the IPOPT optimum")
     ap.add_argument("--json", help="write per-run metrics (with seeds and run indices) here")
     ap.add_argument("--pair", nargs=2, metavar=("OLD_JSON", "NEW_JSON"),
                     help="paired new - old intervals from two --json files")
     a = ap.parse_args()
     if a.pair:
         pair(*a.pair)
+        return
+    if a.gaps:
+        gaps(a.runs, a.particles, seed=a.seed if a.seed else 1000)
         return
     if a.step:
         step_profile()

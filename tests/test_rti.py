@@ -139,17 +139,29 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=300)
     solvers = [e.get("solver") for e in res.replans if e["success"]]
-    assert solvers and all(s in ("rti-daqp", "ipopt") for s in solvers)
+    assert len(solvers) == len(res.replans) >= 4
+    assert all(s in ("rti-daqp", "ipopt") for s in solvers)
+    assert solvers[1] == solvers[2] == "ipopt"  # the default full solves
     assert solvers.count("rti-daqp") >= len(solvers) // 2
     again = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                             filter_rng=np.random.default_rng(2), n_particles=300)
     assert np.array_equal(res.turn_rate, again.turn_rate)
 
 
+def test_receding_full_solves_are_checked(small):
+    from tmaplan.policies import Receding
+
+    sc = small[0]
+    for bad in ((-1,), (1.5,), (True,)):
+        with pytest.raises(ArgumentError, match="full_solves"):
+            Receding(full_solves=bad, objective="mean-range-bound", horizon=900.0) \
+                .resolve(sc).controller(sc)
+
+
 def test_receding_rti_policy_name_takes_only_rti_steps(small):
     from tmaplan.policies import Receding, parse_policy
 
     pol = parse_policy("receding-rti+uniform", small[0])
-    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_every == 0
+    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_solves == ()
     assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
-        .manoeuvre.full_every == 3
+        .manoeuvre.full_solves == (1, 2)

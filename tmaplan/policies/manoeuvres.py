@@ -209,10 +209,13 @@ class Receding:
         QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
     rti_steps : int
         SQP steps per re-plan of the real-time iteration.
-    full_every : int
-        With ``real_time``: every ``full_every``-th re-plan (the first included) is a full
-        IPOPT solve warm-started from the previous plan (the first from the offline plan), the
-        others are real-time iteration steps; 0: real-time iteration steps only.
+    full_solves : tuple of int
+        With ``real_time``: the re-plans (0 = the first) solved by a full IPOPT solve
+        warm-started from the previous plan, the others are real-time iteration steps; empty:
+        real-time iteration steps only. Default the second and third: the filter's posterior,
+        and with it the optimum, moves most over the first minutes (on ``default`` the shifted
+        previous plan was hundreds of objective units from the IPOPT optimum there, against a
+        few at the first re-plan and after the fourth: ``benchmarks/closed_loop.py --gaps``).
     rti : RTIModel, optional
         The offline plan and the Hessian model of the real-time iteration
         (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
@@ -230,7 +233,7 @@ class Receding:
     real_time: bool = True
     qpsol: str = "daqp"
     rti_steps: int = 1
-    full_every: int = 3
+    full_solves: tuple[int, ...] = (1, 2)
     rti: Any = dataclasses.field(default=None, compare=False, repr=False)
     replan_on_alarm: bool = True
     name: str = "receding"
@@ -306,6 +309,10 @@ class _RecedingController:
             raise ScenarioError("planning.replan_interval", "a re-planning interval for the "
                                 "receding policy", None, source=scenario.name)
         self.interval = float(interval)
+        if any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) or i < 0
+               for i in policy.full_solves):
+            raise ArgumentError("receding.full_solves", "re-plan indices >= 0",
+                                policy.full_solves)
         self.policy = policy
         self.scenario = scenario
         self.planner = _planner(scenario, policy.objective, policy.horizon)
@@ -334,8 +341,7 @@ class _RecedingController:
         b = Belief.from_samples(belief.particles[idx], t=t)
         entry: dict[str, Any] = {"t": t}
         try:
-            n_full = self.policy.full_every
-            if self.rti is not None and n_full > 0 and len(self.log) % n_full == 0:
+            if self.rti is not None and len(self.log) in self.policy.full_solves:
                 plan = self.planner.solve(b, heading0=belief.heading, position0=belief.position,
                                           warm_start=self.plan or self.rti.model.plan)
             elif self.rti is not None:

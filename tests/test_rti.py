@@ -141,11 +141,32 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     solvers = [e.get("solver") for e in res.replans if e["success"]]
     assert len(solvers) == len(res.replans) >= 4
     assert all(s in ("rti-daqp", "ipopt") for s in solvers)
-    assert solvers[1] == solvers[2] == "ipopt"  # the default full solves
     assert solvers.count("rti-daqp") >= len(solvers) // 2
     again = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                             filter_rng=np.random.default_rng(2), n_particles=300)
     assert np.array_equal(res.turn_rate, again.turn_rate)
+
+
+def test_receding_full_solve_when_the_optimum_moves_far(small):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    solvers = {}
+    for above, full in ((float("inf"), ()), (1e-9, ()), (float("inf"), (0, 2))):
+        # the closed-loop objective (mean-range-bound saturates the turn rate: zero steps)
+        pol = Receding(horizon=900.0, full_above=above, full_solves=full).resolve(sc)
+        res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                              filter_rng=np.random.default_rng(2), n_particles=300)
+        solvers[above, full] = [e.get("solver") for e in res.replans]
+    never = solvers[float("inf"), ()]
+    assert set(never) == {"rti-daqp"}  # no full solve, no fallback on this run
+    # a step that lowers the objective at all triggers the full solve at a tiny threshold
+    assert solvers[1e-9, ()].count("ipopt") > len(never) // 2
+    fixed = solvers[float("inf"), (0, 2)]
+    assert fixed[0] == fixed[2] == "ipopt" and fixed[1] == "rti-daqp"
 
 
 def test_receding_full_solves_are_checked(small):
@@ -156,12 +177,15 @@ def test_receding_full_solves_are_checked(small):
         with pytest.raises(ArgumentError, match="full_solves"):
             Receding(full_solves=bad, objective="mean-range-bound", horizon=900.0) \
                 .resolve(sc).controller(sc)
+    with pytest.raises(ArgumentError, match="full_above"):
+        Receding(full_above=0.0, objective="mean-range-bound", horizon=900.0) \
+            .resolve(sc).controller(sc)
 
 
 def test_receding_rti_policy_name_takes_only_rti_steps(small):
     from tmaplan.policies import Receding, parse_policy
 
     pol = parse_policy("receding-rti+uniform", small[0])
-    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_solves == ()
+    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_above == np.inf
     assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
-        .manoeuvre.full_solves == (1, 2)
+        .manoeuvre.full_above == 0.01

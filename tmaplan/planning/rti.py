@@ -285,8 +285,9 @@ class RealTimeIteration:
         Returns
         -------
         HeadingPlan
-            ``solver`` is ``"rti-qrqp"`` / ``"rti-osqp"`` for an accepted step, ``"ipopt"``
-            for the fallback.
+            ``solver`` is ``"rti-daqp"`` / ``"rti-qrqp"`` / ``"rti-osqp"`` for an accepted
+            step (``warm["start_objective"]``: the objective at the shifted start),
+            ``"ipopt"`` for the fallback.
         """
         from tmaplan.errors import SolverError
 
@@ -318,7 +319,8 @@ class RealTimeIteration:
             x1, status = accepted
             warm = {"x": x1, "lam_x": np.zeros_like(x1), "lam_g": np.zeros(lbg.size),
                     "sign": 1.0, "shape": ("direct", pl.n, pl.n_arcs),
-                    "scale": float(P[-2])}
+                    "scale": float(P[-2]),
+                    "start_objective": float(self._merit(x0, P)[0]) * float(P[-2])}
             plan = pl._make_plan(x1, P, belief.t, p0, speed0, status, True, 1,
                                  time.perf_counter() - t_start, warm, status)
             return dataclasses.replace(plan, solver=f"rti-{self.qpsol}")

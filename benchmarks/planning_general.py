@@ -57,6 +57,7 @@ def main() -> None:
         rows[p.name] = {x: f"{v.mean / 60:+.1f} [{v.ci_low / 60:+.1f}, {v.ci_high / 60:+.1f}]"
                         + (" ✓" if ok.get(c, False) else "")
                         for c, (x, _, _) in CRITERIA.items() if (v := d.get(x)) is not None}
+        print("  " + ", ".join(f"{x} {v}" for x, v in rows[p.name].items()), flush=True)
     baselines = [x for _, (x, _, _) in CRITERIA.items() if any(x in r for r in rows.values())]
     print(f"\n{a.runs} paired runs per problem, planned − X [min], paired 95 % CI "
           "(✓: criterion met)")

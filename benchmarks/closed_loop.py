@@ -15,12 +15,15 @@ the same process. ``--step`` profiles one re-plan step (objective/gradient/Jacob
 Hessian, condensing, QP per solver) against the IPOPT re-solve.
 
 Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
-     [--particles 3000] [--policies straight,planned,receding] [--step]
+     [--particles 3000] [--policies straight,planned,receding] [--step] [--json OUT]
+     python benchmarks/closed_loop.py --pair OLD_JSON NEW_JSON
+     python benchmarks/closed_loop.py --gaps --runs 3   (seed 1000 unless --seed)
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from collections import defaultdict
 
@@ -64,8 +67,10 @@ def _policies(scenario, names, path):
     return pols, time.perf_counter() - t
 
 
-def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0):
+def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0,
+                json_out=None):
     sc = load_problem(problem)
+    records = []
     rows = defaultdict(lambda: defaultdict(list))
     metric = defaultdict(lambda: defaultdict(list))
     setup = {}
@@ -94,6 +99,14 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
                                     n_pings=len(res.ping_steps))
                     metric[name]["tta", path].append(m.time_to_accuracy)
                     metric[name]["fre", path].append(m.final_range_error)
+                    records.append({"path": path, "policy": name, "run": i, "seed": seed,
+                                    "particles": particles, "problem": problem,
+                                    "time_to_accuracy": _num(m.time_to_accuracy),
+                                    "final_range_error": _num(m.final_range_error),
+                                    "seconds": total, "plan_seconds": plan})
+                    if json_out:
+                        with open(json_out, "w") as fh:
+                            json.dump(records, fh)
     print(f"\n{problem}: {runs} runs, {particles} particles, 1 thread (shared machine: ratios "
           "are the figures to read)")
     print(f"{'policy':<22}{'path':<5}{'s/run':>8}{'plan':>8}{'filter':>8}{'rest':>8}"
@@ -132,6 +145,78 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
     if len(paths) == 2:
         print(f"campaign setup new/old: {setup['new'] / setup['old']:.2f}; seconds per run of "
               f"all policies new/old: {per_run['new'] / per_run['old']:.3f}")
+
+
+def _num(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def pair(old_json, new_json, problem="default"):
+    """Paired new - old intervals from two ``--json`` files (runs matched by seed and index)."""
+    sc = load_problem(problem)
+    censor = float(sc.times[-1] - sc.times[0] + sc.time.dt)
+    recs = {}
+    for fn in (old_json, new_json):
+        with open(fn) as fh:
+            for r in json.load(fh):
+                recs[r["path"], r["policy"], r["seed"], r["particles"], r["run"]] = r
+    keys = {k[1:] for k in recs if k[0] == "old"} & {k[1:] for k in recs if k[0] == "new"}
+    for name in sorted({k[0] for k in keys}):
+        common = sorted(k for k in keys if k[0] == name)
+        sec = {p: np.array([recs[(p, *k)]["seconds"] for k in common]) for p in ("old", "new")}
+        print(f"{name}: {len(common)} paired runs, seconds per run new/old "
+              f"{sec['new'].mean() / sec['old'].mean():.3f} ({sec['new'].mean():.2f} / "
+              f"{sec['old'].mean():.2f})")
+        for key, label, cen in (("time_to_accuracy", "time to accuracy [s]", censor),
+                                ("final_range_error", "final range error [m]", None)):
+            vals = {p: np.array([np.inf if recs[(p, *k)][key] is None else recs[(p, *k)][key]
+                                 for k in common]) for p in ("old", "new")}
+            d = paired_difference(vals, "new", "old", label, censor=cen)
+            print(f"  paired new-old {label}: {d.mean:+.1f} [{d.ci_low:+.1f}, {d.ci_high:+.1f}] "
+                  f"(n={d.n})")
+
+
+def gaps(runs, particles, seed=1000, problem="default"):
+    """How far the optimum moves between re-plans: per re-plan index, the objective of the
+    shifted previous plan (the real-time iteration's start) minus the IPOPT optimum from it,
+    along the new path's runs (tuning seeds, default 1000: not the evaluation seeds)."""
+    from tmaplan.planning import Belief
+    from tmaplan.policies import manoeuvres
+
+    sc = load_problem(problem)
+    pol = parse_policy("receding", sc).resolve(sc)
+    out = defaultdict(list)
+    replan = manoeuvres._RecedingController._replan
+
+    def recorded(self, belief, t):
+        idx = manoeuvres._subsample(belief.weights, self.policy.max_particles)
+        b = Belief.from_samples(belief.particles[idx], t=t)
+        pl = self.planner
+        prev = self.plan or self.rti.model.plan
+        opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)
+        h0, s0, _ = pl._start_state(belief.heading, None, None)
+        x0, _ = pl._shift_warm(prev, t, h0, s0)
+        P = np.concatenate([pl._parameters(b, ()), [h0, s0, 1.0, 1.0]])
+        out[len(self.log)].append(float(pl._f_eval(x0, P)[0]) - opt.objective)
+        return replan(self, belief, t)
+
+    manoeuvres._RecedingController._replan = recorded
+    try:
+        for i in range(runs):
+            s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+            with threadpool_limits(limits=1):
+                target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
+                run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(s_noise),
+                                filter_rng=np.random.default_rng(s_filter), n_particles=particles)
+    finally:
+        manoeuvres._RecedingController._replan = replan
+    print(f"{problem}: objective of the shifted previous plan - IPOPT optimum, {runs} runs "
+          f"(seed {seed})")
+    for k in sorted(out):
+        v = np.array(out[k])
+        print(f"  re-plan {k}: median {np.median(v):8.2f}  mean {v.mean():8.2f}  "
+              f"max {v.max():8.2f}")
 
 
 def step_profile(problem="default"):
@@ -198,13 +283,24 @@ def main():
     ap.add_argument("--first-run", type=int, default=0, help="index of the first Monte Carlo run")
     ap.add_argument("--policies", default="straight,planned,receding")
     ap.add_argument("--step", action="store_true", help="profile one re-plan step")
+    ap.add_argument("--gaps", action="store_true",
+                    help="per re-plan index, how far the start is from the IPOPT optimum")
+    ap.add_argument("--json", help="write per-run metrics (with seeds and run indices) here")
+    ap.add_argument("--pair", nargs=2, metavar=("OLD_JSON", "NEW_JSON"),
+                    help="paired new - old intervals from two --json files")
     a = ap.parse_args()
+    if a.pair:
+        pair(*a.pair)
+        return
+    if a.gaps:
+        gaps(a.runs, a.particles, seed=a.seed if a.seed else 1000)
+        return
     if a.step:
         step_profile()
         return
     paths = ("old", "new") if a.path == "both" else (a.path,)
     closed_loop(paths, a.policies.split(","), a.runs, a.particles, seed=a.seed,
-                first_run=a.first_run)
+                first_run=a.first_run, json_out=a.json)
 
 
 if __name__ == "__main__":

@@ -16,8 +16,14 @@ at mid-horizon: detection = the first monitor alarm at or after the manoeuvre; t
 outside after the manoeuvre; printed: the fractions of runs detected within 5 min, recovered
 within 5 min, and both, the same among the disturbed runs, with the median delays, the alarm
 pings per run (:class:`tmaplan.policies.AlarmResponse`) and the fraction of fault-free runs
-with an alarm after mid-horizon. Options ``responsive`` and ``robust-responsive`` add the
-alarm pings (beyond the budget) to ``monitored`` and ``robust``.
+with an alarm after mid-horizon. Options ``responsive``, ``robust-responsive`` and
+``glr-responsive`` add the alarm pings (beyond the budget) to ``monitored``, ``robust`` and
+``glr`` (the monitor plus the velocity-jump GLR); ``turning`` answers an alarm with a 60°
+own-ship turn instead, ``turning-responsive`` with both. It also prints the ideal-test bound of
+:mod:`tmaplan.evaluation.detectability` at the monitor's α: the fractions of runs in which the
+clairvoyant test (known state, onset and new velocity) and the unknown-state test (best
+straight track through all measurements) detect within the window with probability ≥ 0.5 and
+≥ 0.9 — no monitor at that α does better.
 
 ``--pairs`` runs the issue's fault-free criterion: ``planned+scheduled-terminal`` against
 ``planned+uniform`` per filter option, with the paired interval of the final range error.
@@ -30,14 +36,18 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import time
+import warnings
 from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
+from tmaplan.estimators.particle_filter import DegeneracyWarning
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.detectability import detection_probability, manoeuvre_detectability
 from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads
 from tmaplan.simulate import draw_truth
@@ -56,7 +66,18 @@ OPTIONS = {"plain": FilterOptions.plain, "monitored": FilterOptions.monitored,
            # the presets without their alarm pings (tmaplan.policies.AlarmResponse)
            "responsive": FilterOptions.responsive,
            "robust-responsive": lambda: dataclasses.replace(FilterOptions.robust(),
-                                                            alarm_response=AlarmResponse())}
+                                                            alarm_response=AlarmResponse()),
+           # the velocity-jump GLR test on top of the monitor (tmaplan.estimators.manoeuvre_glr)
+           "glr": FilterOptions.glr,
+           # an own-ship turn of 60° on alarm, without / with the alarm pings
+           "turning": lambda: dataclasses.replace(FilterOptions.monitored(),
+                                                  alarm_response=AlarmResponse(
+                                                      pings=0, turn=math.radians(60.0))),
+           "turning-responsive": lambda: dataclasses.replace(
+               FilterOptions.monitored(),
+               alarm_response=AlarmResponse(turn=math.radians(60.0))),
+           "glr-responsive": lambda: dataclasses.replace(FilterOptions.glr(),
+                                                         alarm_response=AlarmResponse())}
 
 
 def faulty(name: str, base: Scenario | None = None) -> Scenario:
@@ -136,19 +157,28 @@ def print_matrix(rows: list[dict[str, Any]], runs: int) -> None:
               f"{r['recoveries']:>7.2f}")
 
 
-def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "monitored",
-              particles: int = 3000, seed: int = 0, turn_deg: float = 60.0,
-              window_min: float = 5.0) -> dict[str, Any]:
-    """Detection and recovery of an unmodelled course change at mid-horizon (module doc)."""
+def _turning(turn_deg: float) -> tuple[Scenario, Scenario, float]:
+    """``default``, ``default`` with a course change of ``turn_deg`` at mid-horizon, its time."""
     base = load_problem("default")
     t_m = 0.5 * base.time.horizon
     sc = loads(dump(base) + f'\n[faults]\ntarget_manoeuvres = [{{time = {t_m}, '
                f'course_change = "{turn_deg} deg"}}]\n', source="default+manoeuvre")
+    return base, sc, t_m
+
+
+def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "monitored",
+              particles: int = 3000, seed: int = 0, turn_deg: float = 60.0,
+              window_min: float = 5.0) -> dict[str, Any]:
+    """Detection and recovery of an unmodelled course change at mid-horizon (module doc)."""
+    base, sc, t_m = _turning(turn_deg)
     pol_b = resolve_policies(base, [policy])[policy]
     pol_f = resolve_policies(sc, [policy])[policy]
     times = base.times
     j = int(np.searchsorted(times, t_m - 1e-9))
-    det, rec, disturbed, extra, false = [], [], [], [], []
+    det, rec, disturbed, extra, false, bound = [], [], [], [], [], []
+    sig_b = float(base.sensors_of("bearing")[0].sigma)
+    sig_r = float(base.sensors_of("range")[0].sigma)
+    alpha = (OPTIONS[option]().monitor or MonitorConfig()).alpha
     for i in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
         out = []
@@ -170,6 +200,13 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
         det.append(float(times[min(steps)] - times[j]) if steps else np.inf)
         extra.append((out[0].alarm_pings.size, r1.alarm_pings.size))
         false.append(any(a["step"] >= j and a["test"] != "probe" for a in out[0].alarms))
+        bound.append(manoeuvre_detectability(
+            times=times, own_position=r1.observer.position, target=r1.target,
+            straight=out[0].target, onset=j, window=60.0 * window_min, bearing_sigma=sig_b,
+            bearing_steps=np.arange(1, times.size),
+            # the policy's pings, not those answering an alarm (the bound has no alarm)
+            ping_steps=np.setdiff1d(r1.ping_steps, r1.alarm_pings),
+            range_sigma=sig_r, alpha=alpha))
     det_a, rec_a, dist = np.array(det), np.array(rec), np.array(disturbed, bool)
     w = 60.0 * window_min
     return {"runs": runs, "policy": policy, "option": option,
@@ -177,13 +214,66 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
             "both": float(np.mean((det_a <= w) & (rec_a <= w))),
             "detected_ever": float(np.mean(np.isfinite(det_a))),
             "disturbed": float(np.mean(disturbed)),
-            "detected_if_disturbed": float(np.mean(det_a[dist] <= w)) if dist.any() else 1.0,
-            "recovered_if_disturbed": float(np.mean(rec_a[dist] <= w)) if dist.any() else 1.0,
+            "detected_if_disturbed": _among(det_a <= w, dist),
+            "recovered_if_disturbed": _among(rec_a <= w, dist),
             "median_detection_s": float(np.median(det_a)),
             "median_recovery_s": float(np.median(rec_a)),
             "alarm_pings_fault_free": float(np.mean([a for a, _ in extra])),
             "fault_free_alarmed_after_mid": float(np.mean(false)),
-            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra]))}
+            "alarm_pings_manoeuvre": float(np.mean([b for _, b in extra])),
+            "detected_if_unknown_state_pd>=0.5": _among(
+                det_a <= w, np.array([b.pd_unknown_state >= 0.5 for b in bound])),
+            **_bound_summary(bound, alpha)}
+
+
+def _bound_summary(bound: list[Any], alpha: float) -> dict[str, Any]:
+    """Fractions of runs whose ideal tests (tmaplan.evaluation.detectability) detect with
+    probability ≥ 0.5 / 0.9 at α and at 10 α, mean probabilities, median λ."""
+    lam_c = np.array([b.lam_clairvoyant for b in bound])
+    lam_u = np.array([b.lam_unknown_state for b in bound])
+    out: dict[str, Any] = {"bound_alpha": alpha}
+    for name, lam in (("clairvoyant", lam_c), ("unknown_state", lam_u)):
+        pd = detection_probability(lam, alpha)
+        out |= {f"{name}_pd>=0.5": float(np.mean(pd >= 0.5)),
+                f"{name}_pd>=0.9": float(np.mean(pd >= 0.9)),
+                f"{name}_mean_pd": float(np.mean(pd)),
+                f"{name}_pd>=0.9_at_10alpha": float(np.mean(
+                    detection_probability(lam, 10 * alpha) >= 0.9))}
+    return out | {"median_lambda": (float(np.median(lam_c)), float(np.median(lam_u)))}
+
+
+def bound_only(*, runs: int, policy: str = "planned+scheduled", seed: int = 0,
+               turn_deg: float = 60.0, window_min: float = 5.0, alpha: float = 1e-3
+               ) -> dict[str, Any]:
+    """The ideal-test bound alone, for an offline policy (own path and pings independent of the
+    belief, so a 64-particle unmonitored filter flies it): the same truths as
+    :func:`manoeuvre`, no monitor run."""
+    base, sc, t_m = _turning(turn_deg)
+    pol = resolve_policies(sc, [policy])[policy]
+    times = base.times
+    j = int(np.searchsorted(times, t_m - 1e-9))
+    bound = []
+    for i in range(runs):
+        ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+        straight = draw_truth(base, np.random.default_rng(ss[0]))
+        with warnings.catch_warnings():  # 64 particles degenerate at pings; only the path counts
+            warnings.simplefilter("ignore", DegeneracyWarning)
+            r = run_closed_loop(sc, pol, draw_truth(sc, np.random.default_rng(ss[0])),
+                                noise_rng=np.random.default_rng(ss[1]),
+                                filter_rng=np.random.default_rng(ss[2]), n_particles=64,
+                                options=FilterOptions.plain())
+        bound.append(manoeuvre_detectability(
+            times=times, own_position=r.observer.position, target=r.target, straight=straight,
+            onset=j, window=60.0 * window_min,
+            bearing_sigma=float(base.sensors_of("bearing")[0].sigma),
+            bearing_steps=np.arange(1, times.size), ping_steps=r.ping_steps,
+            range_sigma=float(base.sensors_of("range")[0].sigma), alpha=alpha))
+    return {"runs": runs, "policy": policy} | _bound_summary(bound, alpha)
+
+
+def _among(x: np.ndarray, mask: np.ndarray) -> float:
+    """Mean of ``x`` over ``mask`` (nan when empty)."""
+    return float(np.mean(x[mask])) if mask.any() else float("nan")
 
 
 def pairs(*, runs: int, options: list[str], particles: int = 3000, seed: int = 0) -> None:
@@ -208,8 +298,13 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--manoeuvre", action="store_true", help="detection/recovery of a 60° turn")
     ap.add_argument("--pairs", action="store_true", help="terminal vs uniform pings")
+    ap.add_argument("--bound-only", action="store_true",
+                    help="with --manoeuvre: the ideal-test bound alone (offline policies)")
     args = ap.parse_args()
     options = args.options.split(",")
+    if args.manoeuvre and args.bound_only:
+        print(bound_only(runs=args.runs, policy=args.policies.split(",")[0], seed=args.seed))
+        return
     if args.manoeuvre:
         for opt in options:
             print(manoeuvre(runs=args.runs, option=opt, particles=args.particles,
@@ -227,5 +322,5 @@ if __name__ == "__main__":
     main()
 
 
-__all__ = ["FAULTS", "OPTIONS", "faulty", "main", "manoeuvre", "matrix", "outliers", "pairs",
-           "print_matrix"]
+__all__ = ["FAULTS", "OPTIONS", "bound_only", "faulty", "main", "manoeuvre", "matrix",
+           "outliers", "pairs", "print_matrix"]

@@ -6,7 +6,9 @@ one paired campaign (:func:`tmaplan.experiments.plan_campaign`) of the multi-sta
 plan against straight, the single turn the planning cost picks, the practitioner tactics and
 the tuned turn, and print ``planned − X`` of the mean time to 10 % range accuracy (censored at
 the horizon + dt) with paired 95 % intervals, in minutes (negative: the plan localises
-sooner). The README quotes its output.
+sooner), the per-run standard deviation of the paired difference and the runs at which the
+interval would exclude zero if mean and SD stayed as measured
+(:func:`tmaplan.evaluation.metrics.runs_to_exclude_zero`). The README quotes its output.
 
 Run: python benchmarks/planning_pays.py [--problems default,bow-closing,contact-astern]
      [--runs 100] [--tune-runs 16] [--particles 3000] [--workers 1] [--receding]
@@ -18,7 +20,9 @@ import argparse
 import time
 
 import numpy as np
+from scipy import stats
 
+from tmaplan.evaluation.metrics import runs_to_exclude_zero
 from tmaplan.experiments import (
     plan_campaign,
     planned_differences,
@@ -66,10 +70,13 @@ def main() -> None:
             mean = np.mean(np.where(np.isfinite(tt), tt, c)) / 60
             print(f"  {k:<14} mean time to accuracy {mean:5.1f} min, localised "
                   f"{100 * np.mean(np.isfinite(tt)):3.0f} %")
-        print("  | planned − X | mean [min] | 95 % CI [min] |")
-        print("  |---|---|---|")
+        print("  | planned − X | mean [min] | 95 % CI [min] | per-run SD [min] | runs to "
+              "exclude zero |")
+        print("  |---|---|---|---|---|")
         for k, d in planned_differences(camp).items():
-            print(f"  | {k} | {d.mean / 60:+.1f} | [{d.ci_low / 60:+.1f}, {d.ci_high / 60:+.1f}] |")
+            sd = 0.5 * (d.ci_high - d.ci_low) * np.sqrt(d.n) / stats.t.ppf(0.975, d.n - 1)
+            print(f"  | {k} | {d.mean / 60:+.1f} | [{d.ci_low / 60:+.1f}, {d.ci_high / 60:+.1f}]"
+                  f" | {sd / 60:.1f} | {runs_to_exclude_zero(d):.0f} |")
 
 
 if __name__ == "__main__":

@@ -142,3 +142,17 @@ def test_receding_replans_at_once_on_an_alarm():
         for k, alarms in ((0, 0), (1, 0), (2, 1), (3, 1)):
             ctrl.act(belief(k, alarms), 15.0 * k)
         assert len(ctrl.log) == expected
+
+
+def test_an_alarm_turn_turns_away_at_the_maximum_rate_then_hands_back():
+    sc = load_problem("default")  # turn rate ≤ 0.5 °/s, dt 15 s: 7.5° per step
+    ctrl = AlarmResponse(pings=0, turn=np.radians(60.0)).wrap(_Always(), sc)
+    rates = [ctrl.act(_belief(k, 0, int(k >= 10)), 15.0 * k).turn_rate for k in range(30)]
+    u_max = sc.observer.turn_rate_max
+    # contact believed at 045°, heading 000°: starboard changes the cross-LOS speed most
+    assert rates[:10] == [0.01] * 10 and rates[18:] == [0.01] * 12
+    assert rates[10:18] == pytest.approx([u_max] * 8)
+    assert sum(rates[10:18]) * 15.0 == pytest.approx(np.radians(60.0))
+    assert ctrl.alarm_pings == []
+    with pytest.raises(ArgumentError, match=r"alarm_response\.turn"):
+        AlarmResponse(turn=4.0)

@@ -52,3 +52,13 @@ def test_manoeuvre_detection_small():
     bench = _bench()
     r = bench.manoeuvre(runs=4, particles=1000)
     assert 0 <= r["both"] <= r["detected"] <= 1 and r["detected_ever"] > 0
+    assert 0 <= r["unknown_state_pd>=0.9"] <= r["unknown_state_pd>=0.5"] <= 1
+
+
+def test_manoeuvre_bound_small():
+    bench = _bench()
+    r = bench.bound_only(runs=3)
+    assert 0 <= r["clairvoyant_pd>=0.9"] <= r["clairvoyant_pd>=0.5"] <= 1
+    # the straight continuation is one of the straight tracks: the unknown-state λ is smaller
+    assert r["unknown_state_mean_pd"] <= r["clairvoyant_mean_pd"] + 1e-12
+    assert r["median_lambda"][1] <= r["median_lambda"][0] + 1e-9

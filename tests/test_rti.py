@@ -57,8 +57,9 @@ def test_steps_approach_the_ipopt_solution(small):
 
 def test_rejected_step_falls_back_to_ipopt(small):
     _, prior, planner, plan, model = small
-    tiny = RTIModel(hessian=model.hessian * 1e-9, scale=model.scale, plan=plan)
-    rti = RealTimeIteration(planner, tiny, backtracks=0)
+    # a negative-definite model: the convex QP solver fails, the step is rejected
+    bad = RTIModel(hessian=-model.hessian, scale=model.scale, plan=plan)
+    rti = RealTimeIteration(planner, bad, backtracks=0)
     with pytest.raises(SolverError, match="rejected"):
         rti.solve(prior, previous=plan, fallback=False)
     out = rti.solve(prior, previous=plan)
@@ -87,6 +88,25 @@ def test_steps_are_bit_reproducible(small, qpsol):
     rti.solve(prior, previous=start, fallback=False)  # another problem in between
     b = rti.solve(later, previous=start, fallback=False)
     assert np.array_equal(a.turn_rate, b.turn_rate) and a.objective == b.objective
+
+
+def test_model_hessian_is_the_exact_lagrangian_hessian(small):
+    import casadi as ca
+
+    from tmaplan.planning.rti import hessian_columns
+
+    _, prior, planner, plan, _ = small
+    nlp = planner._nlp
+    lam = ca.MX.sym("lam", nlp["g"].shape[0])
+    lag = nlp["f"] + ca.dot(lam, nlp["g"])
+    h0, s0, _ = planner._start_state(None, None, None)
+    P = np.concatenate([planner._parameters(prior, ()), [h0, s0, plan.warm["scale"], 1.0]])
+    args = (plan.warm["x"], P, plan.warm["lam_g"])
+    symbolic = np.asarray(ca.Function("h", [nlp["x"], nlp["p"], lam],
+                                      [ca.hessian(lag, nlp["x"])[0]])(*args))
+    grad = ca.Function("g", [nlp["x"], nlp["p"], lam], [ca.gradient(lag, nlp["x"])])
+    columns = hessian_columns(grad, *args)
+    assert np.abs(columns - symbolic).max() <= 1e-8 * np.abs(symbolic).max()
 
 
 def test_bad_configurations_are_rejected(small):
@@ -119,17 +139,53 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=300)
     solvers = [e.get("solver") for e in res.replans if e["success"]]
-    assert solvers and all(s in ("rti-daqp", "ipopt") for s in solvers)
+    assert len(solvers) == len(res.replans) >= 4
+    assert all(s in ("rti-daqp", "ipopt") for s in solvers)
     assert solvers.count("rti-daqp") >= len(solvers) // 2
     again = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                             filter_rng=np.random.default_rng(2), n_particles=300)
     assert np.array_equal(res.turn_rate, again.turn_rate)
 
 
+def test_receding_full_solve_when_the_optimum_moves_far(small):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    solvers = {}
+    for above, full in ((float("inf"), ()), (1e-9, ()), (float("inf"), (0, 2))):
+        # the closed-loop objective (mean-range-bound saturates the turn rate: zero steps)
+        pol = Receding(horizon=900.0, full_above=above, full_solves=full).resolve(sc)
+        res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                              filter_rng=np.random.default_rng(2), n_particles=300)
+        solvers[above, full] = [e.get("solver") for e in res.replans]
+    never = solvers[float("inf"), ()]
+    assert set(never) == {"rti-daqp"}  # no full solve, no fallback on this run
+    # a step that lowers the objective at all triggers the full solve at a tiny threshold
+    assert solvers[1e-9, ()].count("ipopt") > len(never) // 2
+    fixed = solvers[float("inf"), (0, 2)]
+    assert fixed[0] == fixed[2] == "ipopt" and fixed[1] == "rti-daqp"
+
+
+def test_receding_full_solves_are_checked(small):
+    from tmaplan.policies import Receding
+
+    sc = small[0]
+    for bad in ((-1,), (1.5,), (True,)):
+        with pytest.raises(ArgumentError, match="full_solves"):
+            Receding(full_solves=bad, objective="mean-range-bound", horizon=900.0) \
+                .resolve(sc).controller(sc)
+    with pytest.raises(ArgumentError, match="full_above"):
+        Receding(full_above=0.0, objective="mean-range-bound", horizon=900.0) \
+            .resolve(sc).controller(sc)
+
+
 def test_receding_rti_policy_name_takes_only_rti_steps(small):
     from tmaplan.policies import Receding, parse_policy
 
     pol = parse_policy("receding-rti+uniform", small[0])
-    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_every == 0
+    assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_above == np.inf
     assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
-        .manoeuvre.full_every == 3
+        .manoeuvre.full_above == 0.01

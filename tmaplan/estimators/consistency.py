@@ -24,7 +24,10 @@ false-alarm probability ``alpha`` per test:
   an unmodelled course change, long before the window sum grows; a two-sided CUSUM
   ``g⁺ ← max(0, g⁺ + ν/√S − κ)``, ``g⁻ ← max(0, g⁻ − ν/√S − κ)`` alarms at ``g > h``
   (Page 1954), with ``h`` set from α by Siegmund's approximation of the in-control run length
-  ``ARL₀ ≈ (e^{2κh'} − 2κh' − 1)/(2κ²)``, ``h' = h + 1.166`` so that ``1/ARL₀ ≈ α``.
+  ``ARL₀ ≈ (e^{2κh'} − 2κh' − 1)/(2κ²)``, ``h' = h + 1.166`` so that ``1/ARL₀ ≈ α``;
+* **manoeuvres, GLR** (``glr_window`` > 0): the sliding-window velocity-jump likelihood-ratio
+  test of :mod:`tmaplan.estimators.manoeuvre_glr` on the stored measurements, at false-alarm
+  probability ``glr_alpha`` per step; its change point is the onset of the recovery.
 
 On an alarm the filter **recovers** (when the inner filter is a particle filter): it goes back
 to a posterior it stored, rejuvenates that cloud and filters the stored observer increments
@@ -53,9 +56,9 @@ reports it per run.
 
 :class:`FilterOptions` bundles the robust measurement models of the particle filter
 (:class:`tmaplan.estimators.particle_filter.PFConfig` ``bearing_clutter`` and ``ping_gate``)
-with the monitor; :meth:`FilterOptions.plain`, :meth:`FilterOptions.monitored` and
-:meth:`FilterOptions.robust` are the presets the fault matrix compares
-(``benchmarks/faults.py``).
+with the monitor; :meth:`FilterOptions.plain`, :meth:`FilterOptions.monitored`,
+:meth:`FilterOptions.robust` and :meth:`FilterOptions.glr` are presets the fault matrix
+compares (``benchmarks/faults.py``).
 """
 
 from __future__ import annotations
@@ -70,6 +73,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from tmaplan.errors import ArgumentError
+from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
 from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
 from tmaplan.geometry import wrap_angle
 
@@ -155,6 +159,11 @@ class MonitorConfig:
         Steps after a recovery without tests (the statistics restart).
     recover : bool
         Recover on alarms (False: only count them).
+    glr_window : int
+        Steps of the velocity-jump GLR window (0: no GLR test); its candidate onsets are the
+        last ``lookback`` steps.
+    glr_alpha : float, optional
+        False-alarm probability per step of the GLR test (default ``alpha``).
     """
 
     window: int = 8
@@ -172,6 +181,8 @@ class MonitorConfig:
     q_boost: float = 1000.0
     holdoff: int = 16
     recover: bool = True
+    glr_window: int = 0
+    glr_alpha: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("window", "lookback", "holdoff", "outliers"):
@@ -180,9 +191,14 @@ class MonitorConfig:
                 raise ArgumentError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
         if not 0.0 < self.alpha < 0.5:
             raise ArgumentError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
-        if self.cusum_alpha is not None and not 0.0 < self.cusum_alpha < 0.5:
-            raise ArgumentError("monitor.cusum_alpha", "a probability in (0, 0.5)",
-                                self.cusum_alpha)
+        for name in ("cusum_alpha", "glr_alpha"):
+            v = getattr(self, name)
+            if v is not None and not 0.0 < v < 0.5:
+                raise ArgumentError(f"monitor.{name}", "a probability in (0, 0.5)", v)
+        if (not isinstance(self.glr_window, int) or isinstance(self.glr_window, bool)
+                or not (self.glr_window == 0 or self.glr_window >= self.lookback)):
+            raise ArgumentError("monitor.glr_window", "0 (off) or an integer >= lookback",
+                                self.glr_window)
         if not self.kappa > 0:
             raise ArgumentError("monitor.kappa", "> 0", self.kappa)
         if not (0 <= self.velocity_fraction and 0 <= self.range_fraction
@@ -412,7 +428,10 @@ class MonitoredFilter:
                          "onset": ap if gp > gm else am}
         history = state.history
         if state.pending is not None:
-            history = ((*history, (*state.pending, tuple(kept))))[-cfg.lookback:]
+            history = ((*history, (*state.pending, tuple(kept))))[-max(cfg.lookback,
+                                                                       cfg.glr_window):]
+        if alarm is None and cfg.glr_window and state.quiet == 0:
+            alarm = self._glr(history)
         filt = self._boosted if state.quiet > 0 else self.inner
         new = dataclasses.replace(state, inner=filt.update(state.inner, kept, rng),
                                   nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
@@ -428,6 +447,20 @@ class MonitoredFilter:
             new = self._recover(new, rng, alarm.get("onset"), lost=alarm["test"] == "range")
         return dataclasses.replace(new, log=(*new.log, alarm),
                                    recoveries=new.recoveries + int(can))
+
+    def _glr(self, history: tuple[Any, ...]) -> dict[str, Any] | None:
+        """The velocity-jump GLR alarm on the last ``glr_window`` steps, or None."""
+        cfg, dt = self.config, getattr(getattr(self.inner, "config", None), "dt", None)
+        test = None if dt is None else velocity_jump_glr(history[-cfg.glr_window:], float(dt),
+                                                         max_back=cfg.lookback)
+        if test is None:
+            return None
+        h = glr_threshold(cfg.alpha if cfg.glr_alpha is None else cfg.glr_alpha,
+                          test.candidates)
+        if test.statistic <= h:
+            return None
+        return {"test": "glr", "statistic": test.statistic, "threshold": h,
+                "onset": test.back, "dv": test.dv.tolist()}
 
     # -- recovery ------------------------------------------------------------------------------
     def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator,
@@ -477,7 +510,7 @@ class MonitoredFilter:
                  onset: int | None, lost: bool) -> MonitoredState:
         """Rejuvenate a stored posterior (the CUSUM's change point, else ``lookback`` steps
         back) and filter forward again with boosted process noise."""
-        hist = state.history if onset is None else state.history[-max(int(onset), 1):]
+        hist = state.history[-(self.config.lookback if onset is None else max(int(onset), 1)):]
         post, _, vbar, _ = hist[0]
         inner = self._rejuvenate(post, vbar, rng, lost=lost)
         for _, dv, _, meas in hist:
@@ -534,9 +567,15 @@ class FilterOptions:
         budget the user set."""
         return cls(alarm_response=_default_response())
 
+    @classmethod
+    def glr(cls) -> FilterOptions:
+        """:meth:`monitored` plus the velocity-jump GLR test over 40 steps."""
+        return cls(monitor=MonitorConfig(glr_window=40))
+
     def label(self) -> str:
-        """Short name: "plain", "monitored", "robust", "responsive" or the field values."""
-        for name in ("plain", "monitored", "robust", "responsive"):
+        """Short name: "plain", "monitored", "robust", "responsive", "glr" or the field
+        values."""
+        for name in ("plain", "monitored", "robust", "responsive", "glr"):
             if self == getattr(FilterOptions, name)():
                 return name
         return (f"clutter={self.bearing_clutter},gate={self.ping_gate},"

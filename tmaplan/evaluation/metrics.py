@@ -22,6 +22,7 @@ __all__ = [
     "RunMetrics",
     "paired_difference",
     "run_metrics",
+    "runs_to_exclude_zero",
     "time_to_accuracy",
 ]
 
@@ -194,3 +195,27 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     half = float(stats.t.ppf(0.5 + level / 2, n - 1) * d.std(ddof=1) / np.sqrt(n))
     return PairedDifference(a=a, b=b, metric=metric, mean=m, ci_low=m - half, ci_high=m + half,
                             level=level, n=n)
+
+
+def runs_to_exclude_zero(d: PairedDifference) -> float:
+    """Paired runs at which the interval of ``d`` would just exclude zero, if the mean and the
+    per-run standard deviation of the difference stayed as measured.
+
+    The half-width ``h`` of the t interval falls as ``1/sqrt(n)`` (the t quantile taken as
+    fixed), so the runs needed are ``n·(h/|mean|)²``: how much a campaign must grow before
+    the measured difference could be called significant (the sizing of a study, not a test).
+
+    Parameters
+    ----------
+    d : PairedDifference
+        With ``n >= 2`` runs.
+
+    Returns
+    -------
+    float
+        Runs (not rounded); ``inf`` if the mean is zero or the interval infinite.
+    """
+    half = 0.5 * (d.ci_high - d.ci_low)
+    if d.mean == 0.0 or not np.isfinite(half):
+        return float("inf")
+    return float(d.n * (half / abs(d.mean)) ** 2)

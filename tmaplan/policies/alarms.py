@@ -11,6 +11,12 @@ scenario's ``planning.ping_budget``: once alarm pings were spent, the policy's o
 refused when the total would exceed budget + allowance, so the total never exceeds it. A run
 without alarm behaves exactly as without the response.
 
+It may also (``turn`` > 0) answer with an **own-ship manoeuvre**: a turn by ``turn`` at the
+maximum turn rate, to the side that changes the own velocity across the believed line of sight
+most (the bearing rate then changes with the range, which makes the post-manoeuvre track
+observable, lecadre1997); the policy's turn rates resume afterwards, its headings offset by
+the turn.
+
 :class:`AlarmResponder` wraps the policy's controller for one run; the closed loop
 (:func:`tmaplan.evaluation.closed_loop.run_closed_loop`) tells it the monitor's alarm count
 through :attr:`tmaplan.policies.BeliefView.alarms`.
@@ -19,7 +25,10 @@ through :attr:`tmaplan.policies.BeliefView.alarms`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from tmaplan.errors import ArgumentError
 from tmaplan.policies._base import Action, BeliefView, Controller
@@ -45,15 +54,24 @@ class AlarmResponse:
     spacing : float, optional
         Time between the pings of one response [s] (default: the scenario's
         ``planning.ping_min_spacing``, at least one step).
+    turn : float
+        Own-ship turn per alarm [rad], in [0, π] (0: none; needs
+        ``observer.turn_rate_max``).
     """
 
     pings: int = 2
     extra_pings: int = 2
     spacing: float | None = None
+    turn: float = 0.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.pings, int) or isinstance(self.pings, bool) or self.pings < 1:
-            raise ArgumentError("alarm_response.pings", "an integer >= 1", self.pings)
+        if not isinstance(self.pings, int) or isinstance(self.pings, bool) or self.pings < 0:
+            raise ArgumentError("alarm_response.pings", "an integer >= 0", self.pings)
+        if not 0.0 <= self.turn <= math.pi:
+            raise ArgumentError("alarm_response.turn", "an angle in [0, π] [rad]", self.turn)
+        if self.pings == 0 and self.turn == 0.0:
+            raise ArgumentError("alarm_response.pings", "pings >= 1 or a turn > 0",
+                                (self.pings, self.turn))
         if (not isinstance(self.extra_pings, int) or isinstance(self.extra_pings, bool)
                 or self.extra_pings < 0):
             raise ArgumentError("alarm_response.extra_pings", "an integer >= 0",
@@ -85,6 +103,9 @@ class AlarmResponder:
         self.spacing = max(response.spacing if response.spacing is not None
                            else self.min_spacing, self.dt)
         self.per_alarm = response.pings
+        self.turn = float(response.turn)
+        self.u_max = float(scenario.observer.turn_rate_max or 0.0)
+        self.turn_left = 0.0  # signed heading change still to make [rad]
         self.seen = 0
         self.pending: list[float] = []  # earliest times of requested pings [s]
         self.last = float("-inf")
@@ -103,6 +124,13 @@ class AlarmResponder:
         if belief.alarms > self.seen:
             self.seen = belief.alarms
             self.pending = [t_next + i * self.spacing for i in range(self.per_alarm)]
+            if self.turn > 0 and self.u_max > 0:
+                self.turn_left = self._side(belief) * self.turn
+        if self.turn_left != 0.0:
+            u = float(np.clip(self.turn_left / self.dt, -self.u_max, self.u_max))
+            self.turn_left = 0.0 if abs(u * self.dt) >= abs(self.turn_left) - 1e-12 \
+                else self.turn_left - u * self.dt
+            act = dataclasses.replace(act, turn_rate=u)
         room = belief.pings_used < self.cap
         if act.ping:
             if self.alarm_pings and not room:
@@ -118,6 +146,14 @@ class AlarmResponder:
             self.alarm_pings.append(belief.step + 1)
             return dataclasses.replace(act, ping=True)
         return act
+
+    def _side(self, belief: BeliefView) -> float:
+        """+1 (starboard) or −1: the turn that changes the own velocity across the believed
+        line of sight (the particles' mean bearing) most."""
+        m = np.asarray(belief.weights) @ np.asarray(belief.particles)[:, :2]
+        rel = belief.heading - math.atan2(float(m[0]), float(m[1]))
+        gain = [abs(math.sin(rel + s * self.turn) - math.sin(rel)) for s in (1.0, -1.0)]
+        return 1.0 if gain[0] >= gain[1] else -1.0
 
     def _drop_due(self, t_next: float) -> None:
         """A ping at ``t_next`` serves the first pending request due by then."""

@@ -127,7 +127,7 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "zigzag": best_zigzag,
     "planned": lambda sc: Planned(),
     "receding": lambda sc: Receding(),
-    "receding-rti": lambda sc: Receding(full_every=0, name="receding-rti"),
+    "receding-rti": lambda sc: Receding(full_above=float("inf"), name="receding-rti"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }

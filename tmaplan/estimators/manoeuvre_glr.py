@@ -37,6 +37,7 @@ import numpy as np
 from scipy import stats
 
 from tmaplan.errors import ArgumentError
+from tmaplan.geometry import wrap_angle
 
 __all__ = ["JumpTest", "glr_threshold", "velocity_jump_glr"]
 
@@ -156,7 +157,7 @@ def velocity_jump_glr(history: Sequence[Any], dt: float, *, min_after: int = 2,
     for _ in range(iterations + 1):
         h, grad = _model(x0, tau, off, kind)
         res = z - h
-        res[kind == 0] = np.angle(np.exp(1j * res[kind == 0]))  # wrap bearing residuals
+        res[kind == 0] = wrap_angle(res[kind == 0])  # wrap bearing residuals
         J = np.column_stack([grad, grad * tau[:, None]]) / sig[:, None]
         A = np.vstack([J, W])
         b = np.concatenate([res / sig, W @ (m0 - x0)])

@@ -33,7 +33,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from tmaplan.errors import ArgumentError
-from tmaplan.geometry import wrap_angle
+from tmaplan.geometry import bearing_of, range_of, wrap_angle
 
 __all__ = ["DetectabilityBound", "detection_probability", "manoeuvre_detectability"]
 
@@ -70,7 +70,7 @@ def _predicted(xy: np.ndarray, own: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     """Bearings (from north, [rad]) and ranges [m] of absolute positions ``xy`` seen from
     ``own``, both shape (K, 2)."""
     d = xy - own
-    return np.arctan2(d[:, 0], d[:, 1]), np.hypot(d[:, 0], d[:, 1])
+    return np.asarray(bearing_of(d)), np.asarray(range_of(d))
 
 
 def manoeuvre_detectability(*, times: np.ndarray, own_position: np.ndarray,

@@ -19,7 +19,7 @@ typecheck: $(STAMP)
 	$(BIN)/mypy  # files: [tool.mypy] in pyproject.toml (the whole tmaplan/ package)
 
 test: $(STAMP) lint typecheck
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow"
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" -n auto  # one worker per core (pytest-xdist)
 
 test-slow: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m slow

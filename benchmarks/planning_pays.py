@@ -11,7 +11,8 @@ interval would exclude zero if mean and SD stayed as measured
 (:func:`tmaplan.evaluation.metrics.runs_to_exclude_zero`). The README quotes its output.
 
 Run: python benchmarks/planning_pays.py [--problems default,bow-closing,contact-astern]
-     [--runs 100] [--tune-runs 16] [--particles 3000] [--workers 1] [--receding]
+     [--runs 100] [--seed 0] [--out DIR] [--tune-runs 16] [--particles 3000] [--workers 1]
+     [--receding] [--baselines straight,single-turn,...] [--no-tune]
 """
 
 from __future__ import annotations
@@ -41,7 +42,16 @@ def main() -> None:
     ap.add_argument("--tune-runs", type=int, default=16)
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=0,
+                    help="evaluation seed (0 in the README tables; the tuning uses 1000)")
+    ap.add_argument("--out", default=None,
+                    help="campaign directory, one sub-directory per problem: runs are kept "
+                         "and an interrupted campaign resumes")
     ap.add_argument("--receding", action="store_true", help="also fly receding (slow)")
+    ap.add_argument("--baselines", default="straight,single-turn,leg-turn-leg,lead-lag",
+                    help="comma-separated baselines to fly ('' for none: planned and "
+                         "receding/tuned-turn if asked)")
+    ap.add_argument("--no-tune", action="store_true", help="skip the Monte Carlo tuned turn")
     ap.add_argument("--select-runs", type=int, default=0,
                     help="also fly planned-mc: the OCP local optimum with the best Monte Carlo "
                          "time to accuracy on this many runs of the planner's seeds (2000)")
@@ -50,20 +60,27 @@ def main() -> None:
         t = time.perf_counter()
         sc = load_problem(name)
         plan = offline_plan(sc, None)
-        tuned, _ = tune_single_turn(sc, runs=a.tune_runs, n_particles=a.particles,
-                                    workers=a.workers)
+        tuned = None
+        if not a.no_tune:
+            tuned, _ = tune_single_turn(sc, runs=a.tune_runs, n_particles=a.particles,
+                                        workers=a.workers)
         selected = None
         if a.select_runs > 0:
             pick, selected, scores = select_plan(sc, plan_candidates(sc), runs=a.select_runs,
                                                  n_particles=a.particles, workers=a.workers)
             print(f"{name}: planned-mc = local optimum from start {pick!r} (selection means "
                   + ", ".join(f"{k} {v / 60:.1f}" for k, v in scores.items()) + " min)")
-        camp = plan_campaign(sc, runs=a.runs, n_particles=a.particles, tuned=tuned,
-                             receding=a.receding, selected=selected, workers=a.workers)
-        print(f"{name}: {a.runs} paired runs, {a.particles} particles, objective "
-              f"{sc.planning.objective if sc.planning else '?'}; plan cost {plan.objective:.4f} "
-              f"({plan.message}); tuned turn {np.degrees(tuned.angle):+.0f} deg at "
-              f"{tuned.time - sc.time.t0:.0f} s ({time.perf_counter() - t:.0f} s)")
+        out = None if a.out is None else f"{a.out}/{name}"
+        camp = plan_campaign(sc, runs=a.runs, seed=a.seed, n_particles=a.particles,
+                             tuned=tuned, receding=a.receding, selected=selected,
+                             workers=a.workers, out_dir=out,
+                             baselines=[b for b in a.baselines.split(",") if b])
+        turn = ("none" if tuned is None else
+                f"{np.degrees(tuned.angle):+.0f} deg at {tuned.time - sc.time.t0:.0f} s")
+        print(f"{name}: {a.runs} paired runs (seed {a.seed}), {a.particles} particles, "
+              f"objective {sc.planning.objective if sc.planning else '?'}; plan cost "
+              f"{plan.objective:.4f} ({plan.message}); tuned turn {turn} "
+              f"({time.perf_counter() - t:.0f} s)")
         for k in camp.policies:
             tt = camp.summary[k]["time_to_accuracy_runs"]
             c = camp.times[-1] - camp.times[0] + (camp.times[1] - camp.times[0])

@@ -138,6 +138,15 @@ def test_tuning_and_plan_campaign_code_path_at_tiny_size():
     d = planned_differences(camp)
     assert set(d) == set(camp.policies) - {"planned"}
     assert all(v.n == 2 and np.isfinite(v.mean) for v in d.values())
+    # a subset of the baselines flies the same paired runs as the full campaign
+    sub = plan_campaign(sc, runs=2, n_particles=200, baselines=["single-turn"])
+    assert sub.policies == ("planned", "single-turn")
+    for k in sub.policies:
+        np.testing.assert_array_equal(sub.summary[k]["time_to_accuracy_runs"],
+                                      camp.summary[k]["time_to_accuracy_runs"])
+    with pytest.raises(ArgumentError, match="baselines") as info:
+        plan_campaign(sc, runs=2, baselines=["zig-zag"])
+    assert info.value.field == "baselines"
     with pytest.raises(ArgumentError, match="fractions"):
         tune_single_turn(sc, runs=1, fractions=(1.5,))
     # the planner's Monte Carlo choice among the OCP's distinct local optima

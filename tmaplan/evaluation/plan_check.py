@@ -22,7 +22,7 @@ The checks of the README section "Which objective plans, and does the plan pay?"
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -159,7 +159,8 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
                   n_particles: int = 3000, accuracy: float = 0.1,
                   tuned: SingleTurn | None = None, receding: bool = False,
                   objective: str | None = None, selected: Any = None, workers: int = 1,
-                  out_dir: str | Path | None = None, baselines: bool = True) -> CampaignResult:
+                  out_dir: str | Path | None = None,
+                  baselines: bool | Sequence[str] = True) -> CampaignResult:
     """Paired campaign of ``planned`` against the baselines (see the module docstring).
 
     Policies: ``planned`` (the multi-started offline plan of ``objective``, default the
@@ -167,21 +168,27 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     ``leg-turn-leg``, ``lead-lag``, ``tuned-turn`` (if ``tuned`` is given), ``planned-mc``
     (the plan ``selected`` by :func:`select_plan`, if given) and ``receding`` (if
     ``receding``). ``baselines=False`` flies only ``planned`` and what is asked for beyond
-    the baselines (e.g. ``receding − planned`` alone): every policy re-creates run ``i``'s
-    generators from the same seeds, so its runs are those of the full campaign.
+    the baselines (e.g. ``receding − planned`` alone), a sequence of baseline names flies
+    those only: every policy re-creates run ``i``'s generators from the same seeds, so its
+    runs are those of the full campaign.
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
+    names = ("straight", "single-turn", "leg-turn-leg", "lead-lag")
+    wanted = (names if baselines is True else () if baselines is False
+              else (baselines,) if isinstance(baselines, str) else tuple(baselines))
+    for k in wanted:
+        if k not in names:
+            raise ArgumentError("baselines", f"True, False or names among {names}", k)
     obj = objective if objective is not None else (
         scenario.planning.objective if scenario.planning is not None else None)
     pols: dict[str, Policy] = {
         "planned": Combined(manoeuvre=Planned(objective=obj,
                                               plan=offline_plan(scenario, obj)))}
-    if baselines:
-        pols |= {"straight": Combined(manoeuvre=Straight()),
-                 "single-turn": Combined(manoeuvre=best_single_turn(scenario)),
-                 "leg-turn-leg": Combined(manoeuvre=LegTurnLeg()),
-                 "lead-lag": Combined(manoeuvre=LeadLag())}
+    make: dict[str, Callable[[], Any]] = {
+        "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
+        "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}
+    pols |= {k: Combined(manoeuvre=make[k]()) for k in wanted}
     if tuned is not None:
         pols["tuned-turn"] = Combined(manoeuvre=tuned)
     if selected is not None:

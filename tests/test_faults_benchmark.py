@@ -53,6 +53,10 @@ def test_manoeuvre_detection_small():
     r = bench.manoeuvre(runs=4, particles=1000)
     assert 0 <= r["both"] <= r["detected"] <= 1 and r["detected_ever"] > 0
     assert 0 <= r["unknown_state_pd>=0.9"] <= r["unknown_state_pd>=0.5"] <= 1
+    # handled = both, or never disturbed: at least "both", at most "both" + undisturbed
+    assert r["both"] <= r["handled"] <= r["both"] + (1 - r["disturbed"]) + 1e-12
+    c = r["both_if_clairvoyant_pd>=0.9"]
+    assert math.isnan(c) or 0 <= c <= 1
 
 
 def test_manoeuvre_bound_small():

@@ -333,6 +333,17 @@ def test_random_problems_need_a_planning_base_and_a_generator():
         random_problem(load_problem("default"), 0)
 
 
+@pytest.mark.parametrize("kwargs,field", [({"tune_runs": -1}, "tune_runs"),
+                                          ({"tune_runs": 1.5}, "tune_runs"),
+                                          ({"tune_seed": 0}, "tune_seed")])
+def test_general_check_rejects_bad_tuning_arguments_naming_the_field(kwargs, field):
+    from tmaplan.evaluation.plan_general import general_check
+
+    with pytest.raises(ArgumentError, match=field) as info:
+        general_check(load_problem("default"), **kwargs)
+    assert info.value.field == field
+
+
 def test_criteria_read_the_ends_of_the_paired_intervals():
     from tmaplan.evaluation.metrics import PairedDifference
     from tmaplan.evaluation.plan_general import criteria

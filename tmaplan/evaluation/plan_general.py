@@ -266,7 +266,8 @@ def general_check(problem: Scenario, *, runs: int = 60, seed: int = 0, tune_runs
     runs, seed : int
         Paired evaluation runs and their root seed.
     tune_runs, tune_seed : int
-        Runs per grid point of the tuning and their root seed (keep it apart from ``seed``).
+        Runs per grid point of the tuning and their root seed (keep it apart from ``seed``);
+        ``tune_runs=0``: no tuned turn (no ``tuned-turn`` entry).
     n_particles, receding, workers, out_dir :
         As for :func:`tmaplan.experiments.plan_campaign` (resumable with ``out_dir``).
 
@@ -279,8 +280,12 @@ def general_check(problem: Scenario, *, runs: int = 60, seed: int = 0, tune_runs
     if tune_seed == seed:
         raise ArgumentError("tune_seed", f"a seed other than the evaluation's ({seed})",
                             tune_seed)
-    tuned, _ = tune_single_turn(problem, runs=tune_runs, seed=tune_seed,
-                                n_particles=n_particles, workers=workers, out_dir=out_dir)
+    if not isinstance(tune_runs, int) or isinstance(tune_runs, bool) or tune_runs < 0:
+        raise ArgumentError("tune_runs", "an integer >= 0 (0: no tuned turn)", tune_runs)
+    tuned = None
+    if tune_runs > 0:
+        tuned, _ = tune_single_turn(problem, runs=tune_runs, seed=tune_seed,
+                                    n_particles=n_particles, workers=workers, out_dir=out_dir)
     camp = plan_campaign(problem, runs=runs, seed=seed, n_particles=n_particles, tuned=tuned,
                          receding=receding, workers=workers, out_dir=out_dir)
     return planned_differences(camp)

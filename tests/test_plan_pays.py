@@ -185,8 +185,8 @@ def _differences(problem, baseline=None):
         sc = load_problem(problem)
         tuned, _ = tune_single_turn(sc, runs=16, seed=1000)
         few = (problem, baseline) in _DECISIVE
-        _CAMPAIGNS[key] = planned_differences(plan_campaign(
-            sc, runs=runs, seed=seed, tuned=tuned,
+        _CAMPAIGNS[key] = planned_differences(plan_campaign(   # same runs on any worker count
+            sc, runs=runs, seed=seed, tuned=tuned, workers=2,
             baselines=["single-turn"] if few else True))
     return _CAMPAIGNS[key]
 

@@ -22,8 +22,8 @@ import math
 import time
 
 import numpy as np
-from scipy import stats
 
+from tmaplan.evaluation.metrics import paired_difference
 from tmaplan.evaluation.plan_general import CRITERIA
 from tmaplan.experiments import criteria, general_check, random_problems
 from tmaplan.scenario import load_problem
@@ -79,8 +79,9 @@ def main() -> None:
         print("|---|---|---|---|")
         for x in baselines:
             m = np.array([d[x].mean for d in diffs if x in d]) / 60
-            h = stats.t.ppf(0.975, m.size - 1) * m.std(ddof=1) / np.sqrt(m.size)
-            print(f"| {x} | {m.mean():+.2f} | [{m.mean() - h:+.2f}, {m.mean() + h:+.2f}] | "
+            # the one t interval of the project: each problem mean against zero
+            f = paired_difference({x: m, "zero": np.zeros_like(m)}, x, "zero", "minutes")
+            print(f"| {x} | {f.mean:+.2f} | [{f.ci_low:+.2f}, {f.ci_high:+.2f}] | "
                   f"{int(np.sum(m < 0))} of {m.size} |")
     print("\n| criterion | problems meeting it |")
     print("|---|---|")

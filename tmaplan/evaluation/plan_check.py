@@ -174,20 +174,19 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
-    names = ("straight", "single-turn", "leg-turn-leg", "lead-lag")
-    wanted = (names if baselines is True else () if baselines is False
+    make: dict[str, Callable[[], Any]] = {
+        "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
+        "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}
+    wanted = (tuple(make) if baselines is True else () if baselines is False
               else (baselines,) if isinstance(baselines, str) else tuple(baselines))
     for k in wanted:
-        if k not in names:
-            raise ArgumentError("baselines", f"True, False or names among {names}", k)
+        if k not in make:
+            raise ArgumentError("baselines", f"True, False or names among {tuple(make)}", k)
     obj = objective if objective is not None else (
         scenario.planning.objective if scenario.planning is not None else None)
     pols: dict[str, Policy] = {
         "planned": Combined(manoeuvre=Planned(objective=obj,
                                               plan=offline_plan(scenario, obj)))}
-    make: dict[str, Callable[[], Any]] = {
-        "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
-        "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}
     pols |= {k: Combined(manoeuvre=make[k]()) for k in wanted}
     if tuned is not None:
         pols["tuned-turn"] = Combined(manoeuvre=tuned)

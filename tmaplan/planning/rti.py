@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import os
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -118,7 +119,8 @@ def reference_model(planner: HeadingPlanner, plan: HeadingPlan, belief: Belief, 
     return RTIModel(hessian=(vecs * mag) @ vecs.T, scale=scale, plan=plan)
 
 
-def hessian_columns(grad: Any, x: np.ndarray, *args: Any) -> np.ndarray:
+def hessian_columns(grad: Any, x: np.ndarray, *args: Any, threads: int | None = None
+                    ) -> np.ndarray:
     """The Jacobian of a gradient function (a Hessian), one forward derivative per column.
 
     Parameters
@@ -128,6 +130,10 @@ def hessian_columns(grad: Any, x: np.ndarray, *args: Any) -> np.ndarray:
     x : ndarray, shape (n,)
     *args
         The function's other inputs (fixed).
+    threads : int, optional
+        casadi threads the n columns are shared among (default: the CPUs this process may
+        use). Each column is computed the same way whatever the count, so the result is
+        bit-identical; on ``default`` (183 columns) 2 threads take ≈ 0.55× the time of 1.
 
     Returns
     -------
@@ -138,10 +144,16 @@ def hessian_columns(grad: Any, x: np.ndarray, *args: Any) -> np.ndarray:
         at once as long; the one-direction derivative builds in about 0.1 s.
     """
     n = x.size
+    if threads is None:
+        threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+            os.cpu_count() or 1)
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+        raise ArgumentError("threads", "an integer >= 1", threads)
     g0 = grad(x, *args)
     fwd = grad.forward(1)
     zeros = [np.zeros((np.asarray(a).size, n)) for a in args]
-    return np.asarray(fwd.map(n)(x, *args, g0, np.eye(n), *zeros))
+    mapped = fwd.map(n, "thread", int(min(threads, n))) if threads > 1 else fwd.map(n)
+    return np.asarray(mapped(x, *args, g0, np.eye(n), *zeros))
 
 
 def _check_planner(planner: HeadingPlanner) -> None:

@@ -133,7 +133,7 @@ def hessian_columns(grad: Any, x: np.ndarray, *args: Any, threads: int | None = 
     threads : int, optional
         casadi threads the n columns are shared among (default: the CPUs this process may
         use). Each column is computed the same way whatever the count, so the result is
-        bit-identical; on ``default`` (183 columns) 2 threads take ≈ 0.55× the time of 1.
+        bit-identical; on ``default`` (183 columns) 2 threads take ≈ 0.65× the time of 1.
 
     Returns
     -------

@@ -186,6 +186,26 @@ def test_receding_full_solves_are_checked(small):
     with pytest.raises(ArgumentError, match="full_above"):
         Receding(full_above=0.0, objective="mean-range-bound", horizon=900.0) \
             .resolve(sc).controller(sc)
+    for bad in (0.0, 1.0, True, "1e-4"):
+        with pytest.raises(ArgumentError, match="full_tol"):
+            Receding(full_tol=bad, objective="mean-range-bound", horizon=900.0) \
+                .resolve(sc).controller(sc)
+
+
+def test_planner_tolerance_per_solve(small):
+    """``tol`` loosens one solve (its own IPOPT instance): a warm re-solve stops no later and
+    lands on the same optimum to within the looser tolerance; bad values are rejected."""
+    _, prior, planner, plan, _ = small
+    later = Belief.from_samples(prior.samples[::2], t=300.0)
+    tight = planner.solve(later, warm_start=plan)
+    loose = planner.solve(later, warm_start=plan, tol=1e-3)
+    assert tight.success and loose.success
+    assert loose.iterations <= tight.iterations
+    assert abs(loose.objective - tight.objective) <= 1e-2 * abs(tight.objective)
+    assert planner.solve(later, warm_start=plan).objective == tight.objective  # unchanged
+    for bad in (0.0, 1.0, -1e-3, True, "x"):
+        with pytest.raises(ArgumentError, match="tol"):
+            planner.solve(later, warm_start=plan, tol=bad)
 
 
 def test_receding_rti_policy_name_takes_only_rti_steps(small):

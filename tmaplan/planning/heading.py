@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.errors import PlanningError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
@@ -328,10 +328,10 @@ class HeadingPlanner:
         return (tau, np.zeros(na), np.ones(na), g, lbg, ubg, (pos, vbar, head, urate))
 
     # ------------------------------------------------------------------------- solve
-    def _solver(self, warm: bool) -> Any:
+    def _solver(self, warm: bool, tol: float | None = None) -> Any:
         import casadi as ca
 
-        key = "warm" if warm else "cold"
+        key = ("warm" if warm else "cold") + ("" if tol is None else f"-tol{tol:g}")
         if key not in self._solvers:
             ipopt: dict[str, Any] = {
                 "print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
@@ -341,7 +341,11 @@ class HeadingPlanner:
                 ipopt.update({"warm_start_init_point": "yes", "warm_start_bound_push": 1e-6,
                               "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-4})
             ipopt.update(self._opts)
-            self._solvers[key] = ca.nlpsol(f"heading_{key}", "ipopt", self._nlp,
+            if tol is not None:
+                ipopt.update({"tol": float(tol), "acceptable_tol": 10 * float(tol)})
+            name = "heading_" + ("warm" if warm else "cold") + (
+                "" if tol is None else f"_tol{len(self._solvers)}")
+            self._solvers[key] = ca.nlpsol(name, "ipopt", self._nlp,
                                            {"print_time": False, "ipopt": ipopt})
         return self._solvers[key]
 
@@ -416,7 +420,8 @@ class HeadingPlanner:
               position0: np.ndarray | None = None, speed0: float | None = None,
               warm_start: HeadingPlan | None = None, ping_steps: Sequence[int] = (),
               raise_on_failure: bool = True,
-              starts: Sequence[np.ndarray] | None = None) -> HeadingPlan:
+              starts: Sequence[np.ndarray] | None = None,
+              tol: float | None = None) -> HeadingPlan:
         """Solve the heading OCP for a belief (relative to the observer state at ``belief.t``).
 
         Parameters
@@ -439,6 +444,10 @@ class HeadingPlanner:
         starts : sequence of ndarray, optional
             Initial guesses replacing the built-in ones ("direct" only): turn-rate programs
             ``u_j/u_max`` in [−1, 1], one value per control interval, shape (n,).
+        tol : float, optional
+            IPOPT's convergence tolerance for this solve (``tol``; ``acceptable_tol`` is 10×
+            it) on the objective scaled to 1 at the start; default 1e-7 (or the planner's
+            ``solver_options``). The solver is built once per tolerance.
 
         Raises
         ------
@@ -448,6 +457,9 @@ class HeadingPlanner:
             IPOPT did not converge from any start.
         """
         t_start = time.perf_counter()
+        if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
+                                or not 0 < tol < 1):
+            raise ArgumentError("tol", "a number in (0, 1) or None", tol)
         heading0, speed0, p0 = self._start_state(heading0, speed0, position0)
         self._precheck(belief, heading0, speed0)
         pvec = self._parameters(belief, ping_steps)
@@ -474,7 +486,7 @@ class HeadingPlanner:
         for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
             use_warm = duals is not None
-            solver = self._solver(use_warm)
+            solver = self._solver(use_warm, tol)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,
                                   "ubg": ubg}
             if duals is not None:

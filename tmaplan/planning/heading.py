@@ -251,7 +251,7 @@ class HeadingPlanner:
         self._nlp = {"x": w, "p": P, "f": f / scale, "g": G}
         self._f_eval = ca.Function("plan_eval", [w, P], [f, rb, pos, vbar, head, urate])
         self._opts = solver_options or {}
-        self._solvers: dict[str, Any] = {}
+        self._solvers: dict[tuple[bool, float | None], Any] = {}
 
     # ------------------------------------------------------------------ transcriptions
     def _direct(self, hd0: Any, spd0: Any) -> tuple[Any, ...]:
@@ -331,7 +331,7 @@ class HeadingPlanner:
     def _solver(self, warm: bool, tol: float | None = None) -> Any:
         import casadi as ca
 
-        key = ("warm" if warm else "cold") + ("" if tol is None else f"-tol{tol:g}")
+        key = (warm, tol)
         if key not in self._solvers:
             ipopt: dict[str, Any] = {
                 "print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-7,
@@ -343,9 +343,7 @@ class HeadingPlanner:
             ipopt.update(self._opts)
             if tol is not None:
                 ipopt.update({"tol": float(tol), "acceptable_tol": 10 * float(tol)})
-            name = "heading_" + ("warm" if warm else "cold") + (
-                "" if tol is None else f"_tol{len(self._solvers)}")
-            self._solvers[key] = ca.nlpsol(name, "ipopt", self._nlp,
+            self._solvers[key] = ca.nlpsol(f"heading_{len(self._solvers)}", "ipopt", self._nlp,
                                            {"print_time": False, "ipopt": ipopt})
         return self._solvers[key]
 
@@ -445,9 +443,7 @@ class HeadingPlanner:
             Initial guesses replacing the built-in ones ("direct" only): turn-rate programs
             ``u_j/u_max`` in [−1, 1], one value per control interval, shape (n,).
         tol : float, optional
-            IPOPT's convergence tolerance for this solve (``tol``; ``acceptable_tol`` is 10×
-            it) on the objective scaled to 1 at the start; default 1e-7 (or the planner's
-            ``solver_options``). The solver is built once per tolerance.
+            IPOPT ``tol`` of this solve (``acceptable_tol`` 10× it; default 1e-7).
 
         Raises
         ------
@@ -566,16 +562,10 @@ class HeadingPlanner:
     def _make_plan(self, x: np.ndarray, P: np.ndarray, t0: float, p0: np.ndarray,
                    speed0: float, status: str, success: bool, iters: int, seconds: float,
                    warm: dict[str, Any], message: str) -> HeadingPlan:
-        f, rb, pos, vbar, head, urate = (np.asarray(o) for o in self._f_eval(x, P))
-        head = head.reshape(-1)
-        urate = urate.reshape(-1)
-        times = t0 + self.times
-        nodes = head[:: self.m]
-        tr = np.diff(nodes) / self.Tc
-        if self.speed_choice:
-            spd = x[-self.n:]
-        else:
-            spd = np.full(self.n, speed0)
+        f, rb, pos, vbar, head, _ = (np.asarray(o) for o in self._f_eval(x, P))
+        head, times = head.reshape(-1), t0 + self.times
+        tr = np.diff(nodes := head[:: self.m]) / self.Tc
+        spd = x[-self.n:] if self.speed_choice else np.full(self.n, speed0)
         spd_steps = np.concatenate([[speed0], np.repeat(spd, self.m)])
         track = ObserverTrack(times=times, position=p0 + pos, velocity=velocity_from_course(
             spd_steps, head), mean_velocity=vbar, heading=wrap_angle(head), speed=spd_steps)

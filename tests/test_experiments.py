@@ -216,3 +216,28 @@ def test_receding_campaign_identical_for_any_backend(scenario):
             json.dumps(serial.to_json()["policies"]["receding"]["rmse_range"])
         assert np.array_equal(other.summary["receding"]["time_to_accuracy_runs"],
                               serial.summary["receding"]["time_to_accuracy_runs"])
+
+
+def test_resolve_policies_solves_the_offline_plans_on_the_workers(monkeypatch):
+    """With ``workers > 1`` the offline plan of ``planned`` (and ``receding``) is computed
+    first, its multi-start on the worker processes; not for manoeuvres without one."""
+    import tmaplan.policies.manoeuvres as manoeuvres
+    from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
+
+    calls = []
+
+    class Stop(Exception):
+        pass
+
+    def fake(scenario, objective, *, workers=1):
+        calls.append((scenario.name, objective, workers))
+        raise Stop
+
+    monkeypatch.setattr(manoeuvres, "offline_plan", fake)
+    sc = load_problem("default")
+    assert set(resolve_policies(sc, ["straight", "zigzag"], workers=2)) == {"straight",
+                                                                             "zigzag"}
+    assert calls == []
+    with pytest.raises(Stop):
+        resolve_policies(sc, ["straight", "planned"], workers=2)
+    assert calls == [("default", CLOSED_LOOP_OBJECTIVE, 2)]

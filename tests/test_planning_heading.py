@@ -241,3 +241,22 @@ def test_objective_names_are_one_list(default):
     d["planning"]["objective"] = "fastest"
     with pytest.raises(ScenarioError, match=r"planning\.objective.*'logdet'"):
         from_dict(d)
+
+
+def test_multi_start_on_worker_processes_gives_the_same_plans(default):
+    """The starts solved on 2 spawned processes (each with its own planner) give the plans of
+    one process, bit for bit, in the same order; ``workers`` is checked."""
+    from tmaplan.errors import ArgumentError
+    from tmaplan.policies.plan_starts import plan_candidates
+
+    kw = dict(horizon=900.0, control_interval=60.0)
+    one = plan_candidates(default, "mean-range-bound", **kw)
+    two = plan_candidates(default, "mean-range-bound", workers=2, **kw)
+    assert list(one) == list(two) and len(one) >= 1
+    for name in one:
+        assert one[name].objective == two[name].objective
+        assert np.array_equal(one[name].turn_rate, two[name].turn_rate)
+        assert np.array_equal(one[name].observer.position, two[name].observer.position)
+    for bad in (0, 1.5, True):
+        with pytest.raises(ArgumentError, match="workers"):
+            plan_candidates(default, "mean-range-bound", workers=bad, **kw)

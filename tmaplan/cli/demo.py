@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
     # `receding` policies reuse it instead of solving again
-    plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE)
+    plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K)
     plan_fig = plot_plan(plan, base, belief, out / "plan.png",
                          objective=planner.objective.name)

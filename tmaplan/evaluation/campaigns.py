@@ -105,22 +105,42 @@ class CampaignSpec:
         return meta
 
 
-def resolve_policies(scenario: Scenario, specs: Sequence[str]) -> dict[str, Policy]:
+def resolve_policies(scenario: Scenario, specs: Sequence[str], *,
+                     workers: int = 1) -> dict[str, Policy]:
     """Parse policy specs and precompute what is shared by all runs (offline plans,
     schedules, the best single turn: :meth:`tmaplan.policies.Combined.resolve`), so workers do
     not recompute it.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    specs : sequence of str
+        Policy specs (``manoeuvre[+ping]``).
+    workers : int
+        Processes the offline plans' multi-starts are solved on
+        (:func:`tmaplan.policies.manoeuvres.offline_plan`; the same plans whatever the count).
 
     Returns
     -------
     dict
         Policy name -> policy object (picklable).
     """
-    out: dict[str, Policy] = {}
+    from tmaplan.policies import Combined, Planned, Receding
+    from tmaplan.policies.manoeuvres import offline_plan
+
+    parsed: dict[str, Combined] = {}
     for spec in specs:
-        if spec in out:
+        if spec in parsed:
             raise PlanningError(f"policy {spec!r} given twice")
-        out[spec] = parse_policy(spec, scenario).resolve(scenario)
-    return out
+        parsed[spec] = parse_policy(spec, scenario)
+    if workers > 1:  # the offline plans first, their starts on the worker processes
+        for pol in parsed.values():
+            m = pol.manoeuvre
+            if (isinstance(m, Planned) and m.plan is None) or (
+                    isinstance(m, Receding) and m.real_time and m.rti is None
+                    and m.horizon is None):
+                offline_plan(scenario, m.objective, workers=workers)
+    return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
 def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
@@ -381,7 +401,8 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
     scenario = spec.scenario
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
-    pols = policies if policies is not None else resolve_policies(scenario, spec.policies)
+    pols = policies if policies is not None else resolve_policies(
+        scenario, spec.policies, workers=workers if backend == "processes" else 1)
     directory = None
     results: dict[int, RunRecord] = {}
     if out_dir is not None:

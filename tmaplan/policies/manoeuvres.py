@@ -152,15 +152,15 @@ class Planned:
 _PLAN_CACHE: dict[tuple[Scenario, str | None], Any] = {}
 
 
-def offline_plan(scenario: Scenario, objective: str | None) -> Any:
+def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1) -> Any:
     """The heading plan from the prior, multi-started from straight, the tactics and the best
-    single turns (:func:`tmaplan.policies.plan_starts.plan_from_prior`), cached per scenario
-    and objective."""
+    single turns (:func:`tmaplan.policies.plan_starts.plan_from_prior`, its starts solved on
+    ``workers`` processes), cached per scenario and objective."""
     key = (scenario, objective)
     if key not in _PLAN_CACHE:
         from tmaplan.policies.plan_starts import plan_from_prior
 
-        _PLAN_CACHE[key] = plan_from_prior(scenario, objective)
+        _PLAN_CACHE[key] = plan_from_prior(scenario, objective, workers=workers)
     return _PLAN_CACHE[key]
 
 

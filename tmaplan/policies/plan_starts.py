@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import PlanningError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, SolverError
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -72,7 +72,8 @@ def start_programs(scenario: Scenario, planner: HeadingPlanner, *, n_turns: int 
 
 
 def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int = 3,
-                    planner: HeadingPlanner | None = None, **planner_kw: Any) -> HeadingPlan:
+                    planner: HeadingPlanner | None = None, workers: int = 1,
+                    **planner_kw: Any) -> HeadingPlan:
     """Heading plan from the prior, multi-started (see the module docstring).
 
     Parameters
@@ -84,6 +85,11 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
         Best single turns of the baseline grid used as starts.
     planner : HeadingPlanner, optional
         A planner to reuse (``objective`` and ``planner_kw`` are then ignored).
+    workers : int
+        Processes the starts are solved on (each builds its own planner; the same plans as
+        one process, bit for bit). Only without ``planner`` and with ``objective`` a name
+        (an :class:`~tmaplan.planning.objectives.Objective` object is solved in this
+        process).
     **planner_kw
         Further arguments of :class:`tmaplan.planning.HeadingPlanner`.
 
@@ -100,7 +106,7 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
     import dataclasses
 
     plans = plan_candidates(scenario, objective, n_turns=n_turns, planner=planner,
-                            **planner_kw)
+                            workers=workers, **planner_kw)
     name = min(plans, key=lambda k: plans[k].objective)
     return dataclasses.replace(
         plans[name], iterations=sum(p.iterations for p in plans.values()),
@@ -110,7 +116,7 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
 def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int = 3,
                     planner: HeadingPlanner | None = None, tol: float = 1e-4,
-                    **planner_kw: Any) -> dict[str, HeadingPlan]:
+                    workers: int = 1, **planner_kw: Any) -> dict[str, HeadingPlan]:
     """Every distinct local optimum of the multi-start (start name -> plan), best cost first.
 
     Solutions whose costs agree within ``tol`` (relative) are one optimum, kept under the
@@ -122,22 +128,26 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
         If IPOPT converged from none of the starts.
     """
     from tmaplan.planning.belief import Belief
-    from tmaplan.planning.heading import HeadingPlanner
 
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ArgumentError("workers", "an integer >= 1", workers)
+    parallel = workers > 1 and planner is None and (objective is None
+                                                    or isinstance(objective, str))
     if planner is None:
-        kw = dict(planner_kw)
-        if objective is not None:
-            kw["objective"] = objective
-        planner = HeadingPlanner(scenario, **kw)
-    belief = Belief.from_prior(scenario)
-    found: list[tuple[str, HeadingPlan]] = []
-    for name, u in start_programs(scenario, planner, n_turns=n_turns).items():
-        try:
-            plan = planner.solve(belief, starts=[u], raise_on_failure=False)
-        except PlanningError:
-            continue
-        if plan.success and np.isfinite(plan.objective):
-            found.append((name, plan))
+        planner = _build_planner(scenario, objective, planner_kw)
+    starts = start_programs(scenario, planner, n_turns=n_turns)
+    if parallel:
+        from concurrent.futures import ProcessPoolExecutor
+        from multiprocessing import get_context
+
+        with ProcessPoolExecutor(max_workers=min(int(workers), len(starts)),
+                                 mp_context=get_context("spawn"), initializer=_init_worker,
+                                 initargs=(scenario, objective, planner_kw)) as ex:
+            plans = list(ex.map(_solve_in_worker, starts.values()))
+    else:
+        belief = Belief.from_prior(scenario)
+        plans = [_solve_start(planner, belief, u) for u in starts.values()]
+    found = [(name, plan) for name, plan in zip(starts, plans) if plan is not None]
     if not found:
         raise SolverError("ipopt", "no start converged",
                           f"heading OCP from the prior ({scenario.name})")
@@ -148,3 +158,38 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
                for q in out.values()):
             out[name] = plan
     return out
+
+
+def _build_planner(scenario: Scenario, objective: Any, planner_kw: dict[str, Any]
+                   ) -> HeadingPlanner:
+    from tmaplan.planning.heading import HeadingPlanner
+
+    kw = dict(planner_kw)
+    if objective is not None:
+        kw["objective"] = objective
+    return HeadingPlanner(scenario, **kw)
+
+
+def _solve_start(planner: HeadingPlanner, belief: Any, u: np.ndarray) -> HeadingPlan | None:
+    """IPOPT from one start; None if it failed or did not converge."""
+    try:
+        plan = planner.solve(belief, starts=[u], raise_on_failure=False)
+    except PlanningError:
+        return None
+    return plan if plan.success and np.isfinite(plan.objective) else None
+
+
+_WORKER: dict[str, Any] = {}
+
+
+def _init_worker(scenario: Scenario, objective: str | None, planner_kw: dict[str, Any]
+                 ) -> None:
+    """Process-pool initializer: one planner and the prior belief per worker process."""
+    from tmaplan.planning.belief import Belief
+
+    _WORKER["planner"] = _build_planner(scenario, objective, planner_kw)
+    _WORKER["belief"] = Belief.from_prior(scenario)
+
+
+def _solve_in_worker(u: np.ndarray) -> HeadingPlan | None:
+    return _solve_start(_WORKER["planner"], _WORKER["belief"], u)

@@ -33,6 +33,7 @@ from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
+from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
@@ -52,34 +53,6 @@ __all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "plan_hea
            "safe_sinc"]
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
-
-
-def safe_sinc(a: Any) -> Any:
-    """``sin(a)/a`` for casadi symbols, finite with finite derivatives at a = 0.
-
-    Taylor series ``1 − a²/6 + a⁴/120 − a⁶/5040`` for |a| < 0.1 (error < 1e−13), else
-    ``sin(a)/a`` evaluated at a point kept away from 0 (both branches stay finite, so
-    casadi's ``if_else`` derivatives are clean).
-    """
-    import casadi as ca
-
-    small = ca.fabs(a) < 0.1
-    a_big = ca.if_else(small, 0.1, a)
-    a2 = a * a
-    return ca.if_else(small, 1 - a2 / 6 + a2 * a2 / 120 - a2 * a2 * a2 / 5040,
-                      ca.sin(a_big) / a_big)
-
-
-def arc_displacement_casadi(heading: Any, turn_rate: Any, speed: Any, dt: Any) -> Any:
-    """casadi version of :func:`tmaplan.models.observer.arc_displacement` (elementwise).
-
-    ``V·dt·sinc(ω dt/2)·[sin(ψ + ω dt/2), cos(ψ + ω dt/2)]``; returns (dx, dy) [m].
-    """
-    import casadi as ca
-
-    half = turn_rate * dt / 2
-    scale = speed * dt * safe_sinc(half)
-    return scale * ca.sin(heading + half), scale * ca.cos(heading + half)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -164,6 +137,10 @@ class HeadingPlanner:
         Arcs of the bang-bang sequence (+, 0, −, 0, +, ...).
     logdet_samples : int
         Belief samples averaged by the ``logdet`` objective (1 = the mean).
+    until_end : bool
+        Count only the plan steps up to the scenario's end in the objectives that sum or
+        average over the steps (step weights 0 after it, :class:`ParamLayout`): a re-plan at
+        time t then optimises the time the mission has left, not a full horizon beyond it.
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,
@@ -171,7 +148,8 @@ class HeadingPlanner:
                  transcription: Literal["direct", "bang-bang"] = "direct", n_starts: int = 4,
                  solver_options: dict[str, Any] | None = None,
                  turn_rate_max: float | None = None, keep_out_range: float | None = None,
-                 speed_choice: bool = False, n_arcs: int = 5, logdet_samples: int = 1) -> None:
+                 speed_choice: bool = False, n_arcs: int = 5, logdet_samples: int = 1,
+                 until_end: bool = False) -> None:
         import casadi as ca
 
         pl = scenario.planning
@@ -185,6 +163,7 @@ class HeadingPlanner:
                                 f"{transcription!r}")
         self.transcription = transcription
         self.n_starts = max(1, int(n_starts))
+        self.until_end = bool(until_end)
         dt = float(scenario.time.dt)
         H = horizon if horizon is not None else (pl.horizon if pl and pl.horizon else
                                                  scenario.time.horizon)
@@ -541,7 +520,12 @@ class HeadingPlanner:
                                     "has no range sensor")
             ping[st[(st >= 0) & (st <= self.K)]] = 1.0
         bearing = plan_bearing_information(self.scenario, belief.t, self.K)
-        return self.layout.vector(belief, bearing, ping)
+        weight = None
+        if self.until_end:
+            tg = self.scenario.time
+            end = tg.t0 + tg.dt * tg.n_steps
+            weight = (belief.t + self.times <= end + 1e-6 * self.dt).astype(float)
+        return self.layout.vector(belief, bearing, ping, weight)
 
     def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
         if self.keep_out <= 0:

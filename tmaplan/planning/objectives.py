@@ -153,7 +153,8 @@ def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanCon
         x = per_step(ctx)
         if reduce == "terminal":
             return ca.sum2(x[-1, :]) / x.shape[1]
-        return ca.sum1(ca.sum2(x)) / (x.shape[0] * x.shape[1])
+        w = ctx.param("weight")  # step weights (ParamLayout): a weighted mean over the steps
+        return ca.sum1(w * ca.sum2(x)) / (x.shape[1] * ca.fmax(ca.sum1(w), 1e-12))
 
     return Objective(names[reduce == "mean"], ((1.0, term),), samples)
 
@@ -205,7 +206,8 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
         rel = relative_range_crlb_graph(ctx)
         z = (rel - tau) / (width * tau)
         sig = 0.5 * (1.0 + ca.tanh(0.5 * z))
-        return ca.sum1(ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
+        w = ctx.param("weight")  # step weights (ParamLayout): 0 for steps that do not count
+        return ca.sum1(w * ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
 
     return Objective("time-to-accuracy", ((1.0, term),), int(samples))
 
@@ -244,7 +246,8 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
         z = (rel - tau) / (width * tau)
         sig = 0.5 * (1.0 + ca.tanh(0.5 * z))
         span = float(ctx.times[-1]) + ctx.dt  # (K + 1)·dt
-        return span * ca.sum1(ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
+        w = ctx.param("weight")  # step weights (ParamLayout): 0 for steps that do not count
+        return span * ca.sum1(w * ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
 
     def penalty(ctx: PlanContext) -> Any:
         import casadi as ca

@@ -228,6 +228,10 @@ class Receding:
         process) a full solve took 1.00 s instead of 1.24 s, and over 100 paired runs the
         closed loop did not change (time to accuracy +1.4 s [−64.3, +67.0], final range error
         +5.6 m [−38.6, +49.8] against 1e-7; docs/findings.md).
+    until_end : bool
+        Count only the plan steps up to the scenario's end (``HeadingPlanner(until_end=True)``):
+        a re-plan at time t optimises the time the mission has left instead of a full
+        horizon that runs past the end, where the metrics stop counting.
     rti : RTIModel, optional
         The offline plan and the Hessian model of the real-time iteration
         (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
@@ -248,6 +252,7 @@ class Receding:
     full_solves: tuple[int, ...] = ()
     full_above: float = 0.01
     full_tol: float | None = 1e-4
+    until_end: bool = False
     rti: Any = dataclasses.field(default=None, compare=False, repr=False)
     replan_on_alarm: bool = True
     name: str = "receding"
@@ -260,22 +265,24 @@ class Receding:
         """The same policy with the real-time iteration's model computed (once per campaign)."""
         if not self.real_time or self.rti is not None:
             return self
-        return dataclasses.replace(self, rti=_rti_model(scenario, self.objective, self.horizon))
+        return dataclasses.replace(self, rti=_rti_model(scenario, self.objective, self.horizon,
+                                                        self.until_end))
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The offline plan from the prior: the receding controller's first plan."""
         return offline_plan(scenario, self.objective).observer
 
 
-_PLANNER_CACHE: dict[tuple[Scenario, str | None, float | None], Any] = {}
+_PLANNER_CACHE: dict[tuple[Scenario, str | None, float | None, bool], Any] = {}
 
 
-def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
-    key = (scenario, objective, horizon)
+def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
+             until_end: bool = False) -> Any:
+    key = (scenario, objective, horizon, until_end)
     if key not in _PLANNER_CACHE:
         from tmaplan.planning import HeadingPlanner
 
-        kw: dict[str, Any] = {}
+        kw: dict[str, Any] = {"until_end": until_end}
         if objective is not None:
             kw["objective"] = objective
         if horizon is not None:
@@ -284,18 +291,19 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None) -
     return _PLANNER_CACHE[key]
 
 
-_RTI_MODEL_CACHE: dict[tuple[Scenario, str | None, float | None], Any] = {}
-_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, str, int], Any] = {}
+_RTI_MODEL_CACHE: dict[tuple[Scenario, str | None, float | None, bool], Any] = {}
+_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, bool, str, int], Any] = {}
 
 
-def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None) -> Any:
+def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
+               until_end: bool = False) -> Any:
     """The real-time iteration's model at the offline plan from the prior (cached)."""
-    key = (scenario, objective, horizon)
+    key = (scenario, objective, horizon, until_end)
     if key not in _RTI_MODEL_CACHE:
         from tmaplan.planning import Belief
         from tmaplan.planning.rti import reference_model
 
-        planner = _planner(scenario, objective, horizon)
+        planner = _planner(scenario, objective, horizon, until_end)
         prior = Belief.from_prior(scenario)
         plan = offline_plan(scenario, objective) if horizon is None else planner.solve(prior)
         _RTI_MODEL_CACHE[key] = reference_model(planner, plan, prior)
@@ -306,12 +314,14 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
     """The policy's real-time iteration (casadi functions built once per process)."""
     from tmaplan.planning.rti import RealTimeIteration
 
-    model = policy.rti if policy.rti is not None else _rti_model(scenario, policy.objective,
-                                                                 policy.horizon)
-    key = (scenario, policy.objective, policy.horizon, policy.qpsol, policy.rti_steps)
+    model = policy.rti if policy.rti is not None else _rti_model(
+        scenario, policy.objective, policy.horizon, policy.until_end)
+    key = (scenario, policy.objective, policy.horizon, policy.until_end, policy.qpsol,
+           policy.rti_steps)
     if key not in _RTI_CACHE:
-        _RTI_CACHE[key] = RealTimeIteration(_planner(scenario, policy.objective, policy.horizon),
-                                            model, qpsol=policy.qpsol, steps=policy.rti_steps)
+        planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
+        _RTI_CACHE[key] = RealTimeIteration(planner, model, qpsol=policy.qpsol,
+                                            steps=policy.rti_steps)
     return _RTI_CACHE[key].with_model(model)
 
 
@@ -335,7 +345,7 @@ class _RecedingController:
             raise ArgumentError("receding.full_tol", "a number in (0, 1) or None", tol)
         self.policy = policy
         self.scenario = scenario
-        self.planner = _planner(scenario, policy.objective, policy.horizon)
+        self.planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
         self.rti = _rti(policy, scenario) if policy.real_time else None
         self.u_max, self.dt = _turn_limits(scenario)
         self.plan: Any = None

@@ -231,7 +231,9 @@ class Receding:
     until_end : bool
         Count only the plan steps up to the scenario's end (``HeadingPlanner(until_end=True)``):
         a re-plan at time t optimises the time the mission has left instead of a full
-        horizon that runs past the end, where the metrics stop counting.
+        horizon that runs past the end, where the metrics stop counting. Off by default: on
+        ``bow-closing`` (30 min, 400 paired runs, seed 6) it changed the mean time to
+        accuracy by +0.6 s [−13.2, +14.4] against the default (README).
     rti : RTIModel, optional
         The offline plan and the Hessian model of the real-time iteration
         (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given

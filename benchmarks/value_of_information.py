@@ -31,6 +31,7 @@ from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import paired_difference, run_metrics
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning.objectives import ObjectiveEvaluator
 from tmaplan.policies import Combined, Planned
 from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import load_problem
@@ -72,7 +73,9 @@ def _run(args: tuple[int, int]) -> dict:
                  planner.solve(b, starts=[u0], raise_on_failure=False)]
         clair = min((c for c in cands if c.success), key=lambda c: c.objective,
                     default=None)
-        out = {"run": i, "seed": seed, "clairvoyant_objective": None}
+        at_truth = ObjectiveEvaluator(sc, planner.objective, n_steps=planner.K, belief=b)
+        out = {"run": i, "seed": seed, "clairvoyant_objective": None,
+               "planned_objective_at_truth": at_truth(plan.observer)[0]}
         pols = {"planned": Combined(manoeuvre=Planned(objective=_STATE["obj"], plan=plan))}
         if clair is not None:
             out["clairvoyant_objective"] = clair.objective

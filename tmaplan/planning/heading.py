@@ -307,6 +307,14 @@ class HeadingPlanner:
         return (tau, np.zeros(na), np.ones(na), g, lbg, ubg, (pos, vbar, head, urate))
 
     # ------------------------------------------------------------------------- solve
+    @staticmethod
+    def check_tolerance(tol: Any, field: str = "tol") -> None:
+        """Raise :class:`ArgumentError` naming ``field`` unless ``tol`` is a number in (0, 1)
+        or None (an IPOPT ``tol`` for :meth:`solve`)."""
+        if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
+                                or not 0 < tol < 1):
+            raise ArgumentError(field, "a number in (0, 1) or None", tol)
+
     def _solver(self, warm: bool, tol: float | None = None) -> Any:
         import casadi as ca
 
@@ -432,9 +440,7 @@ class HeadingPlanner:
             IPOPT did not converge from any start.
         """
         t_start = time.perf_counter()
-        if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
-                                or not 0 < tol < 1):
-            raise ArgumentError("tol", "a number in (0, 1) or None", tol)
+        self.check_tolerance(tol)
         heading0, speed0, p0 = self._start_state(heading0, speed0, position0)
         self._precheck(belief, heading0, speed0)
         pvec = self._parameters(belief, ping_steps)

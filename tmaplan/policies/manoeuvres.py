@@ -341,10 +341,9 @@ class _RecedingController:
                                 policy.full_solves)
         if not policy.full_above > 0:
             raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
-        tol = policy.full_tol
-        if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
-                                or not 0 < tol < 1):
-            raise ArgumentError("receding.full_tol", "a number in (0, 1) or None", tol)
+        from tmaplan.planning import HeadingPlanner
+
+        HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
         self.policy = policy
         self.scenario = scenario
         self.planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -31,3 +33,16 @@ def prior(default):
     from tmaplan.planning.belief import Belief
 
     return Belief.from_prior(default)
+
+
+@pytest.fixture
+def benchmark_script():
+    """Load a script of ``benchmarks/`` by file name (they are not a package)."""
+    def load(name: str):
+        path = Path(__file__).parents[1] / "benchmarks" / f"{name}.py"
+        spec = importlib.util.spec_from_file_location(f"benchmark_{name}", path)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+
+    return load

@@ -3,26 +3,16 @@ and the robust filter holds up against wild bearings where the plain one breaks.
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import warnings
-from pathlib import Path
 
 import pytest
 
 pytestmark = pytest.mark.slow
 
 
-def _bench():
-    path = Path(__file__).parents[1] / "benchmarks" / "faults.py"
-    spec = importlib.util.spec_from_file_location("faults_benchmark", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_fault_matrix_small(capsys):
-    bench = _bench()
+def test_fault_matrix_small(capsys, benchmark_script):
+    bench = benchmark_script("faults")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # degeneracy warnings of the plain filter
         rows = bench.matrix(policies=["planned+scheduled"], faults=list(bench.FAULTS),
@@ -39,8 +29,8 @@ def test_fault_matrix_small(capsys):
     assert cell["robust", "manoeuvre-60deg"]["recoveries"] >= 1
 
 
-def test_receding_runs_with_a_fault():
-    bench = _bench()
+def test_receding_runs_with_a_fault(benchmark_script):
+    bench = benchmark_script("faults")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rows = bench.matrix(policies=["receding"], faults=["manoeuvre-60deg"],
@@ -48,8 +38,8 @@ def test_receding_runs_with_a_fault():
     assert [r["fault"] for r in rows] == ["none", "manoeuvre-60deg"]
 
 
-def test_manoeuvre_detection_small():
-    bench = _bench()
+def test_manoeuvre_detection_small(benchmark_script):
+    bench = benchmark_script("faults")
     r = bench.manoeuvre(runs=4, particles=1000)
     assert 0 <= r["both"] <= r["detected"] <= 1 and r["detected_ever"] > 0
     assert 0 <= r["unknown_state_pd>=0.9"] <= r["unknown_state_pd>=0.5"] <= 1
@@ -59,8 +49,8 @@ def test_manoeuvre_detection_small():
     assert math.isnan(c) or 0 <= c <= 1
 
 
-def test_manoeuvre_bound_small():
-    bench = _bench()
+def test_manoeuvre_bound_small(benchmark_script):
+    bench = benchmark_script("faults")
     r = bench.bound_only(runs=3)
     assert 0 <= r["clairvoyant_pd>=0.9"] <= r["clairvoyant_pd>=0.5"] <= 1
     # the straight continuation is one of the straight tracks: the unknown-state λ is smaller

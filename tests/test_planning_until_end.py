@@ -9,22 +9,14 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ArgumentError
-from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning import HeadingPlanner
 from tmaplan.planning.objectives import ParamLayout
-from tmaplan.scenario import load_problem
 
 _KW = {"objective": "expected-time-to-accuracy", "horizon": 900.0, "control_interval": 60.0,
        "n_starts": 1}
 
 
-@pytest.fixture(scope="module")
-def default():
-    sc = load_problem("default")
-    return sc, Belief.from_prior(sc)
-
-
-def test_step_weights_default_to_one_and_are_checked(default):
-    _, prior = default
+def test_step_weights_default_to_one_and_are_checked(prior):
     lay = ParamLayout(n_steps=4, n_samples=2)
     p = lay.vector(prior, np.ones(5))
     assert p.size == lay.size
@@ -35,21 +27,21 @@ def test_step_weights_default_to_one_and_are_checked(default):
         lay.vector(prior, np.ones(5), weight=np.ones(4))
 
 
-def test_until_end_changes_nothing_while_the_horizon_fits(default):
+def test_until_end_changes_nothing_while_the_horizon_fits(default, prior):
     """At the start the whole 15-minute horizon lies inside the 45-minute scenario: every
     step weight is 1, so the plan is the same bit for bit."""
-    sc, prior = default
+    sc = default
     a = HeadingPlanner(sc, **_KW).solve(prior)
     b = HeadingPlanner(sc, until_end=True, **_KW).solve(prior)
     assert a.objective == b.objective
     assert np.array_equal(a.turn_rate, b.turn_rate)
 
 
-def test_until_end_counts_only_the_time_left(default):
+def test_until_end_counts_only_the_time_left(default, prior):
     """Five minutes before the end, the expected time not localised can only count the 21
     steps left (≤ 21·15 s) plus the turn penalty (≤ 0.02·61·15 s); counted over the whole
     15-minute horizon it is far larger for a prior that is not localised."""
-    sc, prior = default
+    sc = default
     end = sc.time.t0 + sc.time.dt * sc.time.n_steps
     late = dataclasses.replace(prior, t=end - 300.0)
     short = HeadingPlanner(sc, until_end=True, **_KW).solve(late)
@@ -62,7 +54,7 @@ def test_until_end_counts_only_the_time_left(default):
 def test_receding_until_end_builds_its_planner_with_it(default):
     from tmaplan.policies import Receding
 
-    sc, _ = default
+    sc = default
     pol = Receding(until_end=True, horizon=900.0, objective="mean-range-bound").resolve(sc)
     ctl = pol.controller(sc)
     assert ctl.planner.until_end and ctl.rti.planner is ctl.planner
@@ -71,11 +63,11 @@ def test_receding_until_end_builds_its_planner_with_it(default):
 
 
 @pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb"])
-def test_until_end_equals_a_horizon_that_stops_at_the_end(default, objective):
+def test_until_end_equals_a_horizon_that_stops_at_the_end(default, prior, objective):
     """Cross-check of the step weights: on the straight course (the first guess, IPOPT stopped
     before its first iteration), a 15-minute horizon that counts only the 5 minutes left
     gives the objective of a 5-minute horizon (the bound at step k uses the steps ≤ k only)."""
-    sc, prior = default
+    sc = default
     end = sc.time.t0 + sc.time.dt * sc.time.n_steps
     late = dataclasses.replace(prior, t=end - 300.0)
     kw = {"objective": objective, "control_interval": 60.0, "n_starts": 1,

@@ -6,22 +6,11 @@ that objective is not the prior's (the draws really are the truth)."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
 
-def _bench():
-    path = Path(__file__).parents[1] / "benchmarks" / "value_of_information.py"
-    spec = importlib.util.spec_from_file_location("voi_benchmark", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_clairvoyant_plan_is_optimal_at_the_truth():
-    bench = _bench()
+def test_clairvoyant_plan_is_optimal_at_the_truth(benchmark_script):
+    bench = benchmark_script("value_of_information")
     bench._init("bow-closing", 500)
     row = bench._run((11, 0))
     plan = bench._STATE["plan"]

@@ -198,7 +198,7 @@ def gaps(runs, particles, seed=1000, problem="default"):
         h0, s0, _ = pl._start_state(belief.heading, None, None)
         x0, _ = pl._shift_warm(prev, t, h0, s0)
         P = np.concatenate([pl._parameters(b, ()), [h0, s0, 1.0, 1.0]])
-        out[len(self.log)].append(float(pl._f_eval(x0, P)[0]) - opt.objective)
+        out[len(self.log)].append(pl._f_eval(x0, P)[0].item() - opt.objective)
         return replan(self, belief, t)
 
     manoeuvres._RecedingController._replan = recorded

@@ -45,6 +45,7 @@ predicted cloud) instead of returning NaNs. The state records it in ``degenerate
 from __future__ import annotations
 
 import dataclasses
+import functools
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, ClassVar, Literal
@@ -218,27 +219,35 @@ class PFState:
     parent: np.ndarray | None = dataclasses.field(default=None, repr=False)
     parent_dv: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
-    @property
-    def weights(self) -> np.ndarray:
-        """Normalised weights, shape (N,)."""
-        return np.exp(self.log_weights)
+    # weights and mean are computed once per state (a closed-loop step reads them four
+    # times) and returned read-only, so that no caller can change the state's cached value
 
-    @property
+    @functools.cached_property
+    def weights(self) -> np.ndarray:
+        """Normalised weights, shape (N,) (read-only)."""
+        return _read_only(np.exp(self.log_weights))
+
+    @functools.cached_property
     def mean(self) -> np.ndarray:
-        """Posterior mean of X, shape (4,)."""
-        return self.weights @ self.particles
+        """Posterior mean of X, shape (4,) (read-only)."""
+        return _read_only(self.weights @ self.particles)
 
     @property
     def cov(self) -> np.ndarray:
         """Posterior covariance of X, shape (4, 4)."""
         w = self.weights
-        d = self.particles - w @ self.particles
+        d = self.particles - self.mean
         return (d * w[:, None]).T @ d
 
     @property
     def n(self) -> int:
         """Number of particles."""
         return self.particles.shape[0]
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
 
 
 # --------------------------------------------------------------------------------------------

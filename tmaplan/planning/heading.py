@@ -35,6 +35,7 @@ from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.casadi_eval import NumpyFunction
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
@@ -228,7 +229,10 @@ class HeadingPlanner:
         self._lbg, self._ubg = np.concatenate(lbg), np.concatenate(ubg)
         self._lbw, self._ubw = lbw, ubw
         self._nlp = {"x": w, "p": P, "f": f / scale, "g": G}
-        self._f_eval = ca.Function("plan_eval", [w, P], [f, rb, pos, vbar, head, urate])
+        # the plan's outputs and the constraints (the real-time iteration's trial point is
+        # tested and, if accepted, becomes the plan from one evaluation)
+        self._f_eval = NumpyFunction(ca.Function("plan_eval", [w, P],
+                                                 [f, rb, pos, vbar, head, urate, G]))
         self._opts = solver_options or {}
         self._solvers: dict[tuple[bool, float | None], Any] = {}
 
@@ -460,7 +464,7 @@ class HeadingPlanner:
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = float(self._f_eval(guesses[0][0], P0)[0])
+        f0 = self._f_eval(guesses[0][0], P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
@@ -551,8 +555,10 @@ class HeadingPlanner:
 
     def _make_plan(self, x: np.ndarray, P: np.ndarray, t0: float, p0: np.ndarray,
                    speed0: float, status: str, success: bool, iters: int, seconds: float,
-                   warm: dict[str, Any], message: str) -> HeadingPlan:
-        f, rb, pos, vbar, head, _ = (np.asarray(o) for o in self._f_eval(x, P))
+                   warm: dict[str, Any], message: str,
+                   evaluated: Sequence[Any] | None = None) -> HeadingPlan:
+        outs = self._f_eval(x, P) if evaluated is None else evaluated
+        f, rb, pos, vbar, head = (np.asarray(o) for o in outs[:5])
         head, times = head.reshape(-1), t0 + self.times
         tr = np.diff(nodes := head[:: self.m]) / self.Tc
         spd = x[-self.n:] if self.speed_choice else np.full(self.n, speed0)

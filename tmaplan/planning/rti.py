@@ -21,12 +21,14 @@ predictive control):
 automatic differentiation, forward over reverse column by column, once per campaign:
 :func:`reference_model`) made positive definite
 by taking the absolute values of its eigenvalues (floored at ``eigen_floor`` times the largest).
-The exact Hessian at every re-plan costs ≈ 0.6 s on ``default`` (16-sample CRLB objective,
-183 variables; measured by ``benchmarks/closed_loop.py --step``), as much as the IPOPT solve it
-replaces, while the objective, its gradient and the constraint Jacobian cost ≈ 2 ms and the
-condensed QP (45 turn rates) 0.6 ms with ``daqp`` (``osqp`` 3.5 ms, ``qrqp`` 140 ms); a whole
-re-plan, belief parameters and track included, takes ≈ 18 ms. Compiling the evaluation with
-casadi's JIT (gcc ``-O1``, 2.7 s) halves its 1.8 ms, less than 1 ms of a re-plan: not used.
+The exact Hessian at every re-plan costs ≈ 4.7 s on ``default`` (the ``expected-time-to-accuracy``
+objective, 183 variables; measured by ``benchmarks/closed_loop.py --step``), more than the
+IPOPT solve it replaces (≈ 1 s), while the objective, its gradient and the constraint Jacobian
+cost ≈ 13 ms and the condensed QP (45 turn rates) 2 ms with ``daqp`` (``osqp`` 9 ms, ``qrqp``
+117 ms). A whole re-plan, belief parameters and track included, takes ≈ 20 ms: the trial point
+is evaluated once, for the merit test and for the plan, and the casadi functions are called
+through numpy buffers (:class:`tmaplan.planning.casadi_eval.NumpyFunction`); before both, it
+took ≈ 43 ms (same values, bit for bit).
 
 ``osqp`` is selectable (``qpsol="osqp"``) but not the default: its workspace is reused across
 calls, so repeated steps may differ in the last digits (≈ 1e−15), while ``qrqp`` is bit
@@ -45,6 +47,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.planning.casadi_eval import NumpyFunction
 
 if TYPE_CHECKING:
     from tmaplan.planning.belief import Belief
@@ -210,8 +213,8 @@ class RealTimeIteration:
         self.steps = int(steps)
         self.rescale = bool(rescale)
         w, P, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
-        self._eval = ca.Function("rti_eval", [w, P], [f, ca.gradient(f, w), g, ca.jacobian(g, w)])
-        self._merit = ca.Function("rti_merit", [w, P], [f, g])
+        self._eval = NumpyFunction(ca.Function("rti_eval", [w, P],
+                                               [f, ca.gradient(f, w), g, ca.jacobian(g, w)]))
         # condensing: the shooting equalities fix the states (ψ, p) given the turn rates u, so
         # the QP is over u only (n variables instead of 4n + 3)
         m = planner.n
@@ -249,9 +252,8 @@ class RealTimeIteration:
         ``Z = [−J_s⁻¹ J_u; I]``; the QP has the reduced Hessian ``Zᵀ H Z`` and gradient
         ``Zᵀ(∇f + H z₀)``.
         """
-        f0, grad, g0, jac = self._eval(x0, P)
-        g0 = np.asarray(g0).reshape(-1)
-        J = np.asarray(jac.full())
+        f0, grad, g0, J = self._eval(x0, P)
+        g0 = g0.reshape(-1)
         eq, xs, xu = self._eq, self._x, self._u
         Js = J[np.ix_(eq, xs)]
         rhs = np.linalg.solve(Js, np.column_stack([J[np.ix_(eq, xu)], g0[eq]]))
@@ -268,7 +270,7 @@ class RealTimeIteration:
               "lba": np.concatenate([lbg[~eq] - lin, (lbw - x0 - z0)[self._xb]]),
               "uba": np.concatenate([ubg[~eq] - lin, (ubw - x0 - z0)[self._xb]]),
               "lbx": (lbw - x0)[xu], "ubx": (ubw - x0)[xu]}
-        return float(f0), g0, qp
+        return f0.item(), g0, qp
 
     def _violation(self, g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
         return float(max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0)))
@@ -316,25 +318,24 @@ class RealTimeIteration:
         if self.rescale:
             # the model Hessian belongs to the objective divided by its value at the
             # reference; divide by the value at the start instead (curvature relative to value)
-            f_start = float(self._merit(x0, np.concatenate([P[:-2], [1.0, 1.0]]))[0])
+            f_start = self._merit(x0, np.concatenate([P[:-2], [1.0, 1.0]]))[0]
             if np.isfinite(f_start) and abs(f_start) > 0:
                 P[-2] = abs(f_start)
-        accepted, reason = self._step(x0, P, lbw, ubw, lbg, ubg)
+        accepted, reason, f_start = self._step(x0, P, lbw, ubw, lbg, ubg)
         for _ in range(self.steps - 1):
             if accepted is None:
                 break
-            more, _ = self._step(accepted[0], P, lbw, ubw, lbg, ubg)
+            more, _, _ = self._step(accepted[0], P, lbw, ubw, lbg, ubg)
             if more is None:
                 break
             accepted = more
         if accepted is not None:
-            x1, status = accepted
+            x1, status, evaluated = accepted
             warm = {"x": x1, "lam_x": np.zeros_like(x1), "lam_g": np.zeros(lbg.size),
                     "sign": 1.0, "shape": ("direct", pl.n, pl.n_arcs),
-                    "scale": float(P[-2]),
-                    "start_objective": float(self._merit(x0, P)[0]) * float(P[-2])}
+                    "scale": float(P[-2]), "start_objective": f_start * float(P[-2])}
             plan = pl._make_plan(x1, P, belief.t, p0, speed0, status, True, 1,
-                                 time.perf_counter() - t_start, warm, status)
+                                 time.perf_counter() - t_start, warm, status, evaluated)
             return dataclasses.replace(plan, solver=f"rti-{self.qpsol}")
         if not fallback:
             raise SolverError(f"rti-{self.qpsol}", reason, "real-time iteration step rejected")
@@ -343,31 +344,39 @@ class RealTimeIteration:
         return dataclasses.replace(plan, seconds=time.perf_counter() - t_start,
                                    message=f"RTI step rejected ({reason}); {plan.message}")
 
+    def _merit(self, x: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarray, Any]:
+        """The NLP's objective (divided by the scale ``P[-2]``, as the NLP's) and constraints
+        at x, and the planner's plan outputs there (one evaluation of the plan function)."""
+        outs = self.planner._f_eval(x, P)
+        return outs[0].item() / float(P[-2]), outs[-1].reshape(-1), outs
+
     def _step(self, x0: np.ndarray, P: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
-              lbg: np.ndarray, ubg: np.ndarray) -> tuple[tuple[np.ndarray, str] | None, str]:
-        """One SQP step from x0; ((x, status), "") if accepted, (None, reason) if not."""
+              lbg: np.ndarray, ubg: np.ndarray
+              ) -> tuple[tuple[np.ndarray, str, Any] | None, str, float]:
+        """One SQP step from x0: ((x, status, plan outputs at x or None), "", f0) if accepted,
+        (None, reason, f0) if not; f0 is the scaled objective at x0."""
         pl = self.planner
         f0, g0, qp = self._condensed(x0, P, lbw, ubw, lbg, ubg)
         if not np.isfinite(f0):
-            return None, "objective not finite at the start"
+            return None, "objective not finite at the start", f0
         v0 = self._violation(g0, lbg, ubg)
         sol = self._qp(**qp)
         if not bool(self._qp.stats().get("success", False)):
-            return None, f"QP: {self._qp.stats().get('return_status', 'failed')}"
+            return None, f"QP: {self._qp.stats().get('return_status', 'failed')}", f0
         d = np.asarray(sol["x"]).reshape(-1)
         if np.max(np.abs(d), initial=0.0) <= 1e-6 and v0 <= self.constraint_tol:
             # below 1e-6 of the maximum turn rate: x0 is stationary to what is flown (the
             # merit test would only compare round-off)
-            return (x0, "RTI step: stationary"), ""
+            return (x0, "RTI step: stationary", None), "", f0
         alpha = 1.0
         for _ in range(self.backtracks + 1):
             u = np.clip(x0[self._u] + alpha * d, -1, 1)
             x1 = pl._direct_w(u, float(P[-4]), float(P[-3]))
-            f1, g1 = self._merit(x1, P)
-            f1, v1 = float(f1), self._violation(np.asarray(g1).reshape(-1), lbg, ubg)
+            f1, g1, outs = self._merit(x1, P)
+            v1 = self._violation(g1, lbg, ubg)
             feasible = v1 <= self.constraint_tol or v1 < v0
             if np.isfinite(f1) and feasible and f1 <= f0 + 1e-12 * abs(f0):
-                return (x1, f"RTI step alpha={alpha:g}"), ""
+                return (x1, f"RTI step alpha={alpha:g}", outs), "", f0
             alpha *= 0.5
         return None, (f"no decrease (objective {f0:.6g} -> {f1:.6g}, violation {v0:.2e} -> "
-                      f"{v1:.2e})")
+                      f"{v1:.2e})"), f0

@@ -108,11 +108,15 @@ def wrap_angle(a: ArrayLike) -> FloatArray:
         (−π, π] are returned unchanged (bit for bit); ``−π`` maps to ``π``.
     """
     arr = np.asarray(a, dtype=np.float64)
-    wrapped = _PI - np.mod(_PI - arr, _TWO_PI)
-    # np.mod can round up to exactly 2π for tiny negative arguments.
-    wrapped = np.where(wrapped <= -_PI, wrapped + _TWO_PI, wrapped)
     inside = (arr > -_PI) & (arr <= _PI)
-    return _scalar_or_array(np.where(inside, arr, wrapped))
+    out = np.array(arr)  # a new array, never the caller's
+    outside = ~inside
+    if outside.any():  # the modulo only where needed (most angles are already inside)
+        x = arr[outside]
+        wrapped = _PI - np.mod(_PI - x, _TWO_PI)
+        # np.mod can round up to exactly 2π for tiny negative arguments.
+        out[outside] = np.where(wrapped <= -_PI, wrapped + _TWO_PI, wrapped)
+    return _scalar_or_array(out)
 
 
 def wrap_half_angle(a: ArrayLike) -> FloatArray:

@@ -22,11 +22,12 @@ import math
 import numbers
 import re
 from collections.abc import Iterable
-from typing import Any, Final, cast
-
-import pint
+from typing import TYPE_CHECKING, Any, Final, cast
 
 from tmaplan.errors import UnitError
+
+if TYPE_CHECKING:
+    import pint
 
 __all__ = [
     "DEG",
@@ -37,7 +38,7 @@ __all__ = [
     "si_validator",
     "to_si",
     "to_si_vector",
-    "ureg",
+    "ureg",  # noqa: F822 - made on first use (module __getattr__)
 ]
 
 KNOT: Final[float] = 1852.0 / 3600.0
@@ -49,18 +50,32 @@ NMI: Final[float] = 1852.0
 DEG: Final[float] = math.pi / 180.0
 """One degree in rad."""
 
-ureg: Final[pint.UnitRegistry] = pint.UnitRegistry()
-"""The module-level unit registry. Use it for every unit conversion in tmaplan."""
 
-# Recent pint versions define all of these; keep the definitions for older ones.
-for _name, _definition in (
-    ("kn", "kn = 1852 / 3600 * meter / second"),
-    ("nmi", "nmi = 1852 * meter"),
-    ("deg", "deg = pi / 180 * radian"),
-    ("°", "° = pi / 180 * radian"),
-):
-    if _name not in ureg:  # pragma: no cover - depends on the installed pint
-        ureg.define(_definition)
+@functools.cache
+def _registry() -> pint.UnitRegistry:
+    """The unit registry, made on first use: building it takes about 0.5 s, which a process
+    that never parses a unit string (a campaign's worker) need not pay."""
+    import pint
+
+    reg = pint.UnitRegistry()
+    # Recent pint versions define all of these; keep the definitions for older ones.
+    for name, definition in (
+        ("kn", "kn = 1852 / 3600 * meter / second"),
+        ("nmi", "nmi = 1852 * meter"),
+        ("deg", "deg = pi / 180 * radian"),
+        ("°", "° = pi / 180 * radian"),
+    ):
+        if name not in reg:  # pragma: no cover - depends on the installed pint
+            reg.define(definition)
+    return reg
+
+
+def __getattr__(name: str) -> Any:
+    """``ureg``: the module-level unit registry (made on first use). Use it for every unit
+    conversion in tmaplan."""
+    if name == "ureg":
+        return _registry()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # dimension name -> (SI unit as pint understands it, SI unit for messages, example string)
@@ -78,9 +93,11 @@ _DIMENSION_TABLE: Final[dict[str, tuple[str, str, str]]] = {
 DIMENSIONS: Final[tuple[str, ...]] = tuple(_DIMENSION_TABLE)
 """Names accepted as ``dimension`` by :func:`to_si` and :func:`to_si_vector`."""
 
-_SI_ROOT: Final[dict[str, pint.Unit]] = {
-    name: ureg.Unit(si) for name, (si, _, _) in _DIMENSION_TABLE.items()
-}
+
+@functools.cache
+def _si_root(dimension: str) -> pint.Unit:
+    """The SI unit of ``dimension`` as a pint unit."""
+    return _registry().Unit(_DIMENSION_TABLE[dimension][0])
 
 # A leading decimal number (sign, digits, optional fraction and exponent), then the unit.
 _QUANTITY_RE: Final[re.Pattern[str]] = re.compile(
@@ -117,8 +134,9 @@ def _unit_factor(unit: str) -> tuple[float, pint.Unit]:
         If pint does not know ``unit``.
     """
     try:
-        parsed = ureg.parse_units(unit)
-        factor, root = ureg.get_root_units(parsed)
+        reg = _registry()
+        parsed = reg.parse_units(unit)
+        factor, root = reg.get_root_units(parsed)
     except Exception as exc:  # any failure to parse a user string is a unit error
         raise _ParseError(f"unknown unit {unit!r}") from exc
     return float(cast(float, factor)), root
@@ -144,7 +162,7 @@ def _parse(text: str, dimension: str) -> float:
         value = magnitude
     else:
         factor, root = _unit_factor(unit)
-        if root != _SI_ROOT[dimension]:
+        if root != _si_root(dimension):
             raise _ParseError(f"unit {unit!r} is not {_expected(dimension).split(':')[0]}")
         value = magnitude * factor
     if not math.isfinite(value):
@@ -262,7 +280,7 @@ def format_quantity(value_si: float, unit: str, digits: int = 4) -> str:
         If pint does not know ``unit`` (the field is ``"unit"``).
     """
     try:
-        factor, _ = _unit_factor(unit) if unit else (1.0, ureg.Unit("dimensionless"))
+        factor, _ = _unit_factor(unit) if unit else (1.0, _registry().Unit("dimensionless"))
     except _ParseError as exc:
         raise UnitError("unit", f"a unit known to pint ({exc})", unit) from None
     number = f"{float(value_si) / factor:.{digits}g}"

@@ -229,7 +229,7 @@ def test_resolve_policies_solves_the_offline_plans_on_the_workers(monkeypatch):
     class Stop(Exception):
         pass
 
-    def fake(scenario, objective, *, workers=1):
+    def fake(scenario, objective, *, workers=1, pool=None):
         calls.append((scenario.name, objective, workers))
         raise Stop
 

@@ -260,3 +260,27 @@ def test_multi_start_on_worker_processes_gives_the_same_plans(default):
     for bad in (0, 1.5, True):
         with pytest.raises(ArgumentError, match="workers"):
             plan_candidates(default, "mean-range-bound", workers=bad, **kw)
+    # on a pool shared by a job's steps: the same plans
+    from tmaplan.parallel import process_pool
+
+    with process_pool(2) as pool:
+        three = plan_candidates(default, "mean-range-bound", pool=pool, **kw)
+    assert list(one) == list(three)
+    for name in one:
+        assert np.array_equal(one[name].turn_rate, three[name].turn_rate)
+
+
+def test_worker_builds_a_new_planner_for_a_new_problem(default):
+    """A worker of a shared pool keeps one planner per multi-start (its token): a later
+    multi-start of another problem on the same worker does not reuse the first planner."""
+    from tmaplan.policies import plan_starts
+
+    def solve(token, horizon):
+        kw = {"horizon": horizon, "control_interval": 60.0}
+        u = np.where(np.arange(int(horizon / 60)) < 3, 1.0, 0.0)
+        plan_starts._solve_in_worker((token, default, "mean-range-bound", kw), u)
+        return plan_starts._WORKER["planner"]
+
+    first = solve("a", 600.0)
+    assert solve("a", 600.0) is first and first.n == 10  # built once per token
+    assert solve("b", 900.0).n == 15

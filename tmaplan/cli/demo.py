@@ -30,6 +30,7 @@ from tmaplan.cli._args import (
 )
 from tmaplan.errors import PlanningError
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.parallel import process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
@@ -79,6 +80,17 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             raise PlanningError(f"{name}: expected >= {low}, received {value}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    # one pool of workers for the whole demo, importing while the main process starts: the
+    # offline plan's multi-start and the campaign run on it
+    pool = process_pool(args.workers) if args.workers > 1 else None
+    try:
+        return _run(args, out, pool, t0)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str, Any]:
     scenario = load_problem(PROBLEM)
     belief = Belief.from_prior(scenario)
 
@@ -86,7 +98,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
     # `receding` policies reuse it instead of solving again
-    plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers)
+    plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers, pool=pool)
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K)
     plan_fig = plot_plan(plan, base, belief, out / "plan.png",
                          objective=planner.objective.name)
@@ -109,7 +121,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                f"({args.particles} particles, {args.workers} workers) ...")
     spec = CampaignSpec(scenario=scenario, policies=DEMO_POLICIES, runs=args.runs,
                         seed=args.seed, n_particles=args.particles)
-    result = run_campaign(spec, out_dir=out, workers=args.workers,
+    result = run_campaign(spec, out_dir=out, workers=args.workers, pool=pool,
                           progress=args.json != "-" and sys.stderr.isatty())
     extra = _extra_html(plan, best, sched)
     cmd = (f"tmaplan demo --runs {args.runs} --particles {args.particles} --seed {args.seed} "

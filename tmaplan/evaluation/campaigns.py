@@ -21,8 +21,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from multiprocessing import get_context
+from concurrent.futures import Executor, as_completed
 from pathlib import Path
 from typing import Any, Literal
 
@@ -34,6 +33,7 @@ from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
 from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
+from tmaplan.parallel import SharedPayload, call_with_payload, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
 from tmaplan.simulate import draw_truth
@@ -106,7 +106,7 @@ class CampaignSpec:
 
 
 def resolve_policies(scenario: Scenario, specs: Sequence[str], *,
-                     workers: int = 1) -> dict[str, Policy]:
+                     workers: int = 1, pool: Executor | None = None) -> dict[str, Policy]:
     """Parse policy specs and precompute what is shared by all runs (offline plans,
     schedules, the best single turn: :meth:`tmaplan.policies.Combined.resolve`), so workers do
     not recompute it.
@@ -119,27 +119,40 @@ def resolve_policies(scenario: Scenario, specs: Sequence[str], *,
     workers : int
         Processes the offline plans' multi-starts are solved on
         (:func:`tmaplan.policies.manoeuvres.offline_plan`; the same plans whatever the count).
+    pool : concurrent.futures.Executor, optional
+        Worker processes to solve them on (:func:`tmaplan.parallel.process_pool`) instead of
+        a pool of ``workers`` started for them.
 
     Returns
     -------
     dict
         Policy name -> policy object (picklable).
     """
-    from tmaplan.policies import Combined, Planned, Receding
-    from tmaplan.policies.manoeuvres import offline_plan
+    return _resolve(scenario, _parse(scenario, specs), workers, pool)
 
-    parsed: dict[str, Combined] = {}
+
+def _parse(scenario: Scenario, specs: Sequence[str]) -> dict[str, Any]:
+    """Policy spec -> parsed policy (errors for a bad spec, before anything is computed)."""
+    parsed: dict[str, Any] = {}
     for spec in specs:
         if spec in parsed:
             raise PlanningError(f"policy {spec!r} given twice")
         parsed[spec] = parse_policy(spec, scenario)
-    if workers > 1:  # the offline plans first, their starts on the worker processes
+    return parsed
+
+
+def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
+             pool: Executor | None) -> dict[str, Policy]:
+    from tmaplan.policies import Planned, Receding
+    from tmaplan.policies.manoeuvres import offline_plan
+
+    if workers > 1 or pool is not None:  # the offline plans first, their starts on workers
         for pol in parsed.values():
             m = pol.manoeuvre
             if (isinstance(m, Planned) and m.plan is None) or (
                     isinstance(m, Receding) and m.real_time and m.rti is None
                     and m.horizon is None):
-                offline_plan(scenario, m.objective, workers=workers)
+                offline_plan(scenario, m.objective, workers=workers, pool=pool)
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
@@ -301,17 +314,9 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
     return summary, tuple(diffs)
 
 
-_SHIPPED: dict[str, Any] = {}
-
-
-def _ship(spec: CampaignSpec, policies: Mapping[str, Policy]) -> None:
-    """Process-pool initializer: keep the campaign's shared inputs in the worker."""
-    _SHIPPED["args"] = (spec, policies)
-
-
-def _run_shipped(fn: Callable[..., RunRecord], run: int) -> RunRecord:
-    spec, policies = _SHIPPED["args"]
-    return fn(spec, policies, run)
+def _run_shipped(shared: tuple[CampaignSpec, Mapping[str, Policy]],
+                 fn: Callable[..., RunRecord], run: int) -> RunRecord:
+    return fn(shared[0], shared[1], run)
 
 
 def _run_packed(fn: Callable[..., RunRecord], shared: tuple[CampaignSpec, Mapping[str, Policy]],
@@ -321,17 +326,20 @@ def _run_packed(fn: Callable[..., RunRecord], shared: tuple[CampaignSpec, Mappin
 
 def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
                   fn: Callable[..., RunRecord], spec: CampaignSpec,
-                  policies: Mapping[str, Policy], todo: list[int]
-                  ) -> Iterable[tuple[int, RunRecord]]:
+                  policies: Mapping[str, Policy], todo: list[int],
+                  pool: Executor | None = None) -> Iterable[tuple[int, RunRecord]]:
     if backend == "serial" or not todo:
         for i in todo:
             yield i, fn(spec, policies, i)
     elif backend == "processes":
+        if pool is None:
+            raise PlanningError("backend 'processes': no worker pool")
         # the spec and the resolved policies (offline plans, schedules, RTI models) are
-        # shipped to each worker once, by the pool's initializer, not with every run
-        with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
-                                 initializer=_ship, initargs=(spec, policies)) as ex:
-            futs = {ex.submit(_run_shipped, fn, i): i for i in todo}
+        # shipped to each worker once, through a file each worker reads once (the pool may
+        # have served the offline plans' multi-start before), not with every run
+        with SharedPayload((spec, policies)) as shared:
+            futs = {pool.submit(call_with_payload, _run_shipped, shared.path, fn, i): i
+                    for i in todo}
             for f in as_completed(futs):
                 yield futs[f], f.result()
     elif backend == "dask":
@@ -361,10 +369,39 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
         raise PlanningError(f"unknown backend {backend!r}: expected serial, processes or dask")
 
 
+def _compute(backend: Backend, workers: int, scheduler: str | None, spec: CampaignSpec,
+             pols: Mapping[str, Policy], todo: list[int], pool: Executor | None,
+             progress: bool, results: dict[int, RunRecord], directory: Path | None
+             ) -> list[int]:
+    """Compute the runs ``todo`` into ``results`` (and ``directory``); the indices computed."""
+    computed = []
+    bar = None
+    if progress:
+        from rich.progress import Progress
+
+        bar = Progress(transient=True)
+        bar.start()
+        task = bar.add_task("Monte Carlo runs", total=len(todo))
+    try:
+        for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo,
+                                     pool):
+            results[i] = data
+            computed.append(i)
+            if directory is not None:
+                data.save(directory / "runs" / f"run_{i:05d}.npz")
+            if bar is not None:
+                bar.advance(task)
+    finally:
+        if bar is not None:
+            bar.stop()
+    return computed
+
+
 def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, workers: int = 1,
                  backend: Backend | None = None, scheduler: str | None = None,
                  progress: bool = False, policies: Mapping[str, Policy] | None = None,
-                 max_new_runs: int | None = None) -> CampaignResult:
+                 max_new_runs: int | None = None, pool: Executor | None = None
+                 ) -> CampaignResult:
     """Run (or resume) a campaign.
 
     Parameters
@@ -385,6 +422,11 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         Pre-resolved policies (default: :func:`resolve_policies`).
     max_new_runs : int, optional
         Stop after computing this many new runs (used to test interruption and resume).
+    pool : concurrent.futures.Executor, optional
+        With backend "processes": worker processes to use (:func:`tmaplan.parallel.
+        process_pool`, e.g. shared with an offline plan solved before); default: a pool of
+        ``workers`` started at once, so that its workers import while the policies are
+        resolved, and used for the offline plans' multi-starts too.
 
     Returns
     -------
@@ -401,8 +443,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
     scenario = spec.scenario
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
-    pols = policies if policies is not None else resolve_policies(
-        scenario, spec.policies, workers=workers if backend == "processes" else 1)
+    parsed = _parse(scenario, spec.policies) if policies is None else None
     directory = None
     results: dict[int, RunRecord] = {}
     if out_dir is not None:
@@ -420,25 +461,19 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     todo = [i for i in range(spec.runs) if i not in results]
     if max_new_runs is not None:
         todo = todo[:max_new_runs]
-    computed = []
-    bar = None
-    if progress:
-        from rich.progress import Progress
-
-        bar = Progress(transient=True)
-        bar.start()
-        task = bar.add_task("Monte Carlo runs", total=len(todo))
+    own_pool = None
+    if backend == "processes" and pool is None and todo:
+        # started before the policies are resolved: the workers import meanwhile
+        pool = own_pool = process_pool(workers)
     try:
-        for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo):
-            results[i] = data
-            computed.append(i)
-            if directory is not None:
-                data.save(directory / "runs" / f"run_{i:05d}.npz")
-            if bar is not None:
-                bar.advance(task)
+        pols = policies if parsed is None else _resolve(
+            scenario, parsed, workers if backend == "processes" else 1,
+            pool if backend == "processes" else None)
+        computed = _compute(backend, workers, scheduler, spec, pols, todo, pool, progress,
+                            results, directory)
     finally:
-        if bar is not None:
-            bar.stop()
+        if own_pool is not None:
+            own_pool.shutdown(wait=True, cancel_futures=True)
     done = sorted(results)
     if len(done) < spec.runs:
         raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "

@@ -17,6 +17,8 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError
 
+__all__ = ["NumpyFunction"]
+
 
 class NumpyFunction:
     """A ``casadi.Function`` with dense inputs, called with and returning numpy arrays.

@@ -21,6 +21,8 @@ from tmaplan.policies._base import (
 )
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor
+
     from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
@@ -152,15 +154,16 @@ class Planned:
 _PLAN_CACHE: dict[tuple[Scenario, str | None], Any] = {}
 
 
-def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1) -> Any:
+def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1,
+                 pool: Executor | None = None) -> Any:
     """The heading plan from the prior, multi-started from straight, the tactics and the best
     single turns (:func:`tmaplan.policies.plan_starts.plan_from_prior`, its starts solved on
-    ``workers`` processes), cached per scenario and objective."""
+    ``workers`` processes or on ``pool``), cached per scenario and objective."""
     key = (scenario, objective)
     if key not in _PLAN_CACHE:
         from tmaplan.policies.plan_starts import plan_from_prior
 
-        _PLAN_CACHE[key] = plan_from_prior(scenario, objective, workers=workers)
+        _PLAN_CACHE[key] = plan_from_prior(scenario, objective, workers=workers, pool=pool)
     return _PLAN_CACHE[key]
 
 

@@ -13,6 +13,7 @@ manoeuvres (up to the solver's tolerance).
 
 from __future__ import annotations
 
+import uuid
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -20,6 +21,8 @@ import numpy as np
 from tmaplan.errors import ArgumentError, PlanningError, SolverError
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor
+
     from tmaplan.models.observer import ObserverTrack
     from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
     from tmaplan.scenario import Scenario
@@ -73,7 +76,7 @@ def start_programs(scenario: Scenario, planner: HeadingPlanner, *, n_turns: int 
 
 def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int = 3,
                     planner: HeadingPlanner | None = None, workers: int = 1,
-                    **planner_kw: Any) -> HeadingPlan:
+                    pool: Executor | None = None, **planner_kw: Any) -> HeadingPlan:
     """Heading plan from the prior, multi-started (see the module docstring).
 
     Parameters
@@ -90,6 +93,9 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
         one process, bit for bit). Only without ``planner`` and with ``objective`` a name
         (an :class:`~tmaplan.planning.objectives.Objective` object is solved in this
         process).
+    pool : concurrent.futures.Executor, optional
+        Worker processes to solve the starts on instead (:func:`tmaplan.parallel.
+        process_pool`, e.g. a campaign's; same conditions as ``workers``).
     **planner_kw
         Further arguments of :class:`tmaplan.planning.HeadingPlanner`.
 
@@ -106,7 +112,7 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
     import dataclasses
 
     plans = plan_candidates(scenario, objective, n_turns=n_turns, planner=planner,
-                            workers=workers, **planner_kw)
+                            workers=workers, pool=pool, **planner_kw)
     name = min(plans, key=lambda k: plans[k].objective)
     return dataclasses.replace(
         plans[name], iterations=sum(p.iterations for p in plans.values()),
@@ -116,7 +122,8 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
 def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int = 3,
                     planner: HeadingPlanner | None = None, tol: float = 1e-4,
-                    workers: int = 1, **planner_kw: Any) -> dict[str, HeadingPlan]:
+                    workers: int = 1, pool: Executor | None = None, **planner_kw: Any
+                    ) -> dict[str, HeadingPlan]:
     """Every distinct local optimum of the multi-start (start name -> plan), best cost first.
 
     Solutions whose costs agree within ``tol`` (relative) are one optimum, kept under the
@@ -131,19 +138,22 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ArgumentError("workers", "an integer >= 1", workers)
-    parallel = workers > 1 and planner is None and (objective is None
-                                                    or isinstance(objective, str))
+    parallel = (workers > 1 or pool is not None) and planner is None and (
+        objective is None or isinstance(objective, str))
     if planner is None:
         planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
-    if parallel:
-        from concurrent.futures import ProcessPoolExecutor
-        from multiprocessing import get_context
+    if parallel and pool is not None:
+        # the planner's inputs travel with each start (a few kB); each worker builds the
+        # planner once (_solve_in_worker's cache)
+        key = (uuid.uuid4().hex, scenario, objective, planner_kw)
+        plans = list(pool.map(_solve_in_worker, [key] * len(starts), starts.values()))
+    elif parallel:
+        from tmaplan.parallel import process_pool
 
-        with ProcessPoolExecutor(max_workers=min(int(workers), len(starts)),
-                                 mp_context=get_context("spawn"), initializer=_init_worker,
-                                 initargs=(scenario, objective, planner_kw)) as ex:
-            plans = list(ex.map(_solve_in_worker, starts.values()))
+        with process_pool(min(int(workers), len(starts))) as ex:
+            key = (uuid.uuid4().hex, scenario, objective, planner_kw)
+            plans = list(ex.map(_solve_in_worker, [key] * len(starts), starts.values()))
     else:
         belief = Belief.from_prior(scenario)
         plans = [_solve_start(planner, belief, u) for u in starts.values()]
@@ -182,14 +192,13 @@ def _solve_start(planner: HeadingPlanner, belief: Any, u: np.ndarray) -> Heading
 _WORKER: dict[str, Any] = {}
 
 
-def _init_worker(scenario: Scenario, objective: str | None, planner_kw: dict[str, Any]
-                 ) -> None:
-    """Process-pool initializer: one planner and the prior belief per worker process."""
+def _solve_in_worker(key: tuple[Any, ...], u: np.ndarray) -> HeadingPlan | None:
+    """One start on a worker process. ``key``: (token, scenario, objective, planner
+    arguments); the planner and the prior belief are built once per worker and token."""
     from tmaplan.planning.belief import Belief
 
-    _WORKER["planner"] = _build_planner(scenario, objective, planner_kw)
-    _WORKER["belief"] = Belief.from_prior(scenario)
-
-
-def _solve_in_worker(u: np.ndarray) -> HeadingPlan | None:
+    token, scenario, objective, planner_kw = key
+    if _WORKER.get("token") != token:
+        _WORKER.update(token=token, planner=_build_planner(scenario, objective, planner_kw),
+                       belief=Belief.from_prior(scenario))
     return _solve_start(_WORKER["planner"], _WORKER["belief"], u)

@@ -1,0 +1,49 @@
+"""tmaplan.parallel: one pool for a job's steps, payloads shipped once per worker."""
+
+import os
+import pickle
+
+import pytest
+
+from tmaplan import parallel
+from tmaplan.errors import ArgumentError
+from tmaplan.parallel import SharedPayload, call_with_payload, process_pool
+
+
+def _payload_and_pid(payload, x):
+    return payload["a"] + x, os.getpid(), len(parallel._LOADED)
+
+
+def test_payload_is_read_once_per_process_and_removed(monkeypatch):
+    loads = []
+    real = pickle.load
+
+    def counting(fh):
+        loads.append(fh.name)
+        return real(fh)
+
+    monkeypatch.setattr(pickle, "load", counting)
+    with SharedPayload({"a": 10}) as shared:
+        assert os.path.exists(shared.path)
+        assert [call_with_payload(_payload_and_pid, shared.path, x)[0] for x in range(3)] == [
+            10, 11, 12]
+        assert loads == [shared.path]  # one read for three calls
+    assert not os.path.exists(shared.path)
+    with SharedPayload({"a": 1}) as other:  # a new payload replaces the kept one
+        assert call_with_payload(_payload_and_pid, other.path, 0)[::2] == (1, 1)
+
+
+def test_pool_workers_read_the_payload_once_each():
+    with process_pool(2) as pool, SharedPayload({"a": 5}) as shared:
+        out = list(pool.map(call_with_payload, [_payload_and_pid] * 8, [shared.path] * 8,
+                            range(8)))
+    assert [o[0] for o in out] == list(range(5, 13))
+    pids = {o[1] for o in out}
+    assert 1 <= len(pids) <= 2 and os.getpid() not in pids
+    assert all(o[2] == 1 for o in out)  # each worker kept one payload
+
+
+def test_process_pool_rejects_bad_worker_counts():
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(ArgumentError, match="workers"):
+            process_pool(bad)

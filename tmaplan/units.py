@@ -57,7 +57,7 @@ def _registry() -> pint.UnitRegistry:
     that never parses a unit string (a campaign's worker) need not pay."""
     import pint
 
-    reg = pint.UnitRegistry()
+    reg: pint.UnitRegistry = pint.UnitRegistry()
     # Recent pint versions define all of these; keep the definitions for older ones.
     for name, definition in (
         ("kn", "kn = 1852 / 3600 * meter / second"),

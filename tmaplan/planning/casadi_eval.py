@@ -53,9 +53,9 @@ class NumpyFunction:
             ins = [np.zeros(fn.nnz_in(i)) for i in range(fn.n_in())]
             outs = [np.zeros(fn.nnz_out(i)) for i in range(fn.n_out())]
             for i, a in enumerate(ins):
-                buf.set_arg(i, memoryview(a))
+                buf.set_arg(i, a.data)
             for i, a in enumerate(outs):
-                buf.set_res(i, memoryview(a))
+                buf.set_res(i, a.data)
             layout = []
             for i in range(fn.n_out()):
                 sp = fn.sparsity_out(i)

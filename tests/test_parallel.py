@@ -47,3 +47,32 @@ def test_process_pool_rejects_bad_worker_counts():
     for bad in (0, -1, 1.5, True, "2"):
         with pytest.raises(ArgumentError, match="workers"):
             process_pool(bad)
+
+
+def test_receding_model_prefetched_on_a_worker_is_the_one_computed_here():
+    """prefetch_receding_model: the real-time iteration's Hessian model computed on a pool
+    worker (from the offline plan it is sent) equals the in-process one bit for bit, and
+    Receding.resolve picks it up."""
+    import numpy as np
+
+    from tmaplan.planning import Belief, HeadingPlanner
+    from tmaplan.policies import Receding, manoeuvres
+    from tmaplan.scenario import from_dict, load_problem, to_dict
+
+    d = to_dict(load_problem("default"))
+    d["time"]["horizon"] = d["planning"]["horizon"] = 600.0  # 10 turn rates: a quick Hessian
+    sc = from_dict(d)
+    obj = "mean-relative-range-crlb"
+    plan = HeadingPlanner(sc, objective=obj).solve(Belief.from_prior(sc))
+    manoeuvres._PLAN_CACHE[(sc, obj)] = plan  # stands in for the multi-start's plan
+    try:
+        here = manoeuvres._rti_model(sc, obj, None)
+        manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False))
+        with process_pool(1) as pool:
+            manoeuvres.prefetch_receding_model(sc, obj, pool)
+            resolved = Receding(objective=obj).resolve(sc)
+        assert np.array_equal(resolved.rti.hessian, here.hessian)
+        assert resolved.rti.scale == here.scale and resolved.rti.hessian.shape == (43, 43)
+    finally:
+        manoeuvres._PLAN_CACHE.pop((sc, obj), None)
+        manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False), None)

@@ -34,7 +34,7 @@ from tmaplan.parallel import process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
-from tmaplan.policies.manoeuvres import offline_plan
+from tmaplan.policies.manoeuvres import offline_plan, prefetch_receding_model
 from tmaplan.report import efficiency, write_report
 from tmaplan.report_tables import baseline_parameters
 from tmaplan.scenario import load_problem
@@ -108,6 +108,8 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                f", best single turn {best['single-turn'].objective:.4g}, best zig-zag "
                f"{best['zigzag'].objective:.4g}); {plan.status}, {plan.seconds:.1f} s")
 
+    if pool is not None:  # receding's Hessian model on a worker while this process schedules
+        prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
     budget = scenario.planning.ping_budget if scenario.planning else 0
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
     sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from concurrent.futures import Executor, Future
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -21,12 +22,11 @@ from tmaplan.policies._base import (
 )
 
 if TYPE_CHECKING:
-    from concurrent.futures import Executor
-
     from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["Planned", "Receding", "SingleTurn", "Straight", "Zigzag", "offline_plan"]
+__all__ = ["Planned", "Receding", "SingleTurn", "Straight", "Zigzag", "offline_plan",
+           "prefetch_receding_model"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -312,7 +312,27 @@ def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
         prior = Belief.from_prior(scenario)
         plan = offline_plan(scenario, objective) if horizon is None else planner.solve(prior)
         _RTI_MODEL_CACHE[key] = reference_model(planner, plan, prior)
-    return _RTI_MODEL_CACHE[key]
+    model = _RTI_MODEL_CACHE[key]
+    if isinstance(model, Future):  # computed on a worker (prefetch_receding_model)
+        model = _RTI_MODEL_CACHE[key] = model.result()
+    return model
+
+
+def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Executor) -> None:
+    """Start computing the real-time iteration's model of ``Receding(objective=objective)``
+    (the Hessian at the offline plan, about 5 s on ``default``) on a worker of ``pool``, so
+    that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
+    :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
+    this process. Needs the offline plan (:func:`offline_plan`), which the worker receives."""
+    key = (scenario, objective, None, False)
+    if key not in _RTI_MODEL_CACHE:
+        _RTI_MODEL_CACHE[key] = pool.submit(_rti_model_on_worker, scenario, objective,
+                                            offline_plan(scenario, objective))
+
+
+def _rti_model_on_worker(scenario: Scenario, objective: str | None, plan: Any) -> Any:
+    _PLAN_CACHE[(scenario, objective)] = plan
+    return _rti_model(scenario, objective, None)
 
 
 def _rti(policy: Receding, scenario: Scenario) -> Any:

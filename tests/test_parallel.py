@@ -76,3 +76,38 @@ def test_receding_model_prefetched_on_a_worker_is_the_one_computed_here():
     finally:
         manoeuvres._PLAN_CACHE.pop((sc, obj), None)
         manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False), None)
+
+
+def test_a_prefetch_whose_pool_went_away_is_computed_here():
+    """A cancelled prefetch (the pool shut down before the model was used) falls back to the
+    in-process computation; a failed one is reported and not kept."""
+    from concurrent.futures import Future
+
+    from tmaplan.policies import manoeuvres
+
+    key = ("sc", "obj", None, False)
+    cancelled: Future = Future()
+    cancelled.cancel()
+    calls = []
+    real = manoeuvres._rti_model
+
+    def fake_model(scenario, objective, horizon, until_end=False):
+        if manoeuvres._RTI_MODEL_CACHE.get(key) is None:
+            calls.append(scenario)
+            manoeuvres._RTI_MODEL_CACHE[key] = "model computed here"
+        return real(scenario, objective, horizon, until_end)
+
+    manoeuvres._RTI_MODEL_CACHE[key] = cancelled
+    try:
+        # the fallback recursion goes through the module attribute, so count it
+        manoeuvres._rti_model = fake_model
+        assert real("sc", "obj", None) == "model computed here" and calls == ["sc"]
+        failed: Future = Future()
+        failed.set_exception(ValueError("worker failed"))
+        manoeuvres._RTI_MODEL_CACHE[key] = failed
+        with pytest.raises(ValueError, match="worker failed"):
+            real("sc", "obj", None)
+        assert key not in manoeuvres._RTI_MODEL_CACHE
+    finally:
+        manoeuvres._rti_model = real
+        manoeuvres._RTI_MODEL_CACHE.pop(key, None)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from concurrent.futures import Executor, Future
+from concurrent.futures import BrokenExecutor, CancelledError, Executor, Future
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -314,7 +314,15 @@ def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
         _RTI_MODEL_CACHE[key] = reference_model(planner, plan, prior)
     model = _RTI_MODEL_CACHE[key]
     if isinstance(model, Future):  # computed on a worker (prefetch_receding_model)
-        model = _RTI_MODEL_CACHE[key] = model.result()
+        try:
+            model = model.result()
+        except (CancelledError, BrokenExecutor):  # the pool went away first: compute here
+            del _RTI_MODEL_CACHE[key]
+            return _rti_model(scenario, objective, horizon, until_end)
+        except BaseException:
+            del _RTI_MODEL_CACHE[key]  # reported, and not kept: a later call tries again
+            raise
+        _RTI_MODEL_CACHE[key] = model
     return model
 
 

@@ -78,7 +78,7 @@ def test_receding_model_prefetched_on_a_worker_is_the_one_computed_here():
         manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False), None)
 
 
-def test_a_prefetch_whose_pool_went_away_is_computed_here():
+def test_a_prefetch_whose_pool_went_away_is_computed_here(monkeypatch):
     """A cancelled prefetch (the pool shut down before the model was used) falls back to the
     in-process computation; a failed one is reported and not kept."""
     from concurrent.futures import Future
@@ -91,23 +91,18 @@ def test_a_prefetch_whose_pool_went_away_is_computed_here():
     calls = []
     real = manoeuvres._rti_model
 
-    def fake_model(scenario, objective, horizon, until_end=False):
-        if manoeuvres._RTI_MODEL_CACHE.get(key) is None:
-            calls.append(scenario)
-            manoeuvres._RTI_MODEL_CACHE[key] = "model computed here"
-        return real(scenario, objective, horizon, until_end)
+    def computed_here(scenario, objective, horizon, until_end=False):
+        # the fallback's call: stands in for the in-process computation
+        calls.append(scenario)
+        return "model computed here"
 
-    manoeuvres._RTI_MODEL_CACHE[key] = cancelled
-    try:
-        # the fallback recursion goes through the module attribute, so count it
-        manoeuvres._rti_model = fake_model
-        assert real("sc", "obj", None) == "model computed here" and calls == ["sc"]
-        failed: Future = Future()
-        failed.set_exception(ValueError("worker failed"))
-        manoeuvres._RTI_MODEL_CACHE[key] = failed
-        with pytest.raises(ValueError, match="worker failed"):
-            real("sc", "obj", None)
-        assert key not in manoeuvres._RTI_MODEL_CACHE
-    finally:
-        manoeuvres._rti_model = real
-        manoeuvres._RTI_MODEL_CACHE.pop(key, None)
+    monkeypatch.setitem(manoeuvres._RTI_MODEL_CACHE, key, cancelled)
+    monkeypatch.setattr(manoeuvres, "_rti_model", computed_here)
+    assert real("sc", "obj", None) == "model computed here" and calls == ["sc"]
+    assert key not in manoeuvres._RTI_MODEL_CACHE  # the cancelled future is not kept
+    failed: Future = Future()
+    failed.set_exception(ValueError("worker failed"))
+    manoeuvres._RTI_MODEL_CACHE[key] = failed
+    with pytest.raises(ValueError, match="worker failed"):
+        real("sc", "obj", None)
+    assert key not in manoeuvres._RTI_MODEL_CACHE

@@ -143,17 +143,20 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
     if planner is None:
         planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
-    if parallel and pool is not None:
-        # the planner's inputs travel with each start (a few kB); each worker builds the
-        # planner once (_solve_in_worker's cache)
-        key = (uuid.uuid4().hex, scenario, objective, planner_kw)
-        plans = list(pool.map(_solve_in_worker, [key] * len(starts), starts.values()))
-    elif parallel:
+    if parallel:
         from tmaplan.parallel import process_pool
 
-        with process_pool(min(int(workers), len(starts))) as ex:
+        own = None
+        if pool is None:
+            pool = own = process_pool(min(int(workers), len(starts)))
+        try:
+            # the planner's inputs travel with each start (a few kB); each worker builds the
+            # planner once per multi-start (the token; _solve_in_worker's cache)
             key = (uuid.uuid4().hex, scenario, objective, planner_kw)
-            plans = list(ex.map(_solve_in_worker, [key] * len(starts), starts.values()))
+            plans = list(pool.map(_solve_in_worker, [key] * len(starts), starts.values()))
+        finally:
+            if own is not None:
+                own.shutdown(wait=True, cancel_futures=True)
     else:
         belief = Belief.from_prior(scenario)
         plans = [_solve_start(planner, belief, u) for u in starts.values()]

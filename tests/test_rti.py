@@ -215,3 +215,45 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
     assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_above == np.inf
     assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
         .manoeuvre.full_above == 0.01
+
+
+
+def test_receding_multi_start_finds_the_other_side(small):
+    """From the mirror image of the optimum a warm-started solve may stay on the wrong side;
+    the multi-start re-plan also starts from the mirror of the previous plan, so it gets back
+    at least the optimum's cost, and its message names the start that won."""
+    from tmaplan.policies import Receding
+    from tmaplan.policies.plan_starts import turn_program
+
+    sc, prior, planner, plan, _ = small
+    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(0,)).resolve(sc)
+    ctrl = pol.controller(sc)
+    mirrored = planner.solve(prior, starts=[-turn_program(plan.observer, planner)])
+    ctrl.plan = mirrored
+    warm = planner.solve(prior, warm_start=mirrored, tol=pol.full_tol)
+    best = ctrl.multi_start(prior, heading0=None, position0=None)
+    assert best.success and best.message.startswith("multi-start: ")
+    assert best.objective <= min(warm.objective, plan.objective) + 1e-3 * abs(plan.objective)
+    # on this problem the mirror is a worse local optimum (301.3 against 289.5 m), which the
+    # warm-started solve does not leave; the multi-start does
+    assert warm.objective > plan.objective + 1e-2 * abs(plan.objective)
+    assert best.message == "multi-start: mirrored"
+
+
+def test_receding_multi_start_in_closed_loop(small):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(1, 2)).resolve(sc)
+    res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                          filter_rng=np.random.default_rng(2), n_particles=300)
+    starts = [e.get("start") for e in res.replans]
+    assert starts[0] is None and starts[3:] == [None] * len(starts[3:])
+    assert all(s and s.startswith("multi-start: ") for s in starts[1:3])
+    assert all(e["success"] for e in res.replans[1:3])
+    with pytest.raises(ArgumentError, match="multi_start"):
+        Receding(multi_start=(-1,), objective="mean-range-bound", horizon=900.0) \
+            .resolve(sc).controller(sc)

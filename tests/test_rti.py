@@ -217,7 +217,6 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
         .manoeuvre.full_above == 0.01
 
 
-
 def test_receding_multi_start_finds_the_other_side(small):
     """From the mirror image of the optimum a warm-started solve may stay on the wrong side;
     the multi-start re-plan also starts from the mirror of the previous plan, so it gets back

@@ -240,7 +240,7 @@ class Receding:
     multi_start : tuple of int
         With ``real_time``: re-plans (0 = the first) solved by IPOPT from the shifted previous
         plan *and* from its mirror image, straight and the planner's turn-early guesses,
-        keeping the best (:meth:`_RecedingController.multi_start`): a warm-started solve
+        keeping the best (the log's ``start`` names it): a warm-started solve
         stays on the side the previous plan turned to, while the posterior may favour the
         other. Default none: with ``(1, 2, 3)`` a start other than the warm one won 232 of
         the 300 multi-start re-plans on ``bow-closing`` (100 runs, development seed 3000),
@@ -445,7 +445,6 @@ class _RecedingController:
         entry["seconds"] = time.perf_counter() - t0
         self.log.append(entry)
 
-
     def multi_start(self, b: Any, *, heading0: float | None,
                     position0: np.ndarray | None) -> Any:
         """Full IPOPT re-plan from several starts, the best kept (its ``message`` names the
@@ -481,7 +480,8 @@ class _RecedingController:
               "tol": self.policy.full_tol, "raise_on_failure": False}
         k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
         u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
-        u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])[: pl.n]
+        u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
+        u = np.resize(u, pl.n) if u.size != pl.n else u
         j = np.arange(pl.n)
         starts = {"mirrored": -u, "straight": np.zeros(pl.n),
                   "early-port": np.where(j < pl.n / 4, -1.0, 0.0),

@@ -112,7 +112,7 @@ def test_backends_bit_identical(scenario):
         assert json.dumps(other.to_json()["policies"]) == json.dumps(serial.to_json()["policies"])
 
 
-def test_interrupted_campaign_resumes(scenario, tmp_path):
+def test_interrupted_campaign_resumes(scenario, tmp_path, monkeypatch):
     spec = _spec(scenario, runs=4)
     with pytest.raises(PlanningError, match="incomplete"):
         run_campaign(spec, out_dir=tmp_path, max_new_runs=2)  # "killed" after two runs
@@ -126,8 +126,20 @@ def test_interrupted_campaign_resumes(scenario, tmp_path):
     for name in spec.policies:
         assert np.array_equal(res.summary[name]["rmse_position"],
                               fresh.summary[name]["rmse_position"])
+    # every run stored: the policies are not resolved again (no offline plan, no schedule)
+    import tmaplan.evaluation.campaigns as campaigns
+
+    def _no_resolve(*a, **k):
+        raise AssertionError("policies resolved for a campaign with every run stored")
+
+    monkeypatch.setattr(campaigns, "_resolve", _no_resolve)
     again = run_campaign(spec, out_dir=tmp_path)
     assert again.computed_runs == () and again.loaded_runs == (0, 1, 2, 3)
+    for name in spec.policies:
+        assert np.array_equal(again.summary[name]["rmse_position"],
+                              res.summary[name]["rmse_position"])
+    with pytest.raises(AssertionError, match="resolved"):  # the patch is in force
+        run_campaign(_spec(scenario, runs=1))
 
 
 def test_report_has_every_figure(scenario, tmp_path):

@@ -466,9 +466,10 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         # started before the policies are resolved: the workers import meanwhile
         pool = own_pool = process_pool(workers)
     try:
-        pols = policies if policies is not None else _resolve(
-            scenario, parsed or {}, workers if backend == "processes" else 1,
-            pool if backend == "processes" else None)
+        pols: Mapping[str, Policy] = policies if policies is not None else {}
+        if parsed is not None and todo:  # nothing to resolve when every run is stored
+            pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
+                            pool if backend == "processes" else None)
         computed = _compute(backend, workers, scheduler, spec, pols, todo, pool, progress,
                             results, directory)
     finally:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -125,3 +126,26 @@ def test_short_filter_run_is_finite(d, seed):
             if k + 1 in by_step:
                 state = pf.update(state, by_step[k + 1], rng)
             assert np.all(np.isfinite(state.mean)) and np.all(np.isfinite(state.cov))
+
+
+def test_closed_form_bound_refuses_an_indefinite_information():
+    """Found by the property above: a prior spanning 0.1–100 km with q = 1e-6 m²/s³ and 1 s
+    steps makes the recursion's information indefinite at step 1 (round-off of terms of
+    order 1/q): refused with the step named, not returned as NaN variances."""
+    from tmaplan.bounds.closed_form import closed_form_pcrb
+
+    d = {"name": "random", "time": {"dt": "1.0 s", "horizon": 5.0},
+         "target": {"model": "ncv", "position": [0.0, 51728.0], "speed": "0.0 kn",
+                    "course": "0.0 deg", "q": 1e-06},
+         "observer": {"position": [0.0, 0.0], "speed": "1.0 kn", "course": "0.0 deg",
+                      "legs": []},
+         "sensors": [{"kind": "bearing", "sigma": "1.0 deg", "ambiguity": "none"}],
+         "prior": {"kind": "polar", "bearing_std": "1.0 deg", "range_std": 25864.0,
+                   "range_min": "100 m", "velocity_std": "2 m/s", "centred_on_truth": True,
+                   "samples": 2000}}
+    with pytest.raises(ObservabilityError, match=r"step 1 .*not positive definite"):
+        closed_form_pcrb(from_dict(d))
+    # the same scenario with a process noise the recursion resolves gives a finite bound
+    d["target"]["q"] = 1e-2
+    res = closed_form_pcrb(from_dict(d))
+    assert np.all(np.isfinite(res.std)) and np.all(res.std > 0)

@@ -21,7 +21,7 @@ from scipy import special
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, StepInformation
 from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.bounds.pcrb import PCRBResult, SideAssumptionWarning
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ObservabilityError, ScenarioError
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -149,6 +149,7 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
     engine = _engine(inp, float(scenario.target.q))
     u = inp.ping_weight * inp.range_sigma**2 if inp.range_sigma else None
     var, info, _ = engine.evaluate(u)
+    _check_information(scenario, inp.times, var, info)
     seconds = time.perf_counter() - t0
     std = np.sqrt(var)
     rb = np.sqrt(engine.er2 * var[:, 1])
@@ -171,6 +172,27 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
         position_std=pos, range_std=rb, seconds=seconds, samples=0,
         prior_samples=inp.prior_samples, ping_steps=inp.ping_steps, range_bound=rb,
         side_density=dens, side_valid=valid, warnings=tuple(msgs))
+
+
+def _check_information(scenario: Scenario, times: np.ndarray, var: np.ndarray,
+                       info: np.ndarray) -> None:
+    """Refuse a recursion that lost positive definiteness (round-off, not a bound).
+
+    The recursion subtracts terms of order 1/q; with a process noise q tiny against the
+    prior's spread (information eigenvalues 10 orders apart) the difference can come out
+    indefinite, and its inverse has negative variances: the result is not a bound.
+    """
+    bad = ~(np.all(np.isfinite(var), axis=1) & np.all(var > 0, axis=1))
+    if not bad.any():
+        return
+    k = int(np.argmax(bad))
+    ev = np.linalg.eigvalsh(0.5 * (info[k] + info[k].T))
+    raise ObservabilityError(
+        f"{scenario.name}: closed-form PCRB: the information at step {k} (t = {times[k]:.6g} "
+        f"s) is not positive definite (eigenvalues {ev.min():.3g} to {ev.max():.3g}): the "
+        f"recursion lost precision, e.g. a process noise q = {scenario.target.q:.3g} m²/s³ "
+        "tiny against the prior's spread; use the Monte Carlo PCRB (--method monte-carlo) "
+        "or a larger target.q")
 
 
 def side_assumption_density(inp: PCRBInputs, floor: float = 1.0

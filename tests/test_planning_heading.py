@@ -284,3 +284,26 @@ def test_worker_builds_a_new_planner_for_a_new_problem(default):
     first = solve("a", 600.0)
     assert solve("a", 600.0) is first and first.n == 10  # built once per token
     assert solve("b", 900.0).n == 15
+
+
+def test_belief_from_particles_keeps_the_filter_weights():
+    """A filter between resamplings has unequal weights: with no more particles than
+    ``max_samples`` the belief keeps them (its mean is the weighted mean, not the plain one);
+    with more, the systematic subsample is equally weighted and its moments match the
+    weighted ones to within the subsample's resolution; bad sizes are refused."""
+    rng = np.random.default_rng(3)
+    X = np.array([0.0, 8000.0, 0.0, -3.0]) + rng.normal(0, [500, 500, 1.0, 1.0], (1000, 4))
+    w = np.where(X[:, 0] > 0, 9.0, 1.0)  # nine times the mass east of the mean bearing
+    w /= w.sum()
+    b = Belief.from_particles(X, w, t=60.0, max_samples=1000)
+    assert b.t == 60.0
+    np.testing.assert_allclose(b.mean, w @ X, rtol=1e-12)
+    assert b.mean[0] > 250.0 > X[:, 0].mean() + 200.0  # the plain mean is ~0
+    sub = Belief.from_particles(X, w, max_samples=200)
+    assert sub.samples.shape == (200, 4)
+    np.testing.assert_allclose(sub.weights, 1 / 200)
+    sd = np.sqrt(np.diag(b.cov))
+    assert np.all(np.abs(sub.mean - b.mean) < 0.1 * sd)
+    for bad in (4, 10.0, True):
+        with pytest.raises(PlanningError, match="max_samples"):
+            Belief.from_particles(X, w, max_samples=bad)

@@ -186,6 +186,10 @@ def test_receding_full_solves_are_checked(small):
     with pytest.raises(ArgumentError, match="full_above"):
         Receding(full_above=0.0, objective="mean-range-bound", horizon=900.0) \
             .resolve(sc).controller(sc)
+    for bad in (4, 2000.0, True):
+        with pytest.raises(ArgumentError, match="max_particles"):
+            Receding(max_particles=bad, objective="mean-range-bound", horizon=900.0) \
+                .resolve(sc).controller(sc)
     for bad in (0.0, 1.0, True, "1e-4"):
         with pytest.raises(ArgumentError, match="full_tol"):
             Receding(full_tol=bad, objective="mean-range-bound", horizon=900.0) \

@@ -109,6 +109,46 @@ class Belief:
         return cls(mean=mean, cov=cov, samples=X, weights=w, t=float(t))
 
     @classmethod
+    def from_particles(cls, particles: np.ndarray, weights: np.ndarray, *, t: float = 0.0,
+                       max_samples: int = 2000) -> Belief:
+        """Belief from a particle filter's weighted particles, at most ``max_samples`` kept.
+
+        With more particles than ``max_samples``, a deterministic systematic subsample
+        (offset 0.5) of ``max_samples``, equally weighted; otherwise every particle with its
+        weight (a filter between resamplings has unequal weights).
+
+        Parameters
+        ----------
+        particles : ndarray, shape (n, 4)
+            Relative states [m, m, m/s, m/s].
+        weights : ndarray, shape (n,)
+            Non-negative weights (normalised here).
+        t : float
+            [s].
+        max_samples : int
+            Samples kept, >= 5.
+
+        Raises
+        ------
+        PlanningError
+            As :meth:`from_samples`, or ``max_samples`` below 5.
+        """
+        if isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer)) \
+                or max_samples < 5:
+            raise PlanningError(f"belief: max_samples must be an integer >= 5, received "
+                                f"{max_samples!r}")
+        X = np.asarray(particles, dtype=float)
+        w = np.asarray(weights, dtype=float).reshape(-1)
+        if w.size <= max_samples:
+            return cls.from_samples(X, w, t=t)
+        if np.any(~np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
+            raise PlanningError("belief: weights must be finite, >= 0, with mass")
+        c = np.cumsum(w / w.sum())
+        c[-1] = 1.0
+        idx = np.searchsorted(c, (np.arange(max_samples) + 0.5) / max_samples)
+        return cls.from_samples(X[idx], t=t)
+
+    @classmethod
     def from_moments(cls, mean: np.ndarray, cov: np.ndarray, *, t: float = 0.0) -> Belief:
         """Belief from the mean (4,) and covariance (4, 4) of the relative state."""
         m = np.asarray(mean, dtype=float).reshape(4)

@@ -202,7 +202,9 @@ class Receding:
     objective : str
         Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
     max_particles : int
-        Particles passed to the planner as belief samples (a systematic subsample).
+        Particles passed to the planner as belief samples (>= 5): a systematic subsample
+        when the filter has more, else all of them with their weights
+        (:meth:`tmaplan.planning.Belief.from_particles`).
     real_time : bool
         Re-plan by one warm-started SQP step (:class:`tmaplan.planning.rti.RealTimeIteration`,
         milliseconds) from the previous plan, the first one from the offline plan from the
@@ -382,6 +384,9 @@ class _RecedingController:
             if any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) or i < 0
                    for i in idx):
                 raise ArgumentError(f"receding.{field}", "re-plan indices >= 0", idx)
+        mp = policy.max_particles
+        if isinstance(mp, bool) or not isinstance(mp, (int, np.integer)) or mp < 5:
+            raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
         if not policy.full_above > 0:
             raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
         from tmaplan.planning import HeadingPlanner
@@ -411,8 +416,8 @@ class _RecedingController:
         from tmaplan.planning import Belief
 
         t0 = time.perf_counter()
-        idx = _subsample(belief.weights, self.policy.max_particles)
-        b = Belief.from_samples(belief.particles[idx], t=t)
+        b = Belief.from_particles(belief.particles, belief.weights, t=t,
+                                  max_samples=self.policy.max_particles)
         entry: dict[str, Any] = {"t": t}
         try:
             if self.rti is not None and len(self.log) in self.policy.multi_start:
@@ -494,15 +499,3 @@ class _RecedingController:
             raise PlanningError(f"multi-start re-plan at t={b.t:.0f} s: no start converged")
         name = min(ok, key=lambda n: ok[n].objective)
         return dataclasses.replace(ok[name], message=f"multi-start: {name}")
-
-
-def _subsample(weights: np.ndarray, n: int) -> np.ndarray:
-    """Systematic subsample of ``n`` indices (deterministic: fixed offset 0.5)."""
-    if weights.size <= n:
-        return np.arange(weights.size)
-    c = np.cumsum(weights)
-    c[-1] = 1.0
-    u = (np.arange(n) + 0.5) / n
-    return np.searchsorted(c, u)
-
-

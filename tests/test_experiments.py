@@ -48,6 +48,14 @@ def test_paired_difference_interval():
     d2 = paired_difference({"a": np.array([1.0, np.inf]), "b": np.array([2.0, 3.0])}, "a", "b",
                            "t", censor=10.0)
     assert d2.mean == pytest.approx(3.0)
+    # a level given in percent, or unpaired runs, are refused (not NaN bounds)
+    from tmaplan.errors import ArgumentError
+
+    for bad in (95, 0.0, 1.0, True, float("nan")):
+        with pytest.raises(ArgumentError, match="level"):
+            paired_difference(vals, "a", "b", "m", level=bad)
+    with pytest.raises(ArgumentError, match="one value per run"):
+        paired_difference({"a": np.zeros(3), "b": np.zeros(4)}, "a", "b", "m")
 
 
 def test_common_random_numbers(scenario):
@@ -253,3 +261,42 @@ def test_resolve_policies_solves_the_offline_plans_on_the_workers(monkeypatch):
     with pytest.raises(Stop):
         resolve_policies(sc, ["straight", "planned"], workers=2)
     assert calls == [("default", CLOSED_LOOP_OBJECTIVE, 2)]
+
+
+def test_stored_runs_of_another_policy_under_the_same_name_are_not_reused(scenario,
+                                                                          tmp_path):
+    """Policy objects passed in enter the key by what they fly: a second tuned turn stored
+    under the same name gets its own runs (the first one's are not loaded), and the same
+    policy again, or a plan differing only in its solve time, reuses them."""
+    from tmaplan.evaluation.records import policy_fingerprint
+    from tmaplan.policies import Planned
+    from tmaplan.policies.manoeuvres import offline_plan
+
+    spec = _spec(scenario, runs=1)
+
+    def pols(angle):
+        turn = SingleTurn(angle=np.radians(angle), time=scenario.time.t0 + 300.0,
+                          name="tuned-turn")
+        return {"straight": Combined(manoeuvre=Straight()),
+                "tuned-turn": Combined(manoeuvre=turn)}
+
+    spec = dataclasses.replace(spec, policies=("straight", "tuned-turn"))
+    first = run_campaign(spec, out_dir=tmp_path, policies=pols(60.0))
+    assert first.computed_runs == (0,)
+    other = run_campaign(spec, out_dir=tmp_path, policies=pols(-120.0))
+    assert other.computed_runs == (0,) and other.loaded_runs == ()
+    fresh = run_campaign(spec, policies=pols(-120.0))
+    assert np.array_equal(other.examples["tuned-turn"].observer,
+                          fresh.examples["tuned-turn"].observer)
+    assert not np.array_equal(first.examples["tuned-turn"].observer,
+                              other.examples["tuned-turn"].observer)
+    again = run_campaign(spec, out_dir=tmp_path, policies=pols(60.0))
+    assert again.loaded_runs == (0,) and again.computed_runs == ()
+    assert spec.key(pols(60.0)) != spec.key() != spec.key(pols(-120.0))
+    # timings are not what a plan flies; its headings are
+    plan = offline_plan(scenario, "mean-range-bound")
+    p = Planned(objective="mean-range-bound", plan=plan)
+    slower = dataclasses.replace(plan, seconds=plan.seconds + 10.0)
+    assert policy_fingerprint(p) == policy_fingerprint(dataclasses.replace(p, plan=slower))
+    moved = dataclasses.replace(plan, turn_rate=plan.turn_rate + 1e-12)
+    assert policy_fingerprint(p) != policy_fingerprint(dataclasses.replace(p, plan=moved))

@@ -10,8 +10,9 @@ results.
 Runs (:class:`tmaplan.evaluation.records.RunRecord`) are written to
 ``<out>/campaign-<key>/runs/run_XXXXX.npz`` as they finish (atomically); re-running the same
 campaign loads them and computes only the missing runs. The key hashes the scenario's content
-(:func:`tmaplan.evaluation.records.scenario_hash`), the other settings, the run-file format and
-the tmaplan version.
+(:func:`tmaplan.evaluation.records.scenario_hash`), the other settings, the run-file format,
+the tmaplan version and, for policy objects passed in, what they fly
+(:func:`tmaplan.evaluation.records.policy_fingerprint`).
 """
 
 from __future__ import annotations
@@ -32,7 +33,13 @@ from tmaplan.errors import PlanningError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
-from tmaplan.evaluation.records import FORMAT, PolicyRun, RunRecord, scenario_hash
+from tmaplan.evaluation.records import (
+    FORMAT,
+    PolicyRun,
+    RunRecord,
+    policy_fingerprint,
+    scenario_hash,
+)
 from tmaplan.parallel import SharedPayload, call_with_payload, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
@@ -84,13 +91,23 @@ class CampaignSpec:
     accuracy: float = 0.1
     filter_options: FilterOptions | None = None
 
-    def key(self) -> str:
+    def key(self, policies: Mapping[str, Policy] | None = None) -> str:
         """Hash of everything but ``runs`` (extending a campaign reuses its runs), plus the
         run-file format and the tmaplan version, so that runs stored by another release are
-        never reused."""
-        return hashlib.sha256(json.dumps(self._meta(), sort_keys=True).encode()).hexdigest()[:16]
+        never reused.
 
-    def _meta(self) -> dict[str, Any]:
+        Parameters
+        ----------
+        policies : dict, optional
+            Policy objects passed to :func:`run_campaign` instead of being resolved from the
+            specs: their :func:`tmaplan.evaluation.records.policy_fingerprint` enters the key,
+            so that runs of another policy stored under the same name (another tuned turn,
+            another objective's plan) are never reused.
+        """
+        text = json.dumps(self._meta(policies), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def _meta(self, policies: Mapping[str, Policy] | None = None) -> dict[str, Any]:
         from tmaplan import __version__
 
         meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
@@ -102,6 +119,9 @@ class CampaignSpec:
             meta["replan"] = "rti"
         if self.filter_options is not None:
             meta["filter"] = repr(self.filter_options)
+        if policies is not None:
+            meta["policy_fingerprints"] = {name: policy_fingerprint(p)
+                                           for name, p in sorted(policies.items())}
         return meta
 
 
@@ -357,7 +377,7 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
             # shipped once to every worker (broadcast), then referenced by each run
             [shared] = client.scatter([(spec, policies)], broadcast=True)
             dfuts = [client.submit(_run_packed, fn, shared, i, pure=False,
-                                   key=f"run-{spec.key()}-{i}") for i in todo]
+                                   key=f"run-{spec.key(policies)}-{i}") for i in todo]
             index = {f.key: i for f, i in zip(dfuts, todo)}
             for df in d_as_completed(dfuts):
                 yield index[df.key], df.result()
@@ -447,9 +467,9 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     directory = None
     results: dict[int, RunRecord] = {}
     if out_dir is not None:
-        directory = Path(out_dir) / f"campaign-{spec.key()}"
+        directory = Path(out_dir) / f"campaign-{spec.key(policies)}"
         (directory / "runs").mkdir(parents=True, exist_ok=True)
-        (directory / "spec.json").write_text(json.dumps(spec._meta(), indent=1))
+        (directory / "spec.json").write_text(json.dumps(spec._meta(policies), indent=1))
         (directory / "scenario.toml").write_text(dump(scenario))
         for i in range(spec.runs):
             p = directory / "runs" / f"run_{i:05d}.npz"

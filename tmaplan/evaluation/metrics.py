@@ -15,6 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import stats
 
+from tmaplan.errors import ArgumentError
 from tmaplan.geometry import course_speed, range_of, wrap_angle
 
 __all__ = [
@@ -177,12 +178,23 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     metric : str
         Name, for the record.
     level : float
+        Confidence level of the t interval, in (0, 1) (0.95, not 95).
     censor : float, optional
         Replace infinite values (never reached) by this value (e.g. the horizon + dt), which
         makes the difference conservative.
+
+    Raises
+    ------
+    ArgumentError
+        A level outside (0, 1), or ``a`` and ``b`` with different numbers of runs.
     """
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
+        raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
     xa = np.asarray(values[a], float)
     xb = np.asarray(values[b], float)
+    if xa.shape != xb.shape:
+        raise ArgumentError(f"values[{b!r}]", f"one value per run of {a!r}, shape {xa.shape}",
+                            xb.shape)
     if censor is not None:
         xa = np.where(np.isfinite(xa), xa, censor)
         xb = np.where(np.isfinite(xb), xb, censor)

@@ -1,4 +1,5 @@
-"""Typed records of closed-loop campaign runs, their on-disk form, and the scenario hash.
+"""Typed records of closed-loop campaign runs, their on-disk form, and the scenario and policy
+hashes that key them.
 
 A campaign run (:class:`RunRecord`) holds one :class:`PolicyRun` per policy: the run's metrics
 (:class:`tmaplan.evaluation.metrics.RunMetrics`) and the tracks the figures draw. On disk a run
@@ -21,7 +22,7 @@ import numpy as np
 
 from tmaplan.evaluation.metrics import RunMetrics
 
-__all__ = ["FORMAT", "PolicyRun", "RunRecord", "scenario_hash"]
+__all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "scenario_hash"]
 
 #: Version of the run-file format (part of the campaign cache key).
 FORMAT = 3
@@ -47,6 +48,64 @@ def scenario_hash(scenario: Any) -> str:
 
     text = json.dumps(canon(scenario), sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+#: Fields that record how a result was computed (wall-clock timings), not what a policy flies:
+#: left out of :func:`policy_fingerprint`, so that a re-computed plan keys the same runs.
+_TIMING_FIELDS = frozenset({"seconds", "nlp_seconds", "polish_seconds", "bound_seconds"})
+
+
+def policy_fingerprint(policy: Any) -> str:
+    """Stable hash (16 hex digits) of what a policy object flies.
+
+    The canonical content is the policy's dataclass tree: every node's type name and every
+    field that takes part in equality (``compare=True``; caches such as ``Receding.rti`` do
+    not), except wall-clock timings; arrays by dtype, shape and bytes, floats by their exact
+    hex form, callables by qualified name, scenarios by :func:`scenario_hash`. Two policies
+    with the same name but different parameters (another tuned turn, another offline plan)
+    hash differently; the same plan re-computed bit for bit hashes the same.
+
+    Parameters
+    ----------
+    policy : Policy
+        Any frozen-dataclass policy (:mod:`tmaplan.policies`), possibly holding plans.
+    """
+    from tmaplan.scenario import Scenario
+
+    h = hashlib.sha256()
+
+    def feed(x: Any) -> None:
+        if isinstance(x, Scenario):
+            h.update(b"S" + scenario_hash(x).encode())
+        elif dataclasses.is_dataclass(x) and not isinstance(x, type):
+            h.update(b"D" + type(x).__qualname__.encode())
+            for f in dataclasses.fields(x):
+                if f.compare and f.name not in _TIMING_FIELDS:
+                    h.update(b"F" + f.name.encode())
+                    feed(getattr(x, f.name))
+        elif isinstance(x, np.ndarray) and x.dtype != object:
+            a = np.ascontiguousarray(x)
+            h.update(f"A{a.dtype.str}{a.shape}".encode() + a.tobytes())
+        elif isinstance(x, tuple | list | np.ndarray):
+            h.update(b"(")
+            for v in x:
+                feed(v)
+            h.update(b")")
+        elif isinstance(x, Mapping):
+            h.update(b"{")
+            for k in sorted(x, key=repr):
+                feed(k)
+                feed(x[k])
+            h.update(b"}")
+        elif isinstance(x, float | np.floating):
+            h.update(b"f" + float(x).hex().encode())
+        elif callable(x) and hasattr(x, "__qualname__"):
+            h.update(f"c{getattr(x, '__module__', '')}.{x.__qualname__}".encode())
+        else:  # int, bool, str, None, enums
+            h.update(f"r{type(x).__name__}:{x!r}".encode())
+
+    feed(policy)
+    return h.hexdigest()[:16]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -138,10 +138,52 @@ def _turn_limits(scenario: Scenario) -> tuple[float, float]:
     return float(o.turn_rate_max), float(scenario.time.dt)
 
 
-def _steer(heading: float, course: float, u_max: float, dt: float) -> float:
-    """Turn rate that reaches ``course`` as fast as the limit allows (shortest way)."""
-    delta = float(wrap_angle(course - heading))
-    return float(np.clip(delta / dt, -u_max, u_max))
+class _CourseKeeper:
+    """Steering to courses held in a continuous (unwrapped) heading frame, at the maximum
+    turn rate: the base of the course-steering controllers.
+
+    A course is a target heading [rad] in the frame of the initial course ``c0`` (``c0 + a``
+    is reached by a turn of ``a`` from ``c0``, to starboard if ``a > 0``, even for
+    ``|a| >= π``), as in the nominal tracks of :mod:`tmaplan.planning.baselines`: a wrapped
+    difference would fly a −180° turn to starboard (``wrap_angle(−π) = π``). The own-ship
+    heading is unwrapped step by step from ``c0`` (it changes by less than π between calls), so
+    a caller may give it wrapped or not.
+
+    Parameters
+    ----------
+    c0 : float
+        Initial course [rad].
+    u_max : float
+        Maximum turn rate [rad/s].
+    dt : float
+        Step [s].
+    """
+
+    def __init__(self, c0: float, u_max: float, dt: float) -> None:
+        self.c0, self.u_max, self.dt = float(c0), u_max, dt
+        self._heading: float | None = None  # unwrapped heading [rad]
+        self._last = 0.0  # heading as last given [rad]
+
+    def heading(self, belief: BeliefView) -> float:
+        """The belief's own-ship heading [rad], unwrapped continuously from ``c0``."""
+        h = float(belief.heading)
+        if self._heading is None:
+            self._heading = self.c0 + float(wrap_angle(h - self.c0))
+        else:
+            self._heading += float(wrap_angle(h - self._last))
+        self._last = h
+        return self._heading
+
+    def course_now(self, belief: BeliefView, course: float) -> float:
+        """The course (in the frame of :meth:`steer`) of an absolute course [rad] decided now
+        from the belief: reached the shorter way from the present heading."""
+        return self.heading(belief) + float(wrap_angle(course - belief.heading))
+
+    def steer(self, belief: BeliefView, course: float) -> float:
+        """Turn rate [rad/s] that reaches ``course`` as fast as the limit allows, turning the
+        way the unwrapped difference says."""
+        delta = course - self.heading(belief)
+        return float(np.clip(delta / self.dt, -self.u_max, self.u_max))
 
 
 def _initial_course(scenario: Scenario) -> float:

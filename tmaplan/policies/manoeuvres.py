@@ -15,8 +15,8 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    _CourseKeeper,
     _initial_course,
-    _steer,
     _turn_limits,
     log,
 )
@@ -112,16 +112,18 @@ class Zigzag:
         return zigzag_track(scenario, self.leg_duration, 2.0 * self.angle)
 
 
-class _CourseSchedule:
+class _CourseSchedule(_CourseKeeper):
+    """Course ``c`` [rad, unwrapped, the first one the initial course] from time ``t`` [s],
+    for the ``(t, c)`` of ``schedule``."""
+
     def __init__(self, schedule: list[tuple[float, float]], u_max: float, dt: float) -> None:
+        super().__init__(schedule[0][1], u_max, dt)
         self.times = np.array([s[0] for s in schedule])
         self.courses = np.array([s[1] for s in schedule])
-        self.u_max, self.dt = u_max, dt
 
     def act(self, belief: BeliefView, t: float) -> Action:
         i = int(np.searchsorted(self.times, t + 1e-9, side="right") - 1)
-        course = self.courses[max(i, 0)]
-        return Action(turn_rate=_steer(belief.heading, course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, float(self.courses[max(i, 0)])))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -25,8 +25,8 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    _CourseKeeper,
     _initial_course,
-    _steer,
     _turn_limits,
 )
 
@@ -207,18 +207,19 @@ class LegTurnLeg:
         return single_turn_track(scenario, delta, t_turn - scenario.time.t0)
 
 
-class _LegTurnLegController:
+class _LegTurnLegController(_CourseKeeper):
     def __init__(self, t_turn: float, beam: float, c0: float, u_max: float, dt: float) -> None:
-        self.t_turn, self.beam, self.course = t_turn, beam, c0
-        self.u_max, self.dt = u_max, dt
+        super().__init__(c0, u_max, dt)
+        self.t_turn, self.beam, self.course = t_turn, beam, self.c0
         self.turned = False
 
     def act(self, belief: BeliefView, t: float) -> Action:
         if not self.turned and t + 1e-9 >= self.t_turn:
             beta, _ = belief_line_of_sight(belief)
-            self.course = doctrine_course(beta, belief.heading, self.beam)
+            self.course = self.course_now(belief, doctrine_course(beta, belief.heading,
+                                                                  self.beam))
             self.turned = True
-        return Action(turn_rate=_steer(belief.heading, self.course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, self.course))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -281,20 +282,22 @@ class LeadLag:
                                                (t_lag - scenario.time.t0, c2)])
 
 
-class _LeadLagController:
+class _LeadLagController(_CourseKeeper):
     def __init__(self, t_lead: float, t_lag: float, angle: float, c0: float, u_max: float,
                  dt: float) -> None:
-        self.t_lead, self.t_lag, self.angle, self.course = t_lead, t_lag, angle, c0
-        self.u_max, self.dt = u_max, dt
+        super().__init__(c0, u_max, dt)
+        self.t_lead, self.t_lag, self.angle, self.course = t_lead, t_lag, angle, self.c0
         self.drift: float | None = None
         self.lagging = False
 
     def act(self, belief: BeliefView, t: float) -> Action:
         if self.drift is None and t + 1e-9 >= self.t_lead:
             beta, self.drift = belief_line_of_sight(belief)
-            self.course = lead_lag_course(beta, self.drift, self.angle, lead=True)
+            self.course = self.course_now(belief, lead_lag_course(beta, self.drift, self.angle,
+                                                                  lead=True))
         if self.drift is not None and not self.lagging and t + 1e-9 >= self.t_lag:
             beta, _ = belief_line_of_sight(belief)
-            self.course = lead_lag_course(beta, self.drift, self.angle, lead=False)
+            self.course = self.course_now(belief, lead_lag_course(beta, self.drift, self.angle,
+                                                                  lead=False))
             self.lagging = True
-        return Action(turn_rate=_steer(belief.heading, self.course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, self.course))

@@ -11,7 +11,20 @@ from tmaplan.errors import ArgumentError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.campaigns import resolve_policies
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.policies import Action, AlarmResponse, BeliefView, NoPing
+from tmaplan.geometry import wrap_angle
+from tmaplan.policies import (
+    Action,
+    AlarmResponse,
+    BeliefView,
+    Combined,
+    LeadLag,
+    LegTurnLeg,
+    NoPing,
+    SingleTurn,
+    Straight,
+    UniformPings,
+    Zigzag,
+)
 from tmaplan.scenario import dump, load_problem, loads
 from tmaplan.simulate import draw_truth
 
@@ -156,3 +169,77 @@ def test_an_alarm_turn_turns_away_at_the_maximum_rate_then_hands_back():
     assert ctrl.alarm_pings == []
     with pytest.raises(ArgumentError, match=r"alarm_response\.turn"):
         AlarmResponse(turn=4.0)
+
+
+def _headings_with_alarm(pol, sc, alarm_step, combined=False):
+    """Heading history [rad] of ``pol`` (alone, or in a :class:`Combined` with pings) wrapped
+    by a 90° alarm turn (no alarm pings), with one alarm raised at ``alarm_step`` (None:
+    never)."""
+    from tmaplan.policies._base import _initial_course
+
+    inner = (Combined(manoeuvre=pol, ping=UniformPings()) if combined else pol).controller(sc)
+    ctrl = AlarmResponse(pings=0, turn=np.pi / 2).wrap(inner, sc)
+    p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
+    h = _initial_course(sc)
+    out = [h]
+    for k in range(sc.n_steps):
+        alarms = int(alarm_step is not None and k >= alarm_step)
+        b = BeliefView(step=k, t=float(sc.times[k]), heading=h, position=np.zeros(2),
+                       particles=p, weights=np.array([0.5, 0.5]), pings_used=0, alarms=alarms)
+        h += ctrl.act(b, float(sc.times[k])).turn_rate * sc.time.dt
+        out.append(h)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("make", [
+    lambda sc: SingleTurn(angle=np.radians(60.0), time=sc.time.t0 + 0.75 * sc.time.horizon),
+    lambda sc: SingleTurn(angle=np.radians(-180.0), time=sc.time.t0 + 0.1 * sc.time.horizon),
+    lambda sc: Zigzag(leg_duration=1200.0, angle=np.radians(40.0), start=sc.time.t0),
+    lambda sc: LegTurnLeg(first_leg=300.0),
+    lambda sc: LeadLag(lead_time=0.0, lag_time=300.0),
+    lambda sc: Straight(),
+], ids=["single-turn-late", "single-turn-early", "zigzag", "leg-turn-leg", "lead-lag",
+        "straight"])
+def test_an_alarm_turn_offsets_the_courses_of_every_manoeuvre_policy(make):
+    """An alarm at step 50, while the policy holds a course (its turns, if any, are over by
+    then or start later): a 90° turn over steps 50–61 (7.5° per step), then the policy flies
+    on 90° off its un-alarmed headings to the end, never turning back."""
+    sc = load_problem("default")
+    pol = make(sc)
+    for combined in (False, True):
+        plain = _headings_with_alarm(pol, sc, None, combined)
+        alarmed = _headings_with_alarm(pol, sc, 50, combined)
+        np.testing.assert_array_equal(alarmed[:51], plain[:51])
+        offset = alarmed[62:] - plain[62:]
+        assert abs(offset[0]) == pytest.approx(np.pi / 2, abs=1e-9)
+        np.testing.assert_allclose(offset, offset[0], atol=1e-9)
+
+
+def test_an_alarm_turn_during_a_turn_keeps_the_rest_of_the_turn():
+    """A single turn of −180° interrupted by the alarm's 90° turn finishes its own turn
+    afterwards: it ends 90° off its un-alarmed course."""
+    sc = load_problem("default")
+    pol = SingleTurn(angle=np.radians(-180.0), time=sc.time.t0 + 0.1 * sc.time.horizon)
+    plain, alarmed = _headings_with_alarm(pol, sc, None), _headings_with_alarm(pol, sc, 40)
+    assert abs(alarmed[-1] - plain[-1]) == pytest.approx(np.pi / 2, abs=1e-9)
+    assert plain[-1] - plain[0] == pytest.approx(-np.pi, abs=1e-9)
+
+
+def test_a_tactic_decides_its_turn_after_an_alarm_turn_from_the_line_of_sight():
+    """An alarm turn during the first leg offsets it; the doctrine's turn is then decided from
+    the belief's line of sight, as ever (the contact abeam on the other side)."""
+    from tmaplan.policies.tactics import belief_line_of_sight, doctrine_course
+
+    sc = load_problem("default")
+    pol = LegTurnLeg()                        # turn at a third of the horizon (step 60)
+    plain, alarmed = _headings_with_alarm(pol, sc, None), _headings_with_alarm(pol, sc, 10)
+    assert abs(alarmed[25] - plain[25]) == pytest.approx(np.pi / 2, abs=1e-9)
+    np.testing.assert_allclose(alarmed[22:61] - plain[22:61], alarmed[22] - plain[22],
+                               atol=1e-9)
+    p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
+    beta, _ = belief_line_of_sight(BeliefView(step=0, t=0.0, heading=0.0, position=np.zeros(2),
+                                              particles=p, weights=np.array([0.5, 0.5]),
+                                              pings_used=0))
+    for h in (plain, alarmed):
+        assert float(wrap_angle(h[-1] - doctrine_course(beta, h[60]))) == pytest.approx(
+            0.0, abs=1e-9)

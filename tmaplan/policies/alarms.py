@@ -14,8 +14,13 @@ without alarm behaves exactly as without the response.
 It may also (``turn`` > 0) answer with an **own-ship manoeuvre**: a turn by ``turn`` at the
 maximum turn rate, to the side that changes the own velocity across the believed line of sight
 most (the bearing rate then changes with the range, which makes the post-manoeuvre track
-observable, lecadre1997); the policy's turn rates resume afterwards, its headings offset by
-the turn.
+observable, lecadre1997). The policy does not turn back afterwards: a policy that replays turn
+rates (straight, planned, receding) resumes them, its headings offset by the turn (its rates
+during the turn are not flown); a policy that steers to courses
+(:class:`tmaplan.policies.CourseSteering`: single turn, zig-zag, leg–turn–leg, lead–lag) has
+every course it holds or will hold offset by the turn, step by step as it is made. A course
+such a tactic decides later from the belief (the doctrine's beam, the lead and lag offsets
+from the line of sight) is decided from the heading then flown.
 
 :class:`AlarmResponder` wraps the policy's controller for one run; the closed loop
 (:func:`tmaplan.evaluation.closed_loop.run_closed_loop`) tells it the monitor's alarm count
@@ -31,7 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError
-from tmaplan.policies._base import Action, BeliefView, Controller
+from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -131,6 +136,8 @@ class AlarmResponder:
             self.turn_left = 0.0 if abs(u * self.dt) >= abs(self.turn_left) - 1e-12 \
                 else self.turn_left - u * self.dt
             act = dataclasses.replace(act, turn_rate=u)
+            if isinstance(self.inner, CourseSteering):  # or it would steer back
+                self.inner.offset_courses(u * self.dt)
         room = belief.pings_used < self.cap
         if act.ping:
             if self.alarm_pings and not room:

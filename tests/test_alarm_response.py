@@ -14,12 +14,14 @@ from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.geometry import wrap_angle
 from tmaplan.policies import (
     Action,
+    AdaptivePings,
     AlarmResponse,
     BeliefView,
     Combined,
     LeadLag,
     LegTurnLeg,
     NoPing,
+    ScheduledPings,
     SingleTurn,
     Straight,
     UniformPings,
@@ -243,3 +245,54 @@ def test_a_tactic_decides_its_turn_after_an_alarm_turn_from_the_line_of_sight():
     for h in (plain, alarmed):
         assert float(wrap_angle(h[-1] - doctrine_course(beta, h[60]))) == pytest.approx(
             0.0, abs=1e-9)
+
+
+def _pings_after_alarm(inner, sc, alarm_step, n=None, tight_until=None):
+    """Ping steps of ``inner`` wrapped by ``AlarmResponse(pings=1)`` with one alarm at
+    ``alarm_step``; the belief's range is uncertain (a wide two-particle cloud), or certain
+    before step ``tight_until``."""
+    wide = np.array([[5000.0, 8000.0, 0.0, -3.0], [9000.0, 12000.0, 0.5, -3.0]])
+    tight = np.array([[5000.0, 8000.0, 0.0, -3.0], [5001.0, 8001.0, 0.0, -3.0]])
+    ctrl = AlarmResponse(pings=1).wrap(inner.controller(sc), sc)
+    pings: list[int] = []
+    for k in range(sc.n_steps if n is None else n):
+        p = tight if tight_until is not None and k < tight_until else wide
+        b = BeliefView(step=k, t=float(sc.times[k]), heading=0.0, position=np.zeros(2),
+                       particles=p, weights=np.array([0.5, 0.5]), pings_used=len(pings),
+                       alarms=int(k >= alarm_step))
+        if ctrl.act(b, float(sc.times[k])).ping:
+            pings.append(k + 1)
+    return pings, ctrl
+
+
+def test_the_policys_ping_waits_for_the_minimum_spacing_after_an_alarm_ping():
+    sc = load_problem("default")            # dt 15 s, ping spacing 120 s (8 steps), budget 4
+    gap = round(sc.planning.ping_min_spacing / sc.time.dt)
+    # the alarm pings at 59; the schedule's 60 is deferred to 67, the earliest the spacing
+    # allows, not dropped: the budget's ping is still flown
+    pings, ctrl = _pings_after_alarm(ScheduledPings(steps=(60, 120)), sc, 58)
+    assert pings == [59, 67, 120] and ctrl.alarm_pings == [59]
+    assert ctrl.deferred_pings == [60]
+    # deferred pings queue: each keeps the spacing after the previous one
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 68, 150)), sc, 58)
+    assert pings == [59, 67, 75, 150]
+    # adaptive pings (the reviewer's cases): the range is uncertain throughout, or only from
+    # the alarm on
+    for tight in (None, 59):
+        pings, ctrl = _pings_after_alarm(AdaptivePings(threshold=0.1), sc, 58, tight_until=tight)
+        assert np.all(np.diff(pings) >= gap), pings
+    assert 59 in ctrl.alarm_pings
+    # no alarm: the policy's pings pass unchanged
+    pings, ctrl = _pings_after_alarm(ScheduledPings(steps=(60, 61)), sc, 10**6)
+    assert pings == [60, 61] and ctrl.deferred_pings == []
+
+
+def test_a_deferred_ping_honours_forbidden_windows_and_the_cap():
+    sc = load_problem("default")
+    pl = dataclasses.replace(sc.planning, ping_forbidden=((1000.0, 1100.0),))
+    forbidden = dataclasses.replace(sc, planning=pl)
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 120)), forbidden, 58)
+    assert pings == [59, 74, 120]           # 67 (1005 s) is forbidden until 1100 s
+    # budget 4 + 2 extra = 6: the queue never takes the total past the cap
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 68, 76, 84, 92, 100)), sc, 58)
+    assert pings == [59, 67, 75, 83, 91, 99]

@@ -27,6 +27,7 @@ from tmaplan.policies._base import (
     Controller,
     _CourseKeeper,
     _initial_course,
+    _real,
     _turn_limits,
 )
 
@@ -123,15 +124,15 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
 
 
 def _check_angle(field: str, value: float) -> float:
-    if not (np.isfinite(value) and 0.0 < value < np.pi):
+    if not (np.isfinite(v := _real(value)) and 0.0 < v < np.pi):
         raise ArgumentError(field, "an angle in (0, 180) deg", value)
-    return float(value)
+    return v
 
 
 def _check_time(field: str, value: float | None, scenario: Scenario, default: float) -> float:
     """An instant ``t0 + value`` strictly inside the horizon (``value`` after t0 [s])."""
     t0, H = scenario.time.t0, scenario.time.horizon
-    v = default * H if value is None else float(value)
+    v = default * H if value is None else _real(value)
     if not (np.isfinite(v) and 0.0 < v < H):
         raise ArgumentError(field, f"a time after t0 in (0, {H:g}) s", value)
     return t0 + v
@@ -254,10 +255,10 @@ class LeadLag:
     def _times(self, scenario: Scenario) -> tuple[float, float]:
         t_lag = _check_time("lead-lag.lag_time", self.lag_time, scenario, 0.5)
         t0 = scenario.time.t0
-        if not (np.isfinite(self.lead_time) and 0.0 <= self.lead_time < t_lag - t0):
+        if not (np.isfinite(lead := _real(self.lead_time)) and 0.0 <= lead < t_lag - t0):
             raise ArgumentError("lead-lag.lead_time", f"a time after t0 in [0, {t_lag - t0:g}) s"
                                 " (before the lag leg)", self.lead_time)
-        return t0 + float(self.lead_time), t_lag
+        return t0 + lead, t_lag
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller flying the lead leg, then the lag leg."""

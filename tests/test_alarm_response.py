@@ -11,7 +11,22 @@ from tmaplan.errors import ArgumentError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.campaigns import resolve_policies
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.policies import Action, AlarmResponse, BeliefView, NoPing
+from tmaplan.geometry import wrap_angle
+from tmaplan.policies import (
+    Action,
+    AdaptivePings,
+    AlarmResponse,
+    BeliefView,
+    Combined,
+    LeadLag,
+    LegTurnLeg,
+    NoPing,
+    ScheduledPings,
+    SingleTurn,
+    Straight,
+    UniformPings,
+    Zigzag,
+)
 from tmaplan.scenario import dump, load_problem, loads
 from tmaplan.simulate import draw_truth
 
@@ -156,3 +171,128 @@ def test_an_alarm_turn_turns_away_at_the_maximum_rate_then_hands_back():
     assert ctrl.alarm_pings == []
     with pytest.raises(ArgumentError, match=r"alarm_response\.turn"):
         AlarmResponse(turn=4.0)
+
+
+def _headings_with_alarm(pol, sc, alarm_step, combined=False):
+    """Heading history [rad] of ``pol`` (alone, or in a :class:`Combined` with pings) wrapped
+    by a 90° alarm turn (no alarm pings), with one alarm raised at ``alarm_step`` (None:
+    never)."""
+    from tmaplan.policies._base import _initial_course
+
+    inner = (Combined(manoeuvre=pol, ping=UniformPings()) if combined else pol).controller(sc)
+    ctrl = AlarmResponse(pings=0, turn=np.pi / 2).wrap(inner, sc)
+    p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
+    h = _initial_course(sc)
+    out = [h]
+    for k in range(sc.n_steps):
+        alarms = int(alarm_step is not None and k >= alarm_step)
+        b = BeliefView(step=k, t=float(sc.times[k]), heading=h, position=np.zeros(2),
+                       particles=p, weights=np.array([0.5, 0.5]), pings_used=0, alarms=alarms)
+        h += ctrl.act(b, float(sc.times[k])).turn_rate * sc.time.dt
+        out.append(h)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("make", [
+    lambda sc: SingleTurn(angle=np.radians(60.0), time=sc.time.t0 + 0.75 * sc.time.horizon),
+    lambda sc: SingleTurn(angle=np.radians(-180.0), time=sc.time.t0 + 0.1 * sc.time.horizon),
+    lambda sc: Zigzag(leg_duration=1200.0, angle=np.radians(40.0), start=sc.time.t0),
+    lambda sc: LegTurnLeg(first_leg=300.0),
+    lambda sc: LeadLag(lead_time=0.0, lag_time=300.0),
+    lambda sc: Straight(),
+], ids=["single-turn-late", "single-turn-early", "zigzag", "leg-turn-leg", "lead-lag",
+        "straight"])
+def test_an_alarm_turn_offsets_the_courses_of_every_manoeuvre_policy(make):
+    """An alarm at step 50, while the policy holds a course (its turns, if any, are over by
+    then or start later): a 90° turn over steps 50–61 (7.5° per step), then the policy flies
+    on 90° off its un-alarmed headings to the end, never turning back."""
+    sc = load_problem("default")
+    pol = make(sc)
+    for combined in (False, True):
+        plain = _headings_with_alarm(pol, sc, None, combined)
+        alarmed = _headings_with_alarm(pol, sc, 50, combined)
+        np.testing.assert_array_equal(alarmed[:51], plain[:51])
+        offset = alarmed[62:] - plain[62:]
+        assert abs(offset[0]) == pytest.approx(np.pi / 2, abs=1e-9)
+        np.testing.assert_allclose(offset, offset[0], atol=1e-9)
+
+
+def test_an_alarm_turn_during_a_turn_keeps_the_rest_of_the_turn():
+    """A single turn of −180° interrupted by the alarm's 90° turn finishes its own turn
+    afterwards: it ends 90° off its un-alarmed course."""
+    sc = load_problem("default")
+    pol = SingleTurn(angle=np.radians(-180.0), time=sc.time.t0 + 0.1 * sc.time.horizon)
+    plain, alarmed = _headings_with_alarm(pol, sc, None), _headings_with_alarm(pol, sc, 40)
+    assert abs(alarmed[-1] - plain[-1]) == pytest.approx(np.pi / 2, abs=1e-9)
+    assert plain[-1] - plain[0] == pytest.approx(-np.pi, abs=1e-9)
+
+
+def test_a_tactic_decides_its_turn_after_an_alarm_turn_from_the_line_of_sight():
+    """An alarm turn during the first leg offsets it; the doctrine's turn is then decided from
+    the belief's line of sight, as ever (the contact abeam on the other side)."""
+    from tmaplan.policies.tactics import belief_line_of_sight, doctrine_course
+
+    sc = load_problem("default")
+    pol = LegTurnLeg()                        # turn at a third of the horizon (step 60)
+    plain, alarmed = _headings_with_alarm(pol, sc, None), _headings_with_alarm(pol, sc, 10)
+    assert abs(alarmed[25] - plain[25]) == pytest.approx(np.pi / 2, abs=1e-9)
+    np.testing.assert_allclose(alarmed[22:61] - plain[22:61], alarmed[22] - plain[22],
+                               atol=1e-9)
+    p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
+    beta, _ = belief_line_of_sight(BeliefView(step=0, t=0.0, heading=0.0, position=np.zeros(2),
+                                              particles=p, weights=np.array([0.5, 0.5]),
+                                              pings_used=0))
+    for h in (plain, alarmed):
+        assert float(wrap_angle(h[-1] - doctrine_course(beta, h[60]))) == pytest.approx(
+            0.0, abs=1e-9)
+
+
+def _pings_after_alarm(inner, sc, alarm_step, n=None, tight_until=None):
+    """Ping steps of ``inner`` wrapped by ``AlarmResponse(pings=1)`` with one alarm at
+    ``alarm_step``; the belief's range is uncertain (a wide two-particle cloud), or certain
+    before step ``tight_until``."""
+    wide = np.array([[5000.0, 8000.0, 0.0, -3.0], [9000.0, 12000.0, 0.5, -3.0]])
+    tight = np.array([[5000.0, 8000.0, 0.0, -3.0], [5001.0, 8001.0, 0.0, -3.0]])
+    ctrl = AlarmResponse(pings=1).wrap(inner.controller(sc), sc)
+    pings: list[int] = []
+    for k in range(sc.n_steps if n is None else n):
+        p = tight if tight_until is not None and k < tight_until else wide
+        b = BeliefView(step=k, t=float(sc.times[k]), heading=0.0, position=np.zeros(2),
+                       particles=p, weights=np.array([0.5, 0.5]), pings_used=len(pings),
+                       alarms=int(k >= alarm_step))
+        if ctrl.act(b, float(sc.times[k])).ping:
+            pings.append(k + 1)
+    return pings, ctrl
+
+
+def test_the_policys_ping_waits_for_the_minimum_spacing_after_an_alarm_ping():
+    sc = load_problem("default")            # dt 15 s, ping spacing 120 s (8 steps), budget 4
+    gap = round(sc.planning.ping_min_spacing / sc.time.dt)
+    # the alarm pings at 59; the schedule's 60 is deferred to 67, the earliest the spacing
+    # allows, not dropped: the budget's ping is still flown
+    pings, ctrl = _pings_after_alarm(ScheduledPings(steps=(60, 120)), sc, 58)
+    assert pings == [59, 67, 120] and ctrl.alarm_pings == [59]
+    assert ctrl.deferred_pings == [60]
+    # deferred pings queue: each keeps the spacing after the previous one
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 68, 150)), sc, 58)
+    assert pings == [59, 67, 75, 150]
+    # adaptive pings (the reviewer's cases): the range is uncertain throughout, or only from
+    # the alarm on
+    for tight in (None, 59):
+        pings, ctrl = _pings_after_alarm(AdaptivePings(threshold=0.1), sc, 58, tight_until=tight)
+        assert np.all(np.diff(pings) >= gap), pings
+    assert 59 in ctrl.alarm_pings
+    # no alarm: the policy's pings pass unchanged
+    pings, ctrl = _pings_after_alarm(ScheduledPings(steps=(60, 61)), sc, 10**6)
+    assert pings == [60, 61] and ctrl.deferred_pings == []
+
+
+def test_a_deferred_ping_honours_forbidden_windows_and_the_cap():
+    sc = load_problem("default")
+    pl = dataclasses.replace(sc.planning, ping_forbidden=((1000.0, 1100.0),))
+    forbidden = dataclasses.replace(sc, planning=pl)
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 120)), forbidden, 58)
+    assert pings == [59, 74, 120]           # 67 (1005 s) is forbidden until 1100 s
+    # budget 4 + 2 extra = 6: the queue never takes the total past the cap
+    pings, _ = _pings_after_alarm(ScheduledPings(steps=(60, 68, 76, 84, 92, 100)), sc, 58)
+    assert pings == [59, 67, 75, 83, 91, 99]

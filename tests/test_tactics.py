@@ -155,6 +155,11 @@ def test_tactics_are_manoeuvre_policies_named_for_the_cli(scenario):
     (LeadLag(angle=4.0), "lead-lag.angle"),
     (LeadLag(lag_time=0.0), "lead-lag.lag_time"),
     (LeadLag(lead_time=1500.0, lag_time=1200.0), "lead-lag.lead_time"),
+    (LeadLag(lead_time=float("nan")), "lead-lag.lead_time"),
+    (LeadLag(lead_time=None), "lead-lag.lead_time"),            # type: ignore[arg-type]
+    (LeadLag(lag_time=float("inf")), "lead-lag.lag_time"),
+    (LegTurnLeg(beam_angle="90"), "leg-turn-leg.beam_angle"),   # type: ignore[arg-type]
+    (LegTurnLeg(first_leg="600 s"), "leg-turn-leg.first_leg"),  # type: ignore[arg-type]
 ])
 def test_bad_tactic_parameters_give_a_one_line_error(scenario, policy, field):
     for make in (policy.controller, policy.nominal_track):

@@ -24,6 +24,7 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    CourseSteering,
     ManoeuvrePolicy,
     Policy,
 )
@@ -42,6 +43,7 @@ __all__ = [
     "BeliefView",
     "Combined",
     "Controller",
+    "CourseSteering",
     "LeadLag",
     "LegTurnLeg",
     "ManoeuvrePolicy",

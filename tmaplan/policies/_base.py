@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
@@ -16,8 +17,8 @@ if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "ManoeuvrePolicy",
-           "Policy"]
+__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "CourseSteering",
+           "ManoeuvrePolicy", "Policy"]
 
 log = logging.getLogger("tmaplan.policies")
 
@@ -118,6 +119,18 @@ class Policy(Protocol):
 
 
 @runtime_checkable
+class CourseSteering(Protocol):
+    """A controller that steers to courses rather than replaying turn rates (single turn,
+    zig-zag, leg–turn–leg, lead–lag): a turn another controller makes in its place (the alarm
+    responder, :mod:`tmaplan.policies.alarms`) offsets its courses, or it would turn back.
+    Courses it decides afterwards from the belief (relative to the line of sight: the
+    doctrine's beam, the lead and lag offsets) are decided from the heading flown, as ever."""
+
+    def offset_courses(self, angle: float) -> None:
+        """Offset every course, present and future, by ``angle`` [rad] (+ starboard)."""
+
+
+@runtime_checkable
 class ManoeuvrePolicy(Policy, Protocol):
     """A policy that steers the own ship and knows the track it nominally flies."""
 
@@ -138,10 +151,72 @@ def _turn_limits(scenario: Scenario) -> tuple[float, float]:
     return float(o.turn_rate_max), float(scenario.time.dt)
 
 
-def _steer(heading: float, course: float, u_max: float, dt: float) -> float:
-    """Turn rate that reaches ``course`` as fast as the limit allows (shortest way)."""
-    delta = float(wrap_angle(course - heading))
-    return float(np.clip(delta / dt, -u_max, u_max))
+class _CourseKeeper:
+    """Steering to courses held in a continuous (unwrapped) heading frame, at the maximum
+    turn rate: the base of the course-steering controllers (:class:`CourseSteering`).
+
+    A course is a target heading [rad] in the frame of the initial course ``c0`` (``c0 + a``
+    is reached by a turn of ``a`` from ``c0``, to starboard if ``a > 0``, even for
+    ``|a| >= π``), as in the nominal tracks of :mod:`tmaplan.planning.baselines`: a wrapped
+    difference would fly a −180° turn to starboard (``wrap_angle(−π) = π``). The own-ship
+    heading is unwrapped step by step from ``c0`` (it changes by less than π between calls), so
+    a caller may give it wrapped or not.
+    :meth:`offset_courses` shifts every course, present and future, by the turns somebody
+    else made (the alarm responder, :mod:`tmaplan.policies.alarms`).
+
+    Parameters
+    ----------
+    c0 : float
+        Initial course [rad].
+    u_max : float
+        Maximum turn rate [rad/s].
+    dt : float
+        Step [s].
+    """
+
+    def __init__(self, c0: float, u_max: float, dt: float) -> None:
+        self.c0, self.u_max, self.dt = float(c0), u_max, dt
+        self.course_offset = 0.0  # [rad], added to every course
+        self._heading: float | None = None  # unwrapped heading [rad]
+        self._last = 0.0  # heading as last given [rad]
+
+    def offset_courses(self, angle: float) -> None:
+        """Offset every course, present and future, by ``angle`` [rad] (+ starboard)."""
+        self.course_offset += float(angle)
+
+    def heading(self, belief: BeliefView) -> float:
+        """The belief's own-ship heading [rad], unwrapped continuously from ``c0``."""
+        h = float(belief.heading)
+        if self._heading is None:
+            self._heading = self.c0 + float(wrap_angle(h - self.c0))
+        else:
+            self._heading += float(wrap_angle(h - self._last))
+        self._last = h
+        return self._heading
+
+    def course_now(self, belief: BeliefView, course: float) -> float:
+        """The course (in the frame of :meth:`steer`, before the offset) of an absolute
+        course [rad] decided now from the belief: reached the shorter way from the present
+        heading."""
+        return (self.heading(belief) + float(wrap_angle(course - belief.heading))
+                - self.course_offset)
+
+    def steer(self, belief: BeliefView, course: float) -> float:
+        """Turn rate [rad/s] that reaches ``course`` + the offset as fast as the limit allows,
+        turning the way the unwrapped difference says."""
+        delta = course + self.course_offset - self.heading(belief)
+        return float(np.clip(delta / self.dt, -self.u_max, self.u_max))
+
+
+def _real(value: object) -> float:
+    """``value`` as a float; NaN if it is not a real number (a bool, a string, None), so that
+    the callers' finiteness checks refuse it."""
+    if isinstance(value, bool):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def _initial_course(scenario: Scenario) -> float:

@@ -8,14 +8,25 @@ alarm (:mod:`tmaplan.estimators.consistency`) with ``pings`` pings of its own: t
 next step, the others ``spacing`` apart, each one honouring the scenario's minimum ping spacing
 and forbidden windows. They come from a declared allowance ``extra_pings`` on top of the
 scenario's ``planning.ping_budget``: once alarm pings were spent, the policy's own pings are
-refused when the total would exceed budget + allowance, so the total never exceeds it. A run
-without alarm behaves exactly as without the response.
+refused when the total would exceed budget + allowance, so the total never exceeds it. A ping
+the policy asks for within the minimum spacing after an alarm ping is **deferred**, not
+dropped: the operator holds the policy's ping (a scheduled one was budgeted for the
+information it brings) until the spacing and the forbidden windows allow it, and then flies
+it; deferred pings queue in order, each one the minimum spacing after the previous ping, count
+in the budget when flown, and are refused like the policy's own once the cap is reached (one
+still held at the end of the run is not flown). A run without alarm behaves exactly as
+without the response.
 
 It may also (``turn`` > 0) answer with an **own-ship manoeuvre**: a turn by ``turn`` at the
 maximum turn rate, to the side that changes the own velocity across the believed line of sight
 most (the bearing rate then changes with the range, which makes the post-manoeuvre track
-observable, lecadre1997); the policy's turn rates resume afterwards, its headings offset by
-the turn.
+observable, lecadre1997). The policy does not turn back afterwards: a policy that replays turn
+rates (straight, planned, receding) resumes them, its headings offset by the turn (its rates
+during the turn are not flown); a policy that steers to courses
+(:class:`tmaplan.policies.CourseSteering`: single turn, zig-zag, leg–turn–leg, lead–lag) has
+every course it holds or will hold offset by the turn, step by step as it is made. A course
+such a tactic decides later from the belief (the doctrine's beam, the lead and lag offsets
+from the line of sight) is decided from the heading then flown.
 
 :class:`AlarmResponder` wraps the policy's controller for one run; the closed loop
 (:func:`tmaplan.evaluation.closed_loop.run_closed_loop`) tells it the monitor's alarm count
@@ -31,7 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError
-from tmaplan.policies._base import Action, BeliefView, Controller
+from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -91,6 +102,9 @@ class AlarmResponder:
     ----------
     alarm_pings : list of int
         Steps of the pings it added.
+    deferred_pings : list of int
+        Steps at which the policy asked for a ping that was deferred (it came within the
+        minimum spacing after an alarm ping or a deferred one).
     """
 
     def __init__(self, inner: Controller, response: AlarmResponse, scenario: Scenario) -> None:
@@ -108,8 +122,11 @@ class AlarmResponder:
         self.turn_left = 0.0  # signed heading change still to make [rad]
         self.seen = 0
         self.pending: list[float] = []  # earliest times of requested pings [s]
-        self.last = float("-inf")
+        self.last = float("-inf")  # time of the last ping [s]
+        self.last_own = float("-inf")  # time of the last alarm or deferred ping [s]
+        self.deferred = 0  # the policy's pings held back, not yet flown
         self.alarm_pings: list[int] = []
+        self.deferred_pings: list[int] = []
 
     @property
     def log(self) -> list[dict[str, object]]:
@@ -118,7 +135,8 @@ class AlarmResponder:
 
     def act(self, belief: BeliefView, t: float) -> Action:
         """The inner action, with a ping added when an alarm asks for one and the allowance
-        lasts, and the policy's ping refused once alarm pings used up budget + allowance."""
+        lasts, the policy's ping deferred when it comes within the minimum spacing after an
+        alarm ping, and refused once alarm pings used up budget + allowance."""
         act = self.inner.act(belief, t)
         t_next = t + self.dt
         if belief.alarms > self.seen:
@@ -131,21 +149,32 @@ class AlarmResponder:
             self.turn_left = 0.0 if abs(u * self.dt) >= abs(self.turn_left) - 1e-12 \
                 else self.turn_left - u * self.dt
             act = dataclasses.replace(act, turn_rate=u)
+            if isinstance(self.inner, CourseSteering):  # or it would steer back
+                self.inner.offset_courses(u * self.dt)
         room = belief.pings_used < self.cap
+        if self.alarm_pings and not room:
+            self.deferred = 0  # the cap binds for good: pings are only ever added
         if act.ping:
             if self.alarm_pings and not room:
+                return dataclasses.replace(act, ping=False)
+            if t_next - self.last_own < self.min_spacing - 1e-9:
+                self.deferred += 1
+                self.deferred_pings.append(belief.step + 1)
                 return dataclasses.replace(act, ping=False)
             self.last = t_next
             self._drop_due(t_next)
             return act
-        if (room and self.pending and self.pending[0] <= t_next + 1e-9
-                and t_next - self.last >= self.min_spacing - 1e-9
-                and not any(a <= t_next <= b for a, b in self.forbidden)):
-            self.last = t_next
-            self._drop_due(t_next)
+        free = (room and t_next - self.last >= self.min_spacing - 1e-9
+                and not any(a <= t_next <= b for a, b in self.forbidden))
+        if free and self.deferred:
+            self.deferred -= 1
+        elif free and self.pending and self.pending[0] <= t_next + 1e-9:
             self.alarm_pings.append(belief.step + 1)
-            return dataclasses.replace(act, ping=True)
-        return act
+        else:
+            return act
+        self.last = self.last_own = t_next
+        self._drop_due(t_next)
+        return dataclasses.replace(act, ping=True)
 
     def _side(self, belief: BeliefView) -> float:
         """+1 (starboard) or −1: the turn that changes the own velocity across the believed

@@ -12,6 +12,7 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    CourseSteering,
     ManoeuvrePolicy,
     Policy,
 )
@@ -89,6 +90,12 @@ class _Both:
 
     def act(self, belief: BeliefView, t: float) -> Action:
         return Action(turn_rate=self.m.act(belief, t).turn_rate, ping=self.p.act(belief, t).ping)
+
+    def offset_courses(self, angle: float) -> None:
+        """Offset the manoeuvre's courses by ``angle`` [rad] if it steers to courses
+        (:class:`CourseSteering`; a turn-rate programme needs nothing)."""
+        if isinstance(self.m, CourseSteering):
+            self.m.offset_courses(angle)
 
 
 _BASELINE_CACHE: dict[Scenario, dict[str, Any]] = {}

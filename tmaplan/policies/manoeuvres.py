@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from concurrent.futures import BrokenExecutor, CancelledError, Executor, Future
 from typing import TYPE_CHECKING, Any
@@ -15,8 +16,9 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    _CourseKeeper,
     _initial_course,
-    _steer,
+    _real,
     _turn_limits,
     log,
 )
@@ -59,47 +61,90 @@ class _Const:
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class SingleTurn:
     """One course change of ``angle`` [rad] (positive = starboard) starting at ``time`` [s],
-    at the maximum turn rate."""
+    at the maximum turn rate.
+
+    Attributes
+    ----------
+    angle : float
+        Course change [rad], in [−π, π]; the sign gives the side, also for ±π (a −180° turn
+        goes to port, in closed loop as in the nominal track).
+    time : float
+        Start of the turn [s], in [t0, t0 + horizon).
+    """
 
     angle: float
     time: float
     name: str = "single-turn"
 
+    def _checked(self, scenario: Scenario) -> tuple[float, float]:
+        """(angle [rad], time [s]), or ArgumentError naming the field."""
+        a, t = _real(self.angle), _real(self.time)
+        if not (math.isfinite(a) and abs(a) <= math.pi):
+            raise ArgumentError("single-turn.angle", "an angle in [−π, π] rad", self.angle)
+        t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
+        if not (math.isfinite(t) and t0 <= t < end):
+            raise ArgumentError("single-turn.time", f"a time in [t0, t0 + horizon) = "
+                                f"[{t0:g}, {end:g}) s", self.time)
+        return a, t
+
     def controller(self, scenario: Scenario) -> Controller:
         """A controller steering to the new course after ``time``."""
+        angle, t = self._checked(scenario)
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
-        return _CourseSchedule([(scenario.time.t0, c0), (self.time, c0 + self.angle)], u_max, dt)
+        return _CourseSchedule([(scenario.time.t0, c0), (t, c0 + angle)], u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import single_turn_track
 
-        return single_turn_track(scenario, self.angle, self.time - scenario.time.t0)
+        angle, t = self._checked(scenario)
+        return single_turn_track(scenario, angle, t - scenario.time.t0)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class Zigzag:
     """Legs of ``leg_duration`` [s] alternately ``+angle`` and ``−angle`` [rad] about the
-    initial course, turning at the maximum rate; the first leg starts at ``start`` [s]."""
+    initial course, turning at the maximum rate; the first leg starts at ``start`` [s].
+
+    Attributes
+    ----------
+    leg_duration : float
+        [s], finite and > 0.
+    angle : float
+        Course of the first leg from the initial course [rad], in [−π, π] (negative: the
+        first leg to port); each later turn is ``2·angle`` the other way.
+    start : float
+        Start of the first leg [s], in [t0, t0 + horizon).
+    """
 
     leg_duration: float
     angle: float
     start: float = 0.0
     name: str = "zigzag"
 
+    def _check(self, scenario: Scenario) -> None:
+        """ArgumentError naming the first invalid field."""
+        if not (math.isfinite(leg := _real(self.leg_duration)) and leg > 0):
+            raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+        if not (math.isfinite(a := _real(self.angle)) and abs(a) <= math.pi):
+            raise ArgumentError("zigzag.angle", "an angle in [−π, π] rad", self.angle)
+        t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
+        if not (math.isfinite(t := _real(self.start)) and t0 <= t < end):
+            raise ArgumentError("zigzag.start", f"a time in [t0, t0 + horizon) = "
+                                f"[{t0:g}, {end:g}) s", self.start)
+
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the zig-zag course schedule."""
-        if not self.leg_duration > 0:
-            raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+        self._check(scenario)
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
         end = scenario.time.t0 + scenario.time.horizon
         sched = [(scenario.time.t0, c0)]
-        t, sign = self.start, 1.0
+        t, sign = float(self.start), 1.0
         while t < end:
-            sched.append((t, c0 + sign * self.angle))
-            t += self.leg_duration
+            sched.append((t, c0 + sign * float(self.angle)))
+            t += float(self.leg_duration)
             sign = -sign
         return _CourseSchedule(sched, u_max, dt)
 
@@ -107,21 +152,24 @@ class Zigzag:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import zigzag_track
 
+        self._check(scenario)
         if self.start != scenario.time.t0:
             raise PlanningError("zigzag.nominal_track: only zig-zags starting at t0")
-        return zigzag_track(scenario, self.leg_duration, 2.0 * self.angle)
+        return zigzag_track(scenario, float(self.leg_duration), 2.0 * float(self.angle))
 
 
-class _CourseSchedule:
+class _CourseSchedule(_CourseKeeper):
+    """Course ``c`` [rad, unwrapped, the first one the initial course] from time ``t`` [s],
+    for the ``(t, c)`` of ``schedule``."""
+
     def __init__(self, schedule: list[tuple[float, float]], u_max: float, dt: float) -> None:
+        super().__init__(schedule[0][1], u_max, dt)
         self.times = np.array([s[0] for s in schedule])
         self.courses = np.array([s[1] for s in schedule])
-        self.u_max, self.dt = u_max, dt
 
     def act(self, belief: BeliefView, t: float) -> Action:
         i = int(np.searchsorted(self.times, t + 1e-9, side="right") - 1)
-        course = self.courses[max(i, 0)]
-        return Action(turn_rate=_steer(belief.heading, course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, float(self.courses[max(i, 0)])))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -196,9 +244,9 @@ class Receding:
     Attributes
     ----------
     replan_interval : float, optional
-        [s]; default: ``scenario.planning.replan_interval``.
+        [s], finite and > 0; default (None): ``scenario.planning.replan_interval``.
     horizon : float, optional
-        Look-ahead [s]; default: the planner's.
+        Look-ahead [s], finite and > 0; default: the planner's.
     objective : str
         Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
     max_particles : int
@@ -213,7 +261,7 @@ class Receding:
     qpsol : str
         QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
     rti_steps : int
-        SQP steps per re-plan of the real-time iteration.
+        SQP steps per re-plan of the real-time iteration, >= 1.
     full_solves : tuple of int
         With ``real_time``: re-plans (0 = the first) always solved by a full IPOPT solve
         warm-started from the previous plan (default none).
@@ -281,6 +329,7 @@ class Receding:
 
     def resolve(self, scenario: Scenario) -> Receding:
         """The same policy with the real-time iteration's model computed (once per campaign)."""
+        _check_receding(self)
         if not self.real_time or self.rti is not None:
             return self
         return dataclasses.replace(self, rti=_rti_model(scenario, self.objective, self.horizon,
@@ -371,10 +420,23 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
     return _RTI_CACHE[key].with_model(model)
 
 
+def _check_receding(policy: Receding) -> None:
+    """ArgumentError naming the first invalid time or step count of ``policy``."""
+    for field in ("replan_interval", "horizon"):
+        v = getattr(policy, field)
+        if v is not None and not (math.isfinite(x := _real(v)) and x > 0):
+            raise ArgumentError(f"receding.{field}", "> 0 s", v)
+    n = policy.rti_steps
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ArgumentError("receding.rti_steps", "an integer >= 1", n)
+
+
 class _RecedingController:
     def __init__(self, policy: Receding, scenario: Scenario) -> None:
+        _check_receding(policy)
         pl = scenario.planning
-        interval = policy.replan_interval or (pl.replan_interval if pl else None)
+        interval = policy.replan_interval if policy.replan_interval is not None else (
+            pl.replan_interval if pl else None)
         if interval is None:
             raise ScenarioError("planning.replan_interval", "a re-planning interval for the "
                                 "receding policy", None, source=scenario.name)

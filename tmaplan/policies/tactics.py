@@ -25,8 +25,9 @@ from tmaplan.policies._base import (
     Action,
     BeliefView,
     Controller,
+    _CourseKeeper,
     _initial_course,
-    _steer,
+    _real,
     _turn_limits,
 )
 
@@ -123,15 +124,15 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
 
 
 def _check_angle(field: str, value: float) -> float:
-    if not (np.isfinite(value) and 0.0 < value < np.pi):
+    if not (np.isfinite(v := _real(value)) and 0.0 < v < np.pi):
         raise ArgumentError(field, "an angle in (0, 180) deg", value)
-    return float(value)
+    return v
 
 
 def _check_time(field: str, value: float | None, scenario: Scenario, default: float) -> float:
     """An instant ``t0 + value`` strictly inside the horizon (``value`` after t0 [s])."""
     t0, H = scenario.time.t0, scenario.time.horizon
-    v = default * H if value is None else float(value)
+    v = default * H if value is None else _real(value)
     if not (np.isfinite(v) and 0.0 < v < H):
         raise ArgumentError(field, f"a time after t0 in (0, {H:g}) s", value)
     return t0 + v
@@ -207,18 +208,19 @@ class LegTurnLeg:
         return single_turn_track(scenario, delta, t_turn - scenario.time.t0)
 
 
-class _LegTurnLegController:
+class _LegTurnLegController(_CourseKeeper):
     def __init__(self, t_turn: float, beam: float, c0: float, u_max: float, dt: float) -> None:
-        self.t_turn, self.beam, self.course = t_turn, beam, c0
-        self.u_max, self.dt = u_max, dt
+        super().__init__(c0, u_max, dt)
+        self.t_turn, self.beam, self.course = t_turn, beam, self.c0
         self.turned = False
 
     def act(self, belief: BeliefView, t: float) -> Action:
         if not self.turned and t + 1e-9 >= self.t_turn:
             beta, _ = belief_line_of_sight(belief)
-            self.course = doctrine_course(beta, belief.heading, self.beam)
+            self.course = self.course_now(belief, doctrine_course(beta, belief.heading,
+                                                                  self.beam))
             self.turned = True
-        return Action(turn_rate=_steer(belief.heading, self.course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, self.course))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -253,10 +255,10 @@ class LeadLag:
     def _times(self, scenario: Scenario) -> tuple[float, float]:
         t_lag = _check_time("lead-lag.lag_time", self.lag_time, scenario, 0.5)
         t0 = scenario.time.t0
-        if not (np.isfinite(self.lead_time) and 0.0 <= self.lead_time < t_lag - t0):
+        if not (np.isfinite(lead := _real(self.lead_time)) and 0.0 <= lead < t_lag - t0):
             raise ArgumentError("lead-lag.lead_time", f"a time after t0 in [0, {t_lag - t0:g}) s"
                                 " (before the lag leg)", self.lead_time)
-        return t0 + float(self.lead_time), t_lag
+        return t0 + lead, t_lag
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller flying the lead leg, then the lag leg."""
@@ -281,20 +283,22 @@ class LeadLag:
                                                (t_lag - scenario.time.t0, c2)])
 
 
-class _LeadLagController:
+class _LeadLagController(_CourseKeeper):
     def __init__(self, t_lead: float, t_lag: float, angle: float, c0: float, u_max: float,
                  dt: float) -> None:
-        self.t_lead, self.t_lag, self.angle, self.course = t_lead, t_lag, angle, c0
-        self.u_max, self.dt = u_max, dt
+        super().__init__(c0, u_max, dt)
+        self.t_lead, self.t_lag, self.angle, self.course = t_lead, t_lag, angle, self.c0
         self.drift: float | None = None
         self.lagging = False
 
     def act(self, belief: BeliefView, t: float) -> Action:
         if self.drift is None and t + 1e-9 >= self.t_lead:
             beta, self.drift = belief_line_of_sight(belief)
-            self.course = lead_lag_course(beta, self.drift, self.angle, lead=True)
+            self.course = self.course_now(belief, lead_lag_course(beta, self.drift, self.angle,
+                                                                  lead=True))
         if self.drift is not None and not self.lagging and t + 1e-9 >= self.t_lag:
             beta, _ = belief_line_of_sight(belief)
-            self.course = lead_lag_course(beta, self.drift, self.angle, lead=False)
+            self.course = self.course_now(belief, lead_lag_course(beta, self.drift, self.angle,
+                                                                  lead=False))
             self.lagging = True
-        return Action(turn_rate=_steer(belief.heading, self.course, self.u_max, self.dt))
+        return Action(turn_rate=self.steer(belief, self.course))

@@ -1,0 +1,103 @@
+"""Course-steering manoeuvre policies (SingleTurn, Zigzag): the closed loop flies the track the
+policy is planned and costed on (tmaplan.planning.baselines), whichever way a turn goes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError
+from tmaplan.policies import BeliefView, Receding, SingleTurn, Zigzag
+from tmaplan.scenario import load_problem
+
+DEG = np.pi / 180.0
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_problem("default")   # dt 15 s, turn rate ≤ 0.5 °/s, 180 steps
+
+
+def _fly(ctrl, scenario, heading0: float) -> np.ndarray:
+    """Closed-loop heading history [rad] of a controller (the belief does not matter)."""
+    dt, h, out = scenario.time.dt, heading0, [heading0]
+    p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
+    for k in range(scenario.n_steps):
+        t = float(scenario.times[k])
+        b = BeliefView(step=k, t=t, heading=h, position=np.zeros(2), particles=p,
+                       weights=np.array([0.5, 0.5]), pings_used=0)
+        h += ctrl.act(b, t).turn_rate * dt
+        out.append(h)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("angle_deg", [-180.0, 180.0, -150.0, 90.0])
+def test_a_single_turn_turns_the_way_its_sign_says_as_its_nominal_track(scenario, angle_deg):
+    pol = SingleTurn(angle=angle_deg * DEG, time=scenario.time.t0 + 0.25 * scenario.time.horizon)
+    nominal = np.unwrap(pol.nominal_track(scenario).heading)
+    flown = _fly(pol.controller(scenario), scenario, float(nominal[0]))
+    assert flown[-1] - flown[0] == pytest.approx(angle_deg * DEG, abs=1e-9)
+    assert nominal[-1] - nominal[0] == pytest.approx(angle_deg * DEG, abs=1e-9)
+    np.testing.assert_allclose(flown, nominal, atol=1e-9)
+
+
+@pytest.mark.parametrize("angle_deg", [100.0, -100.0, 90.0, 45.0])
+def test_a_zigzag_flies_its_nominal_track_even_when_a_leg_change_exceeds_180_deg(scenario,
+                                                                               angle_deg):
+    pol = Zigzag(leg_duration=600.0, angle=angle_deg * DEG, start=scenario.time.t0)
+    nominal = np.unwrap(pol.nominal_track(scenario).heading)
+    flown = _fly(pol.controller(scenario), scenario, float(nominal[0]))
+    np.testing.assert_allclose(flown, nominal, atol=1e-9)
+
+
+NAN, INF = float("nan"), float("inf")
+
+
+@pytest.mark.parametrize(("policy", "field"), [
+    (SingleTurn(angle=NAN, time=600.0), "single-turn.angle"),
+    (SingleTurn(angle=INF, time=600.0), "single-turn.angle"),
+    (SingleTurn(angle=4.0, time=600.0), "single-turn.angle"),
+    (SingleTurn(angle=1.0, time=NAN), "single-turn.time"),
+    (SingleTurn(angle=1.0, time=INF), "single-turn.time"),
+    (SingleTurn(angle=1.0, time=-60.0), "single-turn.time"),
+    (SingleTurn(angle=1.0, time=1e6), "single-turn.time"),
+    (Zigzag(leg_duration=INF, angle=0.5), "zigzag.leg_duration"),
+    (Zigzag(leg_duration=NAN, angle=0.5), "zigzag.leg_duration"),
+    (Zigzag(leg_duration=300.0, angle=NAN), "zigzag.angle"),
+    (Zigzag(leg_duration=300.0, angle=-4.0), "zigzag.angle"),
+    (Zigzag(leg_duration=300.0, angle=0.5, start=NAN), "zigzag.start"),
+    (Zigzag(leg_duration=300.0, angle=0.5, start=-60.0), "zigzag.start"),
+])
+def test_bad_manoeuvre_parameters_give_a_one_line_error(scenario, policy, field):
+    for make in (policy.controller, policy.nominal_track):
+        with pytest.raises(ArgumentError) as exc:
+            make(scenario)
+        msg = str(exc.value)
+        assert exc.value.field == field and "expected" in msg and "\n" not in msg
+
+
+@pytest.mark.parametrize("value", [0.0, -60.0, NAN, INF])
+def test_a_receding_replan_interval_must_be_a_positive_time(scenario, value):
+    pol = Receding(replan_interval=value)
+    for make in (pol.controller, pol.resolve):
+        with pytest.raises(ArgumentError) as exc:
+            make(scenario)
+        assert (exc.value.field, exc.value.expected) == ("receding.replan_interval", "> 0 s")
+        assert exc.value.received is value
+
+
+@pytest.mark.parametrize(("kw", "field"), [
+    ({"horizon": 0.0}, "receding.horizon"), ({"horizon": NAN}, "receding.horizon"),
+    ({"rti_steps": 0}, "receding.rti_steps"), ({"rti_steps": 1.5}, "receding.rti_steps"),
+])
+def test_other_receding_parameters_are_checked(scenario, kw, field):
+    with pytest.raises(ArgumentError) as exc:
+        Receding(**kw).controller(scenario)
+    assert exc.value.field == field
+
+
+def test_good_manoeuvre_parameters_pass(scenario):
+    t0, H = scenario.time.t0, scenario.time.horizon
+    SingleTurn(angle=-np.pi, time=t0).controller(scenario)
+    SingleTurn(angle=np.pi, time=t0 + H - 1.0).nominal_track(scenario)
+    Zigzag(leg_duration=300.0, angle=-np.pi / 4).nominal_track(scenario)

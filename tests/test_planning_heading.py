@@ -307,3 +307,23 @@ def test_belief_from_particles_keeps_the_filter_weights():
     for bad in (4, 10.0, True):
         with pytest.raises(PlanningError, match="max_samples"):
             Belief.from_particles(X, w, max_samples=bad)
+
+
+def test_ping_steps_outside_the_horizon_are_refused(default, prior):
+    """A ping step before the plan's start or after its last step K is refused with an
+    ArgumentError naming ping_steps, the valid range and the steps (it was dropped: the
+    plan was solved as if that ping did not exist)."""
+    from tmaplan.errors import ArgumentError
+    from tmaplan.planning import plan_heading
+
+    planner = HeadingPlanner(default, objective="mean-range-bound", horizon=900.0,
+                             control_interval=300.0, n_starts=1)
+    K = planner.K
+    for bad in ([K + 1], [-1], [3, K + 5]):
+        with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {K}\].*{bad[-1]}"):
+            planner.solve(prior, ping_steps=bad)
+    with pytest.raises(ArgumentError, match="ping_steps"):
+        plan_heading(default, belief=prior, objective="mean-range-bound", horizon=900.0,
+                     control_interval=300.0, n_starts=1, ping_steps=[K + 1])
+    assert planner._parameters(prior, [0, K])[planner.layout.slices()["ping"]][[0, K]].sum() \
+        == 2.0

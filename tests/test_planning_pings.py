@@ -177,3 +177,17 @@ def test_uniform_policy_steps_unchanged_on_default(default):
     from tmaplan.planning import uniform_ping_steps
 
     assert uniform_ping_steps(default.times, 4) == [22, 68, 112, 158]
+
+
+def test_evaluator_refuses_steps_outside_the_track(evaluator):
+    """PingEvaluator.schedules: a step past the track's last step K was an IndexError, a
+    negative one silently pinged from the end; both are an ArgumentError naming ping_steps."""
+    from tmaplan.errors import ArgumentError
+
+    K = evaluator.K
+    for bad in ([K + 1], [-1]):
+        with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {K}\]"):
+            evaluator.schedules([[3], bad])
+        with pytest.raises(ArgumentError, match="ping_steps"):
+            evaluator.value(bad)
+    assert evaluator.schedules([[0, K]])[0, [0, K]].tolist() == [1.0, 1.0]

@@ -130,6 +130,10 @@ def test_bad_configurations_are_rejected(small):
         RealTimeIteration(other, model)
     with pytest.raises(PlanningError, match="solver state"):
         reference_model(planner, dataclasses.replace(plan, warm=None), prior)
+    # a ping step outside the plan's steps 0..K is refused, not dropped
+    with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {planner.K}\]"):
+        RealTimeIteration(planner, model).solve(prior, previous=plan,
+                                                ping_steps=[planner.K + 1])
 
 
 def test_receding_controller_uses_the_real_time_iteration(small):

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
@@ -427,7 +428,8 @@ class HeadingPlanner:
         warm_start : HeadingPlan, optional
             Previous plan: shifted to ``belief.t`` and used as the only initial guess.
         ping_steps : sequence of int
-            Plan steps with a range ping (enter the closed-form objectives).
+            Plan steps with a range ping (enter the closed-form objectives), each in [0, K]
+            (K = :attr:`K`, step 0 at ``belief.t``); others raise :class:`ArgumentError`.
         raise_on_failure : bool
             If False, a failed solve is returned with ``success=False`` instead of raising.
         starts : sequence of ndarray, optional
@@ -523,12 +525,12 @@ class HeadingPlanner:
     def _parameters(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
         """The objective's parameter vector (:class:`ParamLayout`) for a belief and pings."""
         ping = np.zeros(self.K + 1)
-        st = np.asarray(list(ping_steps), int)
+        st = check_ping_steps(ping_steps, self.K, source=self.scenario.name)  # plan steps
         if st.size:
             if self._ping_scale == 0.0:
                 raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
                                     "has no range sensor")
-            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
+            ping[st] = 1.0
         bearing = plan_bearing_information(self.scenario, belief.t, self.K)
         weight = None
         if self.until_end:

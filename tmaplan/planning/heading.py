@@ -21,7 +21,6 @@ re-solves for a new belief (receding horizon) with a warm start.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal
@@ -29,7 +28,6 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import check_ping_steps
-from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
@@ -37,6 +35,7 @@ from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
+from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
@@ -55,63 +54,6 @@ __all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "plan_hea
            "safe_sinc"]
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class HeadingPlan:
-    """An optimal heading plan over the planning horizon.
-
-    Attributes
-    ----------
-    times : ndarray, shape (n + 1,)
-        Control nodes [s] (absolute).
-    heading : ndarray, shape (n + 1,)
-        Heading at the nodes [rad] (unwrapped, clockwise from North).
-    turn_rate : ndarray, shape (n,)
-        Mean turn rate per control interval [rad/s] (the control for "direct").
-    speed : ndarray, shape (n,)
-        Speed per control interval [m/s].
-    switch_times : ndarray, shape (m,)
-        Instants where the turn rate changes [s] (exact for "bang-bang", control nodes where
-        it changes by more than 1 % of ω_max for "direct").
-    observer : ObserverTrack
-        The planned track on the scenario's dt grid over the horizon.
-    objective : float
-        Objective value (minimised; ``logdet`` reports −log det FIM).
-    range_bound : ndarray, shape (K + 1,)
-        Closed-form PCRB range bound along the plan [m].
-    transcription : str
-    status : str
-        IPOPT return status of the best start.
-    success : bool
-    iterations : int
-        IPOPT iterations summed over the starts.
-    seconds : float
-        Wall time of the solve [s].
-    message : str
-    solver : str
-        What produced the plan: ``"ipopt"``, or ``"rti-qrqp"`` / ``"rti-osqp"`` for a
-        real-time iteration step (:mod:`tmaplan.planning.rti`).
-    """
-
-    __repr__ = short_repr
-
-    times: np.ndarray
-    heading: np.ndarray
-    turn_rate: np.ndarray
-    speed: np.ndarray
-    switch_times: np.ndarray
-    observer: ObserverTrack
-    objective: float
-    range_bound: np.ndarray
-    transcription: str
-    status: str
-    success: bool
-    iterations: int
-    seconds: float
-    message: str = ""
-    solver: str = "ipopt"
-    warm: dict[str, Any] | None = dataclasses.field(default=None, repr=False, compare=False)
 
 
 class HeadingPlanner:

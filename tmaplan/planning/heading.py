@@ -39,12 +39,14 @@ from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
+    ObjectiveEvaluator,
     ParamLayout,
     PlanContext,
     closed_form_graph,
     make_objective,
     ping_sigma,
     plan_bearing_information,
+    until_end_weights,
 )
 
 if TYPE_CHECKING:
@@ -474,12 +476,15 @@ class HeadingPlanner:
                                     "has no range sensor")
             ping[st] = 1.0
         bearing = plan_bearing_information(self.scenario, belief.t, self.K)
-        weight = None
-        if self.until_end:
-            tg = self.scenario.time
-            end = tg.t0 + tg.dt * tg.n_steps
-            weight = (belief.t + self.times <= end + 1e-6 * self.dt).astype(float)
+        weight = until_end_weights(self.scenario, belief.t, self.K) if self.until_end else None
         return self.layout.vector(belief, bearing, ping, weight)
+
+    def evaluator(self, belief: Belief) -> ObjectiveEvaluator:
+        """The :class:`ObjectiveEvaluator` of this planner's objective for ``belief``: same
+        horizon K, turn-rate normaliser ``u_max`` [rad/s], belief samples and step weights,
+        so its value of a plan's ``observer`` track is the plan's ``objective``."""
+        return ObjectiveEvaluator(self.scenario, self.objective, n_steps=self.K, belief=belief,
+                                  turn_rate_max=self.u_max, until_end=self.until_end)
 
     def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
         if self.keep_out <= 0:

@@ -191,7 +191,7 @@ def gaps(runs, particles, seed=1000, problem="default"):
 
     def recorded(self, belief, t):
         idx = manoeuvres._subsample(belief.weights, self.policy.max_particles)
-        b = Belief.from_samples(belief.particles[idx], t=t)
+        b = Belief.from_samples(belief.particles[idx], t=t, assimilated=True)  # a posterior
         pl = self.planner
         prev = self.plan or self.rti.model.plan
         opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)

@@ -264,3 +264,27 @@ def test_receding_multi_start_in_closed_loop(small):
     with pytest.raises(ArgumentError, match="multi_start"):
         Receding(multi_start=(-1,), objective="mean-range-bound", horizon=900.0) \
             .resolve(sc).controller(sc)
+
+
+def test_receding_plans_against_a_posterior_that_holds_the_bearing_at_t(small):
+    """The re-plan belief is the filter's posterior after its update at t: ``assimilated``,
+    so a bearing at t is not counted a second time at plan step 0 (a plan from the prior
+    counts it, Belief.from_prior)."""
+    from tmaplan.policies import Receding
+    from tmaplan.policies._base import BeliefView
+
+    sc, prior = small[0], small[1]
+    ctrl = Receding(objective="mean-range-bound", horizon=900.0, real_time=False).controller(sc)
+    seen = []
+
+    class Planner:
+        def solve(self, b, **kw):
+            seen.append(b)
+            raise PlanningError("recorded")  # the controller keeps its previous plan
+
+    ctrl.planner = Planner()
+    ctrl.act(BeliefView(step=4, t=240.0, heading=0.0, position=np.zeros(2),
+                        particles=prior.samples[:500], weights=np.full(500, 1 / 500),
+                        pings_used=0, alarms=0), 240.0)
+    assert len(seen) == 1 and seen[0].assimilated and seen[0].t == 240.0
+    assert not ctrl.log[0]["success"]

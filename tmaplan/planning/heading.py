@@ -42,10 +42,10 @@ from tmaplan.planning.objectives import (
     ObjectiveEvaluator,
     ParamLayout,
     PlanContext,
+    belief_bearing_information,
     closed_form_graph,
     make_objective,
     ping_sigma,
-    plan_bearing_information,
     until_end_weights,
 )
 
@@ -475,7 +475,7 @@ class HeadingPlanner:
                 raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
                                     "has no range sensor")
             ping[st] = 1.0
-        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
+        bearing = belief_bearing_information(self.scenario, belief, self.K)
         weight = until_end_weights(self.scenario, belief.t, self.K) if self.until_end else None
         return self.layout.vector(belief, bearing, ping, weight)
 

@@ -61,6 +61,7 @@ __all__ = [
     "ParamLayout",
     "PingObjectiveName",
     "PlanContext",
+    "belief_bearing_information",
     "expected_time_to_accuracy",
     "logdet",
     "make_objective",
@@ -92,11 +93,25 @@ PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
 DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
 
 
-def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
-    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²], 0 at step 0 (the
-    belief at ``t_start`` holds it): :func:`tmaplan.bounds.inputs.information_rates`."""
+def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int, *,
+                             include_start: bool = False) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²]
+    (:func:`tmaplan.bounds.inputs.information_rates`).
+
+    ``include_start``: count the bearings taken at ``t_start`` at step 0 (a belief that does
+    not hold them, e.g. the prior: ``not belief.assimilated``, :func:`belief_bearing_information`);
+    False: 0 at step 0 (the belief at ``t_start`` already holds them).
+    """
     return information_rates(scenario, t_start=t_start, n_steps=n_steps,
-                             include_start=False)[0]
+                             include_start=include_start)[0]
+
+
+def belief_bearing_information(scenario: Scenario, belief: Belief, n_steps: int) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``belief.t`` [rad⁻²], step 0 counted
+    unless the belief already holds it (:attr:`tmaplan.planning.Belief.assimilated`): the
+    bearing vector of every planner (heading, ping, joint) and of :class:`ObjectiveEvaluator`."""
+    return plan_bearing_information(scenario, belief.t, n_steps,
+                                    include_start=not belief.assimilated)
 
 
 def until_end_weights(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
@@ -387,7 +402,7 @@ class ObjectiveEvaluator:
         val = self.objective.expression(ctx)
         rb = closed_form_graph(ctx)["range_bound"]
         self._fn = ca.Function("plan_objective", [v, dsp, ur, p], [val, rb])
-        self._bearing = plan_bearing_information(scenario, self.belief.t, K)
+        self._bearing = belief_bearing_information(scenario, self.belief, K)
         weight = until_end_weights(scenario, self.belief.t, K) if until_end else None
         self._p0 = self.layout.vector(self.belief, self._bearing, None, weight)
 

@@ -51,8 +51,8 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import (
     PING_OBJECTIVES,
     PingObjectiveName,
+    belief_bearing_information,
     ping_sigma,
-    plan_bearing_information,
 )
 
 if TYPE_CHECKING:
@@ -158,7 +158,7 @@ class PingEvaluator:
         K = observer.position.shape[0] - 1
         self.engine = ClosedFormEngine.from_belief(
             belief, observer, dt=float(scenario.time.dt), q=float(scenario.target.q),
-            bearing_info=plan_bearing_information(scenario, belief.t, K), ping_sigma=sig)
+            bearing_info=belief_bearing_information(scenario, belief, K), ping_sigma=sig)
         self.K, self.dt, self.times = K, float(scenario.time.dt), observer.times
         self._quantity = "position" if objective == "mean-position-bound" else "range"
         self._reduce = "terminal" if objective == "terminal-range-bound" else "mean"

@@ -190,8 +190,8 @@ def gaps(runs, particles, seed=1000, problem="default"):
     replan = manoeuvres._RecedingController._replan
 
     def recorded(self, belief, t):
-        idx = manoeuvres._subsample(belief.weights, self.policy.max_particles)
-        b = Belief.from_samples(belief.particles[idx], t=t)
+        b = Belief.from_particles(belief.particles, belief.weights, t=t,  # a posterior
+                                  max_samples=self.policy.max_particles, assimilated=True)
         pl = self.planner
         prev = self.plan or self.rti.model.plan
         opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)

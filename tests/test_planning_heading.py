@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tmaplan.errors import PlanningError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.models.observer import arc_displacement, turn_rate_track
 from tmaplan.planning import (
     Belief,
@@ -307,3 +307,56 @@ def test_belief_from_particles_keeps_the_filter_weights():
     for bad in (4, 10.0, True):
         with pytest.raises(PlanningError, match="max_samples"):
             Belief.from_particles(X, w, max_samples=bad)
+
+
+def test_ping_steps_outside_the_horizon_are_refused(default, prior):
+    """A ping step before the plan's start or after its last step K is refused with an
+    ArgumentError naming ping_steps, the valid range and the steps (it was dropped: the
+    plan was solved as if that ping did not exist)."""
+    from tmaplan.errors import ArgumentError
+    from tmaplan.planning import plan_heading
+
+    planner = HeadingPlanner(default, objective="mean-range-bound", horizon=900.0,
+                             control_interval=300.0, n_starts=1)
+    K = planner.K
+    for bad in ([K + 1], [-1], [3, K + 5]):
+        with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {K}\].*{bad[-1]}"):
+            planner.solve(prior, ping_steps=bad)
+    with pytest.raises(ArgumentError, match="ping_steps"):
+        plan_heading(default, belief=prior, objective="mean-range-bound", horizon=900.0,
+                     control_interval=300.0, n_starts=1, ping_steps=[K + 1])
+    assert planner._parameters(prior, [0, K])[planner.layout.slices()["ping"]][[0, K]].sum() \
+        == 2.0
+
+
+def test_evaluator_scores_the_objective_the_planner_minimised():
+    """planner.evaluator(belief) values a plan's track at plan.objective (to round-off) with a
+    turn_rate_max override (the turn penalty's normaliser), logdet_samples and until_end; the
+    scenario-default evaluator did not (the turn penalty normalised by the scenario's rate,
+    logdet at the belief mean)."""
+    from tmaplan.planning import logdet, range_bound, turn_penalty
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    sc = sc.replace(time=type(sc.time)(dt=60.0, horizon=1800.0, t0=0.0))
+    bel = Belief.from_prior(sc, n=3000)
+    kw = dict(n_starts=1, control_interval=300.0, horizon=1800.0)
+    obj = range_bound("mean") + turn_penalty(100.0)
+    half = HeadingPlanner(sc, objective=obj, turn_rate_max=sc.observer.turn_rate_max / 2, **kw)
+    plan = half.solve(bel)
+    assert plan.success
+    assert half.evaluator(bel)(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
+    same = ObjectiveEvaluator(sc, obj, belief=bel, n_steps=half.K, turn_rate_max=half.u_max)
+    assert same(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
+    ld = HeadingPlanner(sc, objective="logdet", logdet_samples=8, **kw)
+    plan = ld.solve(bel)
+    assert ld.evaluator(bel)(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
+    named = ObjectiveEvaluator(sc, "logdet", belief=bel, n_steps=ld.K, samples=8)
+    assert named.objective.n_samples == logdet(8).n_samples == 8
+    assert named(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
+    late = Belief.from_samples(bel.samples, t=1200.0)  # 10 of the 30 plan steps left
+    ue = HeadingPlanner(sc, objective="mean-range-bound", until_end=True, **kw)
+    plan = ue.solve(late)
+    assert ue.evaluator(late)(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
+    with pytest.raises(ArgumentError, match="turn_rate_max"):
+        ObjectiveEvaluator(sc, obj, belief=bel, turn_rate_max=-1.0)

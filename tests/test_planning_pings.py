@@ -177,3 +177,69 @@ def test_uniform_policy_steps_unchanged_on_default(default):
     from tmaplan.planning import uniform_ping_steps
 
     assert uniform_ping_steps(default.times, 4) == [22, 68, 112, 158]
+
+
+def test_evaluator_refuses_steps_outside_the_track(evaluator):
+    """PingEvaluator.schedules: a step past the track's last step K was an IndexError, a
+    negative one silently pinged from the end; both are an ArgumentError naming ping_steps."""
+    from tmaplan.errors import ArgumentError
+
+    K = evaluator.K
+    for bad in ([K + 1], [-1]):
+        with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {K}\]"):
+            evaluator.schedules([[3], bad])
+        with pytest.raises(ArgumentError, match="ping_steps"):
+            evaluator.value(bad)
+    assert evaluator.schedules([[0, K]])[0, [0, K]].tolist() == [1.0, 1.0]
+
+
+def _first_step(sc, first_step):
+    """``sc`` on a 30-min grid of 1-min steps, its bearings from ``first_step``, 20000 prior
+    samples (those of closed_form_pcrb and of Belief.from_prior)."""
+    import dataclasses
+
+    sc = sc.replace(time=type(sc.time)(dt=60.0, horizon=1800.0, t0=0.0))
+    sens = tuple(dataclasses.replace(s, first_step=first_step) if s.kind == "bearing" else s
+                 for s in sc.sensors)
+    return sc.replace(sensors=sens, prior=dataclasses.replace(sc.prior, samples=20000))
+
+
+@pytest.mark.parametrize("first_step", [0, 1])
+def test_planning_from_the_prior_counts_the_bearing_at_t0(default, first_step):
+    """A plan from the prior (Belief.from_prior, which holds no measurement) counts a bearing
+    taken at t0 (first_step = 0, e.g. clavard2013-*): the scheduler's, the ping evaluator's
+    and the heading objective's values are closed_form_pcrb's for the same track and pings
+    (the bearing at step 0 was dropped: 1.7e-5 relative off on this case). A belief that
+    already holds it (a filter posterior, ``assimilated``) does not count it again. The
+    remaining 4e-9 is the moments' round-off (test_evaluator_matches_closed_form_model),
+    the same for first_step = 1."""
+    from tmaplan.bounds.closed_form import closed_form_pcrb
+    from tmaplan.planning import Belief, HeadingPlanner, ObjectiveEvaluator
+
+    sc = _first_step(default, first_step)
+    bel = Belief.from_prior(sc)
+    assert not bel.assimilated
+    track = observer_track(sc.observer, sc.time)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cf = closed_form_pcrb(sc, ping_steps=[5, 20])
+        ev = PingEvaluator(sc, track, bel, "mean-range-bound")
+        assert ev.value([5, 20]) == pytest.approx(cf.range_bound.mean(), rel=1e-7)
+        np.testing.assert_allclose(ev.per_step(ev.schedules([[5, 20]]))[0], cf.range_bound,
+                                   rtol=1e-7)
+        u = np.zeros(sc.time.n_steps + 1)
+        u[[5, 20]] = 1.0
+        oe = ObjectiveEvaluator(sc, "mean-range-bound", belief=bel)
+        assert oe(track, u)[0] == pytest.approx(cf.range_bound.mean(), rel=1e-7)
+        sched = schedule_pings(sc, budget=2, gap_reference="none")
+        ref = closed_form_pcrb(sc, ping_steps=sched.steps.tolist())
+        assert sched.objective == pytest.approx(ref.range_bound.mean(), rel=1e-7)
+        plan = HeadingPlanner(sc, objective="mean-range-bound", n_starts=1, horizon=1800.0,
+                              control_interval=300.0).solve(bel, ping_steps=[5, 20])
+        ref = closed_form_pcrb(sc, ping_steps=[5, 20], observer=plan.observer)
+        assert plan.objective == pytest.approx(ref.range_bound.mean(), rel=1e-7)
+        # a posterior that holds the bearing at t0: the scenario whose bearings start at 1
+        post = Belief.from_samples(bel.samples, assimilated=True)
+        cf1 = closed_form_pcrb(_first_step(default, 1), ping_steps=[5, 20])
+        assert PingEvaluator(sc, track, post, "mean-range-bound").value([5, 20]) == \
+            pytest.approx(cf1.range_bound.mean(), rel=1e-7)

@@ -130,6 +130,10 @@ def test_bad_configurations_are_rejected(small):
         RealTimeIteration(other, model)
     with pytest.raises(PlanningError, match="solver state"):
         reference_model(planner, dataclasses.replace(plan, warm=None), prior)
+    # a ping step outside the plan's steps 0..K is refused, not dropped
+    with pytest.raises(ArgumentError, match=rf"ping_steps.*\[0, {planner.K}\]"):
+        RealTimeIteration(planner, model).solve(prior, previous=plan,
+                                                ping_steps=[planner.K + 1])
 
 
 def test_receding_controller_uses_the_real_time_iteration(small):
@@ -260,3 +264,57 @@ def test_receding_multi_start_in_closed_loop(small):
     with pytest.raises(ArgumentError, match="multi_start"):
         Receding(multi_start=(-1,), objective="mean-range-bound", horizon=900.0) \
             .resolve(sc).controller(sc)
+
+
+def test_receding_plans_against_a_posterior_that_holds_the_bearing_at_t(small):
+    """The re-plan belief is the filter's posterior after its update at t: ``assimilated``,
+    so a bearing at t is not counted a second time at plan step 0 (a plan from the prior
+    counts it, Belief.from_prior)."""
+    from tmaplan.policies import Receding
+    from tmaplan.policies._base import BeliefView
+
+    sc, prior = small[0], small[1]
+    ctrl = Receding(objective="mean-range-bound", horizon=900.0, real_time=False).controller(sc)
+    seen = []
+
+    class Planner:
+        def solve(self, b, **kw):
+            seen.append(b)
+            raise PlanningError("recorded")  # the controller keeps its previous plan
+
+    ctrl.planner = Planner()
+    ctrl.act(BeliefView(step=4, t=240.0, heading=0.0, position=np.zeros(2),
+                        particles=prior.samples[:500], weights=np.full(500, 1 / 500),
+                        pings_used=0, alarms=0), 240.0)
+    assert len(seen) == 1 and seen[0].assimilated and seen[0].t == 240.0
+    assert not ctrl.log[0]["success"]
+
+
+def test_a_step_that_leaves_the_keep_out_violated_is_not_a_success(small):
+    """A belief whose mean moved close ahead of the own ship: the shifted previous plan comes
+    within the keep-out range (violation 0.88: range 0.35 × keep-out short). One SQP step
+    halves the violation but leaves the track 1.5 km from the estimate, inside the 2 km
+    keep-out; it was returned with success=True. Now it is rejected: a SolverError naming
+    the violation without fallback, else the IPOPT fallback's plan (feasible) or its error."""
+    _, _, planner, plan, model = small
+    a = np.radians(-19.0)
+    b = Belief.from_moments([3655.0 * np.sin(a), 3655.0 * np.cos(a), -0.08, -6.91],
+                            np.diag([200.0**2, 200.0**2, 0.3**2, 0.3**2]), t=60.0,
+                            assimilated=True)
+    h0 = float(plan.heading[1])
+    rti = RealTimeIteration(planner, model)
+
+    def violation(p):
+        P = np.concatenate([planner._parameters(b, ()), [h0, planner.speed0, 1.0, 1.0]])
+        g = np.asarray(planner._f_eval(p.warm["x"], P)[-1]).reshape(-1)
+        return max(np.max(planner._lbg - g), np.max(g - planner._ubg), 0.0)
+
+    with pytest.raises(SolverError, match="keep-out"):
+        rti.solve(b, previous=plan, heading0=h0, fallback=False)
+    try:
+        out = rti.solve(b, previous=plan, heading0=h0)
+    except PlanningError as exc:  # the IPOPT fallback was tried and failed: reported
+        assert "ipopt" in str(exc).lower()
+    else:
+        assert out.success and out.solver == "ipopt" and "keep-out" in out.message
+        assert violation(out) <= 1e-6

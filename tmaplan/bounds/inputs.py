@@ -33,8 +33,8 @@ from tmaplan.scenario import (
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "information_rates", "lpc_prior_information",
-           "prepare", "resolve_ping_steps"]
+__all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "check_ping_steps", "information_rates",
+           "lpc_prior_information", "prepare", "resolve_ping_steps"]
 
 #: Prior samples closer than this to the observer count as "mass at zero range" [m].
 MIN_PRIOR_RANGE = 1.0
@@ -107,6 +107,38 @@ class PCRBInputs:
         return self.times.shape[0] - 1
 
 
+def check_ping_steps(steps: Sequence[int] | np.ndarray, n_steps: int, *, field: str = "ping_steps",
+                     source: str | None = None) -> np.ndarray:
+    """Ping steps checked against a grid of ``n_steps`` + 1 instants.
+
+    Parameters
+    ----------
+    steps : sequence of int
+        Ping steps (indices on the grid, step 0 at its first instant).
+    n_steps : int
+        Last step K of the grid (the horizon in steps).
+    field : str
+        Name of the argument, for the error message.
+    source : str, optional
+        Scenario name, for the error message.
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        The steps, each in [0, K], in the given order.
+
+    Raises
+    ------
+    ArgumentError
+        Naming ``field``, the valid range and the received steps, if a step is outside it
+        (a step past the horizon or before its start is refused, never dropped).
+    """
+    st = np.asarray(list(steps), dtype=int).reshape(-1)
+    if st.size and (st.min() < 0 or st.max() > n_steps):
+        raise ArgumentError(field, f"steps in [0, {int(n_steps)}]", st.tolist(), source=source)
+    return st
+
+
 def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
                        ) -> tuple[np.ndarray, np.ndarray, float | None]:
     """Ping steps and per-step ping weights Σ 1/σ_r² [m⁻²].
@@ -126,10 +158,7 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     if steps.size and sigma is None:
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
                             "no range sensor", source=scenario.name)
-    if steps.size and (steps.min() < 0 or steps.max() > K):
-        raise ArgumentError("ping_steps", f"steps in [0, {K}]", steps.tolist(),
-                            source=scenario.name)
-    steps = np.unique(steps)
+    steps = np.unique(check_ping_steps(steps, K, source=scenario.name))
     weight[steps] = 1.0 / sigma**2 if sigma else 0.0
     return steps, weight, sigma
 

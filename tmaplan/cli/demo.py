@@ -99,7 +99,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
     # `receding` policies reuse it instead of solving again
     plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers, pool=pool)
-    base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K)
+    base = evaluate_baselines(scenario, planner.objective, evaluator=planner.evaluator(belief))
     plan_fig = plot_plan(plan, base, belief, out / "plan.png",
                          objective=planner.objective.name)
     del plan_fig

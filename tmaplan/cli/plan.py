@@ -24,7 +24,7 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import plan_joint
 from tmaplan.planning.joint_ocp import plan_joint_ocp
-from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
+from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.planning.pings import schedule_pings
 from tmaplan.plotting import objective_label, plot_plan
 from tmaplan.policies.plan_starts import plan_from_prior
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         plan = plan_from_prior(scenario, planner=planner)
     else:
         plan = planner.solve(belief)
-    ev = ObjectiveEvaluator(scenario, planner.objective, n_steps=planner.K, belief=belief)
+    ev = planner.evaluator(belief)  # the objective the planner minimised, settings and all
     base = evaluate_baselines(scenario, planner.objective, belief=belief, n_steps=planner.K,
                               evaluator=ev)
     payload: dict[str, Any] = {

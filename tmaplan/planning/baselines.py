@@ -172,7 +172,10 @@ def evaluate_baselines(scenario: Scenario, objective: str | Objective = "range-b
     """Every baseline of the grids, evaluated (name -> list sorted best first).
 
     Single turns: :data:`SINGLE_TURN_ANGLES` × both directions × :data:`SINGLE_TURN_FRACTIONS`
-    of the horizon; zig-zags: :data:`ZIGZAG_GRID` × both directions.
+    of the horizon; zig-zags: :data:`ZIGZAG_GRID` × both directions. ``evaluator`` (it
+    replaces ``objective``, ``belief`` and ``n_steps``): to compare the baselines with a
+    plan, pass :meth:`tmaplan.planning.HeadingPlanner.evaluator`, which scores the objective
+    that planner minimised (its turn-rate normaliser, samples and step weights).
     """
     ev = evaluator or ObjectiveEvaluator(scenario, objective, n_steps=n_steps, belief=belief)
     K = ev.n_steps

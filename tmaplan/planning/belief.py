@@ -53,6 +53,13 @@ class Belief:
         Normalised sample weights (None: equal weights).
     t : float
         Time of the belief [s].
+    assimilated : bool
+        True if the belief already holds the measurements taken at ``t`` (a filter's
+        posterior after its update at t, e.g. at a re-plan): the planners then count the
+        sensors from the step after t. False (a prior, or a prediction to t): the
+        measurements at t count at plan step 0, as in
+        :func:`tmaplan.bounds.closed_form.closed_form_pcrb` from the prior
+        (:func:`tmaplan.planning.objectives.plan_bearing_information`).
     """
 
     __repr__ = short_repr
@@ -62,11 +69,12 @@ class Belief:
     samples: np.ndarray | None = None
     weights: np.ndarray | None = None
     t: float = 0.0
+    assimilated: bool = False
 
     # ------------------------------------------------------------------ constructors
     @classmethod
     def from_samples(cls, samples: np.ndarray, weights: np.ndarray | None = None, *,
-                     t: float = 0.0) -> Belief:
+                     t: float = 0.0, assimilated: bool = False) -> Belief:
         """Belief from (weighted) samples of the relative state.
 
         Parameters
@@ -77,6 +85,8 @@ class Belief:
             Non-negative weights (normalised here).
         t : float
             [s].
+        assimilated : bool
+            The samples already hold the measurements at ``t`` (:attr:`assimilated`).
 
         Raises
         ------
@@ -106,11 +116,12 @@ class Belief:
         cov = (d * w[:, None]).T @ d
         cov = 0.5 * (cov + cov.T)
         _check_cov(cov)
-        return cls(mean=mean, cov=cov, samples=X, weights=w, t=float(t))
+        return cls(mean=mean, cov=cov, samples=X, weights=w, t=float(t),
+                   assimilated=bool(assimilated))
 
     @classmethod
     def from_particles(cls, particles: np.ndarray, weights: np.ndarray, *, t: float = 0.0,
-                       max_samples: int = 2000) -> Belief:
+                       max_samples: int = 2000, assimilated: bool = False) -> Belief:
         """Belief from a particle filter's weighted particles, at most ``max_samples`` kept.
 
         With more particles than ``max_samples``, a deterministic systematic subsample
@@ -127,6 +138,8 @@ class Belief:
             [s].
         max_samples : int
             Samples kept, >= 5.
+        assimilated : bool
+            The filter has updated on the measurements at ``t`` (:attr:`assimilated`).
 
         Raises
         ------
@@ -140,27 +153,31 @@ class Belief:
         X = np.asarray(particles, dtype=float)
         w = np.asarray(weights, dtype=float).reshape(-1)
         if w.size <= max_samples:
-            return cls.from_samples(X, w, t=t)
+            return cls.from_samples(X, w, t=t, assimilated=assimilated)
         if np.any(~np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
             raise PlanningError("belief: weights must be finite, >= 0, with mass")
         c = np.cumsum(w / w.sum())
         c[-1] = 1.0
         idx = np.searchsorted(c, (np.arange(max_samples) + 0.5) / max_samples)
-        return cls.from_samples(X[idx], t=t)
+        return cls.from_samples(X[idx], t=t, assimilated=assimilated)
 
     @classmethod
-    def from_moments(cls, mean: np.ndarray, cov: np.ndarray, *, t: float = 0.0) -> Belief:
-        """Belief from the mean (4,) and covariance (4, 4) of the relative state."""
+    def from_moments(cls, mean: np.ndarray, cov: np.ndarray, *, t: float = 0.0,
+                     assimilated: bool = False) -> Belief:
+        """Belief from the mean (4,) [m, m, m/s, m/s] and covariance (4, 4) of the relative
+        state at ``t`` [s] (``assimilated``: it holds the measurements at t,
+        :attr:`assimilated`)."""
         m = np.asarray(mean, dtype=float).reshape(4)
         C = np.asarray(cov, dtype=float).reshape(4, 4)
         C = 0.5 * (C + C.T)
         _check_cov(C)
-        return cls(mean=m, cov=C, t=float(t))
+        return cls(mean=m, cov=C, t=float(t), assimilated=bool(assimilated))
 
     @classmethod
     def from_prior(cls, scenario: Scenario, *, n: int | None = None,
                    rng: np.random.Generator | None = None) -> Belief:
-        """Belief of the relative initial state from ``scenario.prior`` (at ``scenario.time.t0``).
+        """Belief of the relative initial state from ``scenario.prior`` (at ``scenario.time.t0``;
+        not :attr:`assimilated`: a sensor measuring at t0 counts at plan step 0).
 
         Parameters
         ----------

@@ -21,14 +21,13 @@ re-solves for a new belief (receding horizon) with a warm start.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.display import short_repr
+from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.errors import ArgumentError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
@@ -36,15 +35,18 @@ from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
+from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
+    ObjectiveEvaluator,
     ParamLayout,
     PlanContext,
+    belief_bearing_information,
     closed_form_graph,
     make_objective,
     ping_sigma,
-    plan_bearing_information,
+    until_end_weights,
 )
 
 if TYPE_CHECKING:
@@ -54,63 +56,6 @@ __all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "plan_hea
            "safe_sinc"]
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class HeadingPlan:
-    """An optimal heading plan over the planning horizon.
-
-    Attributes
-    ----------
-    times : ndarray, shape (n + 1,)
-        Control nodes [s] (absolute).
-    heading : ndarray, shape (n + 1,)
-        Heading at the nodes [rad] (unwrapped, clockwise from North).
-    turn_rate : ndarray, shape (n,)
-        Mean turn rate per control interval [rad/s] (the control for "direct").
-    speed : ndarray, shape (n,)
-        Speed per control interval [m/s].
-    switch_times : ndarray, shape (m,)
-        Instants where the turn rate changes [s] (exact for "bang-bang", control nodes where
-        it changes by more than 1 % of ω_max for "direct").
-    observer : ObserverTrack
-        The planned track on the scenario's dt grid over the horizon.
-    objective : float
-        Objective value (minimised; ``logdet`` reports −log det FIM).
-    range_bound : ndarray, shape (K + 1,)
-        Closed-form PCRB range bound along the plan [m].
-    transcription : str
-    status : str
-        IPOPT return status of the best start.
-    success : bool
-    iterations : int
-        IPOPT iterations summed over the starts.
-    seconds : float
-        Wall time of the solve [s].
-    message : str
-    solver : str
-        What produced the plan: ``"ipopt"``, or ``"rti-qrqp"`` / ``"rti-osqp"`` for a
-        real-time iteration step (:mod:`tmaplan.planning.rti`).
-    """
-
-    __repr__ = short_repr
-
-    times: np.ndarray
-    heading: np.ndarray
-    turn_rate: np.ndarray
-    speed: np.ndarray
-    switch_times: np.ndarray
-    observer: ObserverTrack
-    objective: float
-    range_bound: np.ndarray
-    transcription: str
-    status: str
-    success: bool
-    iterations: int
-    seconds: float
-    message: str = ""
-    solver: str = "ipopt"
-    warm: dict[str, Any] | None = dataclasses.field(default=None, repr=False, compare=False)
 
 
 class HeadingPlanner:
@@ -427,7 +372,8 @@ class HeadingPlanner:
         warm_start : HeadingPlan, optional
             Previous plan: shifted to ``belief.t`` and used as the only initial guess.
         ping_steps : sequence of int
-            Plan steps with a range ping (enter the closed-form objectives).
+            Plan steps with a range ping (enter the closed-form objectives), each in [0, K]
+            (K = :attr:`K`, step 0 at ``belief.t``); others raise :class:`ArgumentError`.
         raise_on_failure : bool
             If False, a failed solve is returned with ``success=False`` instead of raising.
         starts : sequence of ndarray, optional
@@ -523,19 +469,22 @@ class HeadingPlanner:
     def _parameters(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
         """The objective's parameter vector (:class:`ParamLayout`) for a belief and pings."""
         ping = np.zeros(self.K + 1)
-        st = np.asarray(list(ping_steps), int)
+        st = check_ping_steps(ping_steps, self.K, source=self.scenario.name)  # plan steps
         if st.size:
             if self._ping_scale == 0.0:
                 raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
                                     "has no range sensor")
-            ping[st[(st >= 0) & (st <= self.K)]] = 1.0
-        bearing = plan_bearing_information(self.scenario, belief.t, self.K)
-        weight = None
-        if self.until_end:
-            tg = self.scenario.time
-            end = tg.t0 + tg.dt * tg.n_steps
-            weight = (belief.t + self.times <= end + 1e-6 * self.dt).astype(float)
+            ping[st] = 1.0
+        bearing = belief_bearing_information(self.scenario, belief, self.K)
+        weight = until_end_weights(self.scenario, belief.t, self.K) if self.until_end else None
         return self.layout.vector(belief, bearing, ping, weight)
+
+    def evaluator(self, belief: Belief) -> ObjectiveEvaluator:
+        """The :class:`ObjectiveEvaluator` of this planner's objective for ``belief``: same
+        horizon K, turn-rate normaliser ``u_max`` [rad/s], belief samples and step weights,
+        so its value of a plan's ``observer`` track is the plan's ``objective``."""
+        return ObjectiveEvaluator(self.scenario, self.objective, n_steps=self.K, belief=belief,
+                                  turn_rate_max=self.u_max, until_end=self.until_end)
 
     def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
         if self.keep_out <= 0:

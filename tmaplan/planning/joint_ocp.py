@@ -77,7 +77,7 @@ from tmaplan.planning._ping_search import _max_pings, _round, _spacing_ok, ping_
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import _PAIRS
-from tmaplan.planning.objectives import plan_bearing_information
+from tmaplan.planning.objectives import belief_bearing_information
 from tmaplan.planning.pings import PingEvaluator, PingSchedule, schedule_pings
 
 if TYPE_CHECKING:
@@ -389,7 +389,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     heading0 = float(course_speed(initial_velocity(obs))[0])
     speed0 = planner.speed0
     planner._precheck(bel, heading0, speed0)
-    pvec = planner.layout.vector(bel, plan_bearing_information(scenario, bel.t, planner.K))
+    pvec = planner.layout.vector(bel, belief_bearing_information(scenario, bel, planner.K))
     lbh, ubh, lbgh, ubgh = planner._bounds(heading0)
     bounds = {"lbx": np.concatenate([lbh, np.zeros(cand.size)]),
               "ubx": np.concatenate([ubh, np.ones(cand.size)]),

@@ -61,6 +61,7 @@ __all__ = [
     "ParamLayout",
     "PingObjectiveName",
     "PlanContext",
+    "belief_bearing_information",
     "expected_time_to_accuracy",
     "logdet",
     "make_objective",
@@ -71,6 +72,7 @@ __all__ = [
     "relative_range_crlb",
     "time_to_accuracy",
     "turn_penalty",
+    "until_end_weights",
 ]
 
 #: Names accepted by :func:`make_objective` (heading objectives; the scenario's
@@ -91,11 +93,35 @@ PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
 DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
 
 
-def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
-    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²], 0 at step 0 (the
-    belief at ``t_start`` holds it): :func:`tmaplan.bounds.inputs.information_rates`."""
+def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int, *,
+                             include_start: bool = False) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``t_start`` [rad⁻²]
+    (:func:`tmaplan.bounds.inputs.information_rates`).
+
+    ``include_start``: count the bearings taken at ``t_start`` at step 0 (a belief that does
+    not hold them, e.g. the prior: ``not belief.assimilated``, :func:`belief_bearing_information`);
+    False: 0 at step 0 (the belief at ``t_start`` already holds them).
+    """
     return information_rates(scenario, t_start=t_start, n_steps=n_steps,
-                             include_start=False)[0]
+                             include_start=include_start)[0]
+
+
+def belief_bearing_information(scenario: Scenario, belief: Belief, n_steps: int) -> np.ndarray:
+    """Bearing information per plan step k = 0..K from ``belief.t`` [rad⁻²], step 0 counted
+    unless the belief already holds it (:attr:`tmaplan.planning.Belief.assimilated`): the
+    bearing vector of every planner (heading, ping, joint) and of :class:`ObjectiveEvaluator`."""
+    return plan_bearing_information(scenario, belief.t, n_steps,
+                                    include_start=not belief.assimilated)
+
+
+def until_end_weights(scenario: Scenario, t_start: float, n_steps: int) -> np.ndarray:
+    """Step weights (K+1,) of a plan of K = ``n_steps`` steps from ``t_start`` [s]: 1 up to
+    the scenario's end, 0 after (:class:`ParamLayout` ``weight``; ``until_end`` of
+    :class:`tmaplan.planning.HeadingPlanner` and :class:`ObjectiveEvaluator`)."""
+    tg = scenario.time
+    dt = float(tg.dt)
+    end = tg.t0 + tg.dt * tg.n_steps
+    return (t_start + dt * np.arange(n_steps + 1) <= end + 1e-6 * dt).astype(float)
 
 
 # --------------------------------------------------------------------------------------------
@@ -320,7 +346,10 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
 class ObjectiveEvaluator:
     """Numeric value of an objective (and the bounds) for given observer tracks.
 
-    Compiles the objective's casadi expression once for a horizon of ``n_steps`` steps.
+    Compiles the objective's casadi expression once for a horizon of ``n_steps`` steps. To
+    score tracks by the objective a :class:`tmaplan.planning.HeadingPlanner` optimised (its
+    horizon, turn-rate normaliser, belief samples and step weights), build it with
+    :meth:`tmaplan.planning.HeadingPlanner.evaluator`.
 
     Parameters
     ----------
@@ -330,16 +359,29 @@ class ObjectiveEvaluator:
         Default the scenario's.
     belief : Belief, optional
         Default :meth:`Belief.from_prior`.
+    turn_rate_max : float, optional
+        Normaliser of the turn penalties [rad/s] (a planner's ``turn_rate_max``); default
+        the scenario's ``observer.turn_rate_max`` (1 rad/s if it has none).
+    samples : int
+        Belief samples of a named objective (:func:`make_objective`; a planner's
+        ``logdet_samples``); ignored for an :class:`Objective`.
+    until_end : bool
+        Count only the steps up to the scenario's end (a planner's ``until_end``,
+        :func:`until_end_weights`).
     """
 
     def __init__(self, scenario: Scenario, objective: str | Objective = DEFAULT_OBJECTIVE, *,
-                 n_steps: int | None = None, belief: Belief | None = None) -> None:
+                 n_steps: int | None = None, belief: Belief | None = None,
+                 turn_rate_max: float | None = None, samples: int = 1,
+                 until_end: bool = False) -> None:
         import casadi as ca
 
         from tmaplan.planning.belief import Belief
 
+        if turn_rate_max is not None and not (np.isfinite(turn_rate_max) and turn_rate_max >= 0):
+            raise ArgumentError("turn_rate_max", "a finite value >= 0 rad/s", turn_rate_max)
         self.scenario = scenario
-        self.objective = make_objective(objective)
+        self.objective = make_objective(objective, samples=samples)
         self.belief = belief if belief is not None else Belief.from_prior(scenario)
         K = scenario.time.n_steps if n_steps is None else int(n_steps)
         self.n_steps = K
@@ -351,7 +393,8 @@ class ObjectiveEvaluator:
         ur = ca.MX.sym("turn_rate", K, 1)
         p = ca.MX.sym("p", self.layout.size)
         sig = ping_sigma(scenario)
-        umax = scenario.observer.turn_rate_max or 1.0
+        umax = (scenario.observer.turn_rate_max or 1.0) if turn_rate_max is None else \
+            max(float(turn_rate_max), 1e-9)  # as HeadingPlanner's normaliser
         ctx = PlanContext(dt=dt, times=dt * np.arange(K + 1), A=A, Q=Q, v_obs=v, disp=dsp,
                           turn_rate=ur, p=p, layout=self.layout,
                           ping_scale=0.0 if sig is None else 1.0 / sig**2,
@@ -359,8 +402,9 @@ class ObjectiveEvaluator:
         val = self.objective.expression(ctx)
         rb = closed_form_graph(ctx)["range_bound"]
         self._fn = ca.Function("plan_objective", [v, dsp, ur, p], [val, rb])
-        self._bearing = plan_bearing_information(scenario, self.belief.t, K)
-        self._p0 = self.layout.vector(self.belief, self._bearing)
+        self._bearing = belief_bearing_information(scenario, self.belief, K)
+        weight = until_end_weights(scenario, self.belief.t, K) if until_end else None
+        self._p0 = self.layout.vector(self.belief, self._bearing, None, weight)
 
     def parameters(self, ping: np.ndarray | None = None) -> np.ndarray:
         """Parameter vector with ping weights (K+1,) (default none)."""

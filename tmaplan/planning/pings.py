@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
+from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.models.observer import ObserverTrack, observer_track
@@ -50,8 +51,8 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import (
     PING_OBJECTIVES,
     PingObjectiveName,
+    belief_bearing_information,
     ping_sigma,
-    plan_bearing_information,
 )
 
 if TYPE_CHECKING:
@@ -157,7 +158,7 @@ class PingEvaluator:
         K = observer.position.shape[0] - 1
         self.engine = ClosedFormEngine.from_belief(
             belief, observer, dt=float(scenario.time.dt), q=float(scenario.target.q),
-            bearing_info=plan_bearing_information(scenario, belief.t, K), ping_sigma=sig)
+            bearing_info=belief_bearing_information(scenario, belief, K), ping_sigma=sig)
         self.K, self.dt, self.times = K, float(scenario.time.dt), observer.times
         self._quantity = "position" if objective == "mean-position-bound" else "range"
         self._reduce = "terminal" if objective == "terminal-range-bound" else "mean"
@@ -175,10 +176,11 @@ class PingEvaluator:
             for s in range(0, U.shape[0], chunk)])
 
     def schedules(self, sets: Sequence[Sequence[int]]) -> np.ndarray:
-        """0/1 matrix (S, K+1) of ping-step sets."""
+        """0/1 matrix (S, K+1) of ping-step sets (each step in [0, K], else
+        :class:`ArgumentError` naming ``ping_steps``)."""
         U = np.zeros((len(sets), self.K + 1))
         for i, st in enumerate(sets):
-            U[i, list(st)] = 1.0
+            U[i, check_ping_steps(st, self.K)] = 1.0
         return U
 
     def value(self, steps: Sequence[int]) -> float:

@@ -13,9 +13,13 @@ predictive control):
    :class:`tmaplan.planning.objectives.Objective` the planner uses);
 3. the quadratic programme ``min ½ dᵀ H d + ∇fᵀ d`` subject to the linearised constraints and
    the bounds, solved by casadi's ``qrqp`` (default) or ``osqp``;
-4. the turn rates ``u₀ + α d_u`` re-simulated (α = 1, ½, ¼), accepted when the keep-out
-   constraint holds (or its violation decreases) and the objective does not increase;
-   otherwise a full warm-started IPOPT solve is the fallback.
+4. the turn rates ``u₀ + α d_u`` re-simulated (α = 1, ½, ¼), accepted when the objective
+   does not increase and the keep-out constraint holds (to ``constraint_tol``) or its
+   violation decreases; a re-plan is returned only if its last accepted step satisfies the
+   constraint: a step from a start inside the keep-out range (the estimate moved close) that
+   only reduces the violation may be followed by more steps (``steps``), but is never
+   returned as a plan. Otherwise (no step accepted, or the constraint still violated) a full
+   warm-started IPOPT solve is the fallback, whose failure raises.
 
 ``H`` is the Hessian of the Lagrangian at the offline plan from the prior (exact, by casadi's
 automatic differentiation, forward over reverse column by column, once per campaign:
@@ -184,7 +188,8 @@ class RealTimeIteration:
         Constraint violation treated as satisfied [dimensionless: (range/keep-out)² − 1].
     steps : int
         SQP steps per re-plan (1: the real-time iteration; more steps stop at the first
-        rejected one, the fallback only applies when the first is rejected).
+        rejected one; the fallback applies when the first is rejected or the last accepted
+        one leaves the constraints violated).
     rescale : bool
         Divide the objective by its value at the start of each re-plan (the model Hessian was
         computed for the objective divided by its value at the reference plan), so that the
@@ -293,8 +298,8 @@ class RealTimeIteration:
         ping_steps : sequence of int
             Plan steps with a range ping.
         fallback : bool
-            If False, a rejected step raises :class:`tmaplan.errors.SolverError` instead of
-            falling back to IPOPT (used by tests).
+            If False, a rejected step (or one that leaves the keep-out constraint violated)
+            raises :class:`tmaplan.errors.SolverError` instead of falling back to IPOPT.
 
         Returns
         -------
@@ -302,6 +307,13 @@ class RealTimeIteration:
             ``solver`` is ``"rti-daqp"`` / ``"rti-qrqp"`` / ``"rti-osqp"`` for an accepted
             step (``warm["start_objective"]``: the objective at the shifted start),
             ``"ipopt"`` for the fallback.
+
+        Raises
+        ------
+        PlanningError
+            The estimate inside the keep-out range; the IPOPT fallback infeasible.
+        SolverError
+            The fallback did not converge, or (``fallback=False``) the step was rejected.
         """
         from tmaplan.errors import SolverError
 
@@ -329,6 +341,14 @@ class RealTimeIteration:
             if more is None:
                 break
             accepted = more
+        if accepted is not None and accepted[2] is not None:
+            # a step from an infeasible start may only have reduced the violation: that
+            # is no plan (the stationary step has no outputs: its start is feasible)
+            v = self._violation(np.asarray(accepted[2][-1]).reshape(-1), lbg, ubg)
+            if v > self.constraint_tol:
+                accepted, reason = None, (f"constraints (keep-out) still violated after the step "
+                                          f"({v:.2e} > constraint_tol "
+                                          f"{self.constraint_tol:g})")
         if accepted is not None:
             x1, status, evaluated = accepted
             warm = {"x": x1, "lam_x": np.zeros_like(x1), "lam_g": np.zeros(lbg.size),

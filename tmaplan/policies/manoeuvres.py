@@ -478,8 +478,11 @@ class _RecedingController:
         from tmaplan.planning import Belief
 
         t0 = time.perf_counter()
+        # the filter's posterior at step k has assimilated the measurements at k (it predicts
+        # and updates to k before the controller acts at k; none is taken at step 0): the plan
+        # counts the sensors from the next step
         b = Belief.from_particles(belief.particles, belief.weights, t=t,
-                                  max_samples=self.policy.max_particles)
+                                  max_samples=self.policy.max_particles, assimilated=True)
         entry: dict[str, Any] = {"t": t}
         try:
             if self.rti is not None and len(self.log) in self.policy.multi_start:

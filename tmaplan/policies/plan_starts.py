@@ -52,6 +52,7 @@ def start_programs(scenario: Scenario, planner: HeadingPlanner, *, n_turns: int 
     planner's built-in guesses (``guess:i``).
     """
     from tmaplan.planning.baselines import evaluate_baselines, straight_track
+    from tmaplan.planning.belief import Belief
     from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
     out: dict[str, np.ndarray] = {"straight": turn_program(straight_track(scenario), planner)}
@@ -62,7 +63,9 @@ def start_programs(scenario: Scenario, planner: HeadingPlanner, *, n_turns: int 
             continue
         out[tactic.name] = u
         out[f"{tactic.name}:mirrored"] = -u
-    base = evaluate_baselines(scenario, planner.objective, n_steps=planner.K)
+    # ranked by the planner's own objective (its turn-rate normaliser, samples, step weights)
+    base = evaluate_baselines(scenario, planner.objective,
+                              evaluator=planner.evaluator(Belief.from_prior(scenario)))
     for i, b in enumerate(base["single-turn"][: max(int(n_turns), 0)]):
         out[f"single-turn:{i}"] = turn_program(b.track, planner)
     j = np.arange(planner.n)

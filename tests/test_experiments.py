@@ -270,7 +270,6 @@ def test_stored_runs_of_another_policy_under_the_same_name_are_not_reused(scenar
     policy again, or a plan differing only in its solve time, reuses them."""
     from tmaplan.evaluation.records import policy_fingerprint
     from tmaplan.policies import Planned
-    from tmaplan.policies.manoeuvres import offline_plan
 
     spec = _spec(scenario, runs=1)
 
@@ -293,10 +292,15 @@ def test_stored_runs_of_another_policy_under_the_same_name_are_not_reused(scenar
     again = run_campaign(spec, out_dir=tmp_path, policies=pols(60.0))
     assert again.loaded_runs == (0,) and again.computed_runs == ()
     assert spec.key(pols(60.0)) != spec.key() != spec.key(pols(-120.0))
-    # timings are not what a plan flies; its headings are
-    plan = offline_plan(scenario, "mean-range-bound")
+    # timings are not what a plan flies; its turn rates are (a stand-in for a HeadingPlan)
+    @dataclasses.dataclass(frozen=True)
+    class Plan:
+        turn_rate: np.ndarray
+        seconds: float
+
+    plan = Plan(turn_rate=np.linspace(-0.01, 0.01, 31), seconds=1.5)
     p = Planned(objective="mean-range-bound", plan=plan)
-    slower = dataclasses.replace(plan, seconds=plan.seconds + 10.0)
+    slower = dataclasses.replace(plan, seconds=11.5)
     assert policy_fingerprint(p) == policy_fingerprint(dataclasses.replace(p, plan=slower))
     moved = dataclasses.replace(plan, turn_rate=plan.turn_rate + 1e-12)
     assert policy_fingerprint(p) != policy_fingerprint(dataclasses.replace(p, plan=moved))

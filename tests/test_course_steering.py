@@ -101,3 +101,25 @@ def test_good_manoeuvre_parameters_pass(scenario):
     SingleTurn(angle=-np.pi, time=t0).controller(scenario)
     SingleTurn(angle=np.pi, time=t0 + H - 1.0).nominal_track(scenario)
     Zigzag(leg_duration=300.0, angle=-np.pi / 4).nominal_track(scenario)
+
+
+@pytest.mark.parametrize(("policy", "field"), [
+    ("AdaptivePings(threshold=float('nan'))", "adaptive.threshold"),
+    ("AdaptivePings(threshold=0.0)", "adaptive.threshold"),
+    ("AdaptivePings(threshold='0.1')", "adaptive.threshold"),
+    ("AdaptivePings(min_spacing=-60.0)", "adaptive.min_spacing"),
+    ("AdaptivePings(min_spacing=float('nan'))", "adaptive.min_spacing"),
+    ("AdaptivePings(budget=-1)", "pings.budget"),
+    ("UniformPings(budget=2.5)", "pings.budget"),
+    ("UniformPings(budget=True)", "pings.budget"),
+])
+def test_bad_ping_parameters_give_a_one_line_error(scenario, policy, field):
+    """A NaN threshold never pinged, a NaN spacing never waited, a negative or fractional
+    budget was truncated: each is refused, naming the field; good values pass."""
+    from tmaplan.policies import AdaptivePings, UniformPings
+
+    pol = eval(policy, {"AdaptivePings": AdaptivePings, "UniformPings": UniformPings})
+    with pytest.raises(ArgumentError, match=field.replace(".", r"\.")):
+        pol.controller(scenario)
+    AdaptivePings(threshold=0.2, min_spacing=0.0, budget=0).controller(scenario)
+    UniformPings(budget=np.int64(3)).controller(scenario)

@@ -211,7 +211,7 @@ class _CourseKeeper:
 def _real(value: object) -> float:
     """``value`` as a float; NaN if it is not a real number (a bool, a string, None), so that
     the callers' finiteness checks refuse it."""
-    if isinstance(value, bool):
+    if isinstance(value, bool | str | bytes):  # float("0.1") would accept a string
         return math.nan
     try:
         return float(value)  # type: ignore[arg-type]

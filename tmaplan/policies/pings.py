@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.policies._base import Action, BeliefView, Controller
+from tmaplan.errors import ArgumentError
+from tmaplan.policies._base import Action, BeliefView, Controller, _real
 
 if TYPE_CHECKING:
     from tmaplan.planning.objectives import PingObjectiveName
@@ -109,7 +110,22 @@ class AdaptivePings:
     name: str = "adaptive"
 
     def controller(self, scenario: Scenario) -> Controller:
-        """Controller with its own ping count and last ping time."""
+        """Controller with its own ping count and last ping time.
+
+        Raises
+        ------
+        ArgumentError
+            A threshold that is not a positive number, or a minimum spacing that is not a
+            time >= 0 (a NaN threshold would never ping, a NaN spacing always).
+        """
+        threshold = _real(self.threshold)
+        if not (np.isfinite(threshold) and threshold > 0):
+            raise ArgumentError("adaptive.threshold", "a relative range std > 0", self.threshold)
+        if self.min_spacing is not None:
+            ms = _real(self.min_spacing)
+            if not (np.isfinite(ms) and ms >= 0):
+                raise ArgumentError("adaptive.min_spacing", "a time >= 0 s (None: the "
+                                    "scenario's)", self.min_spacing)
         pl = scenario.planning
         spacing = self.min_spacing if self.min_spacing is not None else (
             pl.ping_min_spacing if pl else 0.0)
@@ -138,7 +154,11 @@ class _Adaptive:
 
 
 def _budget(scenario: Scenario, budget: int | None) -> int:
+    """The policy's ping budget, else the scenario's (0 without planning settings)."""
     if budget is not None:
+        if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 0:
+            raise ArgumentError("pings.budget", "an integer >= 0 (None: the scenario's)",
+                                budget)
         return int(budget)
     pl = scenario.planning
     return int(pl.ping_budget) if pl is not None else 0

@@ -187,3 +187,55 @@ def test_chi2_thresholds():
     # the window sums χ²₁ truncated at the outlier cut: a little below the χ²₈ quantile
     assert 0.85 * stats.chi2.isf(1e-3, 8) < cfg.bearing_threshold < stats.chi2.isf(1e-3, 8)
     assert cfg.range_threshold == pytest.approx(10.828, abs=1e-3)
+
+
+@pytest.mark.parametrize("ambiguity", ["none", "pi"])
+def test_clutter_mixture_is_the_configured_one_for_both_bearing_kinds(ambiguity):
+    """With ``bearing_clutter`` ε the weight of a particle is (1 − ε) p(z | x) + ε/L, L the
+    circle the bearing lives on (2π, or π for a bearing known modulo π): the ratio of the
+    weights of a particle on the bearing and one 0.5 rad off is that of an independent
+    evaluation of the mixture (the π-ambiguous one was 40 times too confident at σ = 1°)."""
+    from tmaplan.models.sensors import bearing_loglik
+
+    eps, n = 0.1, 1000
+    X = np.tile([0.0, 5000.0, 0.0, 0.0], (n, 1))
+    X[0, :2] = 5000.0 * np.array([math.sin(0.5), math.cos(0.5)])
+    pf = ParticleFilter(PFConfig(n_particles=n, dt=15.0, q=1e-5, bearing_clutter=eps))
+    z = Measurement(kind="bearing", value=0.0, sigma=SIGMA, ambiguity=ambiguity)
+    st = pf.update(pf.from_particles(X), [z], np.random.default_rng(0))
+    assert not st.resampled
+    period = math.pi if ambiguity == "pi" else 2 * math.pi
+    p = (1 - eps) * np.exp(bearing_loglik(0.0, X[:2], SIGMA, ambiguity)) + eps / period
+    assert st.log_weights[0] - st.log_weights[1] == pytest.approx(math.log(p[0] / p[1]),
+                                                                  rel=1e-9)
+
+
+def test_innovation_of_a_bearing_known_modulo_pi():
+    """A π-ambiguous bearing that is exactly right (−10° for a contact at 170°) has a zero
+    innovation, for the cloud and for the linearised moments (it was split between ±180°)."""
+    from types import SimpleNamespace
+
+    b = math.radians(170.0)
+    x = np.array([5000.0 * math.sin(b), 5000.0 * math.cos(b), 0.0, 0.0])
+    X = x + np.random.default_rng(1).normal(0.0, 10.0, (1000, 4))
+    pf = ParticleFilter(PFConfig(n_particles=1000, dt=60.0, q=1e-6))
+    m = Measurement(kind="bearing", value=b - math.pi, sigma=SIGMA, ambiguity="pi")
+    for state in (pf.from_particles(X), SimpleNamespace(mean=x, cov=np.diag([100.0] * 4))):
+        nu, S = innovation(state, m)
+        assert abs(nu) < math.radians(0.1) and math.sqrt(S) < 2 * SIGMA
+    # read as an unambiguous bearing it is 180° off: residuals split between ±180°
+    full = Measurement(kind="bearing", value=b - math.pi, sigma=SIGMA)
+    assert math.sqrt(innovation(pf.from_particles(X), full)[1]) > math.radians(90.0)
+
+
+@pytest.mark.parametrize("sigma", [0.0, -0.01, float("nan"), float("inf")])
+def test_a_measurement_without_a_positive_std_is_refused(sigma):
+    """σ = 0 or NaN reset the weights to uniform (the measurement thrown away, a healthy ESS
+    reported), a negative one lost its sign: each is an ArgumentError naming the field."""
+    pf = ParticleFilter(PFConfig(n_particles=100, dt=15.0, q=1e-5))
+    st = pf.from_gaussian(X_TRUE, np.diag([200.0**2] * 2 + [1.0, 1.0]),
+                          np.random.default_rng(2))
+    for kind in ("bearing", "range"):
+        m = Measurement(kind=kind, value=1.0, sigma=sigma)
+        with pytest.raises(ArgumentError, match=r"measurement\.sigma"):
+            pf.update(st, [m], np.random.default_rng(3))

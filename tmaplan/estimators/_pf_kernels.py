@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 __all__ = ["systematic_resample"]
 
 _TWO_PI = 2.0 * np.pi
+_LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 # Layout: the cloud is stored column-major, ``particles`` (N, 4) being the transpose of a
 # C-contiguous (4, N) array, so every per-component operation (x, y, vx, vy) runs on a
 # contiguous vector and no thin (N, 4) × (4, 4) BLAS product is needed (multi-threaded
@@ -142,8 +143,13 @@ def _dynamics(dt: float, q: float) -> tuple[float, float, float]:
 
 
 def _bearing_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
+    """Bearing log-likelihood ``−d²/(2σ²)`` of the wrapped residual d, without the constant
+    ``−log(√(2π) σ)`` (the π-ambiguous one the three-term wrapped Gaussian of
+    :func:`tmaplan.models.sensors.bearing_loglik` on the half circle, with the same constant
+    removed): what :func:`_clutter` expects."""
     if m.ambiguity == "pi":
-        return bearing_loglik(m.value, X, float(m.sigma), "pi")
+        sigma = float(m.sigma)
+        return bearing_loglik(m.value, X, sigma, "pi") + (_LOG_SQRT_2PI + np.log(sigma))
     A = _rows(X)
     d = np.arctan2(A[0], A[1])  # one atan2, contiguous rows
     np.subtract(float(m.value), d, out=d)
@@ -158,11 +164,25 @@ def _bearing_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
     return d
 
 
-def _clutter(ll: np.ndarray, sigma: float, eps: float) -> np.ndarray:
-    """Clutter-mixture bearing log-likelihood from the Gaussian one ``ll = −d²/(2σ²)``:
-    ``log((1 − ε) N(d; 0, σ²) + ε/(2π))`` up to the constant ``log((1 − ε)/(√(2π) σ))``."""
-    floor = np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * _TWO_PI))
+def _clutter(ll: np.ndarray, sigma: float, eps: float, period: float = _TWO_PI) -> np.ndarray:
+    """Clutter-mixture bearing log-likelihood from the Gaussian one ``ll = −d²/(2σ²)``
+    (:func:`_bearing_ll`): ``log((1 − ε) N(d; 0, σ²) + ε/period)`` up to the constant
+    ``log((1 − ε)/(√(2π) σ))``; ``period`` 2π, or π for a bearing known modulo π (clutter
+    uniform on the half circle its density lives on)."""
+    floor = np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * period))
     return np.logaddexp(ll, floor)
+
+
+def _measurement_ll(X: np.ndarray, m: Measurement, clutter: float = 0.0) -> np.ndarray:
+    """Log-likelihood (N,) of a bearing (with the clutter mixture when ``clutter`` > 0) or
+    range measurement for the cloud X (N, 4), up to a constant: the one likelihood the
+    filter's update and its Metropolis–Hastings moves share."""
+    if m.kind == "range":
+        return _range_ll(X, m)
+    c = _bearing_ll(X, m)
+    if clutter > 0.0:
+        c = _clutter(c, float(m.sigma), clutter, np.pi if m.ambiguity == "pi" else _TWO_PI)
+    return c
 
 
 def _gated(state: Any, m: Measurement, gate: float | None) -> bool:

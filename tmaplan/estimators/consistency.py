@@ -75,7 +75,7 @@ from scipy import optimize, stats
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
 from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
-from tmaplan.geometry import wrap_angle
+from tmaplan.geometry import wrap_angle, wrap_half_angle
 
 if TYPE_CHECKING:
     from tmaplan.policies.alarms import AlarmResponse
@@ -239,7 +239,8 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
         Predicted state; a particle state (``particles``, ``weights``) gives the moments over
         the cloud, any other its mean and covariance by linearisation.
     m : Measurement
-        Bearing [rad] (innovation wrapped) or range [m].
+        Bearing [rad] (innovation wrapped to (−π, π], or modulo π for a π-ambiguous one) or
+        range [m].
 
     Returns
     -------
@@ -247,10 +248,12 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
         [rad] / [rad²] or [m] / [m²].
     """
     sigma2 = float(m.sigma) ** 2
+    # a bearing known modulo π (a linear array) is compared modulo π
+    wrap = wrap_half_angle if m.kind == "bearing" and m.ambiguity == "pi" else wrap_angle
     if hasattr(state, "particles"):
         X, w = state.particles, state.weights
         if m.kind == "bearing":
-            d = wrap_angle(float(m.value) - np.arctan2(X[:, 0], X[:, 1]))
+            d = wrap(float(m.value) - np.arctan2(X[:, 0], X[:, 1]))
         else:
             d = float(m.value) - np.hypot(X[:, 0], X[:, 1])
         nu = float(w @ d)
@@ -259,7 +262,7 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
     r2 = float(x[0] ** 2 + x[1] ** 2)
     if m.kind == "bearing":
         H = np.array([x[1], -x[0], 0.0, 0.0]) / r2
-        nu = float(wrap_angle(float(m.value) - math.atan2(x[0], x[1])))
+        nu = float(wrap(float(m.value) - math.atan2(x[0], x[1])))
     else:
         H = np.array([x[0], x[1], 0.0, 0.0]) / math.sqrt(r2)
         nu = float(m.value) - math.sqrt(r2)

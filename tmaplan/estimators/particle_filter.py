@@ -55,14 +55,12 @@ from scipy.special import logsumexp
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators._pf_kernels import (
-    _bearing_ll,
-    _clutter,
     _dynamics,
     _ess,
     _frequency_update,
     _gated,
+    _measurement_ll,
     _normals_f32,
-    _range_ll,
     _rows,
     _safe_cholesky,
     _systematic,
@@ -367,12 +365,11 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
     ll: np.ndarray | None = None
     fm, fv = state.freq_mean, state.freq_var
     for m in measurements:
-        if m.kind == "bearing":
-            c = _bearing_ll(X, m)
-            if config.bearing_clutter > 0.0:
-                c = _clutter(c, float(m.sigma), config.bearing_clutter)
-        elif m.kind == "range":
-            c = _range_ll(X, m)
+        if not (np.isfinite(m.sigma) and m.sigma > 0):  # σ = 0 or NaN reset the weights
+            raise ArgumentError("measurement.sigma", f"a finite std > 0 of the {m.kind} "
+                                "measurement", m.sigma)
+        if m.kind in ("bearing", "range"):
+            c = _measurement_ll(X, m, config.bearing_clutter)
         elif m.kind == "frequency":
             c, fm, fv = _frequency_update(X, m, fm, fv)
         else:
@@ -450,11 +447,13 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
                    ess=ess, resampled=resampled, degenerate=degenerate)
 
 
-def _loglik(A: np.ndarray, measurements: Sequence[Measurement]) -> np.ndarray:
-    """Σ log p(z | x) over bearing and range measurements, (4, N) cloud → (N,)."""
+def _loglik(A: np.ndarray, measurements: Sequence[Measurement], clutter: float = 0.0
+            ) -> np.ndarray:
+    """Σ log p(z | x) over bearing and range measurements, (4, N) cloud → (N,): the
+    likelihood of :func:`_assimilate` (the same clutter mixture), up to a constant."""
     ll = np.zeros(A.shape[1])
     for m in measurements:
-        ll += _bearing_ll(A.T, m) if m.kind == "bearing" else _range_ll(A.T, m)
+        ll += _measurement_ll(A.T, m, clutter)
     return ll
 
 
@@ -498,7 +497,7 @@ def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.nd
         prop = A.copy()
         prop[:2] += (s * l11) * Z[:2]
         prop[2:] += s * (l21 * Z[:2] + l22 * Z[2:])
-        lp_prop = _loglik(prop, measurements) + logf(prop)
+        lp_prop = _loglik(prop, measurements, config.bearing_clutter) + logf(prop)
         acc = np.log(rng.random(A.shape[1])) < lp_prop - lp
         A[:, acc] = prop[:, acc]
         lp[acc] = lp_prop[acc]

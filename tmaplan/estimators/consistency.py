@@ -239,8 +239,7 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
         Predicted state; a particle state (``particles``, ``weights``) gives the moments over
         the cloud, any other its mean and covariance by linearisation.
     m : Measurement
-        Bearing [rad] (innovation wrapped to (−π, π], or modulo π for a π-ambiguous one) or
-        range [m].
+        Bearing [rad] (innovation wrapped; modulo π if π-ambiguous) or range [m].
 
     Returns
     -------
@@ -248,7 +247,6 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
         [rad] / [rad²] or [m] / [m²].
     """
     sigma2 = float(m.sigma) ** 2
-    # a bearing known modulo π (a linear array) is compared modulo π
     wrap = wrap_half_angle if m.kind == "bearing" and m.ambiguity == "pi" else wrap_angle
     if hasattr(state, "particles"):
         X, w = state.particles, state.weights

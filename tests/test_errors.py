@@ -48,3 +48,13 @@ def test_scenario_field_is_a_scenario_error() -> None:
                    "target": {"position": [0.0, 1000.0], "velocity": [0.0, 0.0]},
                    "observer": {"position": [0.0, 0.0], "velocity": [1.0, 0.0]},
                    "sensors": [{"kind": "bearing", "sigma": -1.0}]})
+
+
+def test_is_integer_is_the_one_integer_test_of_user_input():
+    import numpy as np
+
+    from tmaplan.errors import is_integer
+
+    assert is_integer(3, 3) and is_integer(np.int64(7), 0)
+    for bad in (True, 3.0, "3", None, 2, np.float64(4.0)):
+        assert not is_integer(bad, 3)

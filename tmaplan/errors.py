@@ -18,6 +18,7 @@ __all__ = [
     "SolverError",
     "TmaplanError",
     "UnitError",
+    "is_integer",
 ]
 
 
@@ -99,3 +100,13 @@ class SolverError(PlanningError):
         self.status = status
         extra = f": {message}" if message else ""
         super().__init__(f"solver {solver} did not converge (status {status!r}){extra}")
+
+
+def is_integer(value: Any, minimum: int) -> bool:
+    """Whether ``value`` is an integer (Python or numpy, not a bool) >= ``minimum``: the one
+    test behind the integer checks of user input (the caller raises its own error, naming
+    the field)."""
+    import numpy as np
+
+    return bool(not isinstance(value, bool) and isinstance(value, (int, np.integer))
+                and value >= minimum)

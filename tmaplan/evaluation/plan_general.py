@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.evaluation.metrics import PairedDifference
 from tmaplan.evaluation.plan_check import plan_campaign, planned_differences, tune_single_turn
 from tmaplan.scenario import Scenario
@@ -214,9 +214,9 @@ def random_problems(base: Scenario, count: int, *, seed: int = 0,
     -------
     tuple of Scenario
     """
-    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+    if not is_integer(count, 1):
         raise ArgumentError("count", "an integer >= 1", count)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    if not is_integer(seed, 0):
         raise ArgumentError("seed", "an integer >= 0", seed)
     return tuple(random_problem(base, np.random.default_rng(
         np.random.SeedSequence(int(seed), spawn_key=(i,))), family=family,

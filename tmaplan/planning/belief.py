@@ -23,7 +23,7 @@ import numpy as np
 
 from tmaplan.bounds.inputs import lpc_prior_information
 from tmaplan.display import short_repr
-from tmaplan.errors import ObservabilityError, PlanningError
+from tmaplan.errors import ObservabilityError, PlanningError, is_integer
 from tmaplan.geometry import range_of
 
 if TYPE_CHECKING:
@@ -146,8 +146,7 @@ class Belief:
         PlanningError
             As :meth:`from_samples`, or ``max_samples`` below 5.
         """
-        if isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer)) \
-                or max_samples < 5:
+        if not is_integer(max_samples, 5):
             raise PlanningError(f"belief: max_samples must be an integer >= 5, received "
                                 f"{max_samples!r}")
         X = np.asarray(particles, dtype=float)

@@ -70,7 +70,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
+from tmaplan.errors import PlanningError, is_integer
 from tmaplan.geometry import course_speed
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning._ping_search import _max_pings, _round, _spacing_ok, ping_candidates
@@ -181,7 +181,7 @@ class JointOCPResult:
 
 
 def _check_int(name: str, value: Any, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+    if not is_integer(value, low):
         raise PlanningError(f"{name}: expected an integer >= {low}, received {value!r}")
     return int(value)
 

@@ -50,7 +50,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.planning.casadi_eval import NumpyFunction
 
 if TYPE_CHECKING:
@@ -154,7 +154,7 @@ def hessian_columns(grad: Any, x: np.ndarray, *args: Any, threads: int | None = 
     if threads is None:
         threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
             os.cpu_count() or 1)
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+    if not is_integer(threads, 1):
         raise ArgumentError("threads", "an integer >= 1", threads)
     g0 = grad(x, *args)
     fwd = grad.forward(1)

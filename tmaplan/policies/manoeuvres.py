@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, is_integer
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -427,7 +427,7 @@ def _check_receding(policy: Receding) -> None:
         if v is not None and not (math.isfinite(x := _real(v)) and x > 0):
             raise ArgumentError(f"receding.{field}", "> 0 s", v)
     n = policy.rti_steps
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+    if not is_integer(n, 1):
         raise ArgumentError("receding.rti_steps", "an integer >= 1", n)
 
 
@@ -443,11 +443,10 @@ class _RecedingController:
         self.interval = float(interval)
         for field in ("full_solves", "multi_start"):
             idx = getattr(policy, field)
-            if any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) or i < 0
-                   for i in idx):
+            if not all(is_integer(i, 0) for i in idx):
                 raise ArgumentError(f"receding.{field}", "re-plan indices >= 0", idx)
         mp = policy.max_particles
-        if isinstance(mp, bool) or not isinstance(mp, (int, np.integer)) or mp < 5:
+        if not is_integer(mp, 5):
             raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
         if not policy.full_above > 0:
             raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.policies._base import Action, BeliefView, Controller, _real
 
 if TYPE_CHECKING:
@@ -156,7 +156,7 @@ class _Adaptive:
 def _budget(scenario: Scenario, budget: int | None) -> int:
     """The policy's ping budget, else the scenario's (0 without planning settings)."""
     if budget is not None:
-        if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 0:
+        if not is_integer(budget, 0):
             raise ArgumentError("pings.budget", "an integer >= 0 (None: the scenario's)",
                                 budget)
         return int(budget)

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, SolverError, is_integer
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
@@ -139,7 +139,7 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
     """
     from tmaplan.planning.belief import Belief
 
-    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+    if not is_integer(workers, 1):
         raise ArgumentError("workers", "an integer >= 1", workers)
     parallel = (workers > 1 or pool is not None) and planner is None and (
         objective is None or isinstance(objective, str))

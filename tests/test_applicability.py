@@ -47,7 +47,7 @@ def test_monte_carlo_refuses_what_cannot_work():
     with pytest.raises(ArgumentError) as exc:
         monte_carlo(sc, "mle", runs=2)
     msg = str(exc.value)
-    assert "field 'estimator'" in msg and "needs at least 4 bearing" in msg
+    assert "field 'estimator'" in msg and "needs at least 5 bearing" in msg
     assert "use estimator range-only or pf" in msg and "\n" not in msg
     with pytest.raises(ArgumentError, match=r"field 'bound'.*batch CRLB"):
         monte_carlo(load_problem("clavard2013-halfturn-cw"), MLEConfig(), runs=1,
@@ -123,3 +123,20 @@ def test_compare_never_exits_0_with_nan(monkeypatch, capsys, tmp_path):
     err = out.err.strip().splitlines()
     assert len(err) == 1 and "result 'policies.straight.final_range_rmse' is NaN" in err[0]
     assert "report written to" in err[0]
+
+
+@pytest.mark.parametrize(("name", "fewest"), [("pf-bearings", 7), ("mle", 5)])
+def test_declared_minimum_is_what_the_estimator_needs(name, fewest):
+    # pf-bearings fits 2k + 1 >= 7 bearings (k >= 3, brehard2004); the MLE needs more
+    # measurements than the 4 parameters of a constant-velocity track. With one bearing fewer
+    # every run raised inside monte_carlo although check_applicable had let it through.
+    sc = load_problem("ristic-bot-moderate")  # one bearing per step from step 1
+
+    def short(n):
+        return dataclasses.replace(sc, time=dataclasses.replace(sc.time,
+                                                                horizon=n * sc.time.dt))
+
+    assert name in applicable_estimators(short(fewest))
+    assert name not in applicable_estimators(short(fewest - 1))
+    with pytest.raises(ArgumentError, match=f"needs at least {fewest} bearing"):
+        check_applicable(name, short(fewest - 1))

@@ -105,3 +105,17 @@ def test_closed_loop_truth_bound_averages_the_runs_covariances():
     rel = tgt[1] - obs[1]
     np.testing.assert_allclose(one[1][0], truth_bounds(sc, rel[None])[0], rtol=1e-12)
     assert one[0][1][30] < 0.5 * one[0][1][29]  # the ping of run 0 counts
+
+
+def test_closed_loop_truth_bound_refuses_mismatched_pings():
+    # One ping list for two runs was broadcast to both; a negative step counted from the end.
+    from tmaplan.errors import ArgumentError
+
+    sc = load_problem("default")
+    sim = simulate(sc, np.random.default_rng(3))
+    obs = np.stack([sim.observer.position] * 2)
+    tgt = np.stack([sim.target[:, :2]] * 2)
+    with pytest.raises(ArgumentError, match="field 'ping_steps'"):
+        closed_loop_truth_bounds(sc, obs, tgt, [np.array([30])])
+    with pytest.raises(ArgumentError, match="field 'ping_steps'"):
+        closed_loop_truth_bounds(sc, obs, tgt, [np.array([-1]), np.array([], int)])

@@ -84,7 +84,7 @@ def test_out_must_be_a_directory(tmp_path, capsys):
 APPLICABILITY = [
     # sharma2024 has one bearing (at t = 0): the MLE is built on bearings
     (["track", "sharma2024-range-only", "--estimator", "mle", "--runs", "2"],
-     ["mle (the batch MLE of clavard2013) needs at least 4 bearing measurements",
+     ["mle (the batch MLE of clavard2013) needs at least 5 bearing measurements",
       "sharma2024-range-only has 1", "use --estimator range-only or pf"]),
     (["track", "gordon1993-bot", "--estimator", "mle"], ["use --estimator pf"]),
     (["track", "default", "--bound", "prior"], ["field '--bound'", "use --bound truth"]),

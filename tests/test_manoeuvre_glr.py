@@ -102,3 +102,17 @@ def test_glr_bad_arguments():
         velocity_jump_glr(_history(0.0, 0), DT, min_after=0)
     with pytest.raises(ArgumentError, match="candidates"):
         glr_threshold(1e-3, 0)
+
+
+@pytest.mark.parametrize(("field", "kw"), [
+    ("iterations", {"iterations": -1}),  # was an UnboundLocalError
+    ("iterations", {"iterations": 1.5}),
+    ("dt", {"dt": 0.0}),  # every lag 0: a silent statistic of 0
+    ("dt", {"dt": float("nan")}),
+    ("min_after", {"min_after": 2.5}),
+    ("max_back", {"max_back": 10.5}),
+])
+def test_glr_refuses_invalid_settings(field, kw):
+    args = {"dt": DT, **kw}
+    with pytest.raises(ArgumentError, match=f"field '{field}'"):
+        velocity_jump_glr(_history(0.0, 0), **args)

@@ -82,12 +82,13 @@ APPLICABILITY: dict[str, Applicability] = {
                         needs=frozenset({"bearing", "range", "frequency"})),
     "pf-bearings": Applicability(
         what="the particle filter started from bearings, brehard2004",
-        needs=frozenset({"bearing"}), min_measurements=3,
-        why_min="its batch initialisation fits a track to the first bearings",
+        needs=frozenset({"bearing"}), min_measurements=7,
+        why_min="its batch initialisation fits a track to the first 2k + 1 bearings, k >= 3",
         needs_prior="bound"),
     "mle": Applicability(
-        what="the batch MLE of clavard2013", needs=frozenset({"bearing"}), min_measurements=4,
-        why_min="its grid start and acceptance test are built on bearings, 4 track parameters",
+        what="the batch MLE of clavard2013", needs=frozenset({"bearing"}), min_measurements=5,
+        why_min="its grid start and acceptance test are built on bearings, more of them than "
+                "the 4 parameters of a constant-velocity track",
         bounds=frozenset({"crlb"}), needs_prior="never", deterministic=True),
     "range-only": Applicability(
         what="range-only tracking of sharma2024", needs=frozenset({"range"}), min_measurements=3,

@@ -43,6 +43,7 @@ __all__ = [
     "dirac_mixture",
     "grid_size",
     "gvm2_from_gaussian",
+    "log_range_density",
     "moments_grid",
     "moments_series",
     "series_loss",
@@ -129,8 +130,40 @@ def moments_grid(g: GvM2, m_max: int, n_grid: int | None = None) -> np.ndarray:
     return s / s[0].real
 
 
+def log_range_density(g: GvM2, yhat: np.ndarray, V: np.ndarray, r: float) -> float:
+    """``log p(r) = log ∫ N(r b(θ); ŷ, V) r dθ`` [log 1/m] (sharma2024 eqs. 17–25 in logs).
+
+    With ``V⁻¹ = [[a, b], [b, c]]`` the exponent is ``−½ ŷ'V⁻¹ŷ − r²(a + c)/4`` plus the
+    GvM2 log-density ``g.logf(θ)``, integrated by the max-shifted periodic trapezoid of
+    :func:`moments_grid`.
+
+    Parameters
+    ----------
+    g : GvM2
+        ``gvm2_from_gaussian(yhat, V, r)``.
+    yhat : ndarray, shape (2,)
+        Predicted relative position [m].
+    V : ndarray, shape (2, 2)
+        Its covariance plus σ_r²I [m²].
+    r : float
+        Measured range [m] (> 0).
+
+    Returns
+    -------
+    float
+    """
+    Vi = np.linalg.inv(V)
+    n = grid_size(g)
+    theta = 2.0 * np.pi * np.arange(n) / n
+    lf = g.logf(theta)
+    top = float(lf.max())
+    log_int = top + float(np.log(np.mean(np.exp(lf - top)) * 2.0 * np.pi))
+    return float(np.log(r) - np.log(2.0 * np.pi) - 0.5 * np.linalg.slogdet(V)[1]
+                 - 0.5 * yhat @ Vi @ yhat - 0.25 * r * r * (Vi[0, 0] + Vi[1, 1]) + log_int)
+
+
 def series_loss(g: GvM2) -> float:
-    """Digits-loss exponent ``κ1 + κ2 − max_θ logf`` of the Bessel series (docs/errata.mdc)."""
+    """Digits-loss exponent ``κ1 + κ2 − max_θ logf`` of the Bessel series (docs/errata.md)."""
     theta = 2.0 * np.pi * np.arange(4096) / 4096
     return float(g.kappa1 + g.kappa2 - g.logf(theta).max())
 

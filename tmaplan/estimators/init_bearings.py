@@ -38,7 +38,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import gammaln
 
-from tmaplan.errors import ArgumentError, EstimationError
+from tmaplan.errors import ArgumentError, EstimationError, is_integer
 from tmaplan.geometry import mp_to_cart, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -167,8 +167,9 @@ def fit_rmp(z: np.ndarray, tau: np.ndarray, sigma: float, *,
     """
     z = np.asarray(z, float)
     tau = np.asarray(tau, float)
-    if z.shape != tau.shape or z.shape[0] < 3:
+    if z.ndim != 1 or z.shape != tau.shape or z.shape[0] < 3:
         raise ArgumentError("bearings", "at least 3 bearings with matching times", z.shape)
+    _check_common(z, tau, sigma, ambiguity)
     wrap = wrap_half_angle if ambiguity == "pi" else wrap_angle
     # Modified linear estimate, eqs. (15)-(17) with the corrected mapping of eq. (16).
     ref = z[np.argmin(np.abs(tau))]
@@ -202,6 +203,18 @@ def fit_rmp(z: np.ndarray, tau: np.ndarray, sigma: float, *,
     r = wrap(zu - bearing_regression(Y, tau)) / sigma
     return RMPFit(estimate=Y, start=start, fim=rmp_fisher_information(Y, tau, sigma),
                   cost=float(r @ r), iterations=it, converged=converged)
+
+
+def _check_common(z: np.ndarray, t: np.ndarray, sigma: float, ambiguity: str) -> None:
+    """Refuse non-finite bearings or times, a bearing std that is not finite and > 0 and an
+    unknown ambiguity."""
+    if not (np.isfinite(z).all() and np.isfinite(t).all()):
+        raise ArgumentError("bearings", "finite bearings [rad] at finite times [s]",
+                            "a NaN or infinite value")
+    if not (np.isfinite(sigma) and sigma > 0):
+        raise ArgumentError("sigma", "a finite bearing std > 0 [rad]", sigma)
+    if ambiguity not in ("none", "pi"):
+        raise ArgumentError("ambiguity", "'none' or 'pi'", ambiguity)
 
 
 def sample_ellipsoid(centre: np.ndarray, info: np.ndarray, c: float, n: int,
@@ -295,9 +308,29 @@ def initialise_from_bearings(
     """
     t = np.asarray(times, float)
     z = np.asarray(bearings, float)
-    if not 0 < r_min < r_max:
-        raise ArgumentError("r_min/r_max", "0 < r_min < r_max [m]", (r_min, r_max))
+    if t.ndim != 1 or z.shape != t.shape:
+        raise ArgumentError("bearings", f"one bearing per time, shape {t.shape}", z.shape)
+    _check_common(z, t, sigma, ambiguity)
+    if not 0 < r_min < r_max < np.inf:
+        raise ArgumentError("r_min/r_max", "0 < r_min < r_max < inf [m]", (r_min, r_max))
+    if not is_integer(n_particles, 1):
+        raise ArgumentError("n_particles", "an integer >= 1", n_particles)
+    if not (np.isfinite(q) and q >= 0):
+        raise ArgumentError("q", "a finite process-noise intensity >= 0 [m²/s³]", q)
+    if dt is not None and not (np.isfinite(dt) and dt > 0):
+        raise ArgumentError("dt", "a finite bearing spacing > 0 [s] or None", dt)
+    if not 0.0 < alpha < 1.0:
+        raise ArgumentError("alpha", "a probability in (0, 1)", alpha)
+    if region not in ("consistent", "paper"):
+        raise ArgumentError("region", "'consistent' or 'paper'", region)
+    if not is_integer(k_min, 1):
+        raise ArgumentError("k_min", "an integer >= 1", k_min)
+    if k_max is not None and not is_integer(k_max, k_min):
+        raise ArgumentError("k_max", f"an integer >= k_min = {k_min} or None", k_max)
     n = t.shape[0]
+    if k_fixed is not None and not (is_integer(k_fixed, 1) and 2 * k_fixed + 1 <= n):
+        raise ArgumentError("k_fixed", f"an integer in [1, {(n - 1) // 2}] ({n} bearings) or "
+                            "None", k_fixed)
     if n < 2 * k_min + 1:
         raise ArgumentError("bearings", f"at least {2 * k_min + 1} bearings", n)
     delta = float(dt) if dt is not None else float(np.median(np.diff(t)))
@@ -327,7 +360,8 @@ def initialise_from_bearings(
         if k_fixed is not None or ratio <= 1.0:
             met = ratio <= 1.0
             break
-    if fit is None or not np.isfinite(fit.estimate).all():
+    if fit is None or not np.isfinite(fit.estimate).all() \
+            or np.linalg.slogdet(fit.fim)[0] <= 0:
         raise EstimationError("bearings-only initialisation: the RMP fit failed")
     c = chi3 if region == "consistent" else chi3 / (2 * k + 1)
     Yr = sample_ellipsoid(fit.estimate, fit.fim, c, n_particles, rng)

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.geometry import wrap_angle
 
 __all__ = ["JumpTest", "glr_threshold", "velocity_jump_glr"]
@@ -124,24 +124,28 @@ def velocity_jump_glr(history: Sequence[Any], dt: float, *, min_after: int = 2,
         step i + 1)`` as :class:`tmaplan.estimators.consistency.MonitoredState` stores them;
         the first posterior (with ``mean`` and ``cov``) is the prior of x₀.
     dt : float
-        Step [s].
+        Step [s], finite and > 0.
     min_after : int
         Measurement steps needed after a candidate onset, >= 1.
     max_back : int, optional
         Candidate onsets at most this many steps back (default: the whole window); the steps
         before them still anchor the no-jump fit.
     iterations : int
-        Gauss–Newton iterations of the H0 fit.
+        Gauss–Newton iterations of the H0 fit (>= 0).
 
     Returns
     -------
     JumpTest or None
         None when the window has fewer than ``min_after`` + 1 steps or no measurement.
     """
-    if min_after < 1:
+    if not (math.isfinite(dt) and dt > 0):
+        raise ArgumentError("dt", "a finite step > 0 s", dt)
+    if not is_integer(min_after, 1):
         raise ArgumentError("min_after", "an integer >= 1", min_after)
-    if max_back is not None and max_back <= min_after:
+    if max_back is not None and not is_integer(max_back, min_after + 1):
         raise ArgumentError("max_back", f"an integer > min_after = {min_after}", max_back)
+    if not is_integer(iterations, 0):
+        raise ArgumentError("iterations", "an integer >= 0", iterations)
     n = len(history)
     if n < min_after + 1:
         return None

@@ -55,7 +55,7 @@ from tmaplan.bounds.batch_fim import (
     tma_data,
 )
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -211,8 +211,30 @@ class MLEConfig:
                                 self.turn_direction)
         if self.init not in ("multistart", "paper"):
             raise ArgumentError("init", "'multistart' or 'paper'", self.init)
-        if not isinstance(self.n_starts, int | np.integer) or self.n_starts < 1:
-            raise ArgumentError("n_starts", "an integer >= 1", self.n_starts)
+        if self.model not in ("auto", "ncv", "multi-leg", "constant-turn"):
+            raise ArgumentError("model", "'auto', 'ncv', 'multi-leg' or 'constant-turn'",
+                                self.model)
+        for name, low in (("n_starts", 1), ("gn_iterations", 0), ("max_nfev", 1),
+                          ("grid_courses", 1)):
+            if not is_integer(getattr(self, name), low):
+                raise ArgumentError(name, f"an integer >= {low}", getattr(self, name))
+        if self.frequencies is not None and not is_integer(self.frequencies, 0):
+            # tma_data slices the lines with it: −1 silently dropped the last line
+            raise ArgumentError("frequencies", "an integer >= 0 or None", self.frequencies)
+        for name, unit, positive in (("grid_ranges", "m", True), ("grid_speeds", "m/s", False),
+                                     ("grid_turn_rates", "rad/s", True)):
+            try:
+                v = np.asarray(getattr(self, name), float)
+            except (TypeError, ValueError):
+                v = np.zeros(0)
+            if v.ndim != 1 or not v.size or not np.isfinite(v).all() or (
+                    (v <= 0).any() if positive else (v < 0).any()):
+                raise ArgumentError(name, f"a non-empty sequence of finite values "
+                                    f"{'> 0' if positive else '>= 0'} [{unit}]",
+                                    getattr(self, name))
+        if not self.ambiguity_margin >= 0:
+            raise ArgumentError("ambiguity_margin", "a cost difference >= 0",
+                                self.ambiguity_margin)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -428,7 +450,7 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     data : TMAData
     config : MLEConfig, optional
     initial : ndarray, shape (n_params,) or (n_geom,), optional
-        Skip the grid and start here (tones default to the mean of each line).
+        Finite; skip the grid and start here (tones default to the mean of each line).
 
     Returns
     -------
@@ -445,6 +467,10 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     sense = _sense(data, cfg)
     if initial is not None:
         init = np.asarray(initial, float)
+        if init.shape not in ((data.n_params,), (data.n_geom,)) or not np.isfinite(init).all():
+            raise ArgumentError("initial", f"finite parameters of shape ({data.n_params},) or "
+                                f"({data.n_geom},) for a '{data.model}' model",
+                                init.tolist())
         if init.size == data.n_geom and data.n_lines:
             init = np.concatenate([init, data.f_values.mean(axis=0)])
         if sense and init[4] * sense <= 0:

@@ -69,10 +69,11 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.estimators.gvm_moments import (
     dirac_mixture,
     gvm2_from_gaussian,
+    log_range_density,
     moments_grid,
     moments_series,
 )
@@ -146,22 +147,26 @@ class RangeOnlyConfig:
     prune: float = 1e-7
 
     def __post_init__(self) -> None:
-        if not self.dt > 0:
-            raise ArgumentError("dt", "> 0 s", self.dt)
-        if not self.q >= 0:
-            raise ArgumentError("q", ">= 0 m²/s³", self.q)
+        if not (self.dt > 0 and np.isfinite(self.dt)):
+            raise ArgumentError("dt", "a finite step > 0 s", self.dt)
+        if not (self.q >= 0 and np.isfinite(self.q)):
+            raise ArgumentError("q", "a finite intensity >= 0 m²/s³", self.q)
         if self.mode not in ("mixture", "moments", "dirac"):
             raise ArgumentError("mode", "'mixture', 'moments' or 'dirac'", self.mode)
         if self.component_cov not in ("exact", "paper"):
             raise ArgumentError("component_cov", "'exact' or 'paper'", self.component_cov)
         if self.moments not in ("grid", "series"):
             raise ArgumentError("moments", "'grid' or 'series'", self.moments)
-        if int(self.max_components) < 1:
-            raise ArgumentError("max_components", ">= 1", self.max_components)
-        if int(self.max_sectors) < 1:
-            raise ArgumentError("max_sectors", ">= 1", self.max_sectors)
-        if not self.sagitta > 0:
-            raise ArgumentError("sagitta", "> 0 (multiple of σ_r)", self.sagitta)
+        for name, low in (("series_terms", 0), ("n_moments", 1), ("n_points", 1),
+                          ("max_components", 1), ("max_sectors", 1)):
+            if not is_integer(getattr(self, name), low):
+                raise ArgumentError(name, f"an integer >= {low}", getattr(self, name))
+        if not (self.sagitta > 0 and np.isfinite(self.sagitta)):
+            raise ArgumentError("sagitta", "a finite number > 0 (multiple of σ_r)", self.sagitta)
+        if not 0.0 <= self.tail < 0.5:
+            raise ArgumentError("tail", "a probability in [0, 0.5)", self.tail)
+        if not 0.0 <= self.prune < 1.0:
+            raise ArgumentError("prune", "a relative weight in [0, 1)", self.prune)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -236,12 +241,24 @@ def single_point_prior(r0: float, bearing0: float, sigma_r: float, sigma_bearing
     -------
     RangeOnlyState
     """
+    v = np.asarray(velocity_mean, float)
+    if not (np.isfinite(r0) and r0 > 0):
+        raise ArgumentError("r0", "a finite range > 0 [m]", r0)
+    if not np.isfinite(bearing0):
+        raise ArgumentError("bearing0", "a finite bearing [rad]", bearing0)
+    for name, value in (("sigma_r", sigma_r), ("sigma_bearing", sigma_bearing),
+                        ("velocity_std", velocity_std)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ArgumentError(name, "a finite std >= 0", value)
+    if v.shape != (2,) or not np.isfinite(v).all():
+        raise ArgumentError("velocity_mean", "a finite relative velocity of shape (2,) [m/s]",
+                            v.tolist())
     s, c = np.sin(bearing0), np.cos(bearing0)
     J = np.array([[s, r0 * c], [c, -r0 * s]])  # ∂(x, y)/∂(r, β)
     P = np.zeros((4, 4))
     P[:2, :2] = J @ np.diag([sigma_r**2, sigma_bearing**2]) @ J.T
     P[2:, 2:] = velocity_std**2 * np.eye(2)
-    mean = np.concatenate([[r0 * s, r0 * c], np.asarray(velocity_mean, float)])
+    mean = np.concatenate([[r0 * s, r0 * c], v])
     return from_gaussian(mean, P, step=step)
 
 
@@ -283,18 +300,29 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
         Predicted state (the moment and Dirac modes collapse a mixture to one Gaussian first).
     r : float
         Measured range [m]; a non-positive range (possible under the truth's additive noise,
-        eq. 58) skips the update.
+        eq. 58) skips the update; a NaN or infinite one is refused.
     sigma_r : float
-        [m]; the filter uses sharma2024's eq. (6) model (noise σ_r²I inside the norm).
+        [m], finite and > 0; the filter uses sharma2024's eq. (6) model (noise σ_r²I inside
+        the norm).
     config : RangeOnlyConfig
 
     Returns
     -------
     RangeOnlyState
-        Mixture mode: reduced to at most ``max_components`` components; if the range has zero
-        (underflowed) likelihood under every component the predicted mixture is returned
-        unchanged with ``log_likelihood = −inf``.
+        Its ``log_likelihood`` is ``log p(r)`` under the predicted mixture (moment and Dirac
+        modes: under its collapse). Mixture mode: reduced to at most ``max_components``
+        components; if the range has zero (underflowed) likelihood under every component the
+        predicted mixture is returned unchanged with ``log_likelihood = −inf``.
+
+    Raises
+    ------
+    ArgumentError
+        If ``r`` is not finite or ``sigma_r`` is not finite and > 0.
     """
+    if not np.isfinite(r):
+        raise ArgumentError("r", "a finite measured range [m]", r)
+    if not (np.isfinite(sigma_r) and sigma_r > 0):
+        raise ArgumentError("sigma_r", "a finite range std > 0 [m]", sigma_r)
     if not r > 0:
         return state
     if config.mode == "mixture":
@@ -330,7 +358,8 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
         cov = Pc + (dev * d.gamma[:, None]).T @ dev
         if config.component_cov == "paper":
             cov = cov + r * r * K @ Pb @ K.T  # eq. 55 as printed
-    return from_gaussian(mean, 0.5 * (cov + cov.T), step=state.step)
+    return dataclasses.replace(from_gaussian(mean, 0.5 * (cov + cov.T), step=state.step),
+                               log_likelihood=log_range_density(g, yhat, V, r))
 
 
 def _windows(yhat: np.ndarray, V: np.ndarray, r: float, drop: float = 30.0
@@ -458,12 +487,23 @@ def reduce_mixture(state: RangeOnlyState, max_components: int, *, prune: float =
     ----------
     state : RangeOnlyState
     max_components : int
+        >= 1.
     prune : float
+        Relative weight in [0, 1).
 
     Returns
     -------
     RangeOnlyState
+
+    Raises
+    ------
+    ArgumentError
+        If ``max_components`` is not an integer >= 1 or ``prune`` not in [0, 1).
     """
+    if not is_integer(max_components, 1):
+        raise ArgumentError("max_components", "an integer >= 1", max_components)
+    if not 0.0 <= prune < 1.0:
+        raise ArgumentError("prune", "a relative weight in [0, 1)", prune)
     w, m, P = state.weights, state.means, state.covs
     keep = w >= prune * w.max()
     if not keep.all():

@@ -227,8 +227,8 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
     observer, target : ndarray, shape (R, K + 1, 2)
         Own-ship and true target positions of R runs [m].
     ping_steps : sequence of R int arrays
-        Steps at which each run pinged (σ of the scenario's first active range sensor);
-        passive range sensors count at their own steps.
+        Steps (>= 0; those past K are ignored) at which each run pinged (σ of the scenario's
+        first active range sensor); passive range sensors count at their own steps.
 
     Returns
     -------
@@ -236,6 +236,18 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
         [m].
     """
     K = scenario.n_steps
+    obs, tgt = np.asarray(observer, float), np.asarray(target, float)
+    if obs.ndim != 3 or obs.shape != tgt.shape or len(ping_steps) != obs.shape[0]:
+        # one ping list for R runs was broadcast to every run
+        raise ArgumentError("ping_steps", f"one ping-step array per run, with observer and "
+                            f"target of one shape (R, {K + 1}, 2)",
+                            f"{len(ping_steps)} arrays, observer {obs.shape}, target "
+                            f"{tgt.shape}", source=scenario.name)
+    if any(np.any(np.asarray(st) < 0) for st in ping_steps):
+        # np.add.at counted a negative step from the end
+        raise ArgumentError("ping_steps", "steps >= 0", [np.asarray(st).tolist()
+                                                         for st in ping_steps],
+                            source=scenario.name)
     active = [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
     # the scenario without its active range sensors (their steps are the runs' pings); an
     # internal copy, not re-validated (it may still hold a ping budget)
@@ -247,6 +259,5 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
         for i, st in enumerate(ping_steps):  # per-run ping weights (bookkeeping)
             np.add.at(w[i], np.asarray(st, int)[np.asarray(st, int) <= K],
                       1.0 / float(active[0].sigma) ** 2)
-    rel = np.asarray(target, float) - np.asarray(observer, float)
-    cov, rvar = truth_covariance(passive, rel, range_info=w)
+    cov, rvar = truth_covariance(passive, tgt - obs, range_info=w)
     return np.sqrt(cov[:, 0, 0] + cov[:, 1, 1]), np.sqrt(rvar)

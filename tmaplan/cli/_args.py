@@ -57,6 +57,7 @@ __all__ = [
     "add_seed_argument",
     "duration",
     "integer",
+    "json_path",
     "minutes",
     "open_fraction",
     "out_dir",
@@ -205,6 +206,13 @@ def out_dir(text: str) -> str:
     """Type of ``--out``: a directory (created when needed), not an existing file."""
     if Path(text).exists() and not Path(text).is_dir():
         _fail("a directory", f"{text!r} (an existing file)")
+    return text
+
+
+def json_path(text: str) -> str:
+    """Type of ``--json``: ``-`` (stdout) or a file path, not an existing directory."""
+    if text != "-" and Path(text).is_dir():
+        _fail("a file path or '-' (stdout)", f"{text!r} (an existing directory)")
     return text
 
 
@@ -359,6 +367,19 @@ def _truth_note(verb: str, scenario: Any) -> None:
               file=sys.stderr)
 
 
+def _check_json_target(args: argparse.Namespace, scenario: Any) -> None:
+    """``--json PATH`` must not be a file the verb reads: writing it would destroy the input."""
+    out = getattr(args, "json", None)
+    if out is None or out == "-":
+        return
+    target = Path(out).resolve()
+    for what, value in (("problem file", getattr(args, "problem", None)),
+                        ("--observer-plan file", getattr(args, "observer_plan", None))):
+        if value is not None and Path(value).is_file() and Path(value).resolve() == target:
+            raise _flag_error("--json", f"a path other than the {what} it would overwrite",
+                              out, scenario)
+
+
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
@@ -373,7 +394,10 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line warning on
     stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
     or ``course_mode = "true"``): every run of a verb that uses the prior says so.
+    ``--json PATH`` naming an input of the verb (the problem file, ``--observer-plan``) is
+    refused: the output would overwrite it.
     """
+    _check_json_target(args, scenario)
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare}.get(args.verb)
     if check is not None:

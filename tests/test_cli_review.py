@@ -1,0 +1,63 @@
+"""Command line review: ``--debug`` before the verb, ``--json`` never destroys an input, and
+bad arguments or scenario values refused up front with the flag or field named."""
+
+from __future__ import annotations
+
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.scenario import problems_dir
+
+
+def _one_line_error(capsys, argv):
+    rc = main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1, (argv, err)
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    return err[0]
+
+
+def _problem_file(tmp_path, name="gordon1993-bot", old=None, new=None):
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    if old is not None:
+        assert old in text
+        text = text.replace(old, new, 1)
+    f = tmp_path / "my.toml"
+    f.write_text(text, encoding="utf-8")
+    return f
+
+
+def test_debug_before_the_verb_shows_the_traceback(capsys):
+    # `tmaplan --debug VERB` is in `tmaplan --help`; the verb's own --debug default used to
+    # overwrite it, so the error was one line without a traceback
+    with pytest.raises(Exception, match="nosuch"):
+        main(["--debug", "simulate", "nosuch"])
+    assert main(["simulate", "nosuch"]) == 1  # still one line without --debug
+
+
+def test_json_never_overwrites_the_problem_file(tmp_path, capsys, monkeypatch):
+    f = _problem_file(tmp_path)
+    before = f.read_text(encoding="utf-8")
+    for path in (str(f), str(tmp_path / "." / "my.toml")):
+        line = _one_line_error(capsys, ["simulate", str(f), "--no-figure", "--json", path])
+        assert "--json" in line and "problem file" in line
+    monkeypatch.chdir(tmp_path)  # relative and absolute spellings of one file
+    line = _one_line_error(capsys, ["simulate", "my.toml", "--no-figure", "--json", str(f)])
+    assert "--json" in line
+    assert f.read_text(encoding="utf-8") == before
+
+
+def test_json_never_overwrites_the_observer_plan(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    plan.write_text('{"problem": "default"}', encoding="utf-8")
+    line = _one_line_error(capsys, ["schedule", "default", "--observer-plan", str(plan),
+                                    "--no-figure", "--json", str(plan)])
+    assert "--json" in line and "--observer-plan" in line
+    assert plan.read_text(encoding="utf-8") == '{"problem": "default"}'
+
+
+def test_json_directory_is_refused_before_any_work(tmp_path, capsys):
+    line = _one_line_error(capsys, ["simulate", "default", "--no-figure", "--json",
+                                    str(tmp_path)])
+    assert "--json must be a file path" in line and "existing directory" in line
+    assert capsys.readouterr().out == ""  # nothing ran

@@ -3,6 +3,8 @@ bad arguments or scenario values refused up front with the flag or field named."
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from tmaplan.cli import main
@@ -61,3 +63,31 @@ def test_json_directory_is_refused_before_any_work(tmp_path, capsys):
                                     str(tmp_path)])
     assert "--json must be a file path" in line and "existing directory" in line
     assert capsys.readouterr().out == ""  # nothing ran
+
+
+# ------------------------------------------------------------------ scenario files
+@pytest.mark.parametrize("name", ["../../escape", "a/b", "a\\b", "", "  ", "..", "x\ny"])
+def test_scenario_name_cannot_escape_the_output_folder(tmp_path, capsys, name):
+    # figures are written to <out>/<name>_geometry.png etc.: "../../escape" wrote outside --out
+    f = _problem_file(tmp_path, old='name = "gordon1993-bot"', new=f"name = {json.dumps(name)}")
+    out = tmp_path / "o" / "p"
+    line = _one_line_error(capsys, ["simulate", str(f), "--out", str(out)])
+    assert "field 'name'" in line and "without '/'" in line
+    assert list(tmp_path.rglob("*.png")) == []
+
+
+def test_speed_max_below_speed_min_names_speed_max(tmp_path, capsys):
+    # the error named observer.speed with an empty interval [3.09, 2.57] m/s
+    f = _problem_file(tmp_path, "default", 'speed_max = "6 kn"', 'speed_max = "5 kn"')
+    line = _one_line_error(capsys, ["simulate", str(f), "--no-figure"])
+    assert "field 'observer.speed_max'" in line and ">= observer.speed_min" in line
+
+
+def test_a_folder_named_like_a_builtin_problem_does_not_hide_it(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "gordon1993-bot").mkdir()  # e.g. an --out folder named after the problem
+    assert main(["simulate", "gordon1993-bot", "--no-figure", "--json", "-"]) == 0
+    assert json.loads(capsys.readouterr().out)["problem"] == "gordon1993-bot"
+    # spelled as a path, it is a path: a folder is not a scenario file
+    line = _one_line_error(capsys, ["simulate", "./gordon1993-bot/", "--no-figure"])
+    assert "an existing .toml file" in line

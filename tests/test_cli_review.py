@@ -91,3 +91,60 @@ def test_a_folder_named_like_a_builtin_problem_does_not_hide_it(tmp_path, capsys
     # spelled as a path, it is a path: a folder is not a scenario file
     line = _one_line_error(capsys, ["simulate", "./gordon1993-bot/", "--no-figure"])
     assert "an existing .toml file" in line
+
+
+# ------------------------------------------------------------------ flags named up front
+FLAG_CASES = [
+    # crlb named the library's 'frequencies', not the flag
+    (["crlb", "default", "--frequencies", "5", "--no-figure"],
+     ["field '--frequencies'", "0..0"]),
+    # the scheduler said "budget K = 999 pings ..." without the flag
+    (["schedule", "default", "--budget", "999", "--no-figure"],
+     ["field '--budget'", "at most the 180 steps"]),
+    # `plan default --pings 2` failed after the set-up with "objective: expected one of ..."
+    (["plan", "default", "--pings", "2", "--no-figure"],
+     ["field '--objective'", "with --pings, one of", "planning.objective"]),
+    (["plan", "default", "--pings", "999", "--objective", "range-bound", "--no-figure"],
+     ["field '--pings'", "at most the 180 steps"]),
+    # an empty list ran the campaign and failed with "tuple index out of range"
+    (["compare", "default", "--policies", ",", "--runs", "1", "--particles", "2"],
+     ["field '--policies'", "one or more distinct"]),
+    (["compare", "default", "--policies", "straight,straight", "--runs", "1"],
+     ["field '--policies'"]),
+]
+
+
+@pytest.mark.parametrize(("argv", "texts"), FLAG_CASES,
+                         ids=[" ".join(a[:4]) for a, _ in FLAG_CASES])
+def test_flags_are_named_up_front(tmp_path, capsys, argv, texts):
+    line = _one_line_error(capsys, [*argv, "--out", str(tmp_path)])
+    for t in texts:
+        assert t in line, line
+    assert list(tmp_path.iterdir()) == []  # refused before any work
+
+
+def test_observer_plan_with_null_values_is_refused(tmp_path):
+    # a null in the plan's track (NaN when read) passed every check: NaN compares false
+    import numpy as np
+
+    from tmaplan.cli.schedule import read_observer_plan
+    from tmaplan.errors import ArgumentError
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    n = sc.n_steps + 1
+    obs = {"times": sc.times.tolist(), "position": np.zeros((n, 2)).tolist(),
+           "velocity": np.ones((n, 2)).tolist(), "mean_velocity": np.ones((n, 2)).tolist(),
+           "heading": np.zeros(n).tolist(), "speed": np.ones(n).tolist()}
+    f = tmp_path / "plan.json"
+    f.write_text(json.dumps({"problem": "default", "observer": obs}), encoding="utf-8")
+    assert read_observer_plan(f, sc).times.shape == (n,)  # the valid file is read
+    for key, where in (("position", (3, 0)), ("times", (5,))):
+        bad = json.loads(json.dumps(obs))
+        if len(where) == 2:
+            bad[key][where[0]][where[1]] = None
+        else:
+            bad[key][where[0]] = None
+        f.write_text(json.dumps({"problem": "default", "observer": bad}), encoding="utf-8")
+        with pytest.raises(ArgumentError, match=f"--observer-plan.*non-finite values in {key}"):
+            read_observer_plan(f, sc)

@@ -289,6 +289,17 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
             raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
                               _seconds_text(tc), scenario)
+    if getattr(args, "pings", 0) > 0:
+        from tmaplan.planning.joint import JOINT_OBJECTIVES
+
+        objective = args.objective or (pl.objective if pl is not None else "range-bound")
+        if objective not in JOINT_OBJECTIVES:
+            given = "" if args.objective else " (the problem's planning.objective)"
+            raise _flag_error("--objective", f"with --pings, one of {', '.join(JOINT_OBJECTIVES)}",
+                              f"{objective}{given}", scenario)
+        if args.pings > scenario.n_steps:
+            raise _flag_error("--pings", f"at most the {scenario.n_steps} steps of the horizon",
+                              args.pings, scenario)
     if args.horizon is None:
         return
     k = round(args.horizon / dt)
@@ -316,7 +327,17 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
                           max(args.ping_steps), scenario)
 
 
+def _check_frequencies(args: argparse.Namespace, scenario: Any) -> None:
+    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if getattr(args, "frequencies", 0) > available:
+        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
+                          args.frequencies, scenario)
+
+
 def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
+    if args.budget is not None and args.budget > scenario.n_steps:
+        raise _flag_error("--budget", f"at most the {scenario.n_steps} steps of the horizon",
+                          args.budget, scenario)
     if args.observer_plan is not None:
         from tmaplan.cli.schedule import read_observer_plan
 
@@ -330,14 +351,15 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
     turn = getattr(args, "turn_direction", "auto")
     if turn != "auto" and args.estimator != "mle":
         raise _flag_error("--turn-direction", "only with --estimator mle", turn, scenario)
-    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
-    if getattr(args, "frequencies", 0) > available:
-        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
-                          args.frequencies, scenario)
+    _check_frequencies(args, scenario)
     check_applicable(args.estimator, scenario, bound=args.bound, cli=True)
 
 
 def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    if not names or len(set(names)) != len(names):
+        raise _flag_error("--policies", "one or more distinct MANOEUVRE[+PING], comma-separated",
+                          args.policies, scenario)
     if scenario.prior is None:
         raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
                               "particle filter, which starts from the prior (and --truth prior "
@@ -384,7 +406,10 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
     Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
-    ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
+    ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`, ``plan --pings`` with an
+    objective that has no joint form or more pings than steps; ``schedule --budget`` over the
+    number of steps; ``crlb`` / ``track --frequencies`` over the problem's lines;
+    ``compare --policies`` empty or repeated; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
     of this problem on its grid; ``compare`` turning policies without
     ``observer.turn_rate_max``; ``track`` estimator/bound combinations
@@ -399,7 +424,8 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """
     _check_json_target(args, scenario)
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
-             "schedule": _check_schedule, "compare": _check_compare}.get(args.verb)
+             "schedule": _check_schedule, "compare": _check_compare,
+             "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)
     _truth_note(args.verb, scenario)

@@ -148,3 +148,23 @@ def test_observer_plan_with_null_values_is_refused(tmp_path):
         f.write_text(json.dumps({"problem": "default", "observer": bad}), encoding="utf-8")
         with pytest.raises(ArgumentError, match=f"--observer-plan.*non-finite values in {key}"):
             read_observer_plan(f, sc)
+
+
+@pytest.mark.parametrize("interval", ["7 min", "2 h"])
+def test_control_interval_must_divide_the_problems_horizon(capsys, interval):
+    # without --horizon the 45 min horizon was rounded to whole intervals silently: 42 min for
+    # 7 min, and 120 min (beyond the problem's horizon) for 2 h
+    line = _one_line_error(capsys, ["plan", "default", "--control-interval", interval,
+                                    "--no-figure"])
+    assert "field '--control-interval'" in line and "planning horizon of 2700 s" in line
+
+
+def test_control_interval_that_divides_the_horizon_passes_the_checks():
+    import argparse
+
+    from tmaplan.cli._args import preflight
+    from tmaplan.scenario import load_problem
+
+    args = argparse.Namespace(verb="plan", horizon=None, control_interval=180.0, pings=0,
+                              objective=None, json=None, problem="default")
+    preflight(args, load_problem("default"))  # 45 min = 15 × 3 min

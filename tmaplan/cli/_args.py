@@ -301,6 +301,13 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
             raise _flag_error("--pings", f"at most the {scenario.n_steps} steps of the horizon",
                               args.pings, scenario)
     if args.horizon is None:
+        if getattr(args, "control_interval", None) is not None:  # else rounded silently
+            h = pl.horizon if pl is not None and pl.horizon else float(scenario.time.horizon)
+            n = h / tc
+            if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+                raise _flag_error("--control-interval", "a whole number (>= 1) of intervals in "
+                                  f"the planning horizon of {_seconds_text(h)} (or give "
+                                  "--horizon)", _seconds_text(tc), scenario)
         return
     k = round(args.horizon / dt)
     if k > MAX_PLAN_STEPS:
@@ -406,7 +413,8 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
     Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
-    ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`, ``plan --pings`` with an
+    ``--control-interval`` not whole (``--control-interval`` alone: in the problem's planning
+    horizon) or over :data:`MAX_PLAN_STEPS`, ``plan --pings`` with an
     objective that has no joint form or more pings than steps; ``schedule --budget`` over the
     number of steps; ``crlb`` / ``track --frequencies`` over the problem's lines;
     ``compare --policies`` empty or repeated; ``bound --ping-every``

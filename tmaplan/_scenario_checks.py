@@ -81,6 +81,10 @@ def _check_velocity(obj: Any, field: str, source: str | None, *, required: bool)
 
 def check(s: Any, source: str | None) -> None:
     """Validate a constructed scenario; raise ScenarioError on the first violated rule."""
+    name = s.name
+    if not name.strip() or name in (".", "..") or any(c in "/\\" or ord(c) < 32 for c in name):
+        raise _err("name", "a non-empty name without '/', '\\' or control characters (the "
+                   "command line names its output files after it)", name, source)
     g = s.time
     k = g.horizon / g.dt
     if abs(k - round(k)) > 1e-9 * max(1.0, k) or round(k) < 1:
@@ -134,6 +138,9 @@ def check(s: Any, source: str | None) -> None:
                        len(o.turn_rates), source)
     else:
         _check_velocity(o, "observer", source, required=True)
+    if o.speed_max is not None and o.speed_max < o.speed_min:
+        raise _err("observer.speed_max", f">= observer.speed_min = {o.speed_min} m/s",
+                   o.speed_max, source)
     speeds: list[tuple[str, float]] = []
     v0 = (np.hypot(*o.velocity) if o.velocity is not None else float(o.speed or 0.0))
     speeds.append(("observer.speed" if o.velocity is None else "observer.velocity", v0))

@@ -191,9 +191,15 @@ def _read_text(path: Path) -> str:
 
 
 def load(name_or_path: str | os.PathLike[str]) -> Scenario:
-    """Load a scenario from a TOML file path or a built-in problem name."""
+    """Load a scenario from a TOML file path or a built-in problem name.
+
+    An existing file is read as a scenario file; a name ending in ``.toml`` or naming an
+    existing directory must be such a file, except that a directory named like a built-in
+    problem (``./default/``, an output folder say) does not hide the problem.
+    """
     path = Path(name_or_path)
-    if path.suffix == ".toml" or path.exists():
+    builtin = (problems_dir() / f"{path.name}.toml").is_file() and str(name_or_path) == path.name
+    if path.is_file() or path.suffix == ".toml" or (path.exists() and not builtin):
         if not path.is_file():
             names = ", ".join(p["name"] for p in list_problems())
             raise ScenarioError("problem", f"an existing .toml file or one of: {names}",

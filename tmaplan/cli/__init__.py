@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan import __version__
-from tmaplan.cli._args import OneLineParser, UsageError, preflight
+from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
 from tmaplan.scenario import load, load_problem
 
@@ -98,9 +98,11 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
                 continue
             raise
         p = sub.add_parser(verb, help=mod.HELP, description=mod.HELP)
-        p.add_argument("--json", metavar="PATH", default=None,
+        p.add_argument("--json", metavar="PATH", default=None, type=json_path,
                        help="write machine-readable output to PATH ('-' for stdout)")
-        p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+        # SUPPRESS: no default of its own, so `tmaplan --debug VERB` keeps the top-level value
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help="show tracebacks on errors")
         mod.add_arguments(p)
         modules[verb] = mod
         parsers[verb] = p

@@ -57,6 +57,7 @@ __all__ = [
     "add_seed_argument",
     "duration",
     "integer",
+    "json_path",
     "minutes",
     "open_fraction",
     "out_dir",
@@ -208,6 +209,13 @@ def out_dir(text: str) -> str:
     return text
 
 
+def json_path(text: str) -> str:
+    """Type of ``--json``: ``-`` (stdout) or a file path, not an existing directory."""
+    if text != "-" and Path(text).is_dir():
+        _fail("a file path or '-' (stdout)", f"{text!r} (an existing directory)")
+    return text
+
+
 # --------------------------------------------------------------------------------------------
 # Shared argument definitions
 # --------------------------------------------------------------------------------------------
@@ -281,7 +289,25 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
             raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
                               _seconds_text(tc), scenario)
+    if getattr(args, "pings", 0) > 0:
+        from tmaplan.planning.joint import JOINT_OBJECTIVES
+
+        objective = args.objective or (pl.objective if pl is not None else "range-bound")
+        if objective not in JOINT_OBJECTIVES:
+            given = "" if args.objective else " (the problem's planning.objective)"
+            raise _flag_error("--objective", f"with --pings, one of {', '.join(JOINT_OBJECTIVES)}",
+                              f"{objective}{given}", scenario)
+        if args.pings > scenario.n_steps:
+            raise _flag_error("--pings", f"at most the {scenario.n_steps} steps of the horizon",
+                              args.pings, scenario)
     if args.horizon is None:
+        if getattr(args, "control_interval", None) is not None:  # else rounded silently
+            h = pl.horizon if pl is not None and pl.horizon else float(scenario.time.horizon)
+            n = h / tc
+            if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+                raise _flag_error("--control-interval", "a whole number (>= 1) of intervals in "
+                                  f"the planning horizon of {_seconds_text(h)} (or give "
+                                  "--horizon)", _seconds_text(tc), scenario)
         return
     k = round(args.horizon / dt)
     if k > MAX_PLAN_STEPS:
@@ -308,7 +334,17 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
                           max(args.ping_steps), scenario)
 
 
+def _check_frequencies(args: argparse.Namespace, scenario: Any) -> None:
+    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if getattr(args, "frequencies", 0) > available:
+        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
+                          args.frequencies, scenario)
+
+
 def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
+    if args.budget is not None and args.budget > scenario.n_steps:
+        raise _flag_error("--budget", f"at most the {scenario.n_steps} steps of the horizon",
+                          args.budget, scenario)
     if args.observer_plan is not None:
         from tmaplan.cli.schedule import read_observer_plan
 
@@ -322,14 +358,15 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
     turn = getattr(args, "turn_direction", "auto")
     if turn != "auto" and args.estimator != "mle":
         raise _flag_error("--turn-direction", "only with --estimator mle", turn, scenario)
-    available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
-    if getattr(args, "frequencies", 0) > available:
-        raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
-                          args.frequencies, scenario)
+    _check_frequencies(args, scenario)
     check_applicable(args.estimator, scenario, bound=args.bound, cli=True)
 
 
 def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    if not names or len(set(names)) != len(names):
+        raise _flag_error("--policies", "one or more distinct MANOEUVRE[+PING], comma-separated",
+                          args.policies, scenario)
     if scenario.prior is None:
         raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
                               "particle filter, which starts from the prior (and --truth prior "
@@ -359,11 +396,28 @@ def _truth_note(verb: str, scenario: Any) -> None:
               file=sys.stderr)
 
 
+def _check_json_target(args: argparse.Namespace, scenario: Any) -> None:
+    """``--json PATH`` must not be a file the verb reads: writing it would destroy the input."""
+    out = getattr(args, "json", None)
+    if out is None or out == "-":
+        return
+    target = Path(out).resolve()
+    for what, value in (("problem file", getattr(args, "problem", None)),
+                        ("--observer-plan file", getattr(args, "observer_plan", None))):
+        if value is not None and Path(value).is_file() and Path(value).resolve() == target:
+            raise _flag_error("--json", f"a path other than the {what} it would overwrite",
+                              out, scenario)
+
+
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
     Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
-    ``--control-interval`` not whole or over :data:`MAX_PLAN_STEPS`; ``bound --ping-every``
+    ``--control-interval`` not whole (``--control-interval`` alone: in the problem's planning
+    horizon) or over :data:`MAX_PLAN_STEPS`, ``plan --pings`` with an
+    objective that has no joint form or more pings than steps; ``schedule --budget`` over the
+    number of steps; ``crlb`` / ``track --frequencies`` over the problem's lines;
+    ``compare --policies`` empty or repeated; ``bound --ping-every``
     below dt or ``--ping-steps`` beyond the horizon; ``schedule --observer-plan`` not a plan
     of this problem on its grid; ``compare`` turning policies without
     ``observer.turn_rate_max``; ``track`` estimator/bound combinations
@@ -373,9 +427,13 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line warning on
     stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
     or ``course_mode = "true"``): every run of a verb that uses the prior says so.
+    ``--json PATH`` naming an input of the verb (the problem file, ``--observer-plan``) is
+    refused: the output would overwrite it.
     """
+    _check_json_target(args, scenario)
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
-             "schedule": _check_schedule, "compare": _check_compare}.get(args.verb)
+             "schedule": _check_schedule, "compare": _check_compare,
+             "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)
     _truth_note(args.verb, scenario)

@@ -64,7 +64,8 @@ def read_observer_plan(path: str | Path, scenario: Scenario) -> ObserverTrack:
     ------
     ArgumentError
         Naming ``--observer-plan`` and the file: unreadable or not JSON, no ``observer``
-        track, a plan of another problem, or a track not on the scenario's time grid.
+        track, a plan of another problem, a null or non-finite value in the track, or a track
+        not on the scenario's time grid.
     """
     def err(expected: str, received: Any) -> ArgumentError:
         return ArgumentError("--observer-plan", expected, received, source=str(path))
@@ -95,6 +96,10 @@ def read_observer_plan(path: str | Path, scenario: Scenario) -> ObserverTrack:
     if not shapes_ok:
         raise err("per-step arrays of one length: times (n,), position/velocity (n, 2)",
                   f"times {t.shape}, position {track.position.shape}")
+    bad = [k for k in _TRACK_KEYS if not np.all(np.isfinite(getattr(track, k)))]
+    if bad:
+        raise err("finite numbers in the 'observer' track", f"null or non-finite values in "
+                  f"{', '.join(bad)}")
     grid = scenario.time
     if abs(t[0] - grid.t0) > 1e-6 or np.max(np.abs(np.diff(t) - grid.dt)) > 1e-6 \
             or n - 1 > grid.n_steps:

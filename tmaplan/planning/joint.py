@@ -24,11 +24,14 @@ from tmaplan.planning.pings import PingSchedule, schedule_pings
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["JointPlan", "plan_joint"]
+__all__ = ["JOINT_OBJECTIVES", "JointPlan", "plan_joint"]
 
 #: Heading objective -> ping-scheduling objective of the same quantity.
 _PAIRS = {"range-bound": "terminal-range-bound", "terminal-range-bound": "terminal-range-bound",
           "mean-range-bound": "mean-range-bound", "mean-position-bound": "mean-position-bound"}
+
+JOINT_OBJECTIVES: tuple[str, ...] = tuple(sorted(_PAIRS))
+"""Heading objectives that :func:`plan_joint` and ``plan_joint_ocp`` plan pings with."""
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

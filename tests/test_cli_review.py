@@ -1,0 +1,170 @@
+"""Command line review: ``--debug`` before the verb, ``--json`` never destroys an input, and
+bad arguments or scenario values refused up front with the flag or field named."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.scenario import problems_dir
+
+
+def _one_line_error(capsys, argv):
+    rc = main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1, (argv, err)
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    return err[0]
+
+
+def _problem_file(tmp_path, name="gordon1993-bot", old=None, new=None):
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    if old is not None:
+        assert old in text
+        text = text.replace(old, new, 1)
+    f = tmp_path / "my.toml"
+    f.write_text(text, encoding="utf-8")
+    return f
+
+
+def test_debug_before_the_verb_shows_the_traceback(capsys):
+    # `tmaplan --debug VERB` is in `tmaplan --help`; the verb's own --debug default used to
+    # overwrite it, so the error was one line without a traceback
+    with pytest.raises(Exception, match="nosuch"):
+        main(["--debug", "simulate", "nosuch"])
+    assert main(["simulate", "nosuch"]) == 1  # still one line without --debug
+
+
+def test_json_never_overwrites_the_problem_file(tmp_path, capsys, monkeypatch):
+    f = _problem_file(tmp_path)
+    before = f.read_text(encoding="utf-8")
+    for path in (str(f), str(tmp_path / "." / "my.toml")):
+        line = _one_line_error(capsys, ["simulate", str(f), "--no-figure", "--json", path])
+        assert "--json" in line and "problem file" in line
+    monkeypatch.chdir(tmp_path)  # relative and absolute spellings of one file
+    line = _one_line_error(capsys, ["simulate", "my.toml", "--no-figure", "--json", str(f)])
+    assert "--json" in line
+    assert f.read_text(encoding="utf-8") == before
+
+
+def test_json_never_overwrites_the_observer_plan(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    plan.write_text('{"problem": "default"}', encoding="utf-8")
+    line = _one_line_error(capsys, ["schedule", "default", "--observer-plan", str(plan),
+                                    "--no-figure", "--json", str(plan)])
+    assert "--json" in line and "--observer-plan" in line
+    assert plan.read_text(encoding="utf-8") == '{"problem": "default"}'
+
+
+def test_json_directory_is_refused_before_any_work(tmp_path, capsys):
+    line = _one_line_error(capsys, ["simulate", "default", "--no-figure", "--json",
+                                    str(tmp_path)])
+    assert "--json must be a file path" in line and "existing directory" in line
+    assert capsys.readouterr().out == ""  # nothing ran
+
+
+# ------------------------------------------------------------------ scenario files
+@pytest.mark.parametrize("name", ["../../escape", "a/b", "a\\b", "", "  ", "..", "x\ny"])
+def test_scenario_name_cannot_escape_the_output_folder(tmp_path, capsys, name):
+    # figures are written to <out>/<name>_geometry.png etc.: "../../escape" wrote outside --out
+    f = _problem_file(tmp_path, old='name = "gordon1993-bot"', new=f"name = {json.dumps(name)}")
+    out = tmp_path / "o" / "p"
+    line = _one_line_error(capsys, ["simulate", str(f), "--out", str(out)])
+    assert "field 'name'" in line and "without '/'" in line
+    assert list(tmp_path.rglob("*.png")) == []
+
+
+def test_speed_max_below_speed_min_names_speed_max(tmp_path, capsys):
+    # the error named observer.speed with an empty interval [3.09, 2.57] m/s
+    f = _problem_file(tmp_path, "default", 'speed_max = "6 kn"', 'speed_max = "5 kn"')
+    line = _one_line_error(capsys, ["simulate", str(f), "--no-figure"])
+    assert "field 'observer.speed_max'" in line and ">= observer.speed_min" in line
+
+
+def test_a_folder_named_like_a_builtin_problem_does_not_hide_it(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "gordon1993-bot").mkdir()  # e.g. an --out folder named after the problem
+    assert main(["simulate", "gordon1993-bot", "--no-figure", "--json", "-"]) == 0
+    assert json.loads(capsys.readouterr().out)["problem"] == "gordon1993-bot"
+    # spelled as a path, it is a path: a folder is not a scenario file
+    line = _one_line_error(capsys, ["simulate", "./gordon1993-bot/", "--no-figure"])
+    assert "an existing .toml file" in line
+
+
+# ------------------------------------------------------------------ flags named up front
+FLAG_CASES = [
+    # crlb named the library's 'frequencies', not the flag
+    (["crlb", "default", "--frequencies", "5", "--no-figure"],
+     ["field '--frequencies'", "0..0"]),
+    # the scheduler said "budget K = 999 pings ..." without the flag
+    (["schedule", "default", "--budget", "999", "--no-figure"],
+     ["field '--budget'", "at most the 180 steps"]),
+    # `plan default --pings 2` failed after the set-up with "objective: expected one of ..."
+    (["plan", "default", "--pings", "2", "--no-figure"],
+     ["field '--objective'", "with --pings, one of", "planning.objective"]),
+    (["plan", "default", "--pings", "999", "--objective", "range-bound", "--no-figure"],
+     ["field '--pings'", "at most the 180 steps"]),
+    # an empty list ran the campaign and failed with "tuple index out of range"
+    (["compare", "default", "--policies", ",", "--runs", "1", "--particles", "2"],
+     ["field '--policies'", "one or more distinct"]),
+    (["compare", "default", "--policies", "straight,straight", "--runs", "1"],
+     ["field '--policies'"]),
+]
+
+
+@pytest.mark.parametrize(("argv", "texts"), FLAG_CASES,
+                         ids=[" ".join(a[:4]) for a, _ in FLAG_CASES])
+def test_flags_are_named_up_front(tmp_path, capsys, argv, texts):
+    line = _one_line_error(capsys, [*argv, "--out", str(tmp_path)])
+    for t in texts:
+        assert t in line, line
+    assert list(tmp_path.iterdir()) == []  # refused before any work
+
+
+def test_observer_plan_with_null_values_is_refused(tmp_path):
+    # a null in the plan's track (NaN when read) passed every check: NaN compares false
+    import numpy as np
+
+    from tmaplan.cli.schedule import read_observer_plan
+    from tmaplan.errors import ArgumentError
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    n = sc.n_steps + 1
+    obs = {"times": sc.times.tolist(), "position": np.zeros((n, 2)).tolist(),
+           "velocity": np.ones((n, 2)).tolist(), "mean_velocity": np.ones((n, 2)).tolist(),
+           "heading": np.zeros(n).tolist(), "speed": np.ones(n).tolist()}
+    f = tmp_path / "plan.json"
+    f.write_text(json.dumps({"problem": "default", "observer": obs}), encoding="utf-8")
+    assert read_observer_plan(f, sc).times.shape == (n,)  # the valid file is read
+    for key, where in (("position", (3, 0)), ("times", (5,))):
+        bad = json.loads(json.dumps(obs))
+        if len(where) == 2:
+            bad[key][where[0]][where[1]] = None
+        else:
+            bad[key][where[0]] = None
+        f.write_text(json.dumps({"problem": "default", "observer": bad}), encoding="utf-8")
+        with pytest.raises(ArgumentError, match=f"--observer-plan.*non-finite values in {key}"):
+            read_observer_plan(f, sc)
+
+
+@pytest.mark.parametrize("interval", ["7 min", "2 h"])
+def test_control_interval_must_divide_the_problems_horizon(capsys, interval):
+    # without --horizon the 45 min horizon was rounded to whole intervals silently: 42 min for
+    # 7 min, and 120 min (beyond the problem's horizon) for 2 h
+    line = _one_line_error(capsys, ["plan", "default", "--control-interval", interval,
+                                    "--no-figure"])
+    assert "field '--control-interval'" in line and "planning horizon of 2700 s" in line
+
+
+def test_control_interval_that_divides_the_horizon_passes_the_checks():
+    import argparse
+
+    from tmaplan.cli._args import preflight
+    from tmaplan.scenario import load_problem
+
+    args = argparse.Namespace(verb="plan", horizon=None, control_interval=180.0, pings=0,
+                              objective=None, json=None, problem="default")
+    preflight(args, load_problem("default"))  # 45 min = 15 × 3 min

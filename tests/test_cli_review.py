@@ -168,3 +168,30 @@ def test_control_interval_that_divides_the_horizon_passes_the_checks():
     args = argparse.Namespace(verb="plan", horizon=None, control_interval=180.0, pings=0,
                               objective=None, json=None, problem="default")
     preflight(args, load_problem("default"))  # 45 min = 15 × 3 min
+
+
+def test_report_command_line_leaves_out_top_level_flags(monkeypatch):
+    from tmaplan.cli._args import command_line
+
+    monkeypatch.setattr("sys.argv", ["/x/bin/tmaplan", "--debug", "compare", "default",
+                                     "--runs", "3", "--out", "my dir"])
+    assert command_line("compare", "fallback") == "tmaplan compare default --runs 3 --out 'my dir'"
+    monkeypatch.setattr("sys.argv", ["/x/bin/tmaplan", "rank-costs", "default"])
+    assert command_line("rank-costs", "fallback") == "tmaplan rank-costs default"
+    monkeypatch.setattr("sys.argv", ["pytest", "compare"])  # not run as tmaplan
+    assert command_line("compare", "fallback") == "fallback"
+
+
+def test_python_dash_m_tmaplan_runs_the_cli():
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "tmaplan", "problems"], capture_output=True,
+                         text=True, check=True).stdout
+    assert "bow-closing" in out and "default" in out
+
+
+def test_prior_samples_have_an_upper_limit(tmp_path, capsys):
+    path = _problem_file(tmp_path, "default", "samples = 100000", "samples = 100000000000000")
+    err = _one_line_error(capsys, ["bound", str(path)])
+    assert "prior.samples" in err and "at most 10000000" in err and "100000000000000" in err

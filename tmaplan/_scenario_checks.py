@@ -401,8 +401,14 @@ def truth_fields(p: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
+#: most prior samples a scenario may ask for (4 floats each: 320 MB)
+MAX_PRIOR_SAMPLES = 10_000_000
+
+
 def _check_prior(p: Any, source: str | None) -> None:
     """A prior states its velocity and never takes the truth silently."""
+    if p.samples > MAX_PRIOR_SAMPLES:
+        raise _err("prior.samples", f"at most {MAX_PRIOR_SAMPLES}", p.samples, source)
     if p.kind == "polar":
         if p.velocity_distribution == "normal" and not p.velocity_std > 0:
             raise _err("prior.velocity_std", "a velocity prior: velocity_mean = [v_x, v_y] with "

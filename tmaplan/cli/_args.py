@@ -221,6 +221,21 @@ def json_path(text: str) -> str:
 # --------------------------------------------------------------------------------------------
 
 
+def command_line(verb: str, fallback: str) -> str:
+    """The ``tmaplan VERB ...`` command line of this process, for a report.
+
+    The words after ``verb`` on ``sys.argv`` when run as ``tmaplan`` (top-level flags such as
+    ``--debug`` before the verb are left out), else ``fallback``.
+    """
+    import shlex
+
+    argv = list(sys.argv)
+    if not argv or not argv[0].endswith("tmaplan") or verb not in argv[1:]:
+        return fallback
+    rest = argv[argv.index(verb, 1) + 1:]
+    return " ".join(["tmaplan", verb, *(shlex.quote(a) for a in rest)])
+
+
 def add_problem_argument(parser: argparse.ArgumentParser) -> None:
     """The positional ``P``: a built-in problem name or a path to a .toml file."""
     parser.add_argument("problem", help="built-in problem name or path to a .toml file")

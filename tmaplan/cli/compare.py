@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,6 +14,7 @@ from tmaplan.cli._args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
+    command_line,
     integer,
     open_fraction,
 )
@@ -64,10 +64,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     result = run_campaign(spec, out_dir=args.out, workers=args.workers,
                           scheduler=args.scheduler,
                           progress=(not quiet) and sys.stderr.isatty())
-    cmd = "tmaplan compare " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
-        if sys.argv and sys.argv[0].endswith("tmaplan") else \
-        (f"tmaplan compare {args.problem} --policies {args.policies} --runs {args.runs} "
-         f"--seed {args.seed} --particles {args.particles}")
+    cmd = command_line("compare", f"tmaplan compare {args.problem} --policies {args.policies} "
+                       f"--runs {args.runs} --seed {args.seed} --particles {args.particles}")
     report = write_report(result, args.out, command=cmd,
                           title=f"tmaplan compare: {scenario.name}")
     payload = result.to_json()

@@ -4,7 +4,6 @@ well each cost functional predicts closed-loop performance."""
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from typing import Any
 
@@ -16,6 +15,7 @@ from tmaplan.cli._args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
+    command_line,
     integer,
     open_fraction,
 )
@@ -89,10 +89,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         fig = plot_cost_ranking(res, f"{args.out}/{scenario.name}_rank_costs.png")
         payload["figure"] = f"{args.out}/{scenario.name}_rank_costs.png"
         del fig
-    cmd = "tmaplan rank-costs " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
-        if sys.argv and sys.argv[0].endswith("tmaplan") else \
-        (f"tmaplan rank-costs {args.problem} --candidates {args.candidates} --runs "
-         f"{args.runs} --seed {args.seed} --particles {args.particles}")
+    cmd = command_line("rank-costs", f"tmaplan rank-costs {args.problem} --candidates "
+                       f"{args.candidates} --runs {args.runs} --seed {args.seed} "
+                       f"--particles {args.particles}")
     from pathlib import Path
 
     report = write_ranking_report(res, args.out, command=cmd, figure=None if args.no_figure

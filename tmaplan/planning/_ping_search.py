@@ -194,14 +194,31 @@ def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[
 
 
 
+def _maximal(chosen: Sequence[int], cand: np.ndarray, gap: int) -> bool:
+    """Whether no candidate can be added to ``chosen`` within the spacing ``gap``."""
+    return not any(all(abs(int(c) - x) >= gap for x in chosen) for c in cand
+                   if int(c) not in chosen)
+
+
 def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
            inc_val: float, max_enumerate: int, time_limit: float) -> tuple[list[int], float,
                                                                           float, str]:
-    """Exhaustive enumeration or best-first branch and bound. Returns (steps, val, lb, status)."""
+    """Exhaustive enumeration or best-first branch and bound over every schedule of *at most*
+    ``budget`` pings. Returns (steps, val, lb, status).
+
+    More pings never raise the objective, so the optimum is a set that cannot be extended:
+    one of ``budget`` pings or, with a spacing (``gap`` > 1), a smaller set that no candidate
+    fits beside (e.g. the middle one of three candidates too close to it); both kinds are
+    searched.
+    """
     n = cand.size
     if math.comb(n, budget) <= max_enumerate:
         combos = [c for c in itertools.combinations(cand.tolist(), budget)
                   if _spacing_ok(c, gap)]
+        if gap > 1:  # the smaller sets that cannot be extended
+            combos += [c for k in range(1, budget)
+                       for c in itertools.combinations(cand.tolist(), k)
+                       if _spacing_ok(c, gap) and _maximal(c, cand, gap)]
         vals = ev.evaluate(ev.schedules(combos))
         j = int(np.argmin(vals))
         return list(combos[j]), float(vals[j]), float(vals[j]), "optimal"
@@ -214,10 +231,12 @@ def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent
     heap: list[tuple[float, tuple[int, ...], int]] = [(root_lb, (), 0)]
     while heap and time.perf_counter() - t0 < time_limit:
         batch = [heapq.heappop(heap) for _ in range(min(len(heap), 64))]
-        kids, kid_sets = [], []
+        kids: list[tuple[tuple[int, ...], int]] = []
+        kid_sets: list[list[int]] = []
         for lb, chosen, nxt in batch:
             if lb >= best_val - 1e-12:
                 continue
+            n_kids = len(kids)
             for i in range(nxt, n):
                 c = int(cand[i])
                 if chosen and c - chosen[-1] < gap:
@@ -229,6 +248,11 @@ def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent
                 else:
                     kids.append((ch, i + 1))
                     kid_sets.append(list(ch) + cand[i + 1:].tolist())
+            if len(kids) == n_kids and chosen:
+                # no later candidate fits: the node's own set is a leaf (it may be the
+                # optimum, e.g. a ping between two candidates too close to it)
+                kids.append((chosen, n))
+                kid_sets.append(list(chosen))
         if not kids:
             continue
         vals = ev.evaluate(ev.schedules(kid_sets))

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, is_integer
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
@@ -48,6 +48,30 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Feasibility helpers
 # --------------------------------------------------------------------------------------------
+def _real(value: object) -> float:
+    """``value`` as a float; NaN if it is not a real number (a bool, a string, None)."""
+    if isinstance(value, (bool, str, bytes)):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _windows(windows: Sequence[tuple[float, float]], field: str) -> list[tuple[float, float]]:
+    """Time windows [s] checked: pairs of finite times with start <= end (a reversed or NaN
+    window forbade nothing, silently)."""
+    out = []
+    for i, win in enumerate(windows):
+        pair = tuple(win) if isinstance(win, (tuple, list, np.ndarray)) else ()
+        a, b = (_real(pair[0]), _real(pair[1])) if len(pair) == 2 else (math.nan, math.nan)
+        if not (np.isfinite(a) and np.isfinite(b) and a <= b):
+            raise ArgumentError(f"{field}[{i}]", "a window (start, end) of finite times [s] "
+                                "with start <= end", win)
+        out.append((a, b))
+    return out
+
+
 def ping_candidates(scenario: Scenario, times: np.ndarray, *,
                     candidate_steps: Sequence[int] | None = None,
                     forbidden: Sequence[tuple[float, float]] = (),
@@ -58,20 +82,36 @@ def ping_candidates(scenario: Scenario, times: np.ndarray, *,
     the closed time windows ``forbidden`` and ``planning.ping_forbidden`` [s]), the minimum
     gap between pings [steps] ``ceil(spacing/dt)`` and the spacing [s] (``min_spacing``,
     default ``planning.ping_min_spacing``).
+
+    Raises
+    ------
+    ArgumentError
+        A candidate step that is not an integer in [0, K] (a float was truncated, a bool
+        taken as 0 or 1), a window that is not (start, end) finite with start <= end, a
+        ``min_spacing`` that is not a finite time >= 0.
     """
     pl = scenario.planning
     times = np.asarray(times, float)
     K = times.shape[0] - 1
-    cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
-        np.asarray(list(candidate_steps), int))
-    if cand.size and (cand.min() < 0 or cand.max() > K):
-        raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
-                            f"[{cand.min()}, {cand.max()}]")
-    for a, b in [*forbidden, *(pl.ping_forbidden if pl is not None else ())]:
+    if candidate_steps is None:
+        cand = np.arange(1, K + 1)
+    else:
+        given = list(candidate_steps)
+        if not all(is_integer(c, 0) and c <= K for c in given):
+            raise ArgumentError("candidate_steps", f"integer steps in [0, {K}]", given)
+        cand = np.unique(np.asarray(given, int))
+    # (the scenario's windows are checked by the scenario: end > start)
+    for a, b in [*_windows(forbidden, "forbidden"),
+                 *(pl.ping_forbidden if pl is not None else ())]:
         t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
-    spacing = float(min_spacing if min_spacing is not None else
-                    (pl.ping_min_spacing if pl is not None else 0.0))
+    if min_spacing is not None:
+        spacing = _real(min_spacing)
+        if not (np.isfinite(spacing) and spacing >= 0):
+            raise ArgumentError("min_spacing", "a finite time >= 0 s (None: "
+                                "planning.ping_min_spacing)", min_spacing)
+    else:
+        spacing = float(pl.ping_min_spacing if pl is not None else 0.0)
     return cand, max(1, math.ceil(spacing / float(scenario.time.dt) - 1e-9)), spacing
 
 

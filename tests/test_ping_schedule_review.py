@@ -170,3 +170,19 @@ def test_joint_ocp_own_pings_keep_a_valid_certificate(short, short_prior):
     tight = _with_own_pings(dataclasses.replace(worse, lower_bound=v * (1 + 1e-9)), ev, own)
     assert tight.lower_bound == v and tight.gap == 0.0 and tight.status == "optimal"
     assert _with_own_pings(cert, ev, [36]) is cert  # the scheduler's pings are better
+
+
+def test_schedule_results_are_read_only_and_independent_of_call_order(short, short_prior):
+    # the relaxed weights of a result were the cached relaxation's array: zeroing them in one
+    # result zeroed those of every later call on the same problem (and fed its roundings)
+    from tmaplan.planning import schedule_pings
+
+    s1 = schedule_pings(short, budget=2, belief=short_prior)
+    w = s1.relaxed_weights.copy()
+    assert w.size and w.max() > 0
+    for name in ("steps", "times", "bound", "uniform_steps", "relaxed_weights"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(s1, name)[...] = 0
+    s2 = schedule_pings(short, budget=2, belief=short_prior)
+    np.testing.assert_array_equal(s2.relaxed_weights, w)
+    np.testing.assert_array_equal(s2.steps, s1.steps)

@@ -130,6 +130,14 @@ class PingSchedule:
     bound_seconds: float = 0.0
     relaxed_weights: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
+    def __post_init__(self) -> None:
+        # read-only copies: the relaxed weights were the cached relaxation's own array, so
+        # writing into one result changed the weights (and roundings) of later calls
+        for name in ("steps", "times", "bound", "uniform_steps", "relaxed_weights"):
+            a = np.array(getattr(self, name), copy=True)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
 
 class PingEvaluator:
     """A ping-scheduling objective on a fixed observer track: the closed-form engine

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, is_integer
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
@@ -48,6 +48,30 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Feasibility helpers
 # --------------------------------------------------------------------------------------------
+def _real(value: object) -> float:
+    """``value`` as a float; NaN if it is not a real number (a bool, a string, None)."""
+    if isinstance(value, (bool, str, bytes)):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _windows(windows: Sequence[tuple[float, float]], field: str) -> list[tuple[float, float]]:
+    """Time windows [s] checked: pairs of finite times with start <= end (a reversed or NaN
+    window forbade nothing, silently)."""
+    out = []
+    for i, win in enumerate(windows):
+        pair = tuple(win) if isinstance(win, (tuple, list, np.ndarray)) else ()
+        a, b = (_real(pair[0]), _real(pair[1])) if len(pair) == 2 else (math.nan, math.nan)
+        if not (np.isfinite(a) and np.isfinite(b) and a <= b):
+            raise ArgumentError(f"{field}[{i}]", "a window (start, end) of finite times [s] "
+                                "with start <= end", win)
+        out.append((a, b))
+    return out
+
+
 def ping_candidates(scenario: Scenario, times: np.ndarray, *,
                     candidate_steps: Sequence[int] | None = None,
                     forbidden: Sequence[tuple[float, float]] = (),
@@ -58,20 +82,36 @@ def ping_candidates(scenario: Scenario, times: np.ndarray, *,
     the closed time windows ``forbidden`` and ``planning.ping_forbidden`` [s]), the minimum
     gap between pings [steps] ``ceil(spacing/dt)`` and the spacing [s] (``min_spacing``,
     default ``planning.ping_min_spacing``).
+
+    Raises
+    ------
+    ArgumentError
+        A candidate step that is not an integer in [0, K] (a float was truncated, a bool
+        taken as 0 or 1), a window that is not (start, end) finite with start <= end, a
+        ``min_spacing`` that is not a finite time >= 0.
     """
     pl = scenario.planning
     times = np.asarray(times, float)
     K = times.shape[0] - 1
-    cand = np.arange(1, K + 1) if candidate_steps is None else np.unique(
-        np.asarray(list(candidate_steps), int))
-    if cand.size and (cand.min() < 0 or cand.max() > K):
-        raise PlanningError(f"candidate_steps must lie in [0, {K}], received "
-                            f"[{cand.min()}, {cand.max()}]")
-    for a, b in [*forbidden, *(pl.ping_forbidden if pl is not None else ())]:
+    if candidate_steps is None:
+        cand = np.arange(1, K + 1)
+    else:
+        given = list(candidate_steps)
+        if not all(is_integer(c, 0) and c <= K for c in given):
+            raise ArgumentError("candidate_steps", f"integer steps in [0, {K}]", given)
+        cand = np.unique(np.asarray(given, int))
+    # (the scenario's windows are checked by the scenario: end > start)
+    for a, b in [*_windows(forbidden, "forbidden"),
+                 *(pl.ping_forbidden if pl is not None else ())]:
         t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
-    spacing = float(min_spacing if min_spacing is not None else
-                    (pl.ping_min_spacing if pl is not None else 0.0))
+    if min_spacing is not None:
+        spacing = _real(min_spacing)
+        if not (np.isfinite(spacing) and spacing >= 0):
+            raise ArgumentError("min_spacing", "a finite time >= 0 s (None: "
+                                "planning.ping_min_spacing)", min_spacing)
+    else:
+        spacing = float(pl.ping_min_spacing if pl is not None else 0.0)
     return cand, max(1, math.ceil(spacing / float(scenario.time.dt) - 1e-9)), spacing
 
 
@@ -194,14 +234,31 @@ def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[
 
 
 
+def _maximal(chosen: Sequence[int], cand: np.ndarray, gap: int) -> bool:
+    """Whether no candidate can be added to ``chosen`` within the spacing ``gap``."""
+    return not any(all(abs(int(c) - x) >= gap for x in chosen) for c in cand
+                   if int(c) not in chosen)
+
+
 def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
            inc_val: float, max_enumerate: int, time_limit: float) -> tuple[list[int], float,
                                                                           float, str]:
-    """Exhaustive enumeration or best-first branch and bound. Returns (steps, val, lb, status)."""
+    """Exhaustive enumeration or best-first branch and bound over every schedule of *at most*
+    ``budget`` pings. Returns (steps, val, lb, status).
+
+    More pings never raise the objective, so the optimum is a set that cannot be extended:
+    one of ``budget`` pings or, with a spacing (``gap`` > 1), a smaller set that no candidate
+    fits beside (e.g. the middle one of three candidates too close to it); both kinds are
+    searched.
+    """
     n = cand.size
     if math.comb(n, budget) <= max_enumerate:
         combos = [c for c in itertools.combinations(cand.tolist(), budget)
                   if _spacing_ok(c, gap)]
+        if gap > 1:  # the smaller sets that cannot be extended
+            combos += [c for k in range(1, budget)
+                       for c in itertools.combinations(cand.tolist(), k)
+                       if _spacing_ok(c, gap) and _maximal(c, cand, gap)]
         vals = ev.evaluate(ev.schedules(combos))
         j = int(np.argmin(vals))
         return list(combos[j]), float(vals[j]), float(vals[j]), "optimal"
@@ -214,10 +271,12 @@ def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent
     heap: list[tuple[float, tuple[int, ...], int]] = [(root_lb, (), 0)]
     while heap and time.perf_counter() - t0 < time_limit:
         batch = [heapq.heappop(heap) for _ in range(min(len(heap), 64))]
-        kids, kid_sets = [], []
+        kids: list[tuple[tuple[int, ...], int]] = []
+        kid_sets: list[list[int]] = []
         for lb, chosen, nxt in batch:
             if lb >= best_val - 1e-12:
                 continue
+            n_kids = len(kids)
             for i in range(nxt, n):
                 c = int(cand[i])
                 if chosen and c - chosen[-1] < gap:
@@ -229,6 +288,11 @@ def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent
                 else:
                     kids.append((ch, i + 1))
                     kid_sets.append(list(ch) + cand[i + 1:].tolist())
+            if len(kids) == n_kids and chosen:
+                # no later candidate fits: the node's own set is a leaf (it may be the
+                # optimum, e.g. a ping between two candidates too close to it)
+                kids.append((chosen, n))
+                kid_sets.append(list(chosen))
         if not kids:
             continue
         vals = ev.evaluate(ev.schedules(kid_sets))

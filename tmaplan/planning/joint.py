@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.pings import PingSchedule, schedule_pings
@@ -73,6 +73,9 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
 
     Raises
     ------
+    ArgumentError
+        ``budget`` not an integer >= 0 (a bool or a float was truncated), ``max_rounds`` not
+        an integer >= 1.
     PlanningError
         Unsupported objective; infeasible heading or ping requests (see the two planners).
     """
@@ -80,6 +83,10 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
     if objective not in _PAIRS:
         raise PlanningError(f"joint objective: expected one of {sorted(_PAIRS)}, received "
                             f"{objective!r}")
+    if budget is not None and not is_integer(budget, 0):
+        raise ArgumentError("budget", "an integer >= 0 (None: planning.ping_budget)", budget)
+    if not is_integer(max_rounds, 1):  # 0 rounds left no schedule to return
+        raise ArgumentError("max_rounds", "an integer >= 1", max_rounds)
     pl = scenario.planning
     budget = int(budget if budget is not None else (pl.ping_budget if pl is not None else 0))
     bel = belief if belief is not None else Belief.from_prior(scenario)

@@ -78,7 +78,13 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import _PAIRS
 from tmaplan.planning.objectives import belief_bearing_information
-from tmaplan.planning.pings import PingEvaluator, PingSchedule, schedule_pings
+from tmaplan.planning.pings import (
+    _TIGHT,
+    OPTIMAL_GAP,
+    PingEvaluator,
+    PingSchedule,
+    schedule_pings,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -184,6 +190,34 @@ def _check_int(name: str, value: Any, low: int) -> int:
     if not is_integer(value, low):
         raise PlanningError(f"{name}: expected an integer >= {low}, received {value!r}")
     return int(value)
+
+
+def _with_own_pings(cert: PingSchedule, ev: PingEvaluator, steps: Sequence[int],
+                    ) -> PingSchedule:
+    """``cert`` (the scheduler's certified pings on the final track), or the pair's own pings
+    ``steps`` with ``cert``'s lower bound when they are better.
+
+    The bound is checked as :func:`~tmaplan.planning.pings.schedule_pings` checks it: above
+    the own pings' objective by more than the solver's tolerance it is an invalid certificate
+    (:class:`PlanningError`), a NaN bound gives no gap ("no bound") — both were reported as a
+    zero gap and "optimal".
+    """
+    v_own = ev.value(list(steps))
+    if not v_own < cert.objective:
+        return cert
+    own = np.asarray(sorted(steps), int)
+    lb = float(cert.lower_bound)
+    if np.isfinite(lb) and v_own < lb <= v_own * (1 + _TIGHT):
+        lb = v_own  # tight relaxation, equal up to the solver's tolerance
+    if np.isfinite(lb) and lb > v_own:
+        raise PlanningError(f"lower bound {lb:.6g} above the objective {v_own:.6g} of the "
+                            f"joint plan's pings ({cert.gap_reference}): certificate invalid")
+    g_rel = (v_own - lb) / v_own if np.isfinite(lb) and v_own > 0 else float("nan")
+    status = ("no bound" if not np.isfinite(g_rel) else
+              "optimal" if g_rel <= OPTIMAL_GAP else "feasible")
+    return dataclasses.replace(cert, steps=own, times=ev.times[own], objective=v_own,
+                               lower_bound=lb, gap=g_rel, status=status,
+                               bound=ev.per_step(ev.schedules([own.tolist()]))[0])
 
 
 def _spacing_matrix(cand: np.ndarray, gap: int) -> np.ndarray:
@@ -464,15 +498,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     cert = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                           observer=plan.observer, belief=bel, min_spacing=min_spacing,
                           forbidden=forbidden, gap_reference="auto")
-    ev = PingEvaluator(scenario, plan.observer, bel, pair)
-    v_own = ev.value(steps)
-    final = cert
-    if v_own < cert.objective:
-        own = np.asarray(sorted(steps), int)
-        g_rel = max(0.0, (v_own - cert.lower_bound) / v_own)
-        final = dataclasses.replace(cert, steps=own, times=ev.times[own], objective=v_own,
-                                    gap=g_rel, bound=ev.per_step(ev.schedules([own.tolist()]))[0],
-                                    status="optimal" if g_rel <= 1e-3 else "feasible")
+    final = _with_own_pings(cert, PingEvaluator(scenario, plan.observer, bel, pair), steps)
     return JointOCPResult(
         heading=plan, pings=final, objective=float(final.objective),
         lower_bound=float(final.lower_bound), gap=float(final.gap),

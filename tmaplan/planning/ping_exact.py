@@ -372,7 +372,7 @@ def tree_search(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
     time_limit : float
         [s]; on expiry the open subtrees' bounds give the certified lower bound.
     workers : int, optional
-        Processes (default: the CPUs available, at most 2 per 100 subtrees).
+        Processes (default: the CPUs available, at most 2; a falsy value is the default).
     """
     if ev.objective not in ("mean-range-bound", "terminal-range-bound"):
         raise PlanningError(f"objective: expected a range objective for the tree "

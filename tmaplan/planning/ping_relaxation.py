@@ -154,6 +154,11 @@ class RelaxationResult:
     status: str
     seconds: float
 
+    def __post_init__(self) -> None:
+        u = np.array(self.u, float, copy=True)  # read-only: results are cached and shared
+        u.flags.writeable = False
+        object.__setattr__(self, "u", u)
+
 
 class Relaxation:
     """The SDP relaxation of one scheduling problem, built once and re-solved.

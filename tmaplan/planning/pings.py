@@ -32,7 +32,7 @@ import numpy as np
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
 from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.models.observer import ObserverTrack, observer_track
 
 # The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
@@ -129,6 +129,14 @@ class PingSchedule:
         default_factory=lambda: np.zeros(0, dtype=int))
     bound_seconds: float = 0.0
     relaxed_weights: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        # read-only copies: the relaxed weights were the cached relaxation's own array, so
+        # writing into one result changed the weights (and roundings) of later calls
+        for name in ("steps", "times", "bound", "uniform_steps", "relaxed_weights"):
+            a = np.array(getattr(self, name), copy=True)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
 
 
 class PingEvaluator:
@@ -247,6 +255,10 @@ def schedule_pings(scenario: Scenario, *, budget: int,
 
     Raises
     ------
+    ArgumentError
+        ``budget``, ``max_enumerate`` or ``workers`` not an integer in range (a bool or a float
+        was truncated), ``time_limit`` NaN or negative (NaN never stopped the enumeration);
+        ``candidate_steps``, ``forbidden``, ``min_spacing`` invalid (:func:`ping_candidates`).
     PlanningError
         Budget larger than the candidate steps (or than the spacing allows), no range sensor.
     """
@@ -254,9 +266,16 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     from tmaplan.planning.ping_relaxation import relaxation_bound
 
     t_start = time.perf_counter()
+    if not is_integer(budget, 0):
+        raise ArgumentError("budget", "an integer >= 0 (pings)", budget)
     budget = int(budget)
-    if budget < 0:
-        raise PlanningError(f"budget: expected >= 0 pings, received {budget}")
+    if not is_integer(max_enumerate, 0):
+        raise ArgumentError("max_enumerate", "an integer >= 0", max_enumerate)
+    if workers is not None and not is_integer(workers, 1):
+        raise ArgumentError("workers", "an integer >= 1 (None: the available cores)", workers)
+    if isinstance(time_limit, bool) or not isinstance(time_limit, (int, float, np.number)) \
+            or not float(time_limit) >= 0:
+        raise ArgumentError("time_limit", "a time >= 0 s (inf: none)", time_limit)
     if method not in ("exact", "relaxed", "greedy"):
         raise PlanningError(f"method: expected 'exact', 'relaxed' or 'greedy', received "
                             f"{method!r}")

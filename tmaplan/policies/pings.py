@@ -64,9 +64,23 @@ class ScheduledPings:
 
     def controller(self, scenario: Scenario) -> Controller:
         """Controller replaying the schedule (computed along the scenario's own track if no
-        steps are given; :class:`Combined` schedules along its manoeuvre's nominal track)."""
+        steps are given; :class:`Combined` schedules along its manoeuvre's nominal track).
+
+        Raises
+        ------
+        ArgumentError
+            Given ``steps`` that are not integers in [1, K] (step 0 cannot be pinged: a ping
+            is decided one step ahead).
+        """
         if self.steps is not None:
-            return _StepPings(np.asarray(self.steps, dtype=int))
+            K = scenario.time.n_steps
+            steps = list(self.steps)
+            # a ping is decided one step ahead (``act`` at step k pings at k + 1): step 0 and
+            # steps past the horizon would silently never be pinged, a float be truncated
+            if not all(is_integer(s, 1) and s <= K for s in steps):
+                raise ArgumentError("scheduled.steps", f"integer steps in [1, {K}]",
+                                    self.steps)
+            return _StepPings(np.asarray(steps, dtype=int))
         return _StepPings(_offline_schedule(scenario, _budget(scenario, self.budget),
                                             self.method, self.objective))
 

@@ -127,3 +127,12 @@ def test_forbidden_window_and_spacing_hold(default, prior):
     assert np.all(r.candidate_steps * 15.0 > 300.0)
     assert np.all(r.pings.times > 300.0) and np.all(np.diff(r.pings.times) >= 240.0)
     assert r.lower_bound <= r.objective
+
+
+def test_alternating_returns_a_consistent_pair_at_the_round_limit(default, prior):
+    # one round: pings scheduled, headings re-solved with them; the pings returned must be
+    # scheduled on the headings returned (they were those of the previous track)
+    r = plan_joint(default, budget=2, belief=prior, max_rounds=1, **SMALL)
+    ev = PingEvaluator(default, r.heading.observer, prior, "mean-range-bound")
+    assert ev.value(r.pings.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)
+    assert r.history[-1] == r.objective and r.iterations == 1

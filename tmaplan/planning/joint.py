@@ -14,8 +14,6 @@ import dataclasses
 import time
 from typing import TYPE_CHECKING, Any, Literal
 
-import numpy as np
-
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
@@ -95,11 +93,17 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
     history = [plan.objective]
     steps: list[int] = []
     sched: PingSchedule | None = None
+    stale = False  # the heading plan changed after the last schedule
     rounds = 0
+
+    def reschedule() -> PingSchedule:
+        return schedule_pings(scenario, budget=budget, method=ping_method,
+                              objective=_PAIRS[objective],  # type: ignore[arg-type]
+                              observer=plan.observer, belief=bel, gap_reference="none")
+
     for rounds in range(1, max_rounds + 1):  # noqa: B007 - rounds is reported
-        sched = schedule_pings(scenario, budget=budget, method=ping_method,
-                               objective=_PAIRS[objective],  # type: ignore[arg-type]
-                               observer=plan.observer, belief=bel, gap_reference="none")
+        sched = reschedule()
+        stale = False
         history.append(sched.objective)
         new = sched.steps.tolist()
         if new == steps:
@@ -107,13 +111,13 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
         steps = new
         plan2 = planner.solve(bel, warm_start=plan, ping_steps=steps)
         if plan2.objective <= sched.objective + 1e-9 * max(1.0, abs(sched.objective)):
-            plan = plan2
+            plan, stale = plan2, True
         history.append(plan.objective)
-    assert sched is not None
-    if not np.array_equal(sched.steps, np.asarray(steps, int)):
-        sched = schedule_pings(scenario, budget=budget, method=ping_method,
-                               objective=_PAIRS[objective],  # type: ignore[arg-type]
-                               observer=plan.observer, belief=bel, gap_reference="none")
+    if sched is None or stale:
+        # stopped at max_rounds after a heading re-solve: the pings returned are scheduled
+        # on the heading plan returned, not on the one before it
+        sched = reschedule()
+        history.append(sched.objective)
     return JointPlan(heading=plan, pings=sched, objective=sched.objective,
                      history=tuple(history), iterations=rounds,
                      seconds=time.perf_counter() - t0)

@@ -241,7 +241,7 @@ def _with_faults(scenario: Scenario, ms: MeasurementSet, obs: ObserverTrack,
     faults, sensor = scenario.faults, scenario.sensors[ms.sensor]
     n = ms.steps.size
     values, rel = ms.values, ms.relative
-    keep = ~dropped(faults, ms.times, "bearing" if ms.kind == "bearing" else "range")
+    keep = ~dropped(faults, ms.times, ms.kind)
     if isinstance(sensor, BearingSensor):
         u = rng.random((n, 2)) if rng is not None else np.ones((n, 2))
         values = corrupt_bearings(faults, values, ms.truth, u, ambiguity=sensor.ambiguity)
@@ -407,11 +407,14 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
 
 def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSet],
                         observer: ObserverTrack) -> dict[int, list[Measurement]]:
-    """Group a run's measurement sets into per-step :class:`Measurement` lists."""
+    """Group a run's measurement sets into per-step :class:`Measurement` lists (the readings
+    of an active range sensor are pings, ``Measurement.ping``, as in :func:`measure_step`)."""
     out: dict[int, list[Measurement]] = {}
     offset = observer.velocity - observer.mean_velocity
     for ms in measurements:
         for i, k in enumerate(np.asarray(ms.steps, int)):
-            m = _measurement(scenario.sensors[ms.sensor], ms.values[i], offset[k])
+            sensor = scenario.sensors[ms.sensor]
+            m = _measurement(sensor, ms.values[i], offset[k],
+                             ping=isinstance(sensor, RangeSensor) and sensor.active)
             out.setdefault(int(k), []).append(m)
     return out

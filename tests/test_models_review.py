@@ -118,3 +118,33 @@ def test_point_mass_outside_its_truncation_is_refused(default, changes, field):
     with pytest.raises(ScenarioError) as exc:
         sample_prior(default.replace(prior=p), 4, np.random.default_rng(0))
     assert exc.value.field == field
+
+
+def test_scenario_truth_follows_the_scenario_target_model(default):
+    # draw_truth(from_prior=False) (`compare --truth scenario`) propagated the initial state of
+    # a constant-turn or multi-leg target in a straight line.
+    from tmaplan.models.target import target_track
+    from tmaplan.simulate import draw_truth
+
+    circle = load_problem("clavard2013-halfturn-cw")
+    x = draw_truth(circle, np.random.default_rng(0), from_prior=False)
+    np.testing.assert_allclose(x, target_track(circle.target, circle.time, None), atol=1e-6)
+    legs = Target(model="multi-leg", position=default.target.position, velocity=(3.0, 0.0),
+                  legs=(TargetLeg(start=600.0, velocity=(0.0, 3.0)),), q=1e-4)
+    s = default.replace(target=legs)
+    x = draw_truth(s, np.random.default_rng(0), from_prior=False)
+    k = 80  # 20 min
+    assert x[k, 3] == pytest.approx(3.0, abs=0.5) and x[k, 2] == pytest.approx(0.0, abs=0.5)
+    # an ncv target's truth is unchanged (bit for bit): x_{k+1} = F x_k + L z_k
+    from tmaplan.models.prior import true_initial_state
+    from tmaplan.models.target import ncv_matrices
+
+    ncv = default.replace(target=dataclasses.replace(default.target, q=1e-4))
+    got = draw_truth(ncv, np.random.default_rng(3), from_prior=False)
+    F, Q = ncv_matrices(ncv.time.dt, 1e-4)
+    w = np.random.default_rng(3).standard_normal((ncv.n_steps, 4)) @ \
+        np.linalg.cholesky(Q + 1e-30 * np.eye(4)).T
+    want = [true_initial_state(ncv)]
+    for k in range(ncv.n_steps):
+        want.append(F @ want[-1] + w[k])
+    assert np.array_equal(got, np.array(want))

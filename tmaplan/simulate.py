@@ -293,21 +293,27 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
 
     With ``from_prior`` the initial state is drawn from the scenario's prior (one draw), then
     propagated with the NCV model of intensity ``scenario.target.q``; otherwise the scenario's
-    own initial state is used. The faults' ``target_manoeuvres`` (unknown to the filter) are
-    applied to the track.
+    own track is used (its initial state propagated by NCV; a multi-leg or constant-turn
+    target's legs or circle plus the same NCV noise). The faults' ``target_manoeuvres``
+    (unknown to the filter) are applied to the track.
     """
     from tmaplan.models.prior import sample_prior, true_initial_state
 
-    x0 = (sample_prior(scenario, 1, rng)[0] if from_prior and scenario.prior is not None
-          else true_initial_state(scenario))
+    prior = from_prior and scenario.prior is not None
+    x0 = sample_prior(scenario, 1, rng)[0] if prior else true_initial_state(scenario)
     K, dt = scenario.n_steps, scenario.time.dt
     F, Q = ncv_matrices(dt, scenario.target.q)
     L = np.linalg.cholesky(Q + 1e-30 * np.eye(4)) if scenario.target.q > 0 else np.zeros((4, 4))
     w = rng.standard_normal((K, 4)) @ L.T
     x = np.empty((K + 1, 4))
-    x[0] = x0
+    if prior or scenario.target.model == "ncv":
+        x[0] = x0
+    else:  # the scenario's legs or circle, plus the noise through the NCV dynamics
+        x[0] = 0.0
     for k in range(K):  # recursion over time
         x[k + 1] = F @ x[k] + w[k]
+    if not (prior or scenario.target.model == "ncv"):
+        x += target_track(scenario.target, scenario.time, None)
     return apply_manoeuvres(scenario.faults, x, scenario.times)
 
 

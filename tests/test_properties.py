@@ -57,9 +57,11 @@ def scenario_dicts(draw):
     n_legs = draw(st.integers(0, 2))
     starts = sorted(draw(st.lists(st.integers(1, n - 1), min_size=n_legs, max_size=n_legs,
                                   unique=True)))
+    # only the last leg may turn at a rate: a leg may not start inside the previous turn
     d["observer"]["legs"] = [
         {"start": s * dt, "course": f"{draw(angles)} deg",
-         **({"turn_rate": "1 deg/s"} if draw(st.booleans()) else {})} for s in starts]
+         **({"turn_rate": "1 deg/s"} if i == n_legs - 1 and draw(st.booleans()) else {})}
+        for i, s in enumerate(starts)]
     if draw(st.booleans()):
         steps = sorted(draw(st.lists(st.integers(1, n), max_size=4, unique=True)))
         d["sensors"].append({"kind": "range", "sigma": "50 m", "steps": steps})

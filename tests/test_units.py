@@ -199,3 +199,12 @@ def test_cached_parsing_is_fast() -> None:
             to_si(text, dim, "x")
     elapsed = time.perf_counter() - start
     assert elapsed < 0.5, f"{50 * len(texts)} conversions took {elapsed:.3f} s"
+
+
+@pytest.mark.parametrize("text", ["0 dB", "3 dB", "1 octave", "0.5 neper"])
+def test_logarithmic_units_are_refused(text: str) -> None:
+    # pint's root-unit factor of a logarithmic unit is 1: "0 dB" became 0 (it is a ratio of 1)
+    with pytest.raises(UnitError, match="logarithmic") as info:
+        to_si(text, "dimensionless", "faults.missed_ping_probability")
+    assert info.value.field == "faults.missed_ping_probability"
+    assert to_si("50 %", "dimensionless", "p") == pytest.approx(0.5)

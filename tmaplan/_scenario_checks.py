@@ -125,6 +125,9 @@ def check(s: Any, source: str | None) -> None:
         if leg.start <= last:
             raise _err(f"target.legs[{i}].start", f"> {last} s (legs in time order)",
                        leg.start, source)
+        if leg.start <= g.t0:
+            raise _err(f"target.legs[{i}].start", f"> t0 = {g.t0} s (target.position and its "
+                       "velocity hold at t0)", leg.start, source)
         last = leg.start
 
     o = s.observer
@@ -152,7 +155,7 @@ def check(s: Any, source: str | None) -> None:
             raise _err(f"{f}.course", "'velocity', 'course' or 'speed'", None, source)
         if leg.start <= last:
             raise _err(f"{f}.start", f"> {last} s (legs in time order)", leg.start, source)
-        if leg.start > g.t0 + g.horizon:
+        if not g.t0 <= leg.start <= g.t0 + g.horizon:
             raise _err(f"{f}.start", f"within the horizon [{g.t0}, {g.t0 + g.horizon}] s",
                        leg.start, source)
         last = leg.start
@@ -173,6 +176,10 @@ def check(s: Any, source: str | None) -> None:
             if abs(u) > o.turn_rate_max * (1 + 1e-12):
                 raise _err(f"observer.turn_rates[{i}]",
                            f"|u| <= observer.turn_rate_max = {o.turn_rate_max} rad/s", u, source)
+    if any(leg.turn_rate is not None for leg in o.legs):
+        from tmaplan.models.observer import observer_track
+
+        observer_track(o, g, source=source)  # refuses a leg starting inside the previous turn
     if o.heading_min is not None and o.heading_max is not None \
             and o.heading_min >= o.heading_max:
         raise _err("observer.heading_max", f"> heading_min = {o.heading_min} rad",
@@ -223,6 +230,9 @@ def check(s: Any, source: str | None) -> None:
                 if p.speed_distribution == "uniform" and p.speed_max is None:
                     raise _err("prior.speed_max", "a value for speed_distribution 'uniform'",
                                None, source)
+                if p.speed_max is not None and p.speed_max <= p.speed_min:
+                    raise _err("prior.speed_max", f"> speed_min = {p.speed_min} m/s",
+                               p.speed_max, source)
                 if p.course_mode == "given" and p.course_mean is None:
                     raise _err("prior.course_mean", "a value for course_mode 'given'", None,
                                source)

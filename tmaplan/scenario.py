@@ -129,7 +129,7 @@ class TargetLeg:
     Attributes
     ----------
     start : float
-        Time the leg starts [s] (absolute, on the scenario clock).
+        Time the leg starts [s] (absolute, on the scenario clock), after t0.
     velocity : tuple of float, optional
         (v_x, v_y) [m/s], x East, y North.
     course : float, optional
@@ -291,7 +291,7 @@ class ObserverLeg:
     Attributes
     ----------
     start : float
-        [s].
+        [s]; not before t0 or the end of the previous leg's turn.
     velocity : tuple of float, optional
         (v_x, v_y) [m/s].
     course : float, optional

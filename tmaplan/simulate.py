@@ -241,7 +241,7 @@ def _with_faults(scenario: Scenario, ms: MeasurementSet, obs: ObserverTrack,
     faults, sensor = scenario.faults, scenario.sensors[ms.sensor]
     n = ms.steps.size
     values, rel = ms.values, ms.relative
-    keep = ~dropped(faults, ms.times, "bearing" if ms.kind == "bearing" else "range")
+    keep = ~dropped(faults, ms.times, ms.kind)
     if isinstance(sensor, BearingSensor):
         u = rng.random((n, 2)) if rng is not None else np.ones((n, 2))
         values = corrupt_bearings(faults, values, ms.truth, u, ambiguity=sensor.ambiguity)
@@ -293,21 +293,27 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
 
     With ``from_prior`` the initial state is drawn from the scenario's prior (one draw), then
     propagated with the NCV model of intensity ``scenario.target.q``; otherwise the scenario's
-    own initial state is used. The faults' ``target_manoeuvres`` (unknown to the filter) are
-    applied to the track.
+    own track is used (its initial state propagated by NCV; a multi-leg or constant-turn
+    target's legs or circle plus the same NCV noise). The faults' ``target_manoeuvres``
+    (unknown to the filter) are applied to the track.
     """
     from tmaplan.models.prior import sample_prior, true_initial_state
 
-    x0 = (sample_prior(scenario, 1, rng)[0] if from_prior and scenario.prior is not None
-          else true_initial_state(scenario))
+    prior = from_prior and scenario.prior is not None
+    x0 = sample_prior(scenario, 1, rng)[0] if prior else true_initial_state(scenario)
     K, dt = scenario.n_steps, scenario.time.dt
     F, Q = ncv_matrices(dt, scenario.target.q)
     L = np.linalg.cholesky(Q + 1e-30 * np.eye(4)) if scenario.target.q > 0 else np.zeros((4, 4))
     w = rng.standard_normal((K, 4)) @ L.T
     x = np.empty((K + 1, 4))
-    x[0] = x0
+    if prior or scenario.target.model == "ncv":
+        x[0] = x0
+    else:  # the scenario's legs or circle, plus the noise through the NCV dynamics
+        x[0] = 0.0
     for k in range(K):  # recursion over time
         x[k + 1] = F @ x[k] + w[k]
+    if not (prior or scenario.target.model == "ncv"):
+        x += target_track(scenario.target, scenario.time, None)
     return apply_manoeuvres(scenario.faults, x, scenario.times)
 
 
@@ -407,11 +413,14 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
 
 def measurement_batches(scenario: Scenario, measurements: Sequence[MeasurementSet],
                         observer: ObserverTrack) -> dict[int, list[Measurement]]:
-    """Group a run's measurement sets into per-step :class:`Measurement` lists."""
+    """Group a run's measurement sets into per-step :class:`Measurement` lists (the readings
+    of an active range sensor are pings, ``Measurement.ping``, as in :func:`measure_step`)."""
     out: dict[int, list[Measurement]] = {}
     offset = observer.velocity - observer.mean_velocity
     for ms in measurements:
         for i, k in enumerate(np.asarray(ms.steps, int)):
-            m = _measurement(scenario.sensors[ms.sensor], ms.values[i], offset[k])
+            sensor = scenario.sensors[ms.sensor]
+            m = _measurement(sensor, ms.values[i], offset[k],
+                             ping=isinstance(sensor, RangeSensor) and sensor.active)
             out.setdefault(int(k), []).append(m)
     return out

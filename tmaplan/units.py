@@ -137,8 +137,12 @@ def _unit_factor(unit: str) -> tuple[float, pint.Unit]:
         reg = _registry()
         parsed = reg.parse_units(unit)
         factor, root = reg.get_root_units(parsed)
+        # a logarithmic (dB, octave) or offset (degC) unit is no factor: 0 dB is 1
+        zero = float(reg.Quantity(0.0, parsed).to_root_units().magnitude)
     except Exception as exc:  # any failure to parse a user string is a unit error
         raise _ParseError(f"unknown unit {unit!r}") from exc
+    if zero != 0.0:
+        raise _ParseError(f"unit {unit!r} is logarithmic or has an offset (not a scale factor)")
     return float(cast(float, factor)), root
 
 

@@ -75,7 +75,8 @@ class Dropout:
     end : float
         [s], > start.
     sensors : {"all", "bearing", "range"}
-        Which measurements drop ("range": passive ranges and ping echoes).
+        Which measurements drop ("range": passive ranges and ping echoes; frequency lines
+        only with "all").
     """
 
     start: NonNegTime
@@ -138,8 +139,9 @@ class Faults:
 
 
 def dropped(faults: Faults | None, t: np.ndarray | float, kind: str) -> np.ndarray:
-    """Whether measurements of ``kind`` ("bearing" or "range") at times ``t`` [s] fall in a
-    dropout window; boolean array of the shape of ``t``."""
+    """Whether measurements of ``kind`` ("bearing", "range" or "frequency") at times ``t`` [s]
+    fall in a dropout window; boolean array of the shape of ``t``. Frequency lines drop only
+    in an "all" window (:class:`Dropout`)."""
     t = np.asarray(t, float)
     out = np.zeros(t.shape, bool)
     for d in faults.dropouts if faults is not None else ():

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.display import short_repr
+from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.target import initial_velocity
 
@@ -131,7 +132,8 @@ def turn_rate_track(position0: np.ndarray, heading0: float, speed: float,
                          heading=wrap_angle(heading), speed=np.full(K + 1, float(speed)))
 
 
-def observer_track(observer: Observer, grid: TimeGrid) -> ObserverTrack:
+def observer_track(observer: Observer, grid: TimeGrid, *,
+                   source: str | None = None) -> ObserverTrack:
     """Observer track for a scenario's observer (scripted legs or turn-rate sequence).
 
     Instantaneous course changes happen exactly at the leg start; turns at a given rate start
@@ -142,10 +144,18 @@ def observer_track(observer: Observer, grid: TimeGrid) -> ObserverTrack:
     ----------
     observer : Observer
     grid : TimeGrid
+    source : str, optional
+        File or problem name for error messages.
 
     Returns
     -------
     ObserverTrack
+
+    Raises
+    ------
+    ScenarioError
+        If a leg starts before t0 or before the previous leg's turn has ended (it could not
+        start at its start).
     """
     v0 = initial_velocity(observer)
     course0, spd0 = course_speed(v0)
@@ -160,8 +170,12 @@ def observer_track(observer: Observer, grid: TimeGrid) -> ObserverTrack:
     t_end_all = float(times[-1])
     segments: list[tuple[float, float, float, float, float]] = []
     t, psi, spd = float(times[0]), heading0, speed0
-    for leg in observer.legs:
+    for i, leg in enumerate(observer.legs):
         start = float(leg.start)
+        if start < t - 1e-9 * max(1.0, abs(t)):
+            after = (f"t0 = {t} s" if t == float(times[0]) else
+                     f"{t} s, the end of the previous leg's turn (a leg starts at its start)")
+            raise ScenarioError(f"observer.legs[{i}].start", f">= {after}", start, source=source)
         if start > t:
             segments.append((t, start, psi, 0.0, spd))
             t = start

@@ -32,9 +32,14 @@ def true_initial_state(scenario: Scenario) -> np.ndarray:
     return np.concatenate([np.asarray(t.position, float), initial_velocity(t)])
 
 
-def _truncnorm(mean: np.ndarray | float, std: float, lo: float, hi: float, n: int,
-               rng: np.random.Generator) -> np.ndarray:
+def _truncnorm(mean: float, std: float, lo: float, hi: float, n: int,
+               rng: np.random.Generator, field: str) -> np.ndarray:
+    """``n`` draws of N(mean, std²) truncated to [lo, hi]; a point mass for ``std = 0``,
+    which must lie in [lo, hi] (``field`` names the mean in the error)."""
     if std == 0.0:
+        if not lo <= mean <= hi:
+            raise ScenarioError(field, f"a value within [{lo}, {hi}] (the std is 0: every "
+                                "sample is the mean)", mean)
         return np.full(n, float(mean))
     a, b = (lo - mean) / std, (hi - mean) / std
     return stats.truncnorm.rvs(a, b, loc=mean, scale=std, size=n, random_state=rng)
@@ -78,7 +83,8 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
     hi = p.range_max if p.range_max is not None else np.inf
     if p.range_distribution == "normal":
         r_mean = p.range_mean if p.range_mean is not None else true_range
-        rng_ = _truncnorm(r_mean, float(p.range_std or 0.0), p.range_min, hi, n, rng)
+        rng_ = _truncnorm(r_mean, float(p.range_std or 0.0), p.range_min, hi, n, rng,
+                          "prior.range_mean")
     elif p.range_distribution == "uniform":
         rng_ = rng.uniform(p.range_min, hi, n)
     else:
@@ -95,7 +101,8 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
             speed = rng.uniform(p.speed_min, s_hi, n)
         else:
             s_mean = p.speed_mean if p.speed_mean is not None else true_speed
-            speed = _truncnorm(s_mean, p.speed_std, p.speed_min, s_hi, n, rng)
+            speed = _truncnorm(s_mean, p.speed_std, p.speed_min, s_hi, n, rng,
+                               "prior.speed_mean")
         if p.course_mode == "uniform":
             course = rng.uniform(-np.pi, np.pi, n)
         else:

@@ -194,4 +194,8 @@ def test_python_dash_m_tmaplan_runs_the_cli():
 def test_prior_samples_have_an_upper_limit(tmp_path, capsys):
     path = _problem_file(tmp_path, "default", "samples = 100000", "samples = 100000000000000")
     err = _one_line_error(capsys, ["bound", str(path)])
-    assert "prior.samples" in err and "at most 10000000" in err and "100000000000000" in err
+    assert "prior.samples" in err and "between 5 and 10000000" in err
+    assert "100000000000000" in err
+    path = _problem_file(tmp_path, "default", "samples = 100000", "samples = 1")
+    err = _one_line_error(capsys, ["bound", str(path)])  # one sample: a NaN covariance
+    assert "prior.samples" in err and "received 1" in err

@@ -417,8 +417,8 @@ MAX_PRIOR_SAMPLES = 10_000_000
 
 def _check_prior(p: Any, source: str | None) -> None:
     """A prior states its velocity and never takes the truth silently."""
-    if p.samples > MAX_PRIOR_SAMPLES:
-        raise _err("prior.samples", f"at most {MAX_PRIOR_SAMPLES}", p.samples, source)
+    if not 5 <= p.samples <= MAX_PRIOR_SAMPLES:  # 5: a belief's fewest samples (moments)
+        raise _err("prior.samples", f"between 5 and {MAX_PRIOR_SAMPLES}", p.samples, source)
     if p.kind == "polar":
         if p.velocity_distribution == "normal" and not p.velocity_std > 0:
             raise _err("prior.velocity_std", "a velocity prior: velocity_mean = [v_x, v_y] with "

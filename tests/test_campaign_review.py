@@ -3,13 +3,24 @@ passed in, and the report's command line."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
+from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import RunMetrics
 from tmaplan.evaluation.records import PolicyRun, RunRecord
+from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.policies import Combined, Straight
+from tmaplan.scenario import load_problem
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_problem("default")
 
 
 def _record() -> RunRecord:
@@ -34,3 +45,45 @@ def test_a_truncated_run_file_is_recomputed_not_a_crash(tmp_path):
     for cut in (len(data) // 2, len(data) - 10):
         path.write_bytes(data[:cut])
         assert RunRecord.load(path, ("straight",)) is None
+
+
+@pytest.mark.parametrize(("change", "field"), [
+    ({"truth": "Prior"}, "truth"),          # was flown as truth = "scenario"
+    ({"runs": True}, "runs"),
+    ({"n_particles": 300.0}, "n_particles"),
+    ({"seed": -1}, "seed"),
+    ({"seed": 1.5}, "seed"),
+    ({"policies": "straight"}, "policies"),  # was read as the policies 's', 't', ...
+    ({"policies": ()}, "policies"),
+])
+def test_campaign_spec_misreadings_are_refused_naming_the_field(scenario, change, field):
+    spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=1, n_particles=50)
+    with pytest.raises(ArgumentError, match=f"field '{field}'"):
+        run_campaign(dataclasses.replace(spec, **change))
+
+
+@pytest.mark.parametrize(("kw", "field"), [
+    ({"backend": "process"}, "backend"),    # was found only after resolving the policies
+    ({"max_new_runs": -1}, "max_new_runs"),  # was todo[:-1]: all runs but the last
+    ({"max_new_runs": True}, "max_new_runs"),
+])
+def test_run_campaign_misreadings_are_refused_naming_the_field(scenario, kw, field):
+    spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=2, n_particles=50)
+    with pytest.raises(ArgumentError, match=f"field '{field}'"):
+        run_campaign(spec, **kw)
+
+
+def test_policy_objects_must_match_the_spec_names(scenario):
+    """Policies passed in with a name the spec does not list were flown in every run and
+    left out of the results and the report without a word; one missing ended in a bare
+    KeyError after every run was computed."""
+    spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=1, n_particles=50)
+    pol = Combined(manoeuvre=Straight())
+    for bad in ({"straight": pol, "extra": pol}, {"other": pol}):
+        with pytest.raises(ArgumentError, match="field 'policies'"):
+            run_campaign(spec, policies=bad)
+    dup = dataclasses.replace(spec, policies=("straight", "straight"))
+    with pytest.raises(ArgumentError, match="field 'policies'"):
+        run_campaign(dup, policies={"straight": pol})
+    res = run_campaign(spec, policies={"straight": pol})
+    assert res.policies == ("straight",)

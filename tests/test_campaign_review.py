@@ -87,3 +87,62 @@ def test_policy_objects_must_match_the_spec_names(scenario):
         run_campaign(dup, policies={"straight": pol})
     res = run_campaign(spec, policies={"straight": pol})
     assert res.policies == ("straight",)
+
+
+class _Stop(Exception):
+    pass
+
+
+def _reproduce_command(monkeypatch, verb: str, argv: list[str], patches: dict) -> str:
+    """The command line the report of ``tmaplan VERB argv`` says reproduces it, when run as
+    ``python -m tmaplan`` (argv[0] is the package's __main__.py: the fallback is used)."""
+    import importlib
+    import sys
+
+    from tmaplan.cli import main
+
+    seen: dict[str, str] = {}
+
+    def report(*a, command, **k):
+        seen["command"] = command
+        raise _Stop
+
+    mod = importlib.import_module(f"tmaplan.cli.{verb.replace('-', '_')}")
+    for target, value in patches.items():
+        monkeypatch.setattr(target, value if value is not None else report)
+    monkeypatch.setattr(sys, "argv", ["/x/tmaplan/__main__.py", verb, *argv])
+    with pytest.raises(_Stop):
+        main(["--debug", verb, *argv])
+    assert mod is not None
+    return seen["command"]
+
+
+def test_compare_report_command_keeps_accuracy_and_truth(monkeypatch, tmp_path):
+    """``python -m tmaplan compare … --accuracy 0.2 --truth scenario``: the report's
+    "Reproduce" line left both out, so it reproduced another campaign."""
+    import tmaplan.cli.compare as compare
+
+    argv = ["default", "--runs", "2", "--accuracy", "0.2", "--truth", "scenario", "--out",
+            str(tmp_path)]
+    cmd = _reproduce_command(monkeypatch, "compare", argv, {
+        f"{compare.__name__}.run_campaign": lambda spec, **k: spec,
+        f"{compare.__name__}.write_report": None})
+    assert "--accuracy 0.2" in cmd and "--truth scenario" in cmd, cmd
+
+
+def test_rank_costs_report_command_keeps_every_setting(monkeypatch, tmp_path):
+    """Likewise ``rank-costs``: --accuracy, --plans, --cost-samples and --resamples change
+    the result and were left out."""
+    from types import SimpleNamespace
+
+    import tmaplan.cli.rank_costs as rank
+
+    fake = SimpleNamespace(to_json=dict)
+    argv = ["default", "--candidates", "3", "--accuracy", "0.2", "--plans", "none",
+            "--cost-samples", "50", "--resamples", "10", "--no-figure", "--out",
+            str(tmp_path)]
+    cmd = _reproduce_command(monkeypatch, "rank-costs", argv, {
+        f"{rank.__name__}.rank_costs": lambda *a, **k: fake,
+        "tmaplan.ranking_report.write_ranking_report": None})
+    for part in ("--accuracy 0.2", "--plans none", "--cost-samples 50", "--resamples 10"):
+        assert part in cmd, cmd

@@ -46,3 +46,10 @@ def test_problem_name_is_escaped_in_the_page_title(tmp_path):
     text = path.read_text()
     assert "<title>tmaplan rank-costs: a&lt;/title&gt;&lt;b&gt;&amp;</title>" in text
     assert text.count("</title>") == 1
+
+
+def test_an_accuracy_below_one_percent_is_not_printed_as_zero(tmp_path):
+    res = _result()
+    res.campaign.spec.accuracy = 0.025
+    flat = " ".join(write_ranking_report(res, tmp_path, command="x").read_text().split())
+    assert "below 2.5% and staying" in flat

@@ -243,3 +243,14 @@ def test_summary_names_the_policies_whose_mean_is_undefined():
     summary = differences_html(fake).split("<details>")[0]
     assert "better than 1 of the 1 other policies" in summary
     assert "Mean undefined for b." in summary
+
+
+def test_an_accuracy_below_one_percent_is_not_printed_as_zero(one_run, tmp_path):
+    """The report and the time-to-accuracy figure printed the accuracy with ``:.0%``: 0.005
+    was "below 0%", 0.025 "below 2%"."""
+    import dataclasses
+
+    res = dataclasses.replace(one_run, spec=dataclasses.replace(one_run.spec, accuracy=0.005))
+    text = write_report(res, tmp_path, command="tmaplan compare default").read_text()
+    flat = " ".join(text.split())
+    assert "below 0.5% and staying there" in flat and "below 0% " not in flat

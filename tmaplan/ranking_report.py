@@ -132,7 +132,7 @@ img{{max-width:100%}}</style></head><body>
 <h1>Cost functionals against closed-loop Monte Carlo: {html.escape(result.problem)}</h1>
 <p>{len(result.candidates)} candidate manoeuvres flown in closed loop, {spec.runs} paired runs
 (truths from the prior, common random numbers), {spec.n_particles} particles, seed
-{spec.seed}. Time to accuracy: relative range error below {spec.accuracy:.0%} and staying
+{spec.seed}. Time to accuracy: relative range error below {100 * spec.accuracy:.3g}% and staying
 there, mean over runs, censored at {result.censor / 60:.2f} min. Every cost and metric is
 minimised, so ρ near +1 means the cost ranks the manoeuvres as the filter does. Intervals:
 bootstrap percentile 95 % (runs and candidates resampled). Default objective of

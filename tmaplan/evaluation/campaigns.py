@@ -225,7 +225,7 @@ class CampaignResult:
         filter's RMSE can approach;
         ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
-        ``time_to_accuracy`` (median [s], inf if most runs never get there),
+        ``time_to_accuracy`` (median [s], inf if at least half the runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m],
         ``final_position_error_runs`` [m] and ``final_rel_range_error`` (per run),

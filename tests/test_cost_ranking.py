@@ -202,3 +202,16 @@ def test_rank_costs_cli_json(tmp_path):
     # display units and the small-sample warning (2 runs), no SI candidate names
     assert "final range RMSE [km]" in text and "Warning: small sample" in text
     assert not re.search(r"@\d+(\.\d+)?s<", text) and "np.float64(" not in text
+
+
+def test_the_rmse_interval_does_not_depend_on_the_time_correlation_being_defined():
+    """No candidate localised within the horizon (every time to accuracy censored: ρ with
+    the time is undefined) still ranks the candidates by final range RMSE; that ρ's interval
+    was left out ("–") although it is defined."""
+    tta, fre = _ordered_runs()
+    never = np.full_like(tta, np.inf)
+    (c,) = rank_correlations({"perfect": np.arange(6.0)}, never, fre, censor=1e4,
+                             n_resamples=100)
+    assert np.isnan(c.spearman) and np.isnan(c.spearman_ci[0])
+    one = pytest.approx(1.0, abs=1e-12)
+    assert c.spearman_rmse == one and c.spearman_rmse_ci == (one, one)

@@ -223,3 +223,34 @@ def test_policy_styles_are_never_dotted_like_the_bounds():
         assert ls not in (":", "dotted")
         if isinstance(ls, tuple):
             assert max(ls[1][::2]) >= 5  # a dash, not dots
+
+
+def test_summary_names_the_policies_whose_mean_is_undefined():
+    """A policy whose mean difference is undefined (a non-finite final error in one run) was
+    left out of the summary line without a word: "better than 1 of the 1 other policies"
+    with three policies compared."""
+    from tmaplan.evaluation.metrics import PairedDifference
+
+    nan = float("nan")
+
+    def pd(a, b, mean, lo, hi):
+        return PairedDifference(a=a, b=b, metric="final_range_error", mean=mean, ci_low=lo,
+                                ci_high=hi, level=0.95, n=3)
+
+    fake = SimpleNamespace(policies=("a", "b", "c"), differences=(
+        pd("a", "b", nan, nan, nan), pd("a", "c", -500.0, -900.0, -100.0),
+        pd("b", "c", nan, nan, nan)))
+    summary = differences_html(fake).split("<details>")[0]
+    assert "better than 1 of the 1 other policies" in summary
+    assert "Mean undefined for b." in summary
+
+
+def test_an_accuracy_below_one_percent_is_not_printed_as_zero(one_run, tmp_path):
+    """The report and the time-to-accuracy figure printed the accuracy with ``:.0%``: 0.005
+    was "below 0%", 0.025 "below 2%"."""
+    import dataclasses
+
+    res = dataclasses.replace(one_run, spec=dataclasses.replace(one_run.spec, accuracy=0.005))
+    text = write_report(res, tmp_path, command="tmaplan compare default").read_text()
+    flat = " ".join(text.split())
+    assert "below 0.5% and staying there" in flat and "below 0% " not in flat

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.plotting import new_figure, save_figure
+from tmaplan.plotting import new_figure, objective_label, save_figure
 from tmaplan.report_tables import sample_warning
 
 if TYPE_CHECKING:
@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
     from tmaplan.evaluation.cost_ranking import CostRankingResult
 
-__all__ = ["candidate_label", "plot_cost_ranking", "write_ranking_report"]
+__all__ = ["candidate_label", "cost_label", "plot_cost_ranking", "write_ranking_report"]
 
 _MARKERS = {"straight": "s", "single-turn": "o", "zigzag": "^", "tactic": "D", "planned": "*"}
 
@@ -40,13 +40,23 @@ def candidate_label(name: str) -> str:
     return re.sub(r",leg(\d+(?:\.\d+)?)s$", lambda m: f", legs of {mins(m)}", out)
 
 
+def cost_label(name: str) -> str:
+    """A cost functional's name with its unit: :func:`tmaplan.plotting.objective_label` for
+    the planning objectives, [m] for the Monte Carlo range bounds of
+    :func:`tmaplan.evaluation.cost_ranking.cost_functionals`."""
+    if name.endswith(("pcrb-cartesian-range", "expected-crlb-range")):
+        return f"{name} [m]"
+    return objective_label(name)
+
+
 def _num(x: float) -> str:
     return "–" if not np.isfinite(x) else f"{x:+.2f}"
 
 
 def plot_cost_ranking(result: CostRankingResult, path: str | Path) -> Figure:
-    """One panel per cost: the cost of each candidate against its Monte Carlo mean time to
-    accuracy [min], marker by family, titled with the cost's Spearman ρ.
+    """One panel per cost: the cost of each candidate (x, with its unit: :func:`cost_label`)
+    against its Monte Carlo mean time to accuracy [min], marker by family, titled with the
+    cost's Spearman ρ.
 
     Parameters
     ----------
@@ -74,7 +84,7 @@ def plot_cost_ranking(result: CostRankingResult, path: str | Path) -> Figure:
         ax.tick_params(labelsize=7)
         if i % ncols == 0:
             ax.set_ylabel("MC mean time to accuracy [min]", fontsize=7)
-        ax.set_xlabel("cost (minimised)", fontsize=7)
+        ax.set_xlabel(f"{cost_label(c.name)}, minimised", fontsize=7)
     axes.flat[0].legend(fontsize=6, loc="best", framealpha=0.6)
     fig.suptitle(f"{result.problem}: cost functionals against closed-loop Monte Carlo "
                  f"({len(result.candidates)} candidates, {result.campaign.spec.runs} runs)",
@@ -112,8 +122,9 @@ def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, comm
               "</figure>"
     skipped = "".join(f"<li>{html.escape(k)}: {html.escape(v)}</li>"
                       for k, v in result.skipped.items())
+    problem = html.escape(result.problem)
     doc = f"""<!doctype html>
-<html lang="en"><head><meta charset="utf-8"><title>tmaplan rank-costs: {result.problem}</title>
+<html lang="en"><head><meta charset="utf-8"><title>tmaplan rank-costs: {problem}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
 .warning{{background:#fff4e0;border-left:4px solid #e69500;padding:.5em 1em}}
@@ -121,7 +132,7 @@ img{{max-width:100%}}</style></head><body>
 <h1>Cost functionals against closed-loop Monte Carlo: {html.escape(result.problem)}</h1>
 <p>{len(result.candidates)} candidate manoeuvres flown in closed loop, {spec.runs} paired runs
 (truths from the prior, common random numbers), {spec.n_particles} particles, seed
-{spec.seed}. Time to accuracy: relative range error below {spec.accuracy:.0%} and staying
+{spec.seed}. Time to accuracy: relative range error below {100 * spec.accuracy:.3g}% and staying
 there, mean over runs, censored at {result.censor / 60:.2f} min. Every cost and metric is
 minimised, so ρ near +1 means the cost ranks the manoeuvres as the filter does. Intervals:
 bootstrap percentile 95 % (runs and candidates resampled). Default objective of

@@ -162,7 +162,7 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
         ax.step(grid / 60, frac, where="post", **line_style(i), label=name)
     ax.set_xlabel("time [min]")
     ax.set_ylabel("fraction of runs localised")
-    ax.set_title(f"time to range accuracy ({result.spec.accuracy:.0%} of range, for good)")
+    ax.set_title(f"time to range accuracy ({100 * result.spec.accuracy:.3g}% of range, for good)")
     ax.set_ylim(-0.03, 1.03)  # curves at 0 and 1 stay visible
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
@@ -221,7 +221,7 @@ document.body.setAttribute("data-images-total",im.length);}});</script></head>
 {spec.n_particles} particles; truths drawn
 from the {'prior' if spec.truth == 'prior' else 'scenario'}; the same truth and noise for
 every policy in a run (paired comparison). Localised = relative range error below
-{spec.accuracy:.0%} and staying there. Wall time {result.seconds:.0f} s
+{100 * spec.accuracy:.3g}% and staying there. Wall time {result.seconds:.0f} s
 ({len(result.computed_runs)} runs computed now, {len(result.loaded_runs)} loaded from disk).</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
 {sample_warning(spec.runs)}

@@ -145,7 +145,9 @@ def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metr
     shown = items[:1] + ([items[-1]] if len(items) > 1 else [])
     names = ["runner-up", "last"][:len(shown)]
     rest = "; ".join(f"{n}: {html.escape(best)} − {i}" for n, i in zip(names, shown))
-    return head + rest + ".</li>"
+    missing = [html.escape(p) for p in policies if p not in rel]
+    left = f" Mean undefined for {', '.join(missing)}." if missing else ""
+    return head + rest + "." + left + "</li>"
 
 
 def differences_html(result: CampaignResult) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -64,8 +65,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     result = run_campaign(spec, out_dir=args.out, workers=args.workers,
                           scheduler=args.scheduler,
                           progress=(not quiet) and sys.stderr.isatty())
-    cmd = command_line("compare", f"tmaplan compare {args.problem} --policies {args.policies} "
-                       f"--runs {args.runs} --seed {args.seed} --particles {args.particles}")
+    cmd = command_line("compare", f"tmaplan compare {shlex.quote(args.problem)} --policies "
+                       f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
+                       f"--particles {args.particles} --accuracy {args.accuracy} "
+                       f"--truth {args.truth}")
     report = write_report(result, args.out, command=cmd,
                           title=f"tmaplan compare: {scenario.name}")
     payload = result.to_json()

@@ -4,6 +4,7 @@ well each cost functional predicts closed-loop performance."""
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from typing import Any
 
@@ -89,9 +90,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         fig = plot_cost_ranking(res, f"{args.out}/{scenario.name}_rank_costs.png")
         payload["figure"] = f"{args.out}/{scenario.name}_rank_costs.png"
         del fig
-    cmd = command_line("rank-costs", f"tmaplan rank-costs {args.problem} --candidates "
-                       f"{args.candidates} --runs {args.runs} --seed {args.seed} "
-                       f"--particles {args.particles}")
+    cmd = command_line("rank-costs", f"tmaplan rank-costs {shlex.quote(args.problem)} "
+                       f"--candidates {args.candidates} --runs {args.runs} --seed {args.seed} "
+                       f"--particles {args.particles} --accuracy {args.accuracy} --plans "
+                       f"{shlex.quote(args.plans)} --cost-samples {args.cost_samples} "
+                       f"--resamples {args.resamples}")
     from pathlib import Path
 
     report = write_ranking_report(res, args.out, command=cmd, figure=None if args.no_figure

@@ -225,7 +225,7 @@ class CampaignResult:
         filter's RMSE can approach;
         ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
-        ``time_to_accuracy`` (median [s], inf if most runs never get there),
+        ``time_to_accuracy`` (median [s], inf if at least half the runs never get there),
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m],
         ``final_position_error_runs`` [m] and ``final_rel_range_error`` (per run),
@@ -417,6 +417,35 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     return computed
 
 
+def _check_arguments(spec: CampaignSpec, backend: str | None, max_new_runs: int | None,
+                     policies: Mapping[str, Policy] | None) -> None:
+    """ArgumentError for what :func:`run_campaign` would otherwise misread: a truth source
+    other than the two (read as "scenario"), a misspelt backend (found only after the
+    policies are resolved), a negative ``max_new_runs`` (a slice from the end), ``policies``
+    whose names are not the spec's (extra ones flown and left out of the results)."""
+    from tmaplan.errors import ArgumentError
+
+    if isinstance(spec.policies, str) or not spec.policies:
+        raise ArgumentError("policies", "a non-empty tuple of policy specs", spec.policies)
+    for name in ("runs", "n_particles", "seed"):
+        v = getattr(spec, name)
+        if isinstance(v, bool) or not isinstance(v, int | np.integer):
+            raise ArgumentError(name, "an integer", v)
+    if spec.seed < 0:
+        raise ArgumentError("seed", "an integer >= 0", spec.seed)
+    if spec.truth not in ("prior", "scenario"):
+        raise ArgumentError("truth", "'prior' or 'scenario'", spec.truth)
+    if backend not in (None, "serial", "processes", "dask"):
+        raise ArgumentError("backend", "'serial', 'processes' or 'dask'", backend)
+    if max_new_runs is not None and (isinstance(max_new_runs, bool) or not isinstance(
+            max_new_runs, int | np.integer) or max_new_runs < 0):
+        raise ArgumentError("max_new_runs", "an integer >= 0 or None", max_new_runs)
+    if policies is not None and (set(policies) != set(spec.policies)
+                                 or len(set(spec.policies)) != len(spec.policies)):
+        raise ArgumentError("policies", "one policy object per name of spec.policies "
+                            f"{list(spec.policies)}", list(policies))
+
+
 def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, workers: int = 1,
                  backend: Backend | None = None, scheduler: str | None = None,
                  progress: bool = False, policies: Mapping[str, Policy] | None = None,
@@ -461,6 +490,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         raise PlanningError(f"workers must be >= 1, received {workers}")
     if not 0 < spec.accuracy < 1:
         raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
+    _check_arguments(spec, backend, max_new_runs, policies)
     scenario = spec.scenario
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
     parsed = _parse(scenario, spec.policies) if policies is None else None

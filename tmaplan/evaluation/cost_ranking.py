@@ -392,7 +392,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
             return np.array([*_rho(v[cand], a), _rho(v[cand], b)[0]])
 
         cis = [(float("nan"), float("nan"))] * 3
-        if np.isfinite(s) and R >= 2 and n_resamples > 0:
+        if (np.isfinite(s) or np.isfinite(s2)) and R >= 2 and n_resamples > 0:
             with np.errstate(invalid="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # degenerate resamples (constant cost)
                 bs = stats.bootstrap((np.arange(R), np.arange(C)), stat, paired=False,

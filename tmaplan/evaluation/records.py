@@ -14,6 +14,7 @@ import hashlib
 import json
 import os
 import tempfile
+import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -200,5 +201,5 @@ class RunRecord:
         try:
             with np.load(path) as z:
                 return cls.from_arrays({k: z[k] for k in z.files}, policies)
-        except (OSError, ValueError, EOFError, KeyError):
+        except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
             return None

@@ -299,3 +299,10 @@ def test_stored_runs_of_another_policy_under_the_same_name_are_not_reused(scenar
     assert policy_fingerprint(p) == policy_fingerprint(dataclasses.replace(p, plan=slower))
     moved = dataclasses.replace(plan, turn_rate=plan.turn_rate + 1e-12)
     assert policy_fingerprint(p) != policy_fingerprint(dataclasses.replace(p, plan=moved))
+
+
+def test_campaign_json_says_where_the_truths_came_from(scenario):
+    for truth in ("prior", "scenario"):
+        spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=1, seed=11,
+                            n_particles=100, truth=truth)
+        assert run_campaign(spec).to_json()["truth"] == truth

@@ -284,6 +284,7 @@ class CampaignResult:
             "seed": self.spec.seed,
             "particles": self.spec.n_particles,
             "accuracy": self.spec.accuracy,
+            "truth": self.spec.truth,
             "differences": [dataclasses.asdict(d) for d in self.differences],
             "computed_runs": len(self.computed_runs),
             "loaded_runs": len(self.loaded_runs),

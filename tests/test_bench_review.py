@@ -119,3 +119,17 @@ def test_closed_loop_times_each_path_setup_from_an_empty_plan_cache(benchmark_sc
         assert (sc, "stale") not in manoeuvres._PLAN_CACHE
     finally:
         manoeuvres._PLAN_CACHE.pop((sc, "stale"), None)
+
+
+@pytest.mark.parametrize("runs", [2.5, True, 0, "4"])
+def test_plan_check_refuses_runs_that_are_not_whole(runs):
+    from tmaplan.experiments import plan_campaign, select_plan, tune_single_turn
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    with pytest.raises(ArgumentError, match="runs"):
+        tune_single_turn(sc, runs=runs)
+    with pytest.raises(ArgumentError, match="runs"):
+        select_plan(sc, {"a": None, "b": None}, runs=runs)
+    with pytest.raises(ArgumentError, match="runs"):
+        plan_campaign(sc, runs=runs)

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference
 from tmaplan.policies import (
@@ -88,8 +88,8 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
     scores : dict
         Grid point name -> mean censored time to accuracy [s].
     """
-    if int(runs) < 1:
-        raise ArgumentError("runs", ">= 1", runs)
+    if not is_integer(runs, 1):
+        raise ArgumentError("runs", "an integer >= 1", runs)
     t0, H = scenario.time.t0, scenario.time.horizon
     grid: dict[str, SingleTurn] = {}
     for f in fractions:
@@ -137,8 +137,8 @@ def select_plan(scenario: Scenario, plans: Mapping[str, Any], *, runs: int = 24,
     """
     if not plans:
         raise ArgumentError("plans", "at least one plan", 0)
-    if int(runs) < 1:
-        raise ArgumentError("runs", ">= 1", runs)
+    if not is_integer(runs, 1):
+        raise ArgumentError("runs", "an integer >= 1", runs)
     if len(plans) == 1:
         (name, plan), = plans.items()
         return name, plan, {}
@@ -174,6 +174,8 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
+    if not is_integer(runs, 1):  # before the offline plan, which takes seconds
+        raise ArgumentError("runs", "an integer >= 1", runs)
     make: dict[str, Callable[[], Any]] = {
         "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
         "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}

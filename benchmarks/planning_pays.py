@@ -24,6 +24,7 @@ import numpy as np
 from scipy import stats
 
 from tmaplan.evaluation.metrics import runs_to_exclude_zero
+from tmaplan.evaluation.plan_check import PLAN_BASELINES
 from tmaplan.experiments import (
     plan_campaign,
     planned_differences,
@@ -66,6 +67,9 @@ def main() -> None:
     if a.select_runs > 0 and a.seed == SELECT_SEED:
         ap.error(f"--seed: an evaluation seed other than the selection's ({SELECT_SEED}), "
                  f"got {a.seed}")
+    baselines = [b for b in a.baselines.split(",") if b]
+    if unknown := [b for b in baselines if b not in PLAN_BASELINES]:  # before the tuning
+        ap.error(f"--baselines: names among {','.join(PLAN_BASELINES)}, got {unknown}")
     for name in a.problems.split(","):
         t = time.perf_counter()
         sc = load_problem(name)
@@ -86,7 +90,7 @@ def main() -> None:
         camp = plan_campaign(sc, runs=a.runs, seed=a.seed, n_particles=a.particles,
                              tuned=tuned, receding=a.receding, selected=selected,
                              workers=a.workers, out_dir=out,
-                             baselines=[b for b in a.baselines.split(",") if b])
+                             baselines=baselines)
         turn = ("none" if tuned is None else
                 f"{np.degrees(tuned.angle):+.0f} deg at {tuned.time - sc.time.t0:.0f} s")
         print(f"{name}: {a.runs} paired runs (seed {a.seed}), {a.particles} particles, "

@@ -133,3 +133,19 @@ def test_plan_check_refuses_runs_that_are_not_whole(runs):
         select_plan(sc, {"a": None, "b": None}, runs=runs)
     with pytest.raises(ArgumentError, match="runs"):
         plan_campaign(sc, runs=runs)
+
+
+def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_script,
+                                                                     monkeypatch):
+    from tmaplan.evaluation.plan_check import PLAN_BASELINES
+    from tmaplan.experiments import plan_campaign
+    from tmaplan.scenario import load_problem
+
+    with pytest.raises(ArgumentError, match="baselines") as err:
+        plan_campaign(load_problem("default"), runs=2, baselines=["straigth"])
+    assert str(PLAN_BASELINES) in str(err.value)  # the script's list is plan_campaign's
+    bench = benchmark_script("planning_pays")
+    monkeypatch.setattr(bench, "load_problem", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(sys, "argv", ["planning_pays.py", "--baselines", "straight,lead-lagg"])
+    with pytest.raises(SystemExit):
+        bench.main()

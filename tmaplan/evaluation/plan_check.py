@@ -44,9 +44,11 @@ from tmaplan.policies import (
 )
 from tmaplan.scenario import Scenario
 
-__all__ = ["TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign", "planned_differences",
-           "select_plan", "tune_single_turn"]
+__all__ = ["PLAN_BASELINES", "TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign",
+           "planned_differences", "select_plan", "tune_single_turn"]
 
+#: The baselines :func:`plan_campaign` flies by name (``baselines``).
+PLAN_BASELINES = ("straight", "single-turn", "leg-turn-leg", "lead-lag")
 #: Course changes of the Monte Carlo tuning grid [deg] (both sides).
 TUNE_ANGLES = (60.0, 90.0, 120.0, 150.0)
 #: Turn times of the tuning grid, as fractions of the horizon.
@@ -179,11 +181,11 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     make: dict[str, Callable[[], Any]] = {
         "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
         "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}
-    wanted = (tuple(make) if baselines is True else () if baselines is False
+    wanted = (PLAN_BASELINES if baselines is True else () if baselines is False
               else (baselines,) if isinstance(baselines, str) else tuple(baselines))
     for k in wanted:
-        if k not in make:
-            raise ArgumentError("baselines", f"True, False or names among {tuple(make)}", k)
+        if k not in PLAN_BASELINES:
+            raise ArgumentError("baselines", f"True, False or names among {PLAN_BASELINES}", k)
     obj = objective if objective is not None else (
         scenario.planning.objective if scenario.planning is not None else None)
     pols: dict[str, Policy] = {

@@ -11,7 +11,7 @@ localises sooner), then the family average of each difference with a t interval 
 problems (the geometry as the random unit) and how many problems meet each criterion of
 issue 13. The README quotes its output.
 
-Run: python benchmarks/planning_general.py [--base default] [--problems 6] [--seed 2026]
+Run: python benchmarks/planning_general.py --seed S [--base default] [--problems 6]
      [--runs 60] [--tune-runs 8] [--particles 3000] [--workers 1] [--receding] [--out DIR]
 """
 

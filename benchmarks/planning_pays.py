@@ -24,6 +24,7 @@ import numpy as np
 from scipy import stats
 
 from tmaplan.evaluation.metrics import runs_to_exclude_zero
+from tmaplan.evaluation.plan_check import PLAN_BASELINES
 from tmaplan.experiments import (
     plan_campaign,
     planned_differences,
@@ -33,6 +34,9 @@ from tmaplan.experiments import (
 from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.policies.plan_starts import plan_candidates
 from tmaplan.scenario import load_problem
+
+#: Root seeds of the Monte Carlo tuned turn and of ``--select-runs`` (never the evaluation's).
+TUNE_SEED, SELECT_SEED = 1000, 2000
 
 
 def main() -> None:
@@ -56,25 +60,37 @@ def main() -> None:
                     help="also fly planned-mc: the OCP local optimum with the best Monte Carlo "
                          "time to accuracy on this many runs of the planner's seeds (2000)")
     a = ap.parse_args()
+    # the tuning (seed 1000) and the selection (seed 2000) must not see the evaluation's runs
+    if not a.no_tune and a.seed == TUNE_SEED:
+        ap.error(f"--seed: an evaluation seed other than the tuning's ({TUNE_SEED}), "
+                 f"got {a.seed}")
+    if a.select_runs > 0 and a.seed == SELECT_SEED:
+        ap.error(f"--seed: an evaluation seed other than the selection's ({SELECT_SEED}), "
+                 f"got {a.seed}")
+    baselines = [b for b in a.baselines.split(",") if b]
+    if unknown := [b for b in baselines if b not in PLAN_BASELINES]:  # before the tuning
+        ap.error(f"--baselines: names among {','.join(PLAN_BASELINES)}, got {unknown}")
     for name in a.problems.split(","):
         t = time.perf_counter()
         sc = load_problem(name)
-        plan = offline_plan(sc, None)
+        # the objective plan_campaign flies (the same cache key: solved once)
+        plan = offline_plan(sc, sc.planning.objective if sc.planning is not None else None)
         tuned = None
         if not a.no_tune:
-            tuned, _ = tune_single_turn(sc, runs=a.tune_runs, n_particles=a.particles,
-                                        workers=a.workers)
+            tuned, _ = tune_single_turn(sc, runs=a.tune_runs, seed=TUNE_SEED,
+                                        n_particles=a.particles, workers=a.workers)
         selected = None
         if a.select_runs > 0:
             pick, selected, scores = select_plan(sc, plan_candidates(sc), runs=a.select_runs,
-                                                 n_particles=a.particles, workers=a.workers)
+                                                 seed=SELECT_SEED, n_particles=a.particles,
+                                                 workers=a.workers)
             print(f"{name}: planned-mc = local optimum from start {pick!r} (selection means "
                   + ", ".join(f"{k} {v / 60:.1f}" for k, v in scores.items()) + " min)")
         out = None if a.out is None else f"{a.out}/{name}"
         camp = plan_campaign(sc, runs=a.runs, seed=a.seed, n_particles=a.particles,
                              tuned=tuned, receding=a.receding, selected=selected,
                              workers=a.workers, out_dir=out,
-                             baselines=[b for b in a.baselines.split(",") if b])
+                             baselines=baselines)
         turn = ("none" if tuned is None else
                 f"{np.degrees(tuned.angle):+.0f} deg at {tuned.time - sc.time.t0:.0f} s")
         print(f"{name}: {a.runs} paired runs (seed {a.seed}), {a.particles} particles, "

@@ -10,6 +10,7 @@ numbers make the differences paired).
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from collections.abc import Mapping
 
 import numpy as np
@@ -181,12 +182,14 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
         Confidence level of the t interval, in (0, 1) (0.95, not 95).
     censor : float, optional
         Replace infinite values (never reached) by this value (e.g. the horizon + dt), which
-        makes the difference conservative.
+        makes the difference conservative; finite and not below any finite value of ``a`` or
+        ``b`` (a run never localised must not count as sooner than one localised).
 
     Raises
     ------
     ArgumentError
-        A level outside (0, 1), or ``a`` and ``b`` with different numbers of runs.
+        A level outside (0, 1), ``a`` and ``b`` with different numbers of runs, or a censor
+        that is not a finite number at least the largest finite value.
     """
     if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
         raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
@@ -196,6 +199,12 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
         raise ArgumentError(f"values[{b!r}]", f"one value per run of {a!r}, shape {xa.shape}",
                             xb.shape)
     if censor is not None:
+        finite = np.concatenate([xa[np.isfinite(xa)], xb[np.isfinite(xb)]])
+        top = float(finite.max()) if finite.size else -np.inf
+        if (isinstance(censor, bool) or not isinstance(censor, numbers.Real)
+                or not np.isfinite(censor) or censor < top):
+            raise ArgumentError("censor", f"a finite number >= the largest finite value "
+                                f"({top:g}), e.g. the horizon + dt", censor)
         xa = np.where(np.isfinite(xa), xa, censor)
         xb = np.where(np.isfinite(xb), xb, censor)
     d = xa - xb

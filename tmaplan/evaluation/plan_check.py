@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference
 from tmaplan.policies import (
@@ -44,9 +44,11 @@ from tmaplan.policies import (
 )
 from tmaplan.scenario import Scenario
 
-__all__ = ["TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign", "planned_differences",
-           "select_plan", "tune_single_turn"]
+__all__ = ["PLAN_BASELINES", "TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign",
+           "planned_differences", "select_plan", "tune_single_turn"]
 
+#: The baselines :func:`plan_campaign` flies by name (``baselines``).
+PLAN_BASELINES = ("straight", "single-turn", "leg-turn-leg", "lead-lag")
 #: Course changes of the Monte Carlo tuning grid [deg] (both sides).
 TUNE_ANGLES = (60.0, 90.0, 120.0, 150.0)
 #: Turn times of the tuning grid, as fractions of the horizon.
@@ -88,8 +90,8 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
     scores : dict
         Grid point name -> mean censored time to accuracy [s].
     """
-    if int(runs) < 1:
-        raise ArgumentError("runs", ">= 1", runs)
+    if not is_integer(runs, 1):
+        raise ArgumentError("runs", "an integer >= 1", runs)
     t0, H = scenario.time.t0, scenario.time.horizon
     grid: dict[str, SingleTurn] = {}
     for f in fractions:
@@ -137,8 +139,8 @@ def select_plan(scenario: Scenario, plans: Mapping[str, Any], *, runs: int = 24,
     """
     if not plans:
         raise ArgumentError("plans", "at least one plan", 0)
-    if int(runs) < 1:
-        raise ArgumentError("runs", ">= 1", runs)
+    if not is_integer(runs, 1):
+        raise ArgumentError("runs", "an integer >= 1", runs)
     if len(plans) == 1:
         (name, plan), = plans.items()
         return name, plan, {}
@@ -174,14 +176,16 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     """
     from tmaplan.policies.manoeuvres import offline_plan
 
+    if not is_integer(runs, 1):  # before the offline plan, which takes seconds
+        raise ArgumentError("runs", "an integer >= 1", runs)
     make: dict[str, Callable[[], Any]] = {
         "straight": Straight, "single-turn": lambda: best_single_turn(scenario),
         "leg-turn-leg": LegTurnLeg, "lead-lag": LeadLag}
-    wanted = (tuple(make) if baselines is True else () if baselines is False
+    wanted = (PLAN_BASELINES if baselines is True else () if baselines is False
               else (baselines,) if isinstance(baselines, str) else tuple(baselines))
     for k in wanted:
-        if k not in make:
-            raise ArgumentError("baselines", f"True, False or names among {tuple(make)}", k)
+        if k not in PLAN_BASELINES:
+            raise ArgumentError("baselines", f"True, False or names among {PLAN_BASELINES}", k)
     obj = objective if objective is not None else (
         scenario.planning.objective if scenario.planning is not None else None)
     pols: dict[str, Policy] = {

@@ -1,0 +1,151 @@
+"""The benchmark scripts whose output the README quotes: their statistics and options.
+
+The paired difference's censoring, the separation of tuning and evaluation seeds, and the
+options the scripts' docstrings document (they exist, the bracketed ones are optional, and a
+documented number is the default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError
+from tmaplan.evaluation.metrics import paired_difference
+
+SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop")
+
+
+class _Parsed(Exception):
+    pass
+
+
+def _parser(bench, monkeypatch) -> argparse.ArgumentParser:
+    """The parser a script's ``main`` builds (stopped at ``parse_args``)."""
+    seen = {}
+
+    def capture(self, *args, **kw):
+        seen["parser"] = self
+        raise _Parsed
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args", capture)
+    with pytest.raises(_Parsed):
+        bench.main()
+    return seen["parser"]
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_documented_options_exist_are_optional_and_default_as_shown(name, benchmark_script,
+                                                                    monkeypatch):
+    bench = benchmark_script(name)
+    parser = _parser(bench, monkeypatch)
+    actions = {o: act for act in parser._actions for o in act.option_strings}
+    doc = bench.__doc__
+    for opt in re.findall(r"(?<![\w-])(--[a-z][a-z-]*)", doc):
+        assert opt in actions, f"{name}: {opt} documented, not an option"
+    for opt, value in re.findall(r"\[(--[a-z][a-z-]*)(?: ([^\]\s]+))?\]", doc):
+        act = actions[opt]
+        assert not act.required, f"{name}: {opt} shown optional, is required"
+        if re.fullmatch(r"\d+", value or ""):
+            assert act.default == int(value), f"{name}: {opt} shown {value}, default " \
+                                              f"{act.default}"
+
+
+def test_planning_pays_refuses_the_tuning_seed_for_the_evaluation(benchmark_script,
+                                                                  monkeypatch):
+    bench = benchmark_script("planning_pays")
+
+    def no_work(*args, **kw):
+        raise AssertionError("work started before the seeds were checked")
+
+    monkeypatch.setattr(bench, "load_problem", no_work)
+    for argv in (["--seed", "1000"], ["--seed", "2000", "--no-tune", "--select-runs", "4"]):
+        monkeypatch.setattr(sys, "argv", ["planning_pays.py", *argv])
+        with pytest.raises(SystemExit):
+            bench.main()
+
+
+@pytest.fixture(autouse=True)
+def _restore_particle_filter():
+    """``closed_loop.py`` wraps the filter's methods with timers when it is loaded."""
+    from tmaplan.estimators.particle_filter import ParticleFilter
+
+    saved = {k: ParticleFilter.__dict__[k] for k in ("init", "predict", "update")}
+    yield
+    for k, v in saved.items():
+        setattr(ParticleFilter, k, v)
+
+
+def test_closed_loop_gaps_take_an_explicit_seed_zero(benchmark_script, monkeypatch):
+    bench = benchmark_script("closed_loop")
+    seeds = []
+    monkeypatch.setattr(bench, "gaps", lambda runs, particles, seed: seeds.append(seed))
+    for argv, want in ((["--gaps"], 1000), (["--gaps", "--seed", "0"], 0),
+                       (["--gaps", "--seed", "7"], 7)):
+        monkeypatch.setattr(sys, "argv", ["closed_loop.py", *argv])
+        bench.main()
+        assert seeds[-1] == want
+
+
+@pytest.mark.parametrize("censor", [float("nan"), float("inf"), True, "600", 5.0])
+def test_paired_difference_refuses_a_censor_that_is_not_conservative(censor):
+    vals = {"a": np.array([10.0, np.inf, 30.0]), "b": np.array([20.0, 25.0, np.inf])}
+    with pytest.raises(ArgumentError, match="censor"):
+        paired_difference(vals, "a", "b", "t", censor=censor)
+
+
+def test_paired_difference_censors_both_arms_alike():
+    vals = {"a": np.array([10.0, np.inf, 30.0]), "b": np.array([20.0, 25.0, np.inf])}
+    d = paired_difference(vals, "a", "b", "t", censor=40.0)
+    assert d.mean == pytest.approx(((10 - 20) + (40 - 25) + (30 - 40)) / 3)
+    # a censor equal to the largest finite value is allowed (the horizon itself)
+    assert paired_difference(vals, "a", "b", "t", censor=30).n == 3
+
+
+def test_closed_loop_times_each_path_setup_from_an_empty_plan_cache(benchmark_script):
+    from tmaplan.policies import manoeuvres
+    from tmaplan.scenario import load_problem
+
+    bench = benchmark_script("closed_loop")
+    sc = load_problem("default")
+    manoeuvres._PLAN_CACHE[(sc, "stale")] = object()
+    try:
+        pols, _ = bench._policies(sc, ["straight"], "new")
+        assert set(pols) == {"straight"}
+        assert (sc, "stale") not in manoeuvres._PLAN_CACHE
+    finally:
+        manoeuvres._PLAN_CACHE.pop((sc, "stale"), None)
+
+
+@pytest.mark.parametrize("runs", [2.5, True, 0, "4"])
+def test_plan_check_refuses_runs_that_are_not_whole(runs):
+    from tmaplan.experiments import plan_campaign, select_plan, tune_single_turn
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    with pytest.raises(ArgumentError, match="runs"):
+        tune_single_turn(sc, runs=runs)
+    with pytest.raises(ArgumentError, match="runs"):
+        select_plan(sc, {"a": None, "b": None}, runs=runs)
+    with pytest.raises(ArgumentError, match="runs"):
+        plan_campaign(sc, runs=runs)
+
+
+def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_script,
+                                                                     monkeypatch):
+    from tmaplan.evaluation.plan_check import PLAN_BASELINES
+    from tmaplan.experiments import plan_campaign
+    from tmaplan.scenario import load_problem
+
+    with pytest.raises(ArgumentError, match="baselines") as err:
+        plan_campaign(load_problem("default"), runs=2, baselines=["straigth"])
+    assert str(PLAN_BASELINES) in str(err.value)  # the script's list is plan_campaign's
+    bench = benchmark_script("planning_pays")
+    monkeypatch.setattr(bench, "load_problem", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(sys, "argv", ["planning_pays.py", "--baselines", "straight,lead-lagg"])
+    with pytest.raises(SystemExit):
+        bench.main()

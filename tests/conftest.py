@@ -35,6 +35,37 @@ def prior(default):
     return Belief.from_prior(default)
 
 
+@pytest.fixture(scope="module")
+def short(default):
+    """`default` cut to 36 steps (9 min): small enough to enumerate every ping schedule."""
+    import dataclasses
+
+    return default.replace(time=dataclasses.replace(default.time, horizon=540.0))
+
+
+@pytest.fixture(scope="module")
+def short_prior(short):
+    from tmaplan.planning.belief import Belief
+
+    return Belief.from_prior(short)
+
+
+@pytest.fixture
+def one_line_error(capsys):
+    """``one_line_error(argv)``: run the CLI, which must exit 1 with a one-line error and no
+    traceback; returns that line."""
+    from tmaplan.cli import main
+
+    def run(argv):
+        rc = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 1, (argv, err)
+        assert len(err) == 1 and "Traceback" not in err[0], err
+        return err[0]
+
+    return run
+
+
 @pytest.fixture
 def benchmark_script():
     """Load a script of ``benchmarks/`` by file name (they are not a package)."""

@@ -14,15 +14,6 @@ from tmaplan.cli import main
 from tmaplan.cli._args import MAX_PLAN_STEPS
 from tmaplan.scenario import load_problem
 
-
-def _one_line_error(capsys, argv):
-    rc = main(argv)
-    err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 1, (argv, err)
-    assert len(err) == 1 and "Traceback" not in err[0], err
-    return err[0]
-
-
 # (argv, text the one-line error must contain). Values that need no scenario are refused by
 # the argument types before anything is loaded; the others by the up-front checks.
 RANGE_CASES = [
@@ -67,16 +58,16 @@ RANGE_CASES = [
 
 @pytest.mark.parametrize(("argv", "text"), RANGE_CASES,
                          ids=[" ".join(a) for a, _ in RANGE_CASES])
-def test_cli_numbers_are_checked_up_front(argv, text, capsys):
-    line = _one_line_error(capsys, argv)
+def test_cli_numbers_are_checked_up_front(argv, text, one_line_error):
+    line = one_line_error(argv)
     assert line.startswith(f"tmaplan {argv[0]}: error:"), line
     assert text in line, line
 
 
-def test_out_must_be_a_directory(tmp_path, capsys):
+def test_out_must_be_a_directory(tmp_path, one_line_error):
     f = tmp_path / "afile"
     f.write_text("x")
-    line = _one_line_error(capsys, ["simulate", "default", "--out", str(f)])
+    line = one_line_error(["simulate", "default", "--out", str(f)])
     assert "--out must be a directory" in line and "afile" in line
 
 
@@ -98,8 +89,8 @@ APPLICABILITY = [
 
 @pytest.mark.parametrize(("argv", "texts"), APPLICABILITY,
                          ids=[" ".join(a[1:4]) for a, _ in APPLICABILITY])
-def test_track_refuses_combinations_that_cannot_work(argv, texts, capsys):
-    line = _one_line_error(capsys, [*argv, "--no-figure"])
+def test_track_refuses_combinations_that_cannot_work(argv, texts, one_line_error):
+    line = one_line_error([*argv, "--no-figure"])
     for t in texts:
         assert t in line, line
 
@@ -195,7 +186,7 @@ def test_time_flags_take_units(capsys):
     assert "with pings at" in line and " min along the scripted track" in line
 
 
-def test_schedule_along_a_saved_plan(tmp_path, capsys):
+def test_schedule_along_a_saved_plan(tmp_path, capsys, one_line_error):
     # `plan --json PLAN.json` then `schedule --observer-plan PLAN.json`: the pings and the
     # bound are those of the API's schedule_pings along the same plan's track.
     from tmaplan.planning import Belief, HeadingPlanner, schedule_pings
@@ -221,21 +212,21 @@ def test_schedule_along_a_saved_plan(tmp_path, capsys):
                  "--json", "-"]) == 0
     assert json.loads(capsys.readouterr().out)["objective"] != pytest.approx(d["objective"])
 
-    line = _one_line_error(capsys, ["schedule", "ristic-bot-moderate", "--observer-plan",
+    line = one_line_error(["schedule", "ristic-bot-moderate", "--observer-plan",
                                     str(plan_js), "--no-figure"])
     assert "--observer-plan" in line and "a plan of problem 'ristic-bot-moderate'" in line
-    line = _one_line_error(capsys, ["schedule", "default", "--observer-plan", str(sched_js),
+    line = one_line_error(["schedule", "default", "--observer-plan", str(sched_js),
                                     "--no-figure"])
     assert "with an 'observer' track" in line and str(sched_js) in line
-    line = _one_line_error(capsys, ["schedule", "default", "--observer-plan",
+    line = one_line_error(["schedule", "default", "--observer-plan",
                                     str(tmp_path / "missing.json"), "--no-figure"])
     assert "no such file" in line
 
 
-def test_binary_scenario_file_names_the_file(tmp_path, capsys):
+def test_binary_scenario_file_names_the_file(tmp_path, one_line_error):
     f = tmp_path / "scenario.toml"
     f.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")
-    line = _one_line_error(capsys, ["simulate", str(f)])
+    line = one_line_error(["simulate", str(f)])
     assert str(f) in line and "UTF-8 text file" in line
 
 

@@ -11,14 +11,6 @@ from tmaplan.cli import main
 from tmaplan.scenario import problems_dir
 
 
-def _one_line_error(capsys, argv):
-    rc = main(argv)
-    err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 1, (argv, err)
-    assert len(err) == 1 and "Traceback" not in err[0], err
-    return err[0]
-
-
 def _problem_file(tmp_path, name="gordon1993-bot", old=None, new=None):
     text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
     if old is not None:
@@ -37,29 +29,29 @@ def test_debug_before_the_verb_shows_the_traceback(capsys):
     assert main(["simulate", "nosuch"]) == 1  # still one line without --debug
 
 
-def test_json_never_overwrites_the_problem_file(tmp_path, capsys, monkeypatch):
+def test_json_never_overwrites_the_problem_file(tmp_path, monkeypatch, one_line_error):
     f = _problem_file(tmp_path)
     before = f.read_text(encoding="utf-8")
     for path in (str(f), str(tmp_path / "." / "my.toml")):
-        line = _one_line_error(capsys, ["simulate", str(f), "--no-figure", "--json", path])
+        line = one_line_error(["simulate", str(f), "--no-figure", "--json", path])
         assert "--json" in line and "problem file" in line
     monkeypatch.chdir(tmp_path)  # relative and absolute spellings of one file
-    line = _one_line_error(capsys, ["simulate", "my.toml", "--no-figure", "--json", str(f)])
+    line = one_line_error(["simulate", "my.toml", "--no-figure", "--json", str(f)])
     assert "--json" in line
     assert f.read_text(encoding="utf-8") == before
 
 
-def test_json_never_overwrites_the_observer_plan(tmp_path, capsys):
+def test_json_never_overwrites_the_observer_plan(tmp_path, one_line_error):
     plan = tmp_path / "plan.json"
     plan.write_text('{"problem": "default"}', encoding="utf-8")
-    line = _one_line_error(capsys, ["schedule", "default", "--observer-plan", str(plan),
+    line = one_line_error(["schedule", "default", "--observer-plan", str(plan),
                                     "--no-figure", "--json", str(plan)])
     assert "--json" in line and "--observer-plan" in line
     assert plan.read_text(encoding="utf-8") == '{"problem": "default"}'
 
 
-def test_json_directory_is_refused_before_any_work(tmp_path, capsys):
-    line = _one_line_error(capsys, ["simulate", "default", "--no-figure", "--json",
+def test_json_directory_is_refused_before_any_work(tmp_path, capsys, one_line_error):
+    line = one_line_error(["simulate", "default", "--no-figure", "--json",
                                     str(tmp_path)])
     assert "--json must be a file path" in line and "existing directory" in line
     assert capsys.readouterr().out == ""  # nothing ran
@@ -67,29 +59,30 @@ def test_json_directory_is_refused_before_any_work(tmp_path, capsys):
 
 # ------------------------------------------------------------------ scenario files
 @pytest.mark.parametrize("name", ["../../escape", "a/b", "a\\b", "", "  ", "..", "x\ny"])
-def test_scenario_name_cannot_escape_the_output_folder(tmp_path, capsys, name):
+def test_scenario_name_cannot_escape_the_output_folder(tmp_path, name, one_line_error):
     # figures are written to <out>/<name>_geometry.png etc.: "../../escape" wrote outside --out
     f = _problem_file(tmp_path, old='name = "gordon1993-bot"', new=f"name = {json.dumps(name)}")
     out = tmp_path / "o" / "p"
-    line = _one_line_error(capsys, ["simulate", str(f), "--out", str(out)])
+    line = one_line_error(["simulate", str(f), "--out", str(out)])
     assert "field 'name'" in line and "without '/'" in line
     assert list(tmp_path.rglob("*.png")) == []
 
 
-def test_speed_max_below_speed_min_names_speed_max(tmp_path, capsys):
+def test_speed_max_below_speed_min_names_speed_max(tmp_path, one_line_error):
     # the error named observer.speed with an empty interval [3.09, 2.57] m/s
     f = _problem_file(tmp_path, "default", 'speed_max = "6 kn"', 'speed_max = "5 kn"')
-    line = _one_line_error(capsys, ["simulate", str(f), "--no-figure"])
+    line = one_line_error(["simulate", str(f), "--no-figure"])
     assert "field 'observer.speed_max'" in line and ">= observer.speed_min" in line
 
 
-def test_a_folder_named_like_a_builtin_problem_does_not_hide_it(tmp_path, capsys, monkeypatch):
+def test_a_folder_named_like_a_builtin_problem_does_not_hide_it(tmp_path, capsys, monkeypatch,
+                                                                one_line_error):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "gordon1993-bot").mkdir()  # e.g. an --out folder named after the problem
     assert main(["simulate", "gordon1993-bot", "--no-figure", "--json", "-"]) == 0
     assert json.loads(capsys.readouterr().out)["problem"] == "gordon1993-bot"
     # spelled as a path, it is a path: a folder is not a scenario file
-    line = _one_line_error(capsys, ["simulate", "./gordon1993-bot/", "--no-figure"])
+    line = one_line_error(["simulate", "./gordon1993-bot/", "--no-figure"])
     assert "an existing .toml file" in line
 
 
@@ -116,8 +109,8 @@ FLAG_CASES = [
 
 @pytest.mark.parametrize(("argv", "texts"), FLAG_CASES,
                          ids=[" ".join(a[:4]) for a, _ in FLAG_CASES])
-def test_flags_are_named_up_front(tmp_path, capsys, argv, texts):
-    line = _one_line_error(capsys, [*argv, "--out", str(tmp_path)])
+def test_flags_are_named_up_front(tmp_path, argv, texts, one_line_error):
+    line = one_line_error([*argv, "--out", str(tmp_path)])
     for t in texts:
         assert t in line, line
     assert list(tmp_path.iterdir()) == []  # refused before any work
@@ -151,10 +144,10 @@ def test_observer_plan_with_null_values_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("interval", ["7 min", "2 h"])
-def test_control_interval_must_divide_the_problems_horizon(capsys, interval):
+def test_control_interval_must_divide_the_problems_horizon(interval, one_line_error):
     # without --horizon the 45 min horizon was rounded to whole intervals silently: 42 min for
     # 7 min, and 120 min (beyond the problem's horizon) for 2 h
-    line = _one_line_error(capsys, ["plan", "default", "--control-interval", interval,
+    line = one_line_error(["plan", "default", "--control-interval", interval,
                                     "--no-figure"])
     assert "field '--control-interval'" in line and "planning horizon of 2700 s" in line
 
@@ -191,11 +184,11 @@ def test_python_dash_m_tmaplan_runs_the_cli():
     assert "bow-closing" in out and "default" in out
 
 
-def test_prior_samples_have_an_upper_limit(tmp_path, capsys):
+def test_prior_samples_have_an_upper_limit(tmp_path, one_line_error):
     path = _problem_file(tmp_path, "default", "samples = 100000", "samples = 100000000000000")
-    err = _one_line_error(capsys, ["bound", str(path)])
+    err = one_line_error(["bound", str(path)])
     assert "prior.samples" in err and "between 5 and 10000000" in err
     assert "100000000000000" in err
     path = _problem_file(tmp_path, "default", "samples = 100000", "samples = 1")
-    err = _one_line_error(capsys, ["bound", str(path)])  # one sample: a NaN covariance
+    err = one_line_error(["bound", str(path)])  # one sample: a NaN covariance
     assert "prior.samples" in err and "received 1" in err

@@ -62,19 +62,6 @@ def test_exact_equals_brute_force_on_random_gains():
                 assert val == pytest.approx(best) and lb <= best + 1e-12
 
 
-@pytest.fixture(scope="module")
-def short(default):
-    """`default` cut to 36 steps (9 min)."""
-    return default.replace(time=dataclasses.replace(default.time, horizon=540.0))
-
-
-@pytest.fixture(scope="module")
-def short_prior(short):
-    from tmaplan.planning import Belief
-
-    return Belief.from_prior(short)
-
-
 NAN, INF = float("nan"), float("inf")
 
 

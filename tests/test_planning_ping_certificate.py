@@ -4,7 +4,6 @@ exact = brute force; the default method is never worse than greedy; every result
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 
 import numpy as np
@@ -14,17 +13,6 @@ from tmaplan.models.observer import observer_track
 from tmaplan.planning import Belief, PingEvaluator, schedule_pings
 from tmaplan.planning.ping_exact import tree_search
 from tmaplan.planning.ping_relaxation import Relaxation, relaxation_bound
-
-
-@pytest.fixture(scope="module")
-def short(default):
-    """`default` cut to 36 steps (9 min): small enough to enumerate every schedule."""
-    return default.replace(time=dataclasses.replace(default.time, horizon=540.0))
-
-
-@pytest.fixture(scope="module")
-def short_prior(short):
-    return Belief.from_prior(short)
 
 
 def _evaluator(sc, prior, objective):

@@ -198,7 +198,8 @@ def test_report_rendered_in_headless_chromium(report, tmp_path):
     assert "Warning: small sample" in dom and "<details>" in dom
 
 
-def test_undefined_differences_are_said_not_printed_as_nan():
+def _undefined_differences():
+    """Three policies whose a-b and b-c mean differences are undefined (NaN)."""
     from tmaplan.evaluation.metrics import PairedDifference
 
     nan = float("nan")
@@ -207,9 +208,13 @@ def test_undefined_differences_are_said_not_printed_as_nan():
         return PairedDifference(a=a, b=b, metric="final_range_error", mean=mean, ci_low=lo,
                                 ci_high=hi, level=0.95, n=3)
 
-    fake = SimpleNamespace(policies=("a", "b", "c"), differences=(
+    return SimpleNamespace(policies=("a", "b", "c"), differences=(
         pd("a", "b", nan, nan, nan), pd("a", "c", -500.0, -900.0, -100.0),
         pd("b", "c", nan, nan, nan)))
+
+
+def test_undefined_differences_are_said_not_printed_as_nan():
+    fake = _undefined_differences()
     text = differences_html(fake)
     assert "nan" not in text.lower() and "undefined" in text
     assert "lowest mean with <strong>a</strong>" in text and "-0.5 km" in text
@@ -229,17 +234,7 @@ def test_summary_names_the_policies_whose_mean_is_undefined():
     """A policy whose mean difference is undefined (a non-finite final error in one run) was
     left out of the summary line without a word: "better than 1 of the 1 other policies"
     with three policies compared."""
-    from tmaplan.evaluation.metrics import PairedDifference
-
-    nan = float("nan")
-
-    def pd(a, b, mean, lo, hi):
-        return PairedDifference(a=a, b=b, metric="final_range_error", mean=mean, ci_low=lo,
-                                ci_high=hi, level=0.95, n=3)
-
-    fake = SimpleNamespace(policies=("a", "b", "c"), differences=(
-        pd("a", "b", nan, nan, nan), pd("a", "c", -500.0, -900.0, -100.0),
-        pd("b", "c", nan, nan, nan)))
+    fake = _undefined_differences()
     summary = differences_html(fake).split("<details>")[0]
     assert "better than 1 of the 1 other policies" in summary
     assert "Mean undefined for b." in summary

@@ -58,3 +58,15 @@ def test_is_integer_is_the_one_integer_test_of_user_input():
     assert is_integer(3, 3) and is_integer(np.int64(7), 0)
     for bad in (True, 3.0, "3", None, 2, np.float64(4.0)):
         assert not is_integer(bad, 3)
+
+
+def test_as_real_turns_what_is_not_a_real_number_into_nan():
+    import math
+
+    import numpy as np
+
+    from tmaplan.errors import as_real
+
+    assert as_real(2) == 2.0 and as_real(np.float32(0.5)) == 0.5 and as_real(-1e300) == -1e300
+    for bad in (True, False, "0.1", b"1", None, [1.0], object()):
+        assert math.isnan(as_real(bad)), bad

@@ -110,3 +110,18 @@ def is_integer(value: Any, minimum: int) -> bool:
 
     return bool(not isinstance(value, bool) and isinstance(value, (int, np.integer))
                 and value >= minimum)
+
+
+def as_real(value: Any) -> float:
+    """``value`` as a float, NaN if it is not a real number (a bool, a string, None): the one
+    conversion behind the real-valued checks of user input, so that the callers' finiteness
+    tests refuse what ``float()`` would have accepted (``float("0.1")``, ``float(True)``) or
+    raised on."""
+    import math
+
+    if isinstance(value, bool | str | bytes):
+        return math.nan
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan

@@ -424,22 +424,18 @@ def _check_arguments(spec: CampaignSpec, backend: str | None, max_new_runs: int 
     other than the two (read as "scenario"), a misspelt backend (found only after the
     policies are resolved), a negative ``max_new_runs`` (a slice from the end), ``policies``
     whose names are not the spec's (extra ones flown and left out of the results)."""
-    from tmaplan.errors import ArgumentError
+    from tmaplan.errors import ArgumentError, is_integer
 
     if isinstance(spec.policies, str) or not spec.policies:
         raise ArgumentError("policies", "a non-empty tuple of policy specs", spec.policies)
-    for name in ("runs", "n_particles", "seed"):
-        v = getattr(spec, name)
-        if isinstance(v, bool) or not isinstance(v, int | np.integer):
-            raise ArgumentError(name, "an integer", v)
-    if spec.seed < 0:
-        raise ArgumentError("seed", "an integer >= 0", spec.seed)
+    for name, least in (("runs", 1), ("n_particles", 2), ("seed", 0)):
+        if not is_integer(v := getattr(spec, name), least):
+            raise ArgumentError(name, f"an integer >= {least}", v)
     if spec.truth not in ("prior", "scenario"):
         raise ArgumentError("truth", "'prior' or 'scenario'", spec.truth)
     if backend not in (None, "serial", "processes", "dask"):
         raise ArgumentError("backend", "'serial', 'processes' or 'dask'", backend)
-    if max_new_runs is not None and (isinstance(max_new_runs, bool) or not isinstance(
-            max_new_runs, int | np.integer) or max_new_runs < 0):
+    if max_new_runs is not None and not is_integer(max_new_runs, 0):
         raise ArgumentError("max_new_runs", "an integer >= 0 or None", max_new_runs)
     if policies is not None and (set(policies) != set(spec.policies)
                                  or len(set(spec.policies)) != len(spec.policies)):

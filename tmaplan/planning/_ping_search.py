@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, as_real, is_integer
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
@@ -48,23 +48,13 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Feasibility helpers
 # --------------------------------------------------------------------------------------------
-def _real(value: object) -> float:
-    """``value`` as a float; NaN if it is not a real number (a bool, a string, None)."""
-    if isinstance(value, (bool, str, bytes)):
-        return math.nan
-    try:
-        return float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return math.nan
-
-
 def _windows(windows: Sequence[tuple[float, float]], field: str) -> list[tuple[float, float]]:
     """Time windows [s] checked: pairs of finite times with start <= end (a reversed or NaN
     window forbade nothing, silently)."""
     out = []
     for i, win in enumerate(windows):
         pair = tuple(win) if isinstance(win, (tuple, list, np.ndarray)) else ()
-        a, b = (_real(pair[0]), _real(pair[1])) if len(pair) == 2 else (math.nan, math.nan)
+        a, b = (as_real(pair[0]), as_real(pair[1])) if len(pair) == 2 else (math.nan, math.nan)
         if not (np.isfinite(a) and np.isfinite(b) and a <= b):
             raise ArgumentError(f"{field}[{i}]", "a window (start, end) of finite times [s] "
                                 "with start <= end", win)
@@ -106,7 +96,7 @@ def ping_candidates(scenario: Scenario, times: np.ndarray, *,
         t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
     if min_spacing is not None:
-        spacing = _real(min_spacing)
+        spacing = as_real(min_spacing)
         if not (np.isfinite(spacing) and spacing >= 0):
             raise ArgumentError("min_spacing", "a finite time >= 0 s (None: "
                                 "planning.ping_min_spacing)", min_spacing)

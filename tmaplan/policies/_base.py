@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
@@ -206,17 +205,6 @@ class _CourseKeeper:
         turning the way the unwrapped difference says."""
         delta = course + self.course_offset - self.heading(belief)
         return float(np.clip(delta / self.dt, -self.u_max, self.u_max))
-
-
-def _real(value: object) -> float:
-    """``value`` as a float; NaN if it is not a real number (a bool, a string, None), so that
-    the callers' finiteness checks refuse it."""
-    if isinstance(value, bool | str | bytes):  # float("0.1") would accept a string
-        return math.nan
-    try:
-        return float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return math.nan
 
 
 def _initial_course(scenario: Scenario) -> float:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, is_integer
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, as_real, is_integer
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -18,7 +18,6 @@ from tmaplan.policies._base import (
     Controller,
     _CourseKeeper,
     _initial_course,
-    _real,
     _turn_limits,
     log,
 )
@@ -78,7 +77,7 @@ class SingleTurn:
 
     def _checked(self, scenario: Scenario) -> tuple[float, float]:
         """(angle [rad], time [s]), or ArgumentError naming the field."""
-        a, t = _real(self.angle), _real(self.time)
+        a, t = as_real(self.angle), as_real(self.time)
         if not (math.isfinite(a) and abs(a) <= math.pi):
             raise ArgumentError("single-turn.angle", "an angle in [−π, π] rad", self.angle)
         t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
@@ -125,12 +124,12 @@ class Zigzag:
 
     def _check(self, scenario: Scenario) -> None:
         """ArgumentError naming the first invalid field."""
-        if not (math.isfinite(leg := _real(self.leg_duration)) and leg > 0):
+        if not (math.isfinite(leg := as_real(self.leg_duration)) and leg > 0):
             raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
-        if not (math.isfinite(a := _real(self.angle)) and abs(a) <= math.pi):
+        if not (math.isfinite(a := as_real(self.angle)) and abs(a) <= math.pi):
             raise ArgumentError("zigzag.angle", "an angle in [−π, π] rad", self.angle)
         t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
-        if not (math.isfinite(t := _real(self.start)) and t0 <= t < end):
+        if not (math.isfinite(t := as_real(self.start)) and t0 <= t < end):
             raise ArgumentError("zigzag.start", f"a time in [t0, t0 + horizon) = "
                                 f"[{t0:g}, {end:g}) s", self.start)
 
@@ -424,7 +423,7 @@ def _check_receding(policy: Receding) -> None:
     """ArgumentError naming the first invalid time or step count of ``policy``."""
     for field in ("replan_interval", "horizon"):
         v = getattr(policy, field)
-        if v is not None and not (math.isfinite(x := _real(v)) and x > 0):
+        if v is not None and not (math.isfinite(x := as_real(v)) and x > 0):
             raise ArgumentError(f"receding.{field}", "> 0 s", v)
     n = policy.rti_steps
     if not is_integer(n, 1):

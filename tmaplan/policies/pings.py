@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, is_integer
-from tmaplan.policies._base import Action, BeliefView, Controller, _real
+from tmaplan.errors import ArgumentError, as_real, is_integer
+from tmaplan.policies._base import Action, BeliefView, Controller
 
 if TYPE_CHECKING:
     from tmaplan.planning.objectives import PingObjectiveName
@@ -132,11 +132,11 @@ class AdaptivePings:
             A threshold that is not a positive number, or a minimum spacing that is not a
             time >= 0 (a NaN threshold would never ping, a NaN spacing always).
         """
-        threshold = _real(self.threshold)
+        threshold = as_real(self.threshold)
         if not (np.isfinite(threshold) and threshold > 0):
             raise ArgumentError("adaptive.threshold", "a relative range std > 0", self.threshold)
         if self.min_spacing is not None:
-            ms = _real(self.min_spacing)
+            ms = as_real(self.min_spacing)
             if not (np.isfinite(ms) and ms >= 0):
                 raise ArgumentError("adaptive.min_spacing", "a time >= 0 s (None: the "
                                     "scenario's)", self.min_spacing)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import bearing_of, wrap_angle
 from tmaplan.policies._base import (
     Action,
@@ -27,7 +27,6 @@ from tmaplan.policies._base import (
     Controller,
     _CourseKeeper,
     _initial_course,
-    _real,
     _turn_limits,
 )
 
@@ -124,7 +123,7 @@ def belief_line_of_sight(belief: BeliefView) -> tuple[float, float]:
 
 
 def _check_angle(field: str, value: float) -> float:
-    if not (np.isfinite(v := _real(value)) and 0.0 < v < np.pi):
+    if not (np.isfinite(v := as_real(value)) and 0.0 < v < np.pi):
         raise ArgumentError(field, "an angle in (0, 180) deg", value)
     return v
 
@@ -132,7 +131,7 @@ def _check_angle(field: str, value: float) -> float:
 def _check_time(field: str, value: float | None, scenario: Scenario, default: float) -> float:
     """An instant ``t0 + value`` strictly inside the horizon (``value`` after t0 [s])."""
     t0, H = scenario.time.t0, scenario.time.horizon
-    v = default * H if value is None else _real(value)
+    v = default * H if value is None else as_real(value)
     if not (np.isfinite(v) and 0.0 < v < H):
         raise ArgumentError(field, f"a time after t0 in (0, {H:g}) s", value)
     return t0 + v
@@ -255,7 +254,7 @@ class LeadLag:
     def _times(self, scenario: Scenario) -> tuple[float, float]:
         t_lag = _check_time("lead-lag.lag_time", self.lag_time, scenario, 0.5)
         t0 = scenario.time.t0
-        if not (np.isfinite(lead := _real(self.lead_time)) and 0.0 <= lead < t_lag - t0):
+        if not (np.isfinite(lead := as_real(self.lead_time)) and 0.0 <= lead < t_lag - t0):
             raise ArgumentError("lead-lag.lead_time", f"a time after t0 in [0, {t_lag - t0:g}) s"
                                 " (before the lag leg)", self.lead_time)
         return t0 + lead, t_lag

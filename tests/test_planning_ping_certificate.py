@@ -12,7 +12,11 @@ import pytest
 from tmaplan.models.observer import observer_track
 from tmaplan.planning import Belief, PingEvaluator, schedule_pings
 from tmaplan.planning.ping_exact import tree_search
-from tmaplan.planning.ping_relaxation import Relaxation, relaxation_bound
+from tmaplan.planning.ping_relaxation import (
+    Relaxation,
+    duality_gap_allowance,
+    relaxation_bound,
+)
 
 
 def _evaluator(sc, prior, objective):
@@ -60,6 +64,31 @@ def test_relaxation_bound_with_coarse_candidates(default, prior):
     r = relaxation_bound(ev, cand, 2, 1)
     _, best = _brute(ev, cand, 2, 1)
     assert r.status.startswith("certified") and r.lower_bound <= best
+
+
+def test_certificate_removes_the_solvers_duality_gap(short, short_prior, monkeypatch):
+    # the solver's value is primal (above the relaxed optimum by up to its stopping gap):
+    # even when the evaluator agrees with it exactly, the bound lies below it by that gap
+    ev = _evaluator(short, short_prior, "mean-range-bound")
+    rel = Relaxation(ev, np.arange(1, ev.K + 1), gap=1)
+    monkeypatch.setattr(rel, "_value_at",
+                        lambda u: float(rel.problem.value) * rel.scale)
+    r = rel.solve(2)
+    assert r.status == "certified (clarabel)"
+    allowance = duality_gap_allowance("CLARABEL", {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8},
+                                      r.value_at_u / rel.scale) * rel.scale
+    assert allowance > 0
+    assert r.lower_bound == pytest.approx(r.value_at_u - allowance, rel=1e-12)
+
+
+def test_duality_gap_allowance_covers_both_stopping_rules():
+    # Clarabel: |p - d| <= abs or rel * min(|p|, |d|); SCS: abs + rel * max(|p|, |d|)
+    assert duality_gap_allowance("CLARABEL", {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-6},
+                                 -50.0) == pytest.approx(1e-8 + 1e-4)
+    assert duality_gap_allowance("SCS", {"eps_abs": 1e-7, "eps_rel": 1e-7},
+                                 10.0) == pytest.approx(2.1e-6)
+    with pytest.raises(ValueError, match="ECOS"):
+        duality_gap_allowance("ECOS", {}, 1.0)
 
 
 def test_failed_solve_is_not_a_certificate(short, short_prior, monkeypatch):

@@ -166,7 +166,8 @@ def differences_html(result: CampaignResult) -> str:
                     f"<td>{_verdict(d)}</td></tr>")
     return (f"<h3>Summary</h3><ul>{summary}</ul>"
             "<p>Negative differences favour the first policy named (lower is better). "
-            "Time to accuracy is censored at the horizon for runs that never get there.</p>"
+            "Time to accuracy is censored at the horizon plus one time step for runs that never "
+            "get there.</p>"
             f"<details><summary>All {len(diffs)} paired differences (95 % confidence "
             "intervals)</summary><table><tr><th>pair</th><th>metric</th><th>mean</th>"
             "<th>95 % CI</th><th>excludes 0</th></tr>" + "".join(rows) +

@@ -2,9 +2,10 @@
 
 Role: the certificate of :func:`tmaplan.planning.pings.schedule_pings`. Every method's
 ``lower_bound`` is the optimum of the convex problem below, solved by Clarabel (SCS as the
-fallback); a solve that is not certified (solver status, or disagreement with the batched
-evaluator at the relaxation's own weights) is never used: the weaker "every candidate pinged"
-bound is reported instead, and the result says which.
+fallback), less the primal–dual gap the solver's stopping test allows
+(:func:`duality_gap_allowance`); a solve that is not certified (solver status, or
+disagreement with the batched evaluator at the relaxation's own weights) is never used: the
+weaker "every candidate pinged" bound is reported instead, and the result says which.
 
 Mathematics (brehard2005, eq. 43–51, information form of the closed-form PCRB):
 the information recursion is
@@ -61,12 +62,44 @@ import numpy as np
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
 
-__all__ = ["InformationMatrices", "Relaxation", "RelaxationResult", "information_matrices",
-           "objective_vectors", "relaxation_bound", "schedule_kernel_of"]
+__all__ = ["InformationMatrices", "Relaxation", "RelaxationResult", "duality_gap_allowance",
+           "information_matrices", "objective_vectors", "relaxation_bound",
+           "schedule_kernel_of"]
 
 #: Relative agreement required between the solver's optimum and the evaluator at the relaxed
 #: weights before the optimum is used as a certificate.
 CERTIFY_RTOL = 2e-3
+
+
+def duality_gap_allowance(solver: str, options: dict[str, float], value: float) -> float:
+    """The largest primal–dual gap an ``optimal`` status of ``solver`` allows at ``value``.
+
+    Clarabel stops when ``|p − d| ≤ tol_gap_abs`` or ``|p − d| ≤ tol_gap_rel·min(|p|, |d|)``;
+    SCS (version 3) when ``|p − d| ≤ eps_abs + eps_rel·max(|p|, |d|)``. Both are covered by
+    ``abs + 2·rel·|p|`` (``|d| ≤ |p| + |p − d|`` and the gap is small against ``|p|``), so
+    the relaxed optimum is at least the returned primal value ``p`` minus this.
+
+    Parameters
+    ----------
+    solver : {"CLARABEL", "SCS"}
+    options : dict
+        The tolerances the solve was given (``tol_gap_abs``/``tol_gap_rel``,
+        ``eps_abs``/``eps_rel``).
+    value : float
+        The primal optimal value ``p`` in the problem's (scaled) units.
+
+    Returns
+    -------
+    float
+        The allowance, in the same units as ``value``.
+    """
+    if solver == "CLARABEL":
+        a, r = options["tol_gap_abs"], options["tol_gap_rel"]
+    elif solver == "SCS":
+        a, r = options["eps_abs"], options["eps_rel"]
+    else:
+        raise ValueError(f"duality_gap_allowance: no stopping rule known for {solver!r}")
+    return float(a + 2.0 * r * abs(value))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -270,8 +303,8 @@ class Relaxation:
         lo, hi = np.zeros(n), np.ones(n)
         self.budget.value = float(budget)
         notes = []
-        for solver, opts in (("CLARABEL", {"tol_gap_rel": 1e-8, "tol_feas": 1e-8,
-                                           "max_iter": 500}),
+        for solver, opts in (("CLARABEL", {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8,
+                                           "tol_feas": 1e-8, "max_iter": 500}),
                              ("SCS", {"eps_abs": 1e-7, "eps_rel": 1e-7,
                                       "max_iters": 200_000})):
             try:
@@ -291,8 +324,11 @@ class Relaxation:
                              f"{fu:.6g} at its weights)")
                 continue
             # the solver's value agrees with the evaluator at u*; remove the residual
-            # disagreement from the bound so the certificate stays on the safe side
-            lb = min(val, fu) - abs(fu - val)
+            # disagreement and the duality gap the solver's stopping test allows (the
+            # returned value is primal: above the relaxed optimum by at most that gap) from
+            # the bound, so that the certificate stays on the safe side
+            lb = (min(val, fu) - abs(fu - val)
+                  - duality_gap_allowance(solver, opts, float(self.problem.value)) * self.scale)
             return RelaxationResult(lower_bound=lb, u=u, value_at_u=fu,
                                     status=f"certified ({solver.lower()})",
                                     seconds=time.perf_counter() - t0)

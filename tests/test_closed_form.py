@@ -15,9 +15,11 @@ from tmaplan.bounds.closed_form import (
     closed_form_pcrb,
     side_density_gaussian,
 )
+from tmaplan.bounds.inputs import lpc_prior_information
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
+from tmaplan.models.prior import zero_prior_stds
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem, measurement_steps
 
@@ -271,9 +273,40 @@ def test_prior_mass_at_zero_range_is_an_error(s1):
 
 
 def test_non_positive_definite_prior_information_is_an_error(s1):
+    # a zero std of the scenario's prior is named as the field at fault
     bad = s1.replace(prior=dataclasses.replace(s1.prior, bearing_std=0.0))
-    with pytest.raises(ObservabilityError, match="not positive definite"):
+    with pytest.raises(ScenarioError, match=r"prior\.bearing_std.*J0.*not positive definite"):
         closed_form_pcrb(bad)
+    g = load_problem("gordon1993-bot")
+    assert g.prior.kind == "gaussian"
+    std = list(g.prior.std)
+    std[0] = std[1] = 0.0  # the position known exactly: bearing and ln r have no spread
+    bad = g.replace(prior=dataclasses.replace(g.prior, std=tuple(std)))
+    with pytest.raises(ScenarioError, match=r"prior\.std\[0\].*prior\.std\[1\]"):
+        closed_form_pcrb(bad)
+    # a belief (not a scenario) that is degenerate keeps the observability error
+    X = np.random.default_rng(0).normal(size=(200, 4)) * [1e3, 1e3, 1, 1] + [1e4, 0, 0, 0]
+    X[:, :2] = [1e4, 0.0]  # every sample at one position
+    with pytest.raises(ObservabilityError, match="not positive definite"):
+        lpc_prior_information(X)
+
+
+def test_zero_prior_stds_names_only_sampled_components(s1):
+    p = s1.prior  # polar, normal range, normal velocity
+    assert zero_prior_stds(p) == ()
+    assert zero_prior_stds(dataclasses.replace(p, bearing_std=0.0, range_std=0.0)) == (
+        "prior.bearing_std", "prior.range_std")
+    # speed-course with a normal speed and a course about the reciprocal bearing
+    r = load_problem("ristic-bot-moderate").prior
+    assert zero_prior_stds(r) == ()
+    assert zero_prior_stds(dataclasses.replace(r, speed_std=0.0, course_std=0.0)) == (
+        "prior.speed_std", "prior.course_std")
+    # a uniform range, speed and course have no std to be zero
+    d = load_problem("default").prior
+    assert (d.range_distribution, d.speed_distribution, d.course_mode) == (
+        "uniform", "uniform", "uniform")
+    assert zero_prior_stds(dataclasses.replace(d, range_std=0.0, speed_std=0.0,
+                                               course_std=0.0)) == ()
 
 
 def test_pings_without_range_sensor_and_frequency_lines_are_errors(s1):

@@ -20,7 +20,7 @@ from scipy import stats
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.prior import relative_prior_samples, true_initial_state
+from tmaplan.models.prior import relative_prior_samples, true_initial_state, zero_prior_stds
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import (
     BearingSensor,
@@ -303,7 +303,15 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
             raise ScenarioError("prior", f"no prior mass within {MIN_PRIOR_RANGE} m of the "
                                 "observer (ln r and 1/r diverge at zero range)",
                                 f"a sample at range {r.min():.3g} m", source=scenario.name)
-        cov_lpc = lpc_prior_information(X0)[0]
+        try:
+            cov_lpc = lpc_prior_information(X0)[0]
+        except ObservabilityError as exc:
+            if not (zero := zero_prior_stds(scenario.prior)):
+                raise
+            raise ScenarioError(zero[0], "a std > 0 (the closed-form bound's prior information "
+                                "J0, brehard2005 eq. 56, is not positive definite for a prior "
+                                f"without a density; zero stds: {', '.join(zero)})", 0.0,
+                                source=scenario.name) from exc
     m0 = X0.mean(axis=0)
     S0 = X0.T @ X0 / n
     return PCRBInputs(

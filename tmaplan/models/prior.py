@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Prior, Scenario
 
 __all__ = ["prior_relative_moments", "relative_prior_samples", "sample_prior",
-           "true_initial_state"]
+           "true_initial_state", "zero_prior_stds"]
 
 
 def true_initial_state(scenario: Scenario) -> np.ndarray:
@@ -115,6 +115,41 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
             course = c_mean + p.course_std * rng.standard_normal(n)
         vel = speed[:, None] * np.stack([np.sin(course), np.cos(course)], axis=-1)
     return np.hstack([pos, vel])
+
+
+def zero_prior_stds(prior: Prior) -> tuple[str, ...]:
+    """The std fields of ``prior`` that :func:`sample_prior` uses and that are zero.
+
+    Each makes the prior degenerate (no density in that component): the prior information
+    ``J0 = P0⁻¹`` of the closed-form bound (brehard2005, eq. 56) does not exist.
+
+    Parameters
+    ----------
+    prior : Prior
+
+    Returns
+    -------
+    tuple of str
+        Dotted field names (``"prior.bearing_std"``, ``"prior.std[2]"``, …) in file order;
+        empty if every sampled component has a positive std.
+    """
+    p = prior
+    if p.kind == "gaussian":
+        return tuple(f"prior.std[{i}]" for i, v in enumerate(p.std or ()) if v == 0)
+    out = []
+    if p.bearing_std == 0:
+        out.append("prior.bearing_std")
+    if p.range_distribution == "normal" and not p.range_std:
+        out.append("prior.range_std")
+    if p.velocity_distribution == "normal":
+        if p.velocity_std == 0:
+            out.append("prior.velocity_std")
+    else:
+        if p.speed_distribution == "normal" and p.speed_std == 0:
+            out.append("prior.speed_std")
+        if p.course_mode != "uniform" and p.course_std == 0:
+            out.append("prior.course_std")
+    return tuple(out)
 
 
 def relative_prior_samples(scenario: Scenario, n: int, rng: np.random.Generator,

@@ -188,7 +188,9 @@ def fit_rmp(z: np.ndarray, tau: np.ndarray, sigma: float, *,
         cost = float(r @ r)
         G = _jacobian(Y, tau) / sigma
         step, *_ = np.linalg.lstsq(G, r, rcond=None)
-        # Backtracking keeps the GN step a descent step.
+        # Backtracking keeps the GN step a descent step; a direction along which no step
+        # lowers the cost ends the iteration at Y (never a worse point), converged if the
+        # Gauss-Newton step is at round-off level there.
         lam = 1.0
         while lam > 1e-4:
             Yn = Y + lam * step
@@ -196,6 +198,9 @@ def fit_rmp(z: np.ndarray, tau: np.ndarray, sigma: float, *,
             if float(rn @ rn) <= cost:
                 break
             lam *= 0.5
+        else:
+            converged = bool(np.all(np.abs(step) <= np.sqrt(tol) * (np.abs(Y) + 1e-12)))
+            break
         Y = Yn
         if np.all(np.abs(lam * step) <= tol * (np.abs(Y) + 1e-12)):
             converged = True

@@ -110,7 +110,7 @@ def _convert(value: Any, kind: str | None) -> Any:
     return value
 
 
-def _display(data: Any, parent: dict[str, Any] | None = None) -> Any:
+def _display(data: Any) -> Any:
     if isinstance(data, list):
         return [_display(v) for v in data]
     if not isinstance(data, dict):
@@ -125,7 +125,7 @@ def _display(data: Any, parent: dict[str, Any] | None = None) -> Any:
             out[k] = [_text("length", float(x)) for x in v[:2]] + \
                 [_text("speed", float(x)) for x in v[2:]]
         elif isinstance(v, dict | list) and kind is None:
-            out[k] = _display(v, data)
+            out[k] = _display(v)
         else:
             out[k] = _convert(v, kind)
     return out

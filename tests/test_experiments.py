@@ -56,6 +56,15 @@ def test_paired_difference_interval():
             paired_difference(vals, "a", "b", "m", level=bad)
     with pytest.raises(ArgumentError, match="one value per run"):
         paired_difference({"a": np.zeros(3), "b": np.zeros(4)}, "a", "b", "m")
+    # a NaN (e.g. the final range error of a non-finite estimate), or an infinite time
+    # without censor, is refused with the runs named (it made the mean and interval NaN)
+    with pytest.raises(ArgumentError, match=r"values\['b'\].*nan at run\(s\) \[1\]"):
+        paired_difference({"a": np.zeros(3), "b": np.array([0.0, np.nan, 1.0])}, "a", "b", "m")
+    with pytest.raises(ArgumentError, match=r"values\['a'\].*censor"):
+        paired_difference({"a": np.array([1.0, np.inf]), "b": np.zeros(2)}, "a", "b", "t")
+    with pytest.raises(ArgumentError, match=r"values\['a'\]"):  # NaN is not censored
+        paired_difference({"a": np.array([1.0, np.nan]), "b": np.zeros(2)}, "a", "b", "t",
+                          censor=10.0)
 
 
 def test_common_random_numbers(scenario):

@@ -181,15 +181,16 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     level : float
         Confidence level of the t interval, in (0, 1) (0.95, not 95).
     censor : float, optional
-        Replace infinite values (never reached) by this value (e.g. the horizon + dt), which
+        Replace ``+inf`` values (never reached) by this value (e.g. the horizon + dt), which
         makes the difference conservative; finite and not below any finite value of ``a`` or
         ``b`` (a run never localised must not count as sooner than one localised).
 
     Raises
     ------
     ArgumentError
-        A level outside (0, 1), ``a`` and ``b`` with different numbers of runs, or a censor
-        that is not a finite number at least the largest finite value.
+        A level outside (0, 1), ``a`` and ``b`` with different numbers of runs, a censor
+        that is not a finite number at least the largest finite value, or a value that is
+        NaN, or infinite without ``censor`` (the difference would be NaN).
     """
     if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
         raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
@@ -205,8 +206,14 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
                 or not np.isfinite(censor) or censor < top):
             raise ArgumentError("censor", f"a finite number >= the largest finite value "
                                 f"({top:g}), e.g. the horizon + dt", censor)
-        xa = np.where(np.isfinite(xa), xa, censor)
-        xb = np.where(np.isfinite(xb), xb, censor)
+        xa = np.where(np.isposinf(xa), censor, xa)
+        xb = np.where(np.isposinf(xb), censor, xb)
+    for name, x in ((a, xa), (b, xb)):
+        if not np.isfinite(x).all():
+            bad = np.flatnonzero(~np.isfinite(x))
+            raise ArgumentError(f"values[{name!r}]", "finite values (times never reached: pass "
+                                "censor=)", f"{x[bad[0]]} at run(s) {bad[:5].tolist()}"
+                                + (" …" if bad.size > 5 else ""))
     d = xa - xb
     n = d.size
     m = float(d.mean())

@@ -42,6 +42,10 @@ def main() -> None:
     ap.add_argument("--receding", action="store_true", help="also fly receding (slow)")
     ap.add_argument("--out", default=None, help="store runs here and resume from there")
     a = ap.parse_args()
+    if a.runs < 2:  # a paired interval needs two runs
+        ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
+    if a.problems < 2:  # the family means' t intervals need two problems
+        ap.error(f"--problems: at least 2 problems, got {a.problems}")
     problems = random_problems(load_problem(a.base), a.problems, seed=a.seed)
     rows: dict[str, dict[str, str]] = {}
     met: dict[str, list[bool]] = {k: [] for k in CRITERIA}

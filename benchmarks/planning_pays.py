@@ -67,6 +67,8 @@ def main() -> None:
     if a.select_runs > 0 and a.seed == SELECT_SEED:
         ap.error(f"--seed: an evaluation seed other than the selection's ({SELECT_SEED}), "
                  f"got {a.seed}")
+    if a.runs < 2:  # a paired interval and a per-run SD need two runs
+        ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
     baselines = [b for b in a.baselines.split(",") if b]
     if unknown := [b for b in baselines if b not in PLAN_BASELINES]:  # before the tuning
         ap.error(f"--baselines: names among {','.join(PLAN_BASELINES)}, got {unknown}")

@@ -101,6 +101,8 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", default=None)
     a = ap.parse_args()
+    if a.runs < 2:  # a paired interval needs two runs
+        ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
     jobs = [(a.seed, i) for i in range(a.first_run, a.first_run + a.runs)]
     with ProcessPoolExecutor(a.workers, initializer=_init,
                              initargs=(a.problem, a.particles)) as ex:

@@ -149,3 +149,20 @@ def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_s
     monkeypatch.setattr(sys, "argv", ["planning_pays.py", "--baselines", "straight,lead-lagg"])
     with pytest.raises(SystemExit):
         bench.main()
+
+
+@pytest.mark.parametrize("script, argv", [
+    ("planning_pays", ["--runs", "1"]), ("planning_general", ["--seed", "9", "--runs", "1"]),
+    ("planning_general", ["--seed", "9", "--problems", "1"]),
+    ("value_of_information", ["--runs", "1"])])
+def test_benchmarks_refuse_too_few_runs_before_work(benchmark_script, monkeypatch, capsys,
+                                                    script, argv):
+    # one run (or one problem) gave NaN standard deviations and intervals after the work
+    bench = benchmark_script(script)
+    for name in ("load_problem", "random_problems", "ProcessPoolExecutor"):
+        if hasattr(bench, name):
+            monkeypatch.setattr(bench, name, lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(sys, "argv", [f"{script}.py", *argv])
+    with pytest.raises(SystemExit):
+        bench.main()
+    assert "at least 2" in capsys.readouterr().err

@@ -302,3 +302,54 @@ def test_cli_crlb_json(tmp_path, capsys):
     assert data["final_range_rsd"] == pytest.approx(0.71 / 9.76, rel=0.03)
     assert main(["crlb", "clavard2013-halfturn-cw", "--frequencies", "9"]) == 1
     assert "frequencies" in capsys.readouterr().err
+
+
+def _halfturn_data():
+    t = np.arange(0.0, 628.0)
+    obs = np.stack([6.0 * t, 0.0 * t], axis=-1)
+    Z = np.array([7530.0, 10000.0, 1000.0, 0.0, 0.005])
+    return t, obs, Z, [BearingData(times=t, observer_position=obs, sigma=SIG)]
+
+
+@pytest.mark.parametrize("kw", [
+    {"final_time": np.nan, "final_observer_position": [0.0, 0.0]},
+    {"final_time": np.inf, "final_observer_position": [0.0, 0.0]},
+    {"final_time": True, "final_observer_position": [0.0, 0.0]},
+    {"final_time": "300", "final_observer_position": [0.0, 0.0]},
+    {"final_observer_position": [np.nan, 0.0]},
+    {"final_observer_position": [np.inf, 0.0]},
+    {"final_observer_position": [1.0, 2.0, 3.0]},
+])
+def test_final_time_and_position_are_validated(kw):
+    """A non-finite final time or observer position gave NaN final bounds without a word."""
+    _, _, Z, bd = _halfturn_data()
+    field = "final_time" if "final_time" in kw else "final_observer_position"
+    with pytest.raises(ArgumentError, match=field):
+        crlb_from_data(constant_turn_model(), Z, bearings=bd, **kw)
+
+
+def test_final_time_at_an_interior_measurement_uses_its_observer_position():
+    """A final time at a measurement time other than the last was refused as 'not a
+    measurement time'; the observer position of that measurement is the default."""
+    _, obs, Z, bd = _halfturn_data()
+    got = crlb_from_data(constant_turn_model(), Z, bearings=bd, final_time=300.0)
+    ref = crlb_from_data(constant_turn_model(), Z, bearings=bd, final_time=300.0,
+                         final_observer_position=obs[300])
+    assert got.final_range == ref.final_range
+    assert got.final_range_std == ref.final_range_std
+    # the default at the last measurement time is unchanged
+    last = crlb_from_data(constant_turn_model(), Z, bearings=bd)
+    assert last.final_range == crlb_from_data(
+        constant_turn_model(), Z, bearings=bd, final_observer_position=obs[-1]).final_range
+
+
+@pytest.mark.parametrize("kw", [{"frequencies": True}, {"frequencies": 1.7},
+                                {"frequencies": "2"}, {"frequencies": -1},
+                                {"t_ref": np.nan}, {"t_ref": "0"}])
+def test_scenario_crlb_arguments_are_validated(kw):
+    """frequencies=True/1.7/"2" silently used 1 or 2 lines; t_ref=NaN was reported as an
+    unobservable velocity."""
+    field = next(iter(kw))
+    with pytest.raises(ArgumentError, match=field):
+        crlb(_ct_scenario(0.005), **kw) if field == "frequencies" else crlb(
+            load_problem("brehard2005-s2"), **kw)

@@ -32,7 +32,7 @@ from tmaplan.bounds.batch_fim import (
     fisher_information,
     true_parameters,
 )
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real, is_integer
 from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
@@ -250,8 +250,8 @@ def crlb_from_data(
     final_time : float, optional
         t_N [s] (default: the last measurement time).
     final_observer_position : ndarray, shape (2,), optional
-        Observer position at t_N [m] (default: the observer position of the last measurement
-        at t_N).
+        Observer position at t_N [m] (default: the observer position of a measurement at
+        t_N; required when t_N is not a measurement time).
     notes : sequence of str
         Caveats copied into the result.
 
@@ -264,7 +264,8 @@ def crlb_from_data(
     ObservabilityError
         Singular FIM, too few measurements, observer at the target.
     ArgumentError
-        Non-positive or non-finite noise, NaN inputs.
+        Non-positive or non-finite noise, NaN inputs, a non-finite ``final_time`` or
+        ``final_observer_position``.
     """
     theta = np.asarray(theta, dtype=float)
     data = batch_data(model, bearings=bearings, ranges=ranges, frequencies=frequencies)
@@ -280,15 +281,24 @@ def crlb_from_data(
     # final time and observer position
     sets = [(s[1], s[2]) for s in _observed(data)]
     t_last = max(float(np.max(s[0])) for s in sets)
-    t_n = t_last if final_time is None else float(final_time)
+    t_n = t_last if final_time is None else as_real(final_time)
+    if not np.isfinite(t_n):
+        raise ArgumentError("final_time", "a finite time [s] (or None: the last measurement "
+                            "time)", final_time)
     if final_observer_position is None:
-        cand = [s[1][np.argmax(s[0])] for s in sets if np.isclose(np.max(s[0]), t_n)]
+        # the observer position of a measurement at t_N (any measurement, not only the last
+        # of a set): in the first set measuring at t_N, its measurement closest to t_N
+        cand = [p[np.argmin(np.where(np.isclose(t, t_n), np.abs(t - t_n), np.inf))]
+                for t, p in sets if np.any(np.isclose(t, t_n))]
         if not cand:
             raise ArgumentError("final_observer_position", f"given when final_time ({t_n} s) "
                                 "is not a measurement time", None)
         obs_n = cand[0]
     else:
-        obs_n = np.asarray(final_observer_position, float).reshape(2)
+        obs_n = np.asarray(final_observer_position, float)
+        if obs_n.shape != (2,) or not np.all(np.isfinite(obs_n)):
+            raise ArgumentError("final_observer_position", "a finite position of shape (2,) "
+                                "[m]", final_observer_position)
 
     pos_n, _ = model.track(theta, np.array([t_n]))
     dpos_n, _ = model.jacobian(theta, np.array([t_n]))
@@ -349,11 +359,18 @@ def scenario_data(
         measurement_steps,
     )
 
+    if frequencies is not None and not is_integer(frequencies, 0):
+        raise ArgumentError("frequencies", "an integer >= 0 or None (all lines)", frequencies,
+                            source=scenario.name)
     grid = scenario.time
     times = grid.times
     tgt = scenario.target
     notes: list[str] = []
-    t_ref = float(grid.t0 if t_ref is None else t_ref)
+    t_ref_in = t_ref
+    t_ref = float(grid.t0) if t_ref is None else as_real(t_ref)
+    if not np.isfinite(t_ref):
+        raise ArgumentError("t_ref", "a finite reference time [s] (or None: t0)", t_ref_in,
+                            source=scenario.name)
     if tgt.model == "constant-turn":
         model = constant_turn_model()
     else:
@@ -389,7 +406,7 @@ def scenario_data(
             lines_sigma += list(sen.sigma)
     n_avail = len(lines_f0)
     n_lines = n_avail if frequencies is None else int(frequencies)
-    if n_lines < 0 or n_lines > n_avail:
+    if n_lines > n_avail:
         raise ArgumentError("frequencies", f"an integer in [0, {n_avail}] (lines in the "
                             "scenario)", frequencies, source=scenario.name)
     freq = None

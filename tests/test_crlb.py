@@ -353,3 +353,15 @@ def test_scenario_crlb_arguments_are_validated(kw):
     with pytest.raises(ArgumentError, match=field):
         crlb(_ct_scenario(0.005), **kw) if field == "frequencies" else crlb(
             load_problem("brehard2005-s2"), **kw)
+
+
+def test_noise_std_of_the_wrong_length_names_the_field():
+    """A σ array of the wrong length was a raw numpy broadcasting ValueError."""
+    t, obs, Z, _ = _halfturn_data()
+    with pytest.raises(ArgumentError, match=r"bearings\[0\]\.sigma"):
+        crlb_from_data(constant_turn_model(), Z, bearings=[
+            BearingData(times=t, observer_position=obs, sigma=np.full(3, SIG))])
+    with pytest.raises(ArgumentError, match=r"ranges\[0\]\.sigma"):
+        crlb_from_data(constant_turn_model(), Z, bearings=[
+            BearingData(times=t, observer_position=obs, sigma=SIG)], ranges=[
+            RangeData(times=t[:5], observer_position=obs[:5], sigma=[1.0, 2.0])])

@@ -285,3 +285,31 @@ def test_cauchy_binet_sum_equals_det():
     total = np.sum(det4_subset(ph[E], t[E]) ** 2)
     G = _G(ph, t)
     assert total == pytest.approx(np.linalg.det(G @ G.T), rel=1e-8)
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda t, rel: fim_bearings(rel, t, 0.01, t_ref=np.nan), "t_ref"),
+    (lambda t, rel: logdet_fim_bearings(rel, t, 0.01, t_ref=np.inf), "t_ref"),
+    (lambda t, rel: fim_bearings(rel, t, 0.01, t_ref="3"), "t_ref"),
+    (lambda t, rel: logdet_fim_bearings(rel, t * np.nan, 0.01), "times"),
+    (lambda t, rel: logdet_fim_bearings(rel, t, np.full(3, 0.01)), "sigma"),
+    (lambda t, rel: logdet_fim_from_bearings(np.arctan2(rel[:, 0], rel[:, 1]), t, 0.01,
+                                             np.full(3, 1e4)), "ranges"),
+    (lambda t, rel: single_leg_small_rate_constant(5.5), "n"),
+    (lambda t, rel: single_leg_small_rate_constant(True), "n"),
+    (lambda t, rel: exact_det_piecewise([1e-3, -1e-3], [2.7, 4]), "leg_lengths"),
+    (lambda t, rel: exact_det_piecewise([1e-3, -1e-3], [True, 4]), "leg_lengths"),
+    (lambda t, rel: bearing_rate_det_approx([1e-3, -1e-3, 1e-3], [3, 4]), "rates"),
+    (lambda t, rel: exact_det_piecewise(1e-3, [3, 4]), "rates"),
+    (lambda t, rel: logdet_bearing_rate_approx([1e-3, -1e-3], [3, 4], np.inf, 1e4), "sigma"),
+    (lambda t, rel: logdet_bearing_rate_approx([1e-3, -1e-3], [3, 4], "0.1", 1e4), "sigma"),
+    (lambda t, rel: logdet_bearing_rate_approx([1e-3, -1e-3], [3, 4], 0.1, 1e4, np.nan),
+     "dt"),
+])
+def test_bad_arguments_name_their_field(call, field):
+    """A NaN t_ref gave a NaN FIM/log det, non-integer leg lengths or sample counts were
+    truncated (2.7 -> 2, True -> 1), an infinite σ gave -inf; shape mismatches were raw numpy
+    errors and NaN times were blamed on rel_pos."""
+    t, rel = _manoeuvre_geometry()
+    with pytest.raises(ArgumentError, match=f"field '{field}'"):
+        call(t, rel)

@@ -209,7 +209,10 @@ class FrequencyData:
 
 
 def _sigma(sigma: Any, n: int, field: str) -> np.ndarray:
-    s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,))
+    s = np.asarray(sigma, dtype=float)
+    if s.shape not in ((), (1,), (n,)):
+        raise ArgumentError(field, f"a scalar or one noise std per measurement ({n})", s.shape)
+    s = np.broadcast_to(s, (n,))
     bad = ~np.isfinite(s) | (s <= 0.0)
     if np.any(bad):
         raise ArgumentError(field, "finite noise std > 0 (zero noise gives infinite "

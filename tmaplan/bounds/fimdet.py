@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds._lpc_terms import ldl
-from tmaplan.errors import ArgumentError, ObservabilityError
+from tmaplan.errors import ArgumentError, ObservabilityError, as_real, is_integer
 
 __all__ = [
     "SINGLE_LEG_COEFFICIENTS",
@@ -85,9 +85,14 @@ def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndar
     n = rel.shape[-2]
     if t.shape != (n,):
         raise ArgumentError("times", f"shape ({n},) [s]", t.shape)
-    if not np.all(np.isfinite(rel)) or not np.all(np.isfinite(t)):
-        raise ArgumentError("rel_pos", "finite positions and times (no NaN)", "nan/inf")
-    s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,))
+    if not np.all(np.isfinite(rel)):
+        raise ArgumentError("rel_pos", "finite relative positions [m] (no NaN)", "nan/inf")
+    if not np.all(np.isfinite(t)):
+        raise ArgumentError("times", "finite times [s] (no NaN)", "nan/inf")
+    s = np.asarray(sigma, dtype=float)
+    if s.shape not in ((), (1,), (n,)):
+        raise ArgumentError("sigma", f"a scalar or shape ({n},) [rad]", s.shape)
+    s = np.broadcast_to(s, (n,))
     if np.any(~np.isfinite(s) | (s <= 0)):
         raise ArgumentError("sigma", "bearing noise std > 0 [rad]", float(np.min(s)))
     if n < 4:
@@ -98,6 +103,13 @@ def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndar
         raise ObservabilityError("the observer is at the target (zero range): the bearing is "
                                  "undefined")
     return rel, t, s, r2
+
+
+def _check_t_ref(t_ref: Any) -> float:
+    tr = as_real(t_ref)
+    if not np.isfinite(tr):
+        raise ArgumentError("t_ref", "a finite reference time [s]", t_ref)
+    return tr
 
 
 def _rows(rel: np.ndarray, tau: np.ndarray, s: np.ndarray, r2: np.ndarray) -> np.ndarray:
@@ -130,7 +142,8 @@ def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) ->
     rel, t, s, _ = _check_bearing_inputs(rel_pos, times, sigma)
     steps = (-1,) + (1,) * (rel.ndim - 2)  # steps along axis 0, batch axes after
     F = fim_bearings_generic(np.moveaxis(rel[..., 0], -1, 0), np.moveaxis(rel[..., 1], -1, 0),
-                             (t - float(t_ref)).reshape(steps), (1.0 / s**2).reshape(steps))
+                             (t - _check_t_ref(t_ref)).reshape(steps),
+                             (1.0 / s**2).reshape(steps))
     return np.moveaxis(np.array(F), (0, 1), (-2, -1))
 
 
@@ -159,7 +172,7 @@ def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
         ``log det F`` (F in SI units); ``-inf`` when F is exactly singular.
     """
     rel, t, s, r2 = _check_bearing_inputs(rel_pos, times, sigma)
-    tr = 0.5 * (t[0] + t[-1]) if t_ref is None else float(t_ref)
+    tr = 0.5 * (t[0] + t[-1]) if t_ref is None else _check_t_ref(t_ref)
     rows = _rows(rel, t - tr, s, r2)
     norms = np.sqrt(np.sum(rows * rows, axis=-2))  # (..., 4)
     safe = np.where(norms > 0, norms, 1.0)
@@ -195,7 +208,10 @@ def logdet_fim_from_bearings(bearings: Any, times: Any, sigma: Any, ranges: Any)
     if np.any(bad):
         raise ArgumentError("bearings", "finite bearings [rad]",
                             f"{b[np.argmax(bad)]} at index {int(np.argmax(bad))}")
-    r = np.broadcast_to(np.asarray(ranges, dtype=float), b.shape)
+    r = np.asarray(ranges, dtype=float)
+    if r.shape not in ((), (1,), b.shape):
+        raise ArgumentError("ranges", f"a scalar or shape {b.shape} [m]", r.shape)
+    r = np.broadcast_to(r, b.shape)
     if np.any(~np.isfinite(r) | (r <= 0)):
         raise ArgumentError("ranges", "finite ranges > 0 [m]", float(np.min(r)))
     rel = r[:, None] * np.stack([np.sin(b), np.cos(b)], axis=-1)
@@ -392,15 +408,19 @@ def single_leg_small_rate_constant(n: int) -> float:
     ``k_n = (1/9) Σ_E V(E)²`` with V the Vandermonde product of the subset's sample indices
     (docs/errata.md; k_4 = 16).
     """
+    if not is_integer(n, 4):
+        raise ArgumentError("n", "an integer number of samples >= 4", n)
     E = _subsets(int(n))
-    return float(np.sum(_vandermonde(E, np.arange(n, dtype=float)) ** 2) / 9.0)
+    return float(np.sum(_vandermonde(E, np.arange(int(n), dtype=float)) ** 2) / 9.0)
 
 
 def _leg_times(leg_lengths: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
     """Model A (docs/errata.md): samples t = 0..N−1; time spent on each leg, shape (N, L)."""
-    lengths = [int(x) for x in leg_lengths]
-    if not lengths or any(x < 1 for x in lengths):
-        raise ArgumentError("leg_lengths", "positive sample counts per leg", leg_lengths)
+    lengths = list(leg_lengths)
+    if not lengths or not all(is_integer(x, 1) for x in lengths):
+        raise ArgumentError("leg_lengths", "positive integer sample counts per leg",
+                            leg_lengths)
+    lengths = [int(x) for x in lengths]
     n = sum(lengths)
     t = np.arange(n, dtype=float)
     ends = np.cumsum(lengths)[:-1] - 1.0  # leg j ends at its last sample
@@ -423,9 +443,13 @@ def model_a_phases(rates: Any, leg_lengths: Sequence[int]) -> tuple[np.ndarray, 
     """
     t, tau = _leg_times(leg_lengths)
     x = np.asarray(rates, dtype=float)
-    if x.shape[-1] != tau.shape[1]:
-        raise ArgumentError("rates", f"one rate per leg ({tau.shape[1]})", x.shape)
+    _check_rates(x, tau.shape[1])
     return t, np.einsum("nl,...l->...n", tau, x)
+
+
+def _check_rates(x: np.ndarray, n_legs: int) -> None:
+    if x.ndim == 0 or x.shape[-1] != n_legs:
+        raise ArgumentError("rates", f"one rate per leg, shape (..., {n_legs})", x.shape)
 
 
 def exact_det_piecewise(rates: Any, leg_lengths: Sequence[int]) -> np.ndarray:
@@ -500,6 +524,7 @@ def bearing_rate_det_approx(rates: Any, leg_lengths: Sequence[int]) -> np.ndarra
     """
     A, single, vander = _leading_forms(leg_lengths)
     x = np.asarray(rates, dtype=float)
+    _check_rates(x, A.shape[1])
     q = np.einsum("...i,mij,...j->...m", x, A, x)
     xs = np.where(single >= 0, np.take(x, np.clip(single, 0, None), axis=-1), 0.0)
     s = np.where(single >= 0, xs**4 * vander / 3.0, 0.0)
@@ -551,8 +576,10 @@ def logdet_bearing_rate_approx(rates: Any, leg_lengths: Sequence[int], sigma: fl
     dt : float
         Sampling period [s].
     """
-    if not (sigma > 0 and rng_ > 0 and dt > 0):
-        raise ArgumentError("sigma/range/dt", "positive values", (sigma, rng_, dt))
+    for field, value in (("sigma", sigma), ("rng_", rng_), ("dt", dt)):
+        v = as_real(value)
+        if not (np.isfinite(v) and v > 0):
+            raise ArgumentError(field, "a finite value > 0", value)
     p = bearing_rate_det_approx(rates, leg_lengths)
     with np.errstate(divide="ignore"):
         return np.log(p) + 4.0 * np.log(dt) - 8.0 * np.log(sigma * rng_)

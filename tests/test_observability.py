@@ -183,3 +183,41 @@ def test_bad_inputs():
         rank_test(np.zeros(3), np.arange(3.0))
     with pytest.raises(ArgumentError, match="frequencies"):
         observability(load_problem("clavard2013-halfturn-cw"), frequencies=6)
+
+
+def test_pseudo_measurement_identity_with_a_change_before_the_first_bearing():
+    """O p = z for the true parameters (positions at times[0]). A change time before
+    times[0] gave a negative time on leg 1 and a wrong matrix."""
+    from tmaplan.bounds.observability import observability_matrix
+
+    t = T[10:]
+    obs = _observer(20.0)[10:]
+    src = _source(5.0)[10:]  # source changed at t = 5, before the first bearing at t = 10
+    b = _brg(src, obs)
+    O = observability_matrix(b, t, change_times=[5.0])
+    z = np.sum(np.stack([np.cos(b), -np.sin(b)], axis=-1) * obs, axis=-1)
+    p = np.r_[src[0], -3.0, -1.0, 2.0, -3.0]  # position at t[0], leg-1 and leg-2 velocities
+    np.testing.assert_allclose(O @ p, z, atol=1e-8 * np.max(np.abs(z)))
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda b: rank_test(b, T, change_times=[np.nan]), "change_times"),
+    (lambda b: rank_test(b, T, rtol=np.nan), "rtol"),
+    (lambda b: rank_test(b, T, rtol=-1.0), "rtol"),
+    (lambda b: ct_vs_cv_test(b, T, _observer(20.0), rtol=2.0), "rtol"),
+    (lambda b: switch_time_scan(b, T, _observer(20.0), [np.nan, 15.0]), "candidates"),
+    (lambda b: ct_observability(T, _observer(20.0), np.tile([5.0, 0.0], (T.size, 1)),
+                                [7530.0, 10000.0, 1000.0, 0.0]), "theta"),
+    (lambda b: ct_observability(T, _observer(20.0), np.tile([5.0, 0.0], (T.size, 1)),
+                                [7530.0, 10000.0, 1000.0, 0.0, 0.005], rtol=np.nan), "rtol"),
+    (lambda b: observability(load_problem("clavard2013-halfturn-cw"), frequencies=True),
+     "frequencies"),
+    (lambda b: observability(load_problem("clavard2013-halfturn-cw"), frequencies=1.5),
+     "frequencies"),
+])
+def test_bad_arguments_name_their_field(call, field):
+    """NaN change times or candidates were a LinAlgError from the SVD, a NaN or negative rtol
+    silently gave rank 0 or full rank, a short theta a tuple-unpacking ValueError, and
+    frequencies=True/1.5 used one line."""
+    with pytest.raises(ArgumentError, match=f"field '{field}'"):
+        call(_brg(_source(15.0), _observer(20.0)))

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError, as_real, is_integer
 from tmaplan.geometry import bearing_of
 from tmaplan.models.target import circle_parameters
 from tmaplan.models.tracks import constant_turn_model
@@ -127,12 +127,22 @@ def _check_bearings(bearings: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
     return b, t
 
 
-def _leg_tau(t: np.ndarray, change_times: Sequence[float]) -> np.ndarray:
+def _leg_tau(t: np.ndarray, change_times: Sequence[float],
+             field: str = "change_times") -> np.ndarray:
+    """Time spent on each source leg between ``t[0]`` and ``t_k``, shape (n, ℓ) [s]."""
     ct = np.asarray(change_times, dtype=float).reshape(-1)
-    if ct.size and np.any(np.diff(ct) <= 0):
-        raise ArgumentError("change_times", "strictly increasing times [s]", ct)
-    edges = np.concatenate([[t[0]], ct, [np.inf]])
+    if not np.all(np.isfinite(ct)) or (ct.size and np.any(np.diff(ct) <= 0)):
+        raise ArgumentError(field, "finite, strictly increasing times [s]", ct)
+    # a change at or before t[0]: no time is spent on the earlier legs after t[0]
+    edges = np.concatenate([[t[0]], np.maximum(ct, t[0]), [np.inf]])
     return np.clip(t[:, None], edges[:-1], edges[1:]) - edges[:-1]
+
+
+def _check_rtol(rtol: Any) -> float:
+    r = as_real(rtol)
+    if not 0.0 < r < 1.0:
+        raise ArgumentError("rtol", "a relative singular-value tolerance in (0, 1)", rtol)
+    return r
 
 
 def observability_matrix(bearings: Any, times: Any, *,
@@ -169,6 +179,7 @@ def numerical_rank(M: Any, rtol: float = RANK_RTOL) -> tuple[int, np.ndarray]:
     sv : ndarray
         Singular values divided by the largest.
     """
+    rtol = _check_rtol(rtol)
     M = np.asarray(M, dtype=float)
     norms = np.linalg.norm(M, axis=0)
     Mn = M / np.where(norms > 0, norms, 1.0)
@@ -275,7 +286,9 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
         raise ArgumentError("observer_position", f"finite, shape ({t.size}, 2)", obs.shape)
     h = np.stack([np.cos(b), -np.sin(b)], axis=-1)
     z = np.sum(h * obs, axis=-1)
-    cands = np.asarray(candidates, dtype=float)
+    cands = np.asarray(candidates, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(cands)):
+        raise ArgumentError("candidates", "finite candidate change times [s]", candidates)
     res = np.full(cands.shape, np.inf)
     degenerate = np.zeros(cands.shape, dtype=bool)
     scale = float(np.max(np.linalg.norm(obs - obs[0], axis=-1))) or 1.0
@@ -285,7 +298,7 @@ def switch_time_scan(bearings: Any, times: Any, observer_position: Any,
             continue
         O = observability_matrix(b, t, change_times=[c])
         p, *_ = np.linalg.lstsq(O, z, rcond=None)
-        tau = _leg_tau(t, [c])
+        tau = _leg_tau(t, [c], "candidates")
         pos = p[:2] + tau[:, :1] * p[2:4] + tau[:, 1:2] * p[4:6]
         if np.max(np.linalg.norm(pos - obs, axis=-1)) < 1e-6 * scale:
             degenerate[i] = True
@@ -337,8 +350,11 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     t = np.asarray(times, dtype=float).reshape(-1)
     pos = np.asarray(observer_position, dtype=float)
     vel = np.asarray(observer_velocity, dtype=float)
+    rtol = _check_rtol(rtol)
     model = constant_turn_model()
     theta = np.asarray(theta, dtype=float)
+    if theta.shape != (5,) or not np.all(np.isfinite(theta)):
+        raise ArgumentError("theta", "5 finite parameters [x_C, y_C, ρ_C, φ, ω] (SI)", theta)
     freq = None
     if len(f0):
         freq = FrequencyData(times=t, observer_position=pos, observer_velocity=vel,
@@ -480,6 +496,9 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
                 f0 += list(s.f0)
                 sf += list(s.sigma)
                 c = s.c
+        if frequencies is not None and not is_integer(frequencies, 0):
+            raise ArgumentError("frequencies", f"an integer in [0, {len(f0)}]", frequencies,
+                                source=scenario.name)
         n = len(f0) if frequencies is None else int(frequencies)
         if not 0 <= n <= len(f0):
             raise ArgumentError("frequencies", f"an integer in [0, {len(f0)}]", frequencies,

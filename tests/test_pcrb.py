@@ -191,3 +191,10 @@ def test_errors():
     no_range = sc.replace(sensors=tuple(s for s in sc.sensors if s.kind != "range"))
     with pytest.raises(ScenarioError, match="range sensor"):
         monte_carlo_pcrb(no_range, samples=10, rng=RNG, ping_steps=[5])
+
+
+@pytest.mark.parametrize("rng", [3, None, np.random.RandomState(0)])
+def test_rng_must_be_a_generator(rng):
+    """An int seed or None was an AttributeError deep in the sampling."""
+    with pytest.raises(ArgumentError, match="field 'rng'"):
+        monte_carlo_pcrb(load_problem("brehard2005-s1"), samples=10, rng=rng)

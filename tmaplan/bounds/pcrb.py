@@ -369,7 +369,7 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
     ScenarioError
         Bad scenario fields (no prior, ``q = 0`` in LPC, mass at zero range, ...).
     ArgumentError
-        Bad arguments (``coords``, ``samples``, ``ping_steps``).
+        Bad arguments (``coords``, ``samples``, ``rng``, ``ping_steps``).
     ObservabilityError
         A non-positive-definite information matrix.
     """
@@ -378,6 +378,9 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
         raise ArgumentError("coords", "'cartesian' or 'lpc'", coords, source=scenario.name)
     if not isinstance(samples, int | np.integer) or samples < 2:
         raise ArgumentError("samples", "an integer >= 2", samples, source=scenario.name)
+    if not isinstance(rng, np.random.Generator):
+        raise ArgumentError("rng", "a numpy.random.Generator", type(rng).__name__,
+                            source=scenario.name)
     inp = prepare(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, lpc=coords == "lpc")
     K, A, Q = inp.n_steps, inp.A, inp.Q

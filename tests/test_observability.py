@@ -202,6 +202,7 @@ def test_pseudo_measurement_identity_with_a_change_before_the_first_bearing():
 
 @pytest.mark.parametrize("call, field", [
     (lambda b: rank_test(b, T, change_times=[np.nan]), "change_times"),
+    (lambda b: rank_test(b[::-1], T[::-1], change_times=[15.0]), "times"),
     (lambda b: rank_test(b, T, rtol=np.nan), "rtol"),
     (lambda b: rank_test(b, T, rtol=-1.0), "rtol"),
     (lambda b: ct_vs_cv_test(b, T, _observer(20.0), rtol=2.0), "rtol"),
@@ -216,7 +217,8 @@ def test_pseudo_measurement_identity_with_a_change_before_the_first_bearing():
      "frequencies"),
 ])
 def test_bad_arguments_name_their_field(call, field):
-    """NaN change times or candidates were a LinAlgError from the SVD, a NaN or negative rtol
+    """Decreasing times gave a wrong matrix (no time on any leg: rank 2 for Property 2);
+    NaN change times or candidates were a LinAlgError from the SVD, a NaN or negative rtol
     silently gave rank 0 or full rank, a short theta a tuple-unpacking ValueError, and
     frequencies=True/1.5 used one line."""
     with pytest.raises(ArgumentError, match=f"field '{field}'"):

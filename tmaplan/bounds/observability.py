@@ -124,6 +124,9 @@ def _check_bearings(bearings: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
                             f"{b[np.argmax(bad)]} at index {int(np.argmax(bad))}")
     if not np.all(np.isfinite(t)):
         raise ArgumentError("times", "finite times [s]", "nan/inf")
+    if np.any(np.diff(t) < 0):
+        raise ArgumentError("times", "non-decreasing times [s] (legs and positions refer to "
+                            "times[0])", t)
     return b, t
 
 

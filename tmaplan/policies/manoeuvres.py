@@ -215,7 +215,7 @@ def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1,
 
 
 class _TurnRatePlayback:
-    def __init__(self, plan: Any, scenario: Scenario, t_start: float | None = None) -> None:
+    def __init__(self, plan: Any, scenario: Scenario) -> None:
         self.times = np.asarray(plan.times, float)
         self.rates = np.asarray(plan.turn_rate, float)
         u_max, _ = _turn_limits(scenario)

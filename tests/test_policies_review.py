@@ -14,7 +14,7 @@ import pytest
 from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
 from tmaplan.planning import baselines
 from tmaplan.planning.belief import Belief
-from tmaplan.policies import AlarmResponse, NoPing, parse_policy
+from tmaplan.policies import AlarmResponse, NoPing, Receding, parse_policy
 from tmaplan.scenario import load_problem
 
 
@@ -115,6 +115,16 @@ def test_an_alarm_turn_needs_a_turn_rate_limit(scenario):
     with pytest.raises(ScenarioError, match="turn_rate_max"):
         AlarmResponse(turn=0.5).wrap(NoPing().controller(sc), sc)
     AlarmResponse().wrap(NoPing().controller(sc), sc)  # pings only: no limit needed
+
+
+# ------------------------------------------------------------------------------ receding
+
+
+@pytest.mark.parametrize("value", ["0.1", True])
+def test_receding_full_above_must_be_a_real_fraction(scenario, value):
+    # a string raised a bare TypeError, True was taken as 1.0
+    with pytest.raises(ArgumentError, match=r"receding\.full_above"):
+        Receding(full_above=value).controller(scenario)
 
 
 # ------------------------------------------------------------------------------ parsing

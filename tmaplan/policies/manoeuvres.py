@@ -447,7 +447,7 @@ class _RecedingController:
         mp = policy.max_particles
         if not is_integer(mp, 5):
             raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
-        if not policy.full_above > 0:
+        if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
             raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
         from tmaplan.planning import HeadingPlanner
 

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, as_real
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
@@ -80,10 +80,23 @@ def _start(scenario: Scenario, heading0: float | None, speed: float | None,
 
 
 def _rate(scenario: Scenario, turn_rate: float | None) -> float:
-    r = turn_rate if turn_rate is not None else scenario.observer.turn_rate_max
-    if r is None or r <= 0:
+    if turn_rate is not None:
+        if not (np.isfinite(r := as_real(turn_rate)) and r > 0):
+            raise ArgumentError("turn_rate", "a finite turn rate > 0 [rad/s] (None: "
+                                "observer.turn_rate_max)", turn_rate)
+        return r
+    limit = scenario.observer.turn_rate_max
+    if limit is None or limit <= 0:
         raise PlanningError(f"{scenario.name}: baselines need observer.turn_rate_max > 0")
-    return float(r)
+    return float(limit)
+
+
+def _finite(field: str, value: float, unit: str) -> float:
+    """``value`` as a float, or ArgumentError naming ``field`` if it is not a finite real
+    (a NaN angle or time would give a NaN track, or no turn at all, without a word)."""
+    if not np.isfinite(v := as_real(value)):
+        raise ArgumentError(field, f"a finite {unit}", value)
+    return v
 
 
 def _course_program(times: np.ndarray, courses: Sequence[tuple[float, float]], heading0: float,
@@ -117,13 +130,14 @@ def single_turn_track(scenario: Scenario, angle: float, time: float, *,
                       speed: float | None = None, position0: Any = None,
                       turn_rate: float | None = None, t0: float | None = None) -> ObserverTrack:
     """One course change of ``angle`` [rad] (+ starboard) starting ``time`` [s] after t0."""
+    angle = _finite("angle", angle, "angle [rad]")
+    time = _finite("time", time, "time [s] after t0")
     h, s, p = _start(scenario, heading0, speed, position0)
     K = scenario.time.n_steps if n_steps is None else int(n_steps)
     dt = scenario.time.dt
     t0 = scenario.time.t0 if t0 is None else t0
     times = dt * np.arange(K + 1)
-    u = _course_program(times, [(float(time), h + float(angle))], h,
-                        _rate(scenario, turn_rate), dt)
+    u = _course_program(times, [(time, h + angle)], h, _rate(scenario, turn_rate), dt)
     return turn_rate_track(p, h, s, u, dt, t0)
 
 
@@ -135,9 +149,11 @@ def course_program_track(scenario: Scenario, courses: Sequence[tuple[float, floa
     K = scenario.time.n_steps if n_steps is None else int(n_steps)
     dt = scenario.time.dt
     prog, prev = [], h
-    for t, c in courses:
-        prev = prev + float(wrap_angle(float(c) - prev))
-        prog.append((float(t), prev))
+    for i, (t, c) in enumerate(courses):
+        t = _finite(f"courses[{i}].time", t, "time [s] after t0")
+        prev = prev + float(wrap_angle(_finite(f"courses[{i}].course", c, "course [rad]")
+                                       - prev))
+        prog.append((t, prev))
     u = _course_program(dt * np.arange(K + 1), prog, h, _rate(scenario, None), dt)
     return turn_rate_track(p, h, s, u, dt, scenario.time.t0)
 
@@ -151,12 +167,14 @@ def zigzag_track(scenario: Scenario, leg_duration: float, angle: float, *,
     The first turn (to ``c0 + angle/2``; negative ``angle`` starts to port) starts at t0, the
     next ones every ``leg_duration`` [s].
     """
+    if not (np.isfinite(leg := as_real(leg_duration)) and leg > 0):
+        raise ArgumentError("leg_duration", "a finite time > 0 [s]", leg_duration)
+    angle = _finite("angle", angle, "angle [rad]")
+    leg_duration = leg
     h, s, p = _start(scenario, heading0, speed, position0)
     K = scenario.time.n_steps if n_steps is None else int(n_steps)
     dt = scenario.time.dt
     t0 = scenario.time.t0 if t0 is None else t0
-    if leg_duration <= 0:
-        raise PlanningError(f"zigzag leg_duration: expected > 0 s, received {leg_duration}")
     times = dt * np.arange(K + 1)
     n_legs = int(np.ceil(times[-1] / leg_duration)) + 1
     prog = [(i * leg_duration, h + (0.5 if i % 2 == 0 else -0.5) * float(angle))
@@ -272,18 +290,31 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
 
     Raises
     ------
+    ArgumentError
+        ``n_samples`` not an integer >= 4 (four parameters), ``rate_max`` not a finite rate
+        > 0, ``switch_time`` not in (0, N − 1), ``n_arcs`` or ``n_starts`` not an integer
+        >= 1.
     SolverError
         If no start converges.
     """
     import casadi as ca
 
-    from tmaplan.errors import SolverError
+    from tmaplan.errors import SolverError, is_integer
 
+    if not is_integer(n_samples, 4):
+        raise ArgumentError("n_samples", "an integer >= 4", n_samples)
+    if not (np.isfinite(as_real(rate_max)) and as_real(rate_max) > 0):
+        raise ArgumentError("rate_max", "a finite bearing rate > 0 [rad per sample]", rate_max)
+    for field, value in (("n_arcs", n_arcs), ("n_starts", n_starts)):
+        if not is_integer(value, 1):
+            raise ArgumentError(field, "an integer >= 1", value)
     N = int(n_samples)
     t = ca.DM(np.arange(N, dtype=float))
     H = float(N - 1)
     if switch == "fixed":
-        Ts = 0.5 * H if switch_time is None else float(switch_time)
+        Ts = 0.5 * H if switch_time is None else as_real(switch_time)
+        if not (np.isfinite(Ts) and 0.0 < Ts < H):
+            raise ArgumentError("switch_time", f"a time in (0, {H:g}) [samples]", switch_time)
         x = ca.MX.sym("x", 2)
         phi = rate_max * (x[0] * ca.fmin(t, Ts) + x[1] * ca.fmax(t - Ts, 0))
         lbx, ubx = -np.ones(2), np.ones(2)

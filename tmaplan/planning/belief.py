@@ -23,7 +23,13 @@ import numpy as np
 
 from tmaplan.bounds.inputs import lpc_prior_information
 from tmaplan.display import short_repr
-from tmaplan.errors import ObservabilityError, PlanningError, is_integer
+from tmaplan.errors import (
+    ArgumentError,
+    ObservabilityError,
+    PlanningError,
+    as_real,
+    is_integer,
+)
 from tmaplan.geometry import range_of
 
 if TYPE_CHECKING:
@@ -94,12 +100,7 @@ class Belief:
             No samples, non-finite samples, weights with no mass, or a degenerate covariance
             ("a target prior with no mass").
         """
-        X = np.asarray(samples, dtype=float)
-        if X.ndim != 2 or X.shape[1] != 4 or X.shape[0] < 5:
-            raise PlanningError(f"belief: samples of shape (n >= 5, 4) expected, received "
-                                f"{X.shape}: the target prior has no mass to plan against")
-        if not np.all(np.isfinite(X)):
-            raise PlanningError("belief: non-finite samples")
+        X = _samples(samples)
         if weights is None:
             w = np.full(X.shape[0], 1.0 / X.shape[0])
         else:
@@ -116,7 +117,7 @@ class Belief:
         cov = (d * w[:, None]).T @ d
         cov = 0.5 * (cov + cov.T)
         _check_cov(cov)
-        return cls(mean=mean, cov=cov, samples=X, weights=w, t=float(t),
+        return cls(mean=mean, cov=cov, samples=X, weights=w, t=_time(t),
                    assimilated=bool(assimilated))
 
     @classmethod
@@ -144,13 +145,17 @@ class Belief:
         Raises
         ------
         PlanningError
-            As :meth:`from_samples`, or ``max_samples`` below 5.
+            As :meth:`from_samples` (also when subsampling: particles of the wrong shape or
+            not one weight per particle), or ``max_samples`` below 5.
         """
         if not is_integer(max_samples, 5):
             raise PlanningError(f"belief: max_samples must be an integer >= 5, received "
                                 f"{max_samples!r}")
-        X = np.asarray(particles, dtype=float)
+        X = _samples(particles)
         w = np.asarray(weights, dtype=float).reshape(-1)
+        if w.shape[0] != X.shape[0]:  # subsampling would pick rows by the wrong weights
+            raise PlanningError(f"belief: one weight per particle expected ({X.shape[0]}), "
+                                f"received {w.shape[0]} weights")
         if w.size <= max_samples:
             return cls.from_samples(X, w, t=t, assimilated=assimilated)
         if np.any(~np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
@@ -165,12 +170,20 @@ class Belief:
                      assimilated: bool = False) -> Belief:
         """Belief from the mean (4,) [m, m, m/s, m/s] and covariance (4, 4) of the relative
         state at ``t`` [s] (``assimilated``: it holds the measurements at t,
-        :attr:`assimilated`)."""
+        :attr:`assimilated`).
+
+        Raises
+        ------
+        PlanningError
+            A non-finite mean or time, or a covariance that is not positive definite.
+        """
         m = np.asarray(mean, dtype=float).reshape(4)
+        if not np.all(np.isfinite(m)):
+            raise PlanningError(f"belief: mean: expected finite values, received {m.tolist()}")
         C = np.asarray(cov, dtype=float).reshape(4, 4)
         C = 0.5 * (C + C.T)
         _check_cov(C)
-        return cls(mean=m, cov=C, t=float(t), assimilated=bool(assimilated))
+        return cls(mean=m, cov=C, t=_time(t), assimilated=bool(assimilated))
 
     @classmethod
     def from_prior(cls, scenario: Scenario, *, n: int | None = None,
@@ -182,7 +195,7 @@ class Belief:
         ----------
         scenario : Scenario
         n : int, optional
-            Number of samples (default ``min(scenario.prior.samples, 20000)``).
+            Number of samples, >= 5 (default ``min(scenario.prior.samples, 20000)``).
         rng : numpy.random.Generator, optional
             Default ``default_rng(scenario.prior.seed)`` (reproducible).
 
@@ -190,6 +203,8 @@ class Belief:
         ------
         PlanningError
             No prior, or a prior with no mass.
+        ArgumentError
+            ``n`` not an integer >= 5 (a float was truncated, a bool taken as 0 or 1).
         """
         from tmaplan.errors import ScenarioError
         from tmaplan.models.prior import relative_prior_samples
@@ -197,6 +212,8 @@ class Belief:
         if scenario.prior is None:
             raise PlanningError(f"{scenario.name}: the scenario has no [prior]: nothing to "
                                 "plan against")
+        if n is not None and not is_integer(n, 5):
+            raise ArgumentError("n", "an integer >= 5 (None: the prior's samples)", n)
         n = min(scenario.prior.samples, _GAUSS_SAMPLES) if n is None else int(n)
         rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
         try:
@@ -265,6 +282,25 @@ class Belief:
     def mean_range(self) -> float:
         """Range of the mean relative position [m]."""
         return float(range_of(self.mean))
+
+
+def _samples(samples: np.ndarray) -> np.ndarray:
+    """``samples`` as a finite (n >= 5, 4) float array, or PlanningError."""
+    X = np.asarray(samples, dtype=float)
+    if X.ndim != 2 or X.shape[1] != 4 or X.shape[0] < 5:
+        raise PlanningError(f"belief: samples of shape (n >= 5, 4) expected, received "
+                            f"{X.shape}: the target prior has no mass to plan against")
+    if not np.all(np.isfinite(X)):
+        raise PlanningError("belief: non-finite samples")
+    return X
+
+
+def _time(t: float) -> float:
+    """The belief's time ``t`` [s] as a finite float, or PlanningError."""
+    v = as_real(t)
+    if not np.isfinite(v):
+        raise PlanningError(f"belief: t: expected a finite time [s], received {t!r}")
+    return v
 
 
 def _check_cov(cov: np.ndarray) -> None:

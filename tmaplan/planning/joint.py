@@ -112,7 +112,9 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
         plan2 = planner.solve(bel, warm_start=plan, ping_steps=steps)
         if plan2.objective <= sched.objective + 1e-9 * max(1.0, abs(sched.objective)):
             plan, stale = plan2, True
-        history.append(plan.objective)
+        # a rejected heading block leaves the pair (plan, sched): its objective is the
+        # schedule's, not the kept plan's (computed with the pings it was solved with)
+        history.append(plan.objective if stale else sched.objective)
     if sched is None or stale:
         # stopped at max_rounds after a heading re-solve: the pings returned are scheduled
         # on the heading plan returned, not on the one before it

@@ -4,7 +4,8 @@ The heading OCP of :class:`tmaplan.planning.heading.HeadingPlanner` (direct mult
 closed-form PCRB objective) gets the ping weights as decision variables: a ping at step k adds
 ``w_k·E r_k²/σ_r²`` to ``J_k[ln r, ln r]`` of the closed-form recursion (brehard2005, eq. 51),
 exactly as in the scheduler (:mod:`tmaplan.planning.pings`). Over the candidate steps c_i
-(every ``ping_stride``-th allowed step, outside the forbidden windows) the NLP is::
+(the allowed steps, outside the forbidden windows, a multiple of ``ping_stride`` after
+the first one) the NLP is::
 
     minimise   f(ω, w)   (the closed-form objective, e.g. the mean range bound [m])
     subject to the heading dynamics, |ω| ≤ ω_max, keep-out range (the heading OCP),
@@ -131,7 +132,8 @@ class JointOCPResult:
         Pings after rounding ``weights``, before polishing.
     rounded_objective : float
         Objective of the NLP's headings with ``rounded_steps`` [m] (polishing starts there
-        and never ends above it).
+        and never ends above it when the NLP succeeded; after a failed NLP, whose point may
+        violate the heading constraints, any polished pair replaces it).
     mode : str
         "relaxed" or "bonmin".
     nlp_solver : str
@@ -286,7 +288,8 @@ def _solve_nlp(solver: Any, x: np.ndarray, P: np.ndarray, mus: Sequence[float],
                bounds: dict[str, np.ndarray], nh: int, quiet: bool) -> dict[str, Any]:
     """μ = 0: the relaxation (or bonmin's MINLP); then a continuation in μ of the penalty
     μ·Σ w(1 − w) pushing the weights to {0, 1} while the headings adapt. Status, success and
-    objective are the μ = 0 solve's; ``x`` the last successful one's."""
+    objective are the μ = 0 solve's; ``x`` the last successful continuation step's, else the
+    μ = 0 solve's (successful or not: ``ok`` says)."""
     out: dict[str, Any] = {"iters": 0}
     for k, m in enumerate(mus):
         with _quiet_stdout(quiet):
@@ -336,7 +339,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     nlp_solver : {"ipopt", "sqp-osqp", "sqp-qrqp"}
         NLP solver of the relaxed mode (bonmin has its own).
     ping_stride : int
-        Candidate ping steps are the allowed steps that are multiples of it (≥ 1).
+        Candidate ping steps are the allowed steps a multiple of it after the first allowed
+        step (≥ 1).
     belief : Belief, optional
         Default the prior.
     min_spacing : float, optional

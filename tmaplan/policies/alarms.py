@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, ScenarioError, as_real
 from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
@@ -57,13 +57,14 @@ class AlarmResponse:
     Attributes
     ----------
     pings : int
-        Pings requested per alarm (the first at the next step), >= 1.
+        Pings requested per alarm (the first at the next step), >= 0 (0 only with a
+        ``turn``).
     extra_pings : int
         Pings allowed per run on top of the scenario's ping budget for alarm responses, >= 0
         (0: alarm pings only while the budget lasts, and then they take the place of the
         policy's last ones).
     spacing : float, optional
-        Time between the pings of one response [s] (default: the scenario's
+        Time between the pings of one response [s], finite and > 0 (default: the scenario's
         ``planning.ping_min_spacing``, at least one step).
     turn : float
         Own-ship turn per alarm [rad], in [0, π] (0: none; needs
@@ -78,7 +79,7 @@ class AlarmResponse:
     def __post_init__(self) -> None:
         if not isinstance(self.pings, int) or isinstance(self.pings, bool) or self.pings < 0:
             raise ArgumentError("alarm_response.pings", "an integer >= 0", self.pings)
-        if not 0.0 <= self.turn <= math.pi:
+        if not 0.0 <= as_real(self.turn) <= math.pi:  # (NaN, a bool or a string fail)
             raise ArgumentError("alarm_response.turn", "an angle in [0, π] [rad]", self.turn)
         if self.pings == 0 and self.turn == 0.0:
             raise ArgumentError("alarm_response.pings", "pings >= 1 or a turn > 0",
@@ -87,11 +88,15 @@ class AlarmResponse:
                 or self.extra_pings < 0):
             raise ArgumentError("alarm_response.extra_pings", "an integer >= 0",
                                 self.extra_pings)
-        if self.spacing is not None and not self.spacing > 0:
-            raise ArgumentError("alarm_response.spacing", "a time > 0 [s]", self.spacing)
+        if self.spacing is not None and not (math.isfinite(sp := as_real(self.spacing))
+                                             and sp > 0):
+            # (inf: the first ping of a response would be due at 0·inf = NaN, never)
+            raise ArgumentError("alarm_response.spacing", "a finite time > 0 [s]",
+                                self.spacing)
 
     def wrap(self, controller: Controller, scenario: Scenario) -> AlarmResponder:
-        """The per-run controller: ``controller`` plus the alarm pings."""
+        """The per-run controller: ``controller`` plus the alarm pings
+        (:class:`AlarmResponder`, which raises as documented there)."""
         return AlarmResponder(controller, self, scenario)
 
 
@@ -105,9 +110,19 @@ class AlarmResponder:
     deferred_pings : list of int
         Steps at which the policy asked for a ping that was deferred (it came within the
         minimum spacing after an alarm ping or a deferred one).
+
+    Raises
+    ------
+    ScenarioError
+        A response ``turn`` > 0 on a scenario without ``observer.turn_rate_max`` (the turn
+        would silently never be made).
     """
 
     def __init__(self, inner: Controller, response: AlarmResponse, scenario: Scenario) -> None:
+        if response.turn > 0 and not scenario.observer.turn_rate_max:
+            raise ScenarioError("observer.turn_rate_max", "a turn-rate limit for the alarm "
+                                "response's turn (alarm_response.turn > 0)",
+                                scenario.observer.turn_rate_max, source=scenario.name)
         pl = scenario.planning
         self.inner = inner
         self.dt = float(scenario.time.dt)

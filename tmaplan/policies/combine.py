@@ -164,6 +164,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     PlanningError
         For an unknown name (the message lists the valid ones).
     """
+    if not isinstance(spec, str):  # (None.strip() was an AttributeError)
+        raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
     parts = spec.strip().split("+")
     if len(parts) > 2 or parts[0] not in MANOEUVRES or (len(parts) == 2
                                                         and parts[1] not in PINGS):

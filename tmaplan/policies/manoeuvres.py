@@ -215,7 +215,7 @@ def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1,
 
 
 class _TurnRatePlayback:
-    def __init__(self, plan: Any, scenario: Scenario, t_start: float | None = None) -> None:
+    def __init__(self, plan: Any, scenario: Scenario) -> None:
         self.times = np.asarray(plan.times, float)
         self.rates = np.asarray(plan.turn_rate, float)
         u_max, _ = _turn_limits(scenario)
@@ -447,7 +447,7 @@ class _RecedingController:
         mp = policy.max_particles
         if not is_integer(mp, 5):
             raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
-        if not policy.full_above > 0:
+        if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
             raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
         from tmaplan.planning import HeadingPlanner
 

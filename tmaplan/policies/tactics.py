@@ -47,12 +47,13 @@ def doctrine_course(bearing: float, course: float, beam_angle: float = 0.5 * np.
     """New course of the bearing-rate doctrine: the contact on the *other* side at relative
     bearing ``beam_angle``.
 
-    The own-ship contribution to the bearing rate is ``−S·sin θ / r`` (S own speed, θ the
-    relative bearing, r the range), so a course change from relative bearing θ₁ to θ₂ changes
-    the bearing rate by ``S (sin θ₁ − sin θ₂) / r``, whatever the contact does. For a given
-    first leg this is largest in magnitude with θ₂ = −sign(θ₁)·90°: the contact abeam on the
-    other side (``beam_angle = π/2``), which is the two-leg bang-bang optimum of lecadre1997
-    (§VII.B, eq. 87: the bearing rate changes sign at its bound, θ̇₂ = −θ̇₁).
+    The own-ship contribution to the bearing rate is ``S·sin θ / r`` (S own speed, θ the
+    relative bearing, r the range: an own ship heading North with the contact abeam to
+    starboard, θ = +90°, sees the bearing grow), so a course change from relative bearing θ₁
+    to θ₂ changes the bearing rate by ``S (sin θ₂ − sin θ₁) / r``, whatever the contact does.
+    For a given first leg this is largest in magnitude with θ₂ = −sign(θ₁)·90°: the contact
+    abeam on the other side (``beam_angle = π/2``), which is the two-leg bang-bang optimum of
+    lecadre1997 (§VII.B, eq. 87: the bearing rate changes sign at its bound, θ̇₂ = −θ̇₁).
 
     Parameters
     ----------

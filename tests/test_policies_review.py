@@ -1,0 +1,165 @@
+"""Review of the policies and of the planning helpers they use (belief, baselines, joint plan):
+inputs that were silently accepted or crashed without naming the field, and reports that
+contradicted their documentation."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import types
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
+from tmaplan.planning import baselines
+from tmaplan.planning.belief import Belief
+from tmaplan.policies import AlarmResponse, NoPing, Receding, parse_policy
+from tmaplan.scenario import load_problem
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return load_problem("default")
+
+
+def _cloud(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return rng.normal(size=(n, 4)) * [100.0, 100.0, 1.0, 1.0] + [5000.0, 5000.0, 0.0, 0.0]
+
+
+# ------------------------------------------------------------------------------ belief
+
+
+@pytest.mark.parametrize("n_weights", [2500, 3500])
+def test_from_particles_refuses_weights_not_one_per_particle_when_subsampling(n_weights):
+    # 3000 particles, max_samples 2000: the systematic subsample used to pick rows by the
+    # wrong weights (2500 weights: the last 500 particles never drawn) or crash (IndexError)
+    with pytest.raises(PlanningError, match="one weight per particle"):
+        Belief.from_particles(_cloud(3000), np.ones(n_weights), max_samples=2000)
+
+
+def test_from_particles_still_subsamples_systematically():
+    X = _cloud(3000)
+    w = np.zeros(3000)
+    w[:10] = 1.0  # all the mass on ten particles: the subsample holds only those
+    b = Belief.from_particles(X, w, max_samples=2000)
+    assert b.samples.shape == (2000, 4)
+    assert {tuple(r) for r in b.samples} <= {tuple(r) for r in X[:10]}
+    assert b.mean == pytest.approx(X[:10].mean(axis=0))
+
+
+@pytest.mark.parametrize("mean", [[np.nan, 0, 0, 0], [np.inf, 0, 0, 0]])
+def test_from_moments_refuses_a_non_finite_mean(mean):
+    with pytest.raises(PlanningError, match="mean"):
+        Belief.from_moments(mean, np.eye(4))
+
+
+@pytest.mark.parametrize("t", [np.nan, np.inf, "10", True])
+def test_a_belief_time_must_be_finite(t):
+    with pytest.raises(PlanningError, match="t: expected a finite time"):
+        Belief.from_moments([1000.0, 0, 0, 0], np.eye(4), t=t)
+    with pytest.raises(PlanningError, match="t: expected a finite time"):
+        Belief.from_samples(_cloud(10), t=t)
+
+
+@pytest.mark.parametrize("n", [7.9, True, 3])
+def test_from_prior_refuses_a_sample_count_that_is_not_an_integer_ge_5(scenario, n):
+    with pytest.raises(ArgumentError, match="'n'"):
+        Belief.from_prior(scenario, n=n)
+
+
+# ------------------------------------------------------------------------------ baselines
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda sc: baselines.zigzag_track(sc, np.nan, 0.5), "leg_duration"),
+    (lambda sc: baselines.zigzag_track(sc, 300.0, np.nan), "angle"),
+    (lambda sc: baselines.single_turn_track(sc, np.nan, 100.0), "angle"),
+    (lambda sc: baselines.single_turn_track(sc, 0.5, np.nan), "time"),
+    (lambda sc: baselines.single_turn_track(sc, 0.5, 100.0, turn_rate=np.nan), "turn_rate"),
+    (lambda sc: baselines.single_turn_track(sc, 0.5, 100.0, turn_rate=True), "turn_rate"),
+    (lambda sc: baselines.course_program_track(sc, [(100.0, np.nan)]), "courses[0].course"),
+])
+def test_baseline_tracks_refuse_non_finite_angles_times_and_rates(scenario, call, field):
+    # they gave a NaN track, a track without the turn, or int(nan)'s ValueError
+    with pytest.raises(ArgumentError, match=re.escape(f"'{field}'")):
+        call(scenario)
+
+
+@pytest.mark.parametrize("kw, field", [
+    ({"n_starts": 0}, "n_starts"), ({"n_samples": 3}, "n_samples"),
+    ({"rate_max": np.nan}, "rate_max"), ({"switch_time": 60.0}, "switch_time"),
+])
+def test_bearing_rate_plan_checks_its_arguments_before_solving(kw, field):
+    args = {"n_samples": 50, "rate_max": 1e-2, **kw}
+    with pytest.raises(ArgumentError, match=rf"'{field}'"):
+        baselines.bearing_rate_plan(args.pop("n_samples"), args.pop("rate_max"), **args)
+
+
+# ------------------------------------------------------------------------------ alarms
+
+
+@pytest.mark.parametrize("kw, field", [
+    ({"turn": "0.5"}, "turn"), ({"turn": True}, "turn"), ({"spacing": "10"}, "spacing"),
+    ({"spacing": np.inf}, "spacing"),
+])
+def test_alarm_response_refuses_non_real_turns_and_spacings(kw, field):
+    with pytest.raises(ArgumentError, match=rf"alarm_response\.{field}"):
+        AlarmResponse(**kw)
+
+
+def test_an_alarm_turn_needs_a_turn_rate_limit(scenario):
+    sc = dataclasses.replace(scenario, observer=dataclasses.replace(scenario.observer,
+                                                                    turn_rate_max=None))
+    with pytest.raises(ScenarioError, match="turn_rate_max"):
+        AlarmResponse(turn=0.5).wrap(NoPing().controller(sc), sc)
+    AlarmResponse().wrap(NoPing().controller(sc), sc)  # pings only: no limit needed
+
+
+# ------------------------------------------------------------------------------ receding
+
+
+@pytest.mark.parametrize("value", ["0.1", True])
+def test_receding_full_above_must_be_a_real_fraction(scenario, value):
+    # a string raised a bare TypeError, True was taken as 1.0
+    with pytest.raises(ArgumentError, match=r"receding\.full_above"):
+        Receding(full_above=value).controller(scenario)
+
+
+# ------------------------------------------------------------------------------ parsing
+
+
+@pytest.mark.parametrize("spec", [None, 3])
+def test_parse_policy_refuses_a_non_string(scenario, spec):
+    with pytest.raises(PlanningError, match="unknown policy"):
+        parse_policy(spec, scenario)
+
+
+# ------------------------------------------------------------------------------ joint plan
+
+
+def test_plan_joint_history_never_reports_a_rejected_heading_block(scenario, monkeypatch):
+    """A heading re-solve that does not improve on the pair is rejected: the pair's objective
+    is then the schedule's, not the older heading plan's (computed with other pings)."""
+    from tmaplan.planning import joint
+
+    track = object()
+
+    class Planner:
+        def __init__(self, *a, **k):
+            pass
+
+        def solve(self, bel, warm_start=None, ping_steps=None):
+            # pingless: 100; with pings the re-solve is worse than the schedule (95 > 90)
+            return types.SimpleNamespace(objective=100.0 if ping_steps is None else 95.0,
+                                         observer=track)
+
+    def schedule(*a, **k):
+        return types.SimpleNamespace(objective=90.0, steps=np.array([10, 20]))
+
+    monkeypatch.setattr(joint, "HeadingPlanner", Planner)
+    monkeypatch.setattr(joint, "schedule_pings", schedule)
+    res = joint.plan_joint(scenario, budget=2, belief=object())
+    assert res.objective == 90.0
+    assert all(b <= a for a, b in zip(res.history, res.history[1:])), res.history

@@ -70,7 +70,9 @@ plan_cells = [
         "free = bearing_rate_plan(15, 1e-2, switch='free', n_arcs=3, n_starts=4)\n"
         "print('fixed switch: rates / rate_max =', np.round(fixed.rates / 1e-2, 6))\n"
         "print('free switch (N=15):', free.rates / 1e-2, 'switch after', free.switch_times, 'samples')\n"
-        "assert fixed.rates[0] * fixed.rates[1] < 0 and free.switch_times.size == 1"),
+        "assert fixed.rates[0] * fixed.rates[1] < 0 and np.allclose(np.abs(fixed.rates), 1e-2)\n"
+        "assert free.switch_times.size == 1\n"
+        "assert min(abs(free.switch_times[0] - 15 * f) for f in (1 / 3, 2 / 3)) <= 1.0"),
 ]
 
 sched_cells = [
@@ -112,7 +114,9 @@ sched_cells = [
         "print('terminal range bound vs K:', np.round(term, 1))\n"
         "assert all(b <= a for a, b in zip(term, term[1:]))\n"
         "r = schedule_pings(sc, budget=4, method='relaxed', min_spacing=600, forbidden=[(900, 1500)], belief=belief)\n"
-        "print('spaced, outside 900-1500 s:', r.times)"),
+        "print('spaced, outside 900-1500 s:', r.times)\n"
+        "assert 0 < r.times.size <= 4 and np.all(np.diff(r.times) >= 600)\n"
+        "assert not np.any((r.times >= 900) & (r.times <= 1500))"),
 ]
 
 for name, cells in (("plan_manoeuvre", plan_cells), ("schedule_pings", sched_cells)):

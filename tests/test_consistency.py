@@ -239,3 +239,14 @@ def test_a_measurement_without_a_positive_std_is_refused(sigma):
         m = Measurement(kind=kind, value=1.0, sigma=sigma)
         with pytest.raises(ArgumentError, match=r"measurement\.sigma"):
             pf.update(st, [m], np.random.default_rng(3))
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("q_boost", math.inf), ("q_boost", math.nan), ("speed_spread", math.nan),
+    ("speed_spread", -0.1), ("window", True), ("holdoff", False),
+])
+def test_monitor_config_refuses_non_finite_and_bool_values(field, value):
+    """q_boost = inf failed later as the inner filter's "q"; a NaN or negative speed_spread
+    gave NaN / shrunk rejuvenated speeds; True was taken as the integer 1."""
+    with pytest.raises(ArgumentError, match=rf"monitor\.{field}"):
+        MonitorConfig(**{field: value})

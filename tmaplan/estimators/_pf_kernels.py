@@ -8,12 +8,14 @@ particles.
 from __future__ import annotations
 
 import functools
+import math
+import numbers
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import EstimationError
+from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.models.sensors import bearing_loglik
 
 if TYPE_CHECKING:
@@ -35,6 +37,46 @@ def _rows(X: np.ndarray) -> np.ndarray:
     return A if A.flags.c_contiguous else np.ascontiguousarray(A)
 
 
+# --------------------------------------------------------------------------------------------
+# Input validation
+# --------------------------------------------------------------------------------------------
+
+
+def _check_real(field: str, value: Any, lower: float, strict: bool = False) -> None:
+    """ArgumentError unless ``value`` is a finite real (not a bool) ≥ ``lower`` (> if strict)."""
+    ok = (isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+          and math.isfinite(value)
+          and (float(value) > lower if strict else float(value) >= lower))
+    if not ok:
+        raise ArgumentError(field, f"a finite number {'>' if strict else '>='} {lower:g}",
+                            value)
+
+
+def _check_measurement(m: Any) -> None:
+    """ArgumentError naming the field of an invalid :class:`Measurement` (kind, finite value,
+    finite std > 0 per line, ping only on a range)."""
+    if m.kind not in ("bearing", "range", "frequency"):
+        raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'", m.kind)
+    sigma = np.asarray(m.sigma, dtype=float)
+    if sigma.size == 0 or not (np.isfinite(sigma).all() and (sigma > 0).all()):
+        # σ = 0 or NaN would reset the weights
+        raise ArgumentError("measurement.sigma",
+                            f"a finite std > 0 (per line) of the {m.kind} measurement", m.sigma)
+    value = np.asarray(m.value, dtype=float)
+    if value.size == 0 or not np.isfinite(value).all():
+        raise ArgumentError("measurement.value", f"a finite {m.kind} value", m.value)
+    if m.kind != "frequency" and (value.size != 1 or sigma.size != 1):
+        raise ArgumentError("measurement.value", f"a scalar {m.kind} value and std",
+                            (m.value, m.sigma))
+    if m.kind == "bearing" and m.ambiguity not in ("none", "pi"):
+        raise ArgumentError("measurement.ambiguity", "'none' or 'pi'", m.ambiguity)
+    if m.kind == "frequency" and sigma.ndim > 0 and sigma.shape != np.atleast_1d(value).shape:
+        raise ArgumentError("measurement.sigma", "a scalar or one std per frequency line "
+                            f"(shape {np.atleast_1d(value).shape})", m.sigma)
+    if m.ping and m.kind != "range":
+        raise ArgumentError("measurement.ping", "True only for a range measurement", m.kind)
+
+
 
 # --------------------------------------------------------------------------------------------
 # Resampling
@@ -48,17 +90,25 @@ def systematic_resample(log_weights: np.ndarray, rng: np.random.Generator,
     Parameters
     ----------
     log_weights : ndarray, shape (N,)
-        Normalised log-weights.
+        Log-weights (normalised or not: they are shifted by their maximum, so very negative
+        ones do not underflow); −inf for a zero weight, no NaN or +inf.
     rng : numpy.random.Generator
     n : int, optional
-        Number of draws (default N).
+        Number of draws (default N), >= 1.
 
     Returns
     -------
     ndarray of int, shape (n,)
     """
+    log_weights = np.asarray(log_weights, float)
+    if (log_weights.ndim != 1 or np.isnan(log_weights).any() or np.isposinf(log_weights).any()
+            or not np.isfinite(log_weights).any()):
+        raise ArgumentError("log_weights", "a 1-D array without NaN or +inf, not all -inf",
+                            log_weights)
     m = log_weights.shape[0] if n is None else n
-    cdf = np.cumsum(np.exp(log_weights))
+    if not isinstance(m, int | np.integer) or isinstance(m, bool) or m < 1:
+        raise ArgumentError("n", "an integer >= 1 (number of draws)", n)
+    cdf = np.cumsum(np.exp(log_weights - log_weights.max()))
     cdf /= cdf[-1]
     u = (rng.random() + np.arange(m)) / m
     idx = np.searchsorted(cdf, u, side="right")

@@ -187,7 +187,7 @@ class MonitorConfig:
     def __post_init__(self) -> None:
         for name in ("window", "lookback", "holdoff", "outliers"):
             v = getattr(self, name)
-            if not isinstance(v, int) or v < (0 if name == "holdoff" else 1):
+            if type(v) is not int or v < (0 if name == "holdoff" else 1):  # no bool
                 raise ArgumentError(f"monitor.{name}", "an integer >= 1 (holdoff >= 0)", v)
         if not 0.0 < self.alpha < 0.5:
             raise ArgumentError("monitor.alpha", "a probability in (0, 0.5)", self.alpha)
@@ -209,8 +209,9 @@ class MonitorConfig:
         if not 0.0 < self.rejuvenation_weight < 1.0:
             raise ArgumentError("monitor.rejuvenation_weight", "in (0, 1)",
                                 self.rejuvenation_weight)
-        if not self.q_boost >= 1:
-            raise ArgumentError("monitor.q_boost", ">= 1", self.q_boost)
+        for name, lo in (("q_boost", 1.0), ("speed_spread", 0.0)):  # finite (q·q_boost, e^…)
+            if not lo <= getattr(self, name) < math.inf:
+                raise ArgumentError(f"monitor.{name}", f"finite, >= {lo:g}", getattr(self, name))
 
     @property
     def bearing_threshold(self) -> float:

@@ -55,6 +55,8 @@ from scipy.special import logsumexp
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators._pf_kernels import (
+    _check_measurement,
+    _check_real,
     _dynamics,
     _ess,
     _frequency_update,
@@ -164,15 +166,16 @@ class PFConfig:
             raise ArgumentError("ping_gate", "> 0 (in σ) or None", self.ping_gate)
         if not isinstance(self.n_particles, int | np.integer) or self.n_particles < 2:
             raise ArgumentError("n_particles", "an integer >= 2", self.n_particles)
-        if not self.dt > 0:
-            raise ArgumentError("dt", "> 0 s", self.dt)
-        if not self.q >= 0:
-            raise ArgumentError("q", ">= 0 m²/s³", self.q)
+        _check_real("dt", self.dt, 0.0, strict=True)  # [s]
+        _check_real("q", self.q, 0.0)  # [m²/s³]
+        for name in ("bandwidth_scale", "degeneracy_ess", "roughening", "move_scale"):
+            _check_real(name, getattr(self, name), 0.0)
         if self.variant not in ("bootstrap", "regularised", "resample-move"):
             raise ArgumentError("variant", "'bootstrap', 'regularised' or 'resample-move'",
                                 self.variant)
-        if int(self.move_steps) < 0:
-            raise ArgumentError("move_steps", ">= 0", self.move_steps)
+        if (not isinstance(self.move_steps, int | np.integer) or isinstance(self.move_steps, bool)
+                or self.move_steps < 0):
+            raise ArgumentError("move_steps", "an integer >= 0", self.move_steps)
         if not 0.0 <= self.ess_threshold <= 1.0:
             raise ArgumentError("ess_threshold", "in [0, 1]", self.ess_threshold)
         if self.noise not in ("float32", "float64"):
@@ -278,7 +281,11 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
     l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
     dt = float(config.dt)
     A = _rows(state.particles)
-    d = np.zeros(2) if dv is None else np.asarray(dv, float).reshape(2)
+    d = np.zeros(2) if dv is None else np.asarray(dv, float)
+    if d.size != 2 or not np.isfinite(d).all():
+        raise ArgumentError("dv", "a finite observer velocity increment of shape (2,) [m/s]",
+                            dv)
+    d = d.reshape(2)
     An = np.empty_like(A)
     pos, vel = An[:2], An[2:]
     np.multiply(A[2:], dt, out=pos)
@@ -335,6 +342,8 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
         New state; ``ess`` is computed before resampling, ``resampled`` and ``degenerate``
         tell what happened (in the last stage).
     """
+    for m in measurements:
+        _check_measurement(m)
     state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
     for m in measurements:
         if m.ping and not _gated(state, m, config.ping_gate):
@@ -364,10 +373,7 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             and config.move_steps > 0 and all(m.kind != "frequency" for m in measurements))
     ll: np.ndarray | None = None
     fm, fv = state.freq_mean, state.freq_var
-    for m in measurements:
-        if not (np.isfinite(m.sigma) and m.sigma > 0):  # σ = 0 or NaN reset the weights
-            raise ArgumentError("measurement.sigma", f"a finite std > 0 of the {m.kind} "
-                                "measurement", m.sigma)
+    for m in measurements:  # validated by update (_check_measurement)
         if m.kind in ("bearing", "range"):
             c = _measurement_ll(X, m, config.bearing_clutter)
         elif m.kind == "frequency":
@@ -537,11 +543,19 @@ class ParticleFilter:
                        log_weights: np.ndarray | None = None) -> PFState:
         """State from given relative particles, shape (N, 4) (equal weights by default)."""
         X = np.array(particles, dtype=float, copy=True, order="F")  # column-major layout
-        if X.ndim != 2 or X.shape[1] != 4 or not np.isfinite(X).all():
-            raise ArgumentError("particles", "a finite (N, 4) array", getattr(X, "shape", X))
+        if X.ndim != 2 or X.shape[1] != 4 or X.shape[0] < 1 or not np.isfinite(X).all():
+            raise ArgumentError("particles", "a finite (N, 4) array, N >= 1",
+                                getattr(X, "shape", X))
         n = X.shape[0]
-        lw = (np.full(n, -np.log(n)) if log_weights is None
-              else np.asarray(log_weights, float) - logsumexp(log_weights))
+        if log_weights is None:
+            lw = np.full(n, -np.log(n))
+        else:
+            lw = np.asarray(log_weights, float)
+            if (lw.shape != (n,) or np.isnan(lw).any() or np.isposinf(lw).any()
+                    or not np.isfinite(lw).any()):
+                raise ArgumentError("log_weights", f"shape ({n},), no NaN or +inf, not all "
+                                    "-inf", lw.shape if lw.shape != (n,) else lw)
+            lw = lw - logsumexp(lw)
         return PFState(step=step, particles=X, log_weights=lw, ess=_ess(lw))
 
     def from_prior(self, scenario: Scenario, rng: np.random.Generator, *,
@@ -559,9 +573,14 @@ class ParticleFilter:
     def from_gaussian(self, mean: np.ndarray, cov: np.ndarray, rng: np.random.Generator, *,
                       step: int = 0) -> PFState:
         """Draw N particles from N(mean, cov) (relative state)."""
-        L = _safe_cholesky(np.asarray(cov, float))
+        m, C = np.asarray(mean, float), np.asarray(cov, float)
+        if m.shape != (4,) or not np.isfinite(m).all():
+            raise ArgumentError("mean", "a finite relative state of shape (4,)", mean)
+        if C.shape != (4, 4) or not np.isfinite(C).all() or (np.diag(C) < 0).any():
+            raise ArgumentError("cov", "a finite (4, 4) covariance", cov)
+        L = _safe_cholesky(C)
         Z = rng.standard_normal((4, self.config.n_particles))
-        A = np.asarray(mean, float)[:, None] + L @ Z
+        A = m[:, None] + L @ Z
         return self.from_particles(A.T, step=step)
 
     def predict(self, state: PFState, dv: np.ndarray | None, rng: np.random.Generator

@@ -129,6 +129,18 @@ def test_an_undefined_correlation_gives_a_nan_interval_without_a_warning():
     assert np.isnan(c.spearman_ci).all() and np.isfinite(c.spearman_rmse_ci).all()
 
 
+@pytest.mark.parametrize(("n", "objectives"), [
+    (3, ("no-such-objective",)),   # was accepted unchecked: three candidates, no plan
+    (3.5, ()),                     # was a TypeError slicing the candidates
+    ("40", ()),
+    (True, ()),
+])
+def test_candidate_manoeuvres_refuse_bad_input_naming_the_field(scenario, n, objectives):
+    with pytest.raises(ArgumentError) as info:
+        candidate_manoeuvres(scenario, n, plan_objectives=objectives)
+    assert info.value.field == ("plan_objectives" if objectives else "candidates")
+
+
 def test_candidate_family(scenario):
     cands, skipped = candidate_manoeuvres(scenario, 30,
                                           plan_objectives=("logdet", "range-bound",

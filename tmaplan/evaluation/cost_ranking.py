@@ -143,20 +143,21 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
     from tmaplan.planning.objectives import OBJECTIVE_NAMES, make_objective
     from tmaplan.policies.manoeuvres import offline_plan
 
-    if int(n) < 3:
-        raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", n)
+    if not is_integer(n, 3):
+        raise ArgumentError("candidates", "an integer >= 3 (a rank correlation needs three)", n)
     fixed = [Candidate(name="straight", family="straight", policy=Straight()),
              Candidate(name="leg-turn-leg", family="tactic", policy=LegTurnLeg()),
              Candidate(name="lead-lag", family="tactic", policy=LeadLag())]
     skipped: dict[str, str] = {}
     names = OBJECTIVE_NAMES if plan_objectives is None else tuple(plan_objectives)
+    for obj in names:  # every name, also those beyond the n candidates
+        if obj not in OBJECTIVE_NAMES:
+            raise ArgumentError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
+                                obj)
     seen: dict[str, str] = {}
     for obj in names:
         if len(fixed) >= n:
             break
-        if obj not in OBJECTIVE_NAMES:
-            raise ArgumentError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
-                                obj)
         canon = make_objective(obj).name
         if canon in seen:
             skipped[obj] = f"same objective as {seen[canon]}"

@@ -312,6 +312,8 @@ def test_random_problems_are_valid_distinct_and_reproducible(scenario):
     ({"family": {"own_speed": (3.0,)}}, "own_speed"),
     ({"family": {"horizon": (610.0, 890.0)}}, "horizon"),
     ({"family": {"horizon_step": 0.0}}, "horizon_step"),
+    ({"family": {"horizon_step": "300"}}, "horizon_step"),   # was a TypeError
+    ({"family": {"own_speed": (True, 3.0)}}, "own_speed"),   # a bool was read as 1 m/s
 ])
 def test_random_problems_reject_bad_arguments_naming_the_field(scenario, kwargs, field):
     from tmaplan.evaluation.plan_general import ProblemFamily, random_problems

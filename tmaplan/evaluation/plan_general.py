@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.evaluation.metrics import PairedDifference
 from tmaplan.evaluation.plan_check import plan_campaign, planned_differences, tune_single_turn
 from tmaplan.scenario import Scenario
@@ -87,11 +87,11 @@ class ProblemFamily:
             v = getattr(self, name)
             closed = name == "relative_bearing"
             ok = (isinstance(v, tuple) and len(v) == 2
-                  and all(isinstance(x, (int, float)) and math.isfinite(x) for x in v)
+                  and all(math.isfinite(as_real(x)) for x in v)
                   and v[0] <= v[1] and (lo <= v[0] if closed else lo < v[0]) and v[1] <= hi)
             if not ok:
                 raise ArgumentError(name, f"(low, high) with low <= high, each {text}", v)
-        if not (math.isfinite(self.horizon_step) and self.horizon_step > 0):
+        if not (math.isfinite(as_real(self.horizon_step)) and self.horizon_step > 0):
             raise ArgumentError("horizon_step", "> 0 s", self.horizon_step)
         if math.floor(self.horizon[1] / self.horizon_step + 1e-9) < math.ceil(
                 self.horizon[0] / self.horizon_step - 1e-9):

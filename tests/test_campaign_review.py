@@ -47,6 +47,20 @@ def test_a_truncated_run_file_is_recomputed_not_a_crash(tmp_path):
         assert RunRecord.load(path, ("straight",)) is None
 
 
+def test_a_failed_save_leaves_no_temporary_file(tmp_path, monkeypatch):
+    """A write that fails (a full disk) raises and leaves neither a run file nor a stray
+    ``.tmp`` file in the campaign directory."""
+    import tmaplan.evaluation.records as records
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(records.np, "savez", full_disk)
+    with pytest.raises(OSError, match="No space"):
+        _record().save(tmp_path / "runs" / "run_00000.npz")
+    assert list((tmp_path / "runs").iterdir()) == []
+
+
 @pytest.mark.parametrize(("change", "field"), [
     ({"truth": "Prior"}, "truth"),          # was flown as truth = "scenario"
     ({"runs": True}, "runs"),

@@ -60,8 +60,9 @@ def test_rank_correlations_match_an_independent_computation():
     tta[3, :2] = np.inf                    # never localised in two runs: censored
     fre = rng.exponential(500.0, (C, R))
     cost = rng.normal(size=C)
-    (c,) = rank_correlations({"x": cost}, tta, fre, censor=2000.0, n_resamples=50)
-    mean_t = np.where(np.isfinite(tta), tta, 2000.0).mean(axis=1)
+    # the censor is above every finite time (a run never localised is not sooner)
+    (c,) = rank_correlations({"x": cost}, tta, fre, censor=4000.0, n_resamples=50)
+    mean_t = np.where(np.isfinite(tta), tta, 4000.0).mean(axis=1)
     # Spearman = Pearson correlation of the ranks (no ties here)
     ranks = [np.argsort(np.argsort(v)) for v in (cost, mean_t)]
     assert c.spearman == pytest.approx(np.corrcoef(*ranks)[0, 1], abs=1e-12)
@@ -81,6 +82,63 @@ def test_rank_correlations_need_three_candidates():
     tta, fre = _ordered_runs(C=2)
     with pytest.raises(ArgumentError, match="field 'candidates': expected >= 3"):
         rank_correlations({"x": np.arange(2.0)}, tta, fre, censor=1.0)
+
+
+@pytest.mark.parametrize(("change", "field"), [
+    ({"tta": "nan"}, "tta"),                 # was censored as if never reached
+    ({"fre": "nan"}, "fre"),                 # made every RMSE correlation NaN silently
+    ({"fre": "short"}, "fre"),               # IndexError inside the bootstrap
+    ({"cost": "short"}, "costs['x']"),       # numpy broadcasting error
+    ({"tta": "1d"}, "tta"),
+    ({"censor": float("nan")}, "censor"),
+    ({"censor": 100.0}, "censor"),           # below a finite time: never counted as sooner
+    ({"level": 95}, "level"),
+    ({"n_resamples": 2.5}, "n_resamples"),
+    ({"n_resamples": True}, "n_resamples"),
+    ({"seed": -1}, "seed"),
+])
+def test_rank_correlations_refuse_bad_input_naming_the_field(change, field):
+    tta, fre = _ordered_runs()
+    cost = np.arange(6.0)
+    kw = {"censor": 1e4, "n_resamples": 10}
+    if change.get("tta") == "nan":
+        tta[2, 3] = np.nan
+    elif change.get("tta") == "1d":
+        tta, fre = tta[:, 0], fre[:, 0]
+    elif change.get("fre") == "nan":
+        fre[1, 0] = np.nan
+    elif change.get("fre") == "short":
+        fre = fre[:, :3]
+    elif change.get("cost") == "short":
+        cost = cost[:4]
+    else:
+        kw |= change
+    with pytest.raises(ArgumentError) as info:
+        rank_correlations({"x": cost}, tta, fre, **kw)
+    assert info.value.field == field
+
+
+def test_an_undefined_correlation_gives_a_nan_interval_without_a_warning():
+    import warnings
+
+    tta, fre = _ordered_runs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        (c,) = rank_correlations({"x": np.arange(6.0)}, np.full_like(tta, np.inf), fre,
+                                 censor=1e4, n_resamples=20)
+    assert np.isnan(c.spearman_ci).all() and np.isfinite(c.spearman_rmse_ci).all()
+
+
+@pytest.mark.parametrize(("n", "objectives"), [
+    (3, ("no-such-objective",)),   # was accepted unchecked: three candidates, no plan
+    (3.5, ()),                     # was a TypeError slicing the candidates
+    ("40", ()),
+    (True, ()),
+])
+def test_candidate_manoeuvres_refuse_bad_input_naming_the_field(scenario, n, objectives):
+    with pytest.raises(ArgumentError) as info:
+        candidate_manoeuvres(scenario, n, plan_objectives=objectives)
+    assert info.value.field == ("plan_objectives" if objectives else "candidates")
 
 
 def test_candidate_family(scenario):

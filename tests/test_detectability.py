@@ -62,7 +62,16 @@ def test_unknown_state_is_harder_and_a_ping_helps():
 
 @pytest.mark.parametrize(("field", "kw"), [("onset", {"onset": 0}),
                                            ("window", {"window": 0.0}),
-                                           ("bearing_sigma", {"bearing_sigma": -1.0})])
+                                           ("bearing_sigma", {"bearing_sigma": -1.0}),
+                                           # a negative step was read from the end: the
+                                           # last step, after the window, counted in λ
+                                           ("bearing_steps", {"bearing_steps": [-1]}),
+                                           ("ping_steps", {"ping_steps": [ONSET, T.size]}),
+                                           ("onset", {"onset": float(ONSET)}),
+                                           ("onset", {"onset": True}),
+                                           ("target", {"target": np.zeros((T.size, 2))}),
+                                           ("own_position", {"own_position": np.zeros(2)}),
+                                           ("alpha", {"alpha": 0.5})])
 def test_bad_arguments_name_the_field(field, kw):
     own, man, straight = _tracks()
     args = dict(times=T, own_position=own, target=man, straight=straight, onset=ONSET,

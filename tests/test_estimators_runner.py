@@ -164,3 +164,25 @@ def test_truth_bounds_range_is_the_line_of_sight_projection() -> None:
         C = np.linalg.inv(J)[:2, :2]
         assert rng_b[k] == pytest.approx(np.sqrt(u @ C @ u), rel=1e-6)
     assert np.all(rng_b <= pos)
+
+
+@pytest.mark.parametrize(("change", "field"), [
+    ({"runs": True}, "runs"),            # was a TypeError from numpy
+    ({"runs": 1.5}, "runs"),
+    ({"runs": "2"}, "runs"),
+    ({"seed": -1}, "seed"),              # was a bare ValueError from SeedSequence
+    ({"bound": ""}, "bound"),            # was read as False: no bound
+    ({"bound": "prio"}, "bound"),
+    ({"bound": "prior", "bound_samples": 0}, "bound_samples"),  # was found after the runs
+])
+def test_monte_carlo_refuses_bad_input_before_any_run(monkeypatch, change, field):
+    import tmaplan.evaluation.tracking as tracking
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a run was simulated before the arguments were checked")
+
+    monkeypatch.setattr(tracking, "simulate", no_run)
+    kw = {"runs": 1, "n_particles": 100} | change
+    with pytest.raises(ArgumentError) as info:
+        monte_carlo(load_problem("ristic-bot-moderate"), "pf", **kw)
+    assert info.value.field == field

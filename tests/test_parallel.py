@@ -106,3 +106,12 @@ def test_a_prefetch_whose_pool_went_away_is_computed_here(monkeypatch):
     with pytest.raises(ValueError, match="worker failed"):
         real("sc", "obj", None)
     assert key not in manoeuvres._RTI_MODEL_CACHE
+
+
+def test_a_payload_that_cannot_be_pickled_leaves_no_file(monkeypatch, tmp_path):
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with pytest.raises((pickle.PicklingError, AttributeError, TypeError)):
+        SharedPayload(lambda: 1)
+    assert list(tmp_path.iterdir()) == []

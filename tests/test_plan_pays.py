@@ -312,6 +312,8 @@ def test_random_problems_are_valid_distinct_and_reproducible(scenario):
     ({"family": {"own_speed": (3.0,)}}, "own_speed"),
     ({"family": {"horizon": (610.0, 890.0)}}, "horizon"),
     ({"family": {"horizon_step": 0.0}}, "horizon_step"),
+    ({"family": {"horizon_step": "300"}}, "horizon_step"),   # was a TypeError
+    ({"family": {"own_speed": (True, 3.0)}}, "own_speed"),   # a bool was read as 1 m/s
 ])
 def test_random_problems_reject_bad_arguments_naming_the_field(scenario, kwargs, field):
     from tmaplan.evaluation.plan_general import ProblemFamily, random_problems
@@ -341,6 +343,35 @@ def test_general_check_rejects_bad_tuning_arguments_naming_the_field(kwargs, fie
 
     with pytest.raises(ArgumentError, match=field) as info:
         general_check(load_problem("default"), **kwargs)
+    assert info.value.field == field
+
+
+@pytest.mark.parametrize("kwargs,field", [({"runs": 0}, "runs"), ({"runs": 2.5}, "runs"),
+                                          ({"seed": -1}, "seed"),
+                                          ({"tune_seed": "1000"}, "tune_seed")])
+def test_general_check_checks_every_argument_before_the_tuning(monkeypatch, kwargs, field):
+    """``runs`` and ``seed`` were checked only by the paired campaign, after the tuning
+    campaign (minutes) had been flown."""
+    import tmaplan.evaluation.plan_general as plan_general
+
+    def no_tuning(*args, **kwargs):
+        raise AssertionError("the tuning ran before the arguments were checked")
+
+    monkeypatch.setattr(plan_general, "tune_single_turn", no_tuning)
+    with pytest.raises(ArgumentError) as info:
+        plan_general.general_check(load_problem("default"), **kwargs)
+    assert info.value.field == field
+
+
+@pytest.mark.parametrize("kwargs,field", [
+    ({"angles": ()}, "angles"),             # was an error about the campaign's "policies"
+    ({"angles": (90.0, float("nan"))}, "angles"),
+    ({"fractions": ()}, "fractions"),
+    ({"fractions": ("0.5",)}, "fractions"),  # was a TypeError building the grid names
+])
+def test_tune_single_turn_refuses_a_bad_grid_naming_the_field(scenario, kwargs, field):
+    with pytest.raises(ArgumentError) as info:
+        tune_single_turn(scenario, runs=1, **kwargs)
     assert info.value.field == field
 
 

@@ -62,7 +62,8 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
 class SharedPayload:
     """A picklable object written once to a temporary file for the tasks of one step.
 
-    Use as a context manager; the file is removed on exit. Pass :attr:`path` to
+    Use as a context manager; the file is removed on exit (and at once if the payload cannot
+    be written, e.g. is not picklable: the error is raised). Pass :attr:`path` to
     :func:`call_with_payload`.
 
     Parameters
@@ -73,8 +74,12 @@ class SharedPayload:
 
     def __init__(self, payload: Any) -> None:
         fd, self.path = tempfile.mkstemp(prefix="tmaplan-payload-", suffix=".pkl")
-        with os.fdopen(fd, "wb") as fh:
-            pickle.dump(payload, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                pickle.dump(payload, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        except BaseException:  # not picklable, disk full: no file is left behind
+            os.remove(self.path)
+            raise
 
     def __enter__(self) -> SharedPayload:
         return self

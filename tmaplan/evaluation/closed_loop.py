@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.errors import ArgumentError, as_real
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
 from tmaplan.estimators.particle_filter import PFConfig
@@ -92,12 +93,13 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         use the first active range sensor's σ.
     policy : Policy
     target : ndarray, shape (K + 1, 4)
-        True absolute target track (see :func:`tmaplan.simulate.draw_truth`).
+        True absolute target track, finite (see :func:`tmaplan.simulate.draw_truth`).
     noise_rng, filter_rng : numpy.random.Generator
         Measurement noise and particle-filter randomness.
     n_particles : int
     filter_q : float, optional
-        Filter process-noise intensity [m²/s³] (default: the scenario's, floored at 1e-8).
+        Filter process-noise intensity [m²/s³], >= 0 (default: the scenario's); either is
+        floored at 1e-8.
     options : FilterOptions, optional
         Robust likelihoods, consistency monitoring and the answer to its alarms (default:
         :meth:`FilterOptions.monitored`, the monitor on, no alarm pings).
@@ -105,9 +107,25 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     Returns
     -------
     ClosedLoopRun
+
+    Raises
+    ------
+    ArgumentError
+        A generator that is not a ``numpy.random.Generator``, a target track of the wrong
+        shape or with non-finite values, a negative or non-finite ``filter_q``.
     """
     t_start = time.perf_counter()
     K, dt, times = scenario.n_steps, scenario.time.dt, scenario.times
+    for field, g in (("noise_rng", noise_rng), ("filter_rng", filter_rng)):
+        if not isinstance(g, np.random.Generator):
+            raise ArgumentError(field, "a numpy.random.Generator", type(g).__name__)
+    target = np.asarray(target, float)
+    if target.shape != (K + 1, 4) or not np.isfinite(target).all():
+        raise ArgumentError("target", f"a finite absolute target track of shape ({K + 1}, 4)",
+                            f"shape {target.shape}" if target.shape != (K + 1, 4)
+                            else "non-finite values")
+    if filter_q is not None and not (np.isfinite(as_real(filter_q)) and filter_q >= 0):
+        raise ArgumentError("filter_q", "a finite intensity >= 0 [m²/s³]", filter_q)
     noise = draw_common_noise(scenario, noise_rng)
     v0 = initial_velocity(scenario.observer)
     heading, speed = (float(x) for x in course_speed(v0))

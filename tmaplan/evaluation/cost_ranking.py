@@ -38,7 +38,7 @@ import numpy as np
 from scipy import stats
 
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.policies import (
@@ -143,20 +143,21 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
     from tmaplan.planning.objectives import OBJECTIVE_NAMES, make_objective
     from tmaplan.policies.manoeuvres import offline_plan
 
-    if int(n) < 3:
-        raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", n)
+    if not is_integer(n, 3):
+        raise ArgumentError("candidates", "an integer >= 3 (a rank correlation needs three)", n)
     fixed = [Candidate(name="straight", family="straight", policy=Straight()),
              Candidate(name="leg-turn-leg", family="tactic", policy=LegTurnLeg()),
              Candidate(name="lead-lag", family="tactic", policy=LeadLag())]
     skipped: dict[str, str] = {}
     names = OBJECTIVE_NAMES if plan_objectives is None else tuple(plan_objectives)
+    for obj in names:  # every name, also those beyond the n candidates
+        if obj not in OBJECTIVE_NAMES:
+            raise ArgumentError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
+                                obj)
     seen: dict[str, str] = {}
     for obj in names:
         if len(fixed) >= n:
             break
-        if obj not in OBJECTIVE_NAMES:
-            raise ArgumentError("plan_objectives", f"names of {', '.join(OBJECTIVE_NAMES)}",
-                                obj)
         canon = make_objective(obj).name
         if canon in seen:
             skipped[obj] = f"same objective as {seen[canon]}"
@@ -356,29 +357,63 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
     Parameters
     ----------
     costs : mapping
-        Cost name -> values, shape (C,).
+        Cost name -> values, shape (C,) (a NaN value makes that cost's correlations NaN).
     tta : ndarray, shape (C, R)
-        Time to accuracy of each candidate in each run [s] (inf: never).
+        Time to accuracy of each candidate in each run [s] (+inf: never; NaN refused).
     fre : ndarray, shape (C, R)
-        Final range error of each candidate in each run [m].
+        Final range error of each candidate in each run [m] (finite).
     censor : float
-        Value of a time to accuracy that is never reached [s] (horizon + dt).
+        Value of a time to accuracy that is never reached [s] (horizon + dt); finite and not
+        below any finite time.
     n_resamples : int
-        Bootstrap resamples; runs and candidates are resampled independently
-        (:func:`scipy.stats.bootstrap`, ``paired=False``, percentile intervals).
+        Bootstrap resamples, >= 0 (0: no intervals); runs and candidates are resampled
+        independently (:func:`scipy.stats.bootstrap`, ``paired=False``, percentile
+        intervals).
     seed : int
+        Seed of the bootstrap, >= 0.
     level : float
+        Confidence level, in (0, 1).
 
     Returns
     -------
     tuple of CostCorrelation
         In the order of ``costs``.
+
+    Raises
+    ------
+    ArgumentError
+        Fewer than three candidates, arrays of mismatched shapes, a NaN time or a non-finite
+        final error (named by candidate and run), a censor below a finite time, a level
+        outside (0, 1), a negative or non-integer ``n_resamples`` or ``seed``.
     """
     tta = np.asarray(tta, float)
     fre = np.asarray(fre, float)
+    if tta.ndim != 2 or tta.shape[1] < 1:
+        raise ArgumentError("tta", "an array of shape (candidates, runs)", tta.shape)
     C, R = tta.shape
     if C < 3:
         raise ArgumentError("candidates", ">= 3 (a rank correlation needs three)", C)
+    if fre.shape != tta.shape:
+        raise ArgumentError("fre", f"the shape of tta {tta.shape}", fre.shape)
+    for field, x, what in (("tta", tta, "finite values or +inf (never reached)"),
+                           ("fre", fre, "finite values")):
+        bad = np.argwhere(~(np.isfinite(x) | (np.isposinf(x) if field == "tta" else False)))
+        if bad.size:
+            raise ArgumentError(field, what, f"{x[tuple(bad[0])]} at (candidate, run) "
+                                f"{tuple(bad[0].tolist())}, {len(bad)} in all")
+    top = float(np.max(tta, initial=-np.inf, where=np.isfinite(tta)))
+    if not np.isfinite(as_real(censor)) or censor < top:
+        raise ArgumentError("censor", f"a finite number >= the largest finite time ({top:g} s), "
+                            "e.g. the horizon + dt", censor)
+    for name, v in costs.items():
+        if np.shape(v) != (C,):
+            raise ArgumentError(f"costs[{name!r}]", f"one value per candidate, shape ({C},)",
+                                np.shape(v))
+    if not 0 < as_real(level) < 1:
+        raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
+    for field, value in (("n_resamples", n_resamples), ("seed", seed)):
+        if not is_integer(value, 0):
+            raise ArgumentError(field, "an integer >= 0", value)
     m_tta, m_fre = _metrics(tta, fre, censor)
     out = []
     for name, v in costs.items():
@@ -402,7 +437,9 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
             # percentiles of the resamples where the correlation is defined (a resample of
             # one repeated candidate has none)
             a = 100.0 * (1.0 - level) / 2.0
-            lo, hi = np.nanpercentile(bs.bootstrap_distribution, [a, 100.0 - a], axis=-1)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # all NaN: interval NaN
+                lo, hi = np.nanpercentile(bs.bootstrap_distribution, [a, 100.0 - a], axis=-1)
             cis = [(float(lo[i]), float(hi[i])) for i in range(3)]
         out.append(CostCorrelation(name=name, values=v, spearman=s, spearman_ci=cis[0],
                                    kendall=k, kendall_ci=cis[1], spearman_rmse=s2,

@@ -32,7 +32,7 @@ import dataclasses
 import numpy as np
 from scipy import optimize, stats
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.geometry import bearing_of, range_of, wrap_angle
 
 __all__ = ["DetectabilityBound", "detection_probability", "manoeuvre_detectability"]
@@ -96,7 +96,7 @@ def manoeuvre_detectability(*, times: np.ndarray, own_position: np.ndarray,
     bearing_sigma, range_sigma : float
         Measurement standard deviations [rad] / [m], > 0.
     bearing_steps, ping_steps : ndarray of int
-        Steps with a bearing / a ping echo.
+        Steps with a bearing / a ping echo, in [0, K].
     alpha : float
         False-alarm probability of the test.
 
@@ -105,17 +105,28 @@ def manoeuvre_detectability(*, times: np.ndarray, own_position: np.ndarray,
     DetectabilityBound
     """
     times = np.asarray(times, float)
-    if not 0 < onset < times.size:
-        raise ArgumentError("onset", f"a step in [1, {times.size - 1}]", onset)
+    n = times.size
+    if not is_integer(onset, 1) or not onset < n:
+        raise ArgumentError("onset", f"an integer step in [1, {n - 1}]", onset)
     if not window > 0:
         raise ArgumentError("window", "a time > 0 [s]", window)
     for name, v in (("bearing_sigma", bearing_sigma), ("range_sigma", range_sigma)):
         if not v > 0:
             raise ArgumentError(name, "> 0", v)
-    last = int(np.searchsorted(times, times[onset] + window + 1e-9)) - 1
+    if not 0.0 < as_real(alpha) < 0.5:
+        raise ArgumentError("alpha", "a probability in (0, 0.5)", alpha)
     own = np.asarray(own_position, float)
+    target, straight = np.asarray(target, float), np.asarray(straight, float)
+    for name, x, cols in (("own_position", own, 2), ("target", target, 4),
+                          ("straight", straight, 4)):
+        if x.shape != (n, cols):
+            raise ArgumentError(name, f"shape ({n}, {cols}), one row per grid time", x.shape)
     bs = np.asarray(bearing_steps, int)
     ps = np.asarray(ping_steps, int)
+    for name, st in (("bearing_steps", bs), ("ping_steps", ps)):
+        if st.ndim != 1 or ((st < 0) | (st >= n)).any():  # a negative step counts from the end
+            raise ArgumentError(name, f"grid steps in [0, {n - 1}]", st.tolist())
+    last = int(np.searchsorted(times, times[onset] + window + 1e-9)) - 1
     bs, ps = bs[bs <= last], ps[ps <= last]
     b_m, _ = _predicted(target[bs, :2], own[bs])
     _, r_m = _predicted(target[ps, :2], own[ps])

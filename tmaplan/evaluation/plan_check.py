@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import PairedDifference, paired_difference
 from tmaplan.policies import (
@@ -77,9 +77,9 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
     n_particles, accuracy :
         As for :class:`tmaplan.experiments.CampaignSpec`.
     angles : sequence of float
-        Course changes [deg], each flown to both sides.
+        Course changes [deg], each flown to both sides; non-empty, finite.
     fractions : sequence of float
-        Turn times as fractions of the horizon, in (0, 1).
+        Turn times as fractions of the horizon, in (0, 1); non-empty.
     workers, out_dir :
         As for :func:`tmaplan.experiments.run_campaign` (resumable).
 
@@ -92,11 +92,16 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
     """
     if not is_integer(runs, 1):
         raise ArgumentError("runs", "an integer >= 1", runs)
+    if isinstance(angles, str) or not len(angles) or not all(
+            np.isfinite(as_real(a)) for a in angles):
+        raise ArgumentError("angles", "a non-empty sequence of finite course changes [deg]",
+                            angles)
+    if isinstance(fractions, str) or not len(fractions) or not all(
+            0.0 < as_real(f) < 1.0 for f in fractions):
+        raise ArgumentError("fractions", "a non-empty sequence of values in (0, 1)", fractions)
     t0, H = scenario.time.t0, scenario.time.horizon
     grid: dict[str, SingleTurn] = {}
     for f in fractions:
-        if not 0.0 < float(f) < 1.0:
-            raise ArgumentError("fractions", "values in (0, 1)", f)
         for a in angles:
             for s in (1.0, -1.0):
                 grid[f"turn:{s * a:+g}deg@{f * H:g}s"] = SingleTurn(

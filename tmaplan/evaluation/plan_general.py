@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.evaluation.metrics import PairedDifference
 from tmaplan.evaluation.plan_check import plan_campaign, planned_differences, tune_single_turn
 from tmaplan.scenario import Scenario
@@ -87,11 +87,11 @@ class ProblemFamily:
             v = getattr(self, name)
             closed = name == "relative_bearing"
             ok = (isinstance(v, tuple) and len(v) == 2
-                  and all(isinstance(x, (int, float)) and math.isfinite(x) for x in v)
+                  and all(math.isfinite(as_real(x)) for x in v)
                   and v[0] <= v[1] and (lo <= v[0] if closed else lo < v[0]) and v[1] <= hi)
             if not ok:
                 raise ArgumentError(name, f"(low, high) with low <= high, each {text}", v)
-        if not (math.isfinite(self.horizon_step) and self.horizon_step > 0):
+        if not (math.isfinite(as_real(self.horizon_step)) and self.horizon_step > 0):
             raise ArgumentError("horizon_step", "> 0 s", self.horizon_step)
         if math.floor(self.horizon[1] / self.horizon_step + 1e-9) < math.ceil(
                 self.horizon[0] / self.horizon_step - 1e-9):
@@ -129,8 +129,8 @@ def random_problem(base: Scenario, rng: np.random.Generator, *,
     bearing mean (relative to the own course), range interval and speed bound (its lower
     speed bound clipped to half the drawn bound); the bearing sensors get the drawn noise; the
     scenario and planning horizons are the drawn horizon. The single-run truth (campaigns draw
-    truths from the prior) sits at the prior's mean bearing and mid range, at half the speed
-    bound, on the prior's course (``given``) or heading for the own ship.
+    truths from the prior) sits at the prior's mean bearing and mid range, at the middle of
+    the prior's speed interval, on the prior's course (``given``) or heading for the own ship.
 
     Parameters
     ----------
@@ -277,10 +277,14 @@ def general_check(problem: Scenario, *, runs: int = 60, seed: int = 0, tune_runs
         Baseline name -> :class:`tmaplan.evaluation.metrics.PairedDifference` of
         ``planned − X`` (:func:`criteria` reads it).
     """
+    # all checked before the tuning campaign, which takes minutes
+    for field, value, least in (("runs", runs, 1), ("seed", seed, 0), ("tune_seed", tune_seed, 0)):
+        if not is_integer(value, least):
+            raise ArgumentError(field, f"an integer >= {least}", value)
     if tune_seed == seed:
         raise ArgumentError("tune_seed", f"a seed other than the evaluation's ({seed})",
                             tune_seed)
-    if not isinstance(tune_runs, int) or isinstance(tune_runs, bool) or tune_runs < 0:
+    if not is_integer(tune_runs, 0):
         raise ArgumentError("tune_runs", "an integer >= 0 (0: no tuned turn)", tune_runs)
     tuned = None
     if tune_runs > 0:

@@ -186,14 +186,19 @@ class RunRecord:
         return cls(run=int(d["run"]), policies=pols)
 
     def save(self, path: Path) -> None:
-        """Write atomically (a kill leaves the old file or none, never a torn one)."""
+        """Write atomically (a kill leaves the old file or none, never a torn one; an error
+        removes the temporary file and is raised)."""
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         os.close(fd)
-        arrays: dict[str, Any] = self.to_arrays()
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
-        os.replace(tmp, path)
+        try:
+            arrays: dict[str, Any] = self.to_arrays()
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **arrays)
+            os.replace(tmp, path)
+        except BaseException:  # a full disk, an interrupt: no stray .tmp file in the cache
+            os.remove(tmp)
+            raise
 
     @classmethod
     def load(cls, path: Path, policies: tuple[str, ...]) -> RunRecord | None:

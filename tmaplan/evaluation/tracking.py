@@ -21,7 +21,7 @@ import numpy as np
 
 from tmaplan.bounds.batch_fim import fisher_information, tma_data, true_parameters
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.estimators.applicability import check_applicable
 from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
@@ -174,12 +174,21 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
 
     Raises
     ------
+    ArgumentError
+        ``runs`` not an integer >= 1, ``seed`` not an integer >= 0, another ``bound``, or
+        ``bound_samples`` < 2 with ``bound="prior"`` (before any run is computed).
     ScenarioError
         An estimator / bound that cannot give a number on this scenario
         (:func:`tmaplan.estimators.applicability.check_applicable`).
     """
-    if runs < 1:
-        raise ArgumentError("runs", ">= 1", runs)
+    if not is_integer(runs, 1):
+        raise ArgumentError("runs", "an integer >= 1", runs)
+    if not is_integer(seed, 0):
+        raise ArgumentError("seed", "an integer >= 0", seed)
+    if not (isinstance(bound, bool) or bound in ("truth", "prior")):
+        raise ArgumentError("bound", "True, False, 'truth' or 'prior'", bound)
+    if bound == "prior" and not is_integer(bound_samples, 2):  # checked before the runs
+        raise ArgumentError("bound_samples", "an integer >= 2", bound_samples)
     est = estimator_for(estimator, scenario, n_particles=n_particles,
                         **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
     check_applicable(est, scenario, bound=bound)

@@ -48,3 +48,37 @@ def test_run_closed_loop_refuses_bad_input_naming_the_field(scenario, change, fi
     with pytest.raises(ArgumentError) as info:
         run_closed_loop(scenario, Combined(manoeuvre=Straight()), target, **kw)
     assert info.value.field == field
+
+
+def test_closed_loop_assimilates_the_measurements_of_step_0():
+    # sharma2024-range-only has a prior and its one bearing at step 0 (steps = [0]); the
+    # closed loop started updating at step 1, so that bearing was never used
+    import dataclasses
+
+    from tmaplan.policies import parse_policy
+    from tmaplan.simulate import draw_truth
+
+    sc = load_problem("sharma2024-range-only")
+    (b,) = [s for s in sc.sensors if s.kind == "bearing"]
+    assert tuple(b.steps) == (0,)
+    without = sc.replace(sensors=tuple(dataclasses.replace(s, steps=()) if s is b else s
+                                       for s in sc.sensors))
+    target = draw_truth(sc, np.random.default_rng(1))
+
+    def run(s):
+        return run_closed_loop(s, parse_policy("straight", s), target,
+                               noise_rng=np.random.default_rng(2),
+                               filter_rng=np.random.default_rng(3), n_particles=2000)
+
+    with_b, no_b = run(sc), run(without)
+    los = target[0, :2] - with_b.observer.position[0]
+    perp = np.array([los[1], -los[0]]) / np.hypot(*los)  # cross-range direction
+
+    def cross_std(r):
+        return float(np.sqrt(perp @ r.covariance[0, :2, :2] @ perp))
+
+    # one bearing as precise as the prior's bearing spread: posterior about 1/sqrt(2) of it
+    assert b.sigma == pytest.approx(sc.prior.bearing_std)
+    assert 0.55 < cross_std(with_b) / cross_std(no_b) < 0.85
+    # nothing else at step 0: the runs differ only through that bearing
+    assert np.array_equal(with_b.observer.position, no_b.observer.position)

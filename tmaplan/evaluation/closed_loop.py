@@ -1,6 +1,7 @@
 """One closed-loop run: a policy steers the own ship and pings on the particle filter's belief.
 
-At each step k the controller sees a :class:`tmaplan.policies.BeliefView` (never the truth)
+The filter starts from the prior and assimilates the measurements of step 0, if any. At each
+step k the controller then sees a :class:`tmaplan.policies.BeliefView` (never the truth)
 and returns a turn rate over (t_k, t_{k+1}] and whether to ping at k + 1. The own ship moves on
 the exact arc, the sensors measure at k + 1 (:func:`tmaplan.simulate.measure_step`), the filter
 predicts with the observer's velocity increment and updates (:func:`tmaplan.estimators.filter
@@ -169,7 +170,12 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         pings.extend([k + 1] if act.ping and active else [])
         return vbar[k + 1] - vbar[k], meas
 
-    fr = drive(pf, pf.init(scenario, filter_rng), K, step, filter_rng)
+    state0 = pf.init(scenario, filter_rng)
+    # the sensors that measure at step 0 (e.g. a first bearing at t0) are assimilated before
+    # the controller's first action; with none there, nothing is drawn or changed
+    if meas0 := measure_step(scenario, 0, target[0] - np.concatenate([pos, v0]), noise):
+        state0 = pf.update(state0, meas0, filter_rng)
+    fr = drive(pf, state0, K, step, filter_rng)
     obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
                         heading=wrap_angle(headings), speed=np.full(K + 1, speed))
     return ClosedLoopRun(times=times, truth=target - obs.state, target=target, observer=obs,

@@ -477,8 +477,8 @@ class _RecedingController:
 
         t0 = time.perf_counter()
         # the filter's posterior at step k has assimilated the measurements at k (it predicts
-        # and updates to k before the controller acts at k; none is taken at step 0): the plan
-        # counts the sensors from the next step
+        # and updates to k before the controller acts at k; at step 0 it has updated with the
+        # measurements of step 0, if any): the plan counts the sensors from the next step
         b = Belief.from_particles(belief.particles, belief.weights, t=t,
                                   max_samples=self.policy.max_particles, assimilated=True)
         entry: dict[str, Any] = {"t": t}

@@ -60,11 +60,12 @@ class PCRBInputs:
     ambiguity : {"none", "pi"}
         "pi" if any bearing sensor is π-ambiguous (brehard2005 eq. 4).
     ping_steps : ndarray of int
-        Steps with a range ping.
+        Steps with a range ping (active range sensors or an explicit list).
     ping_weight : ndarray, shape (K + 1,)
-        Σ 1/σ_r² of the pings at each step [m⁻²] (0 where there is none).
+        Σ 1/σ_r² of the range measurements at each step [m⁻²]: the pings and the passive
+        range sensors (0 where there is none).
     range_sigma : float or None
-        σ_r of the (first) range sensor [m].
+        σ_r of a ping [m] (:func:`resolve_ping_steps`).
     frequency_sensors : tuple of (FrequencySensor, ndarray)
         Each frequency sensor with its steps.
     prior_samples : int
@@ -141,26 +142,41 @@ def check_ping_steps(steps: Sequence[int] | np.ndarray, n_steps: int, *, field: 
 
 def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
                        ) -> tuple[np.ndarray, np.ndarray, float | None]:
-    """Ping steps and per-step ping weights Σ 1/σ_r² [m⁻²].
+    """Ping steps and per-step range weights Σ 1/σ_r² [m⁻²].
 
-    ``ping_steps=None``: the steps of the scenario's range sensors (each with its own σ).
-    An explicit list overrides them and uses the σ of the first range sensor; a non-empty list
-    without a range sensor raises :class:`ScenarioError`.
+    The passive range sensors (``active = false``: continuous range measurements, not pings)
+    always count at their own steps. ``ping_steps=None``: the active range sensors ping at
+    their own steps (each with its own σ). An explicit list replaces the active sensors'
+    steps and pings with the σ of the first active range sensor (of the first range sensor
+    if none is active); a non-empty list without a range sensor raises
+    :class:`ScenarioError`. The returned steps are those of the pings (not of the passive
+    range measurements); the returned σ is that of a ping.
     """
     K = scenario.time.n_steps
     sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
-    sigma = float(sensors[0].sigma) if sensors else None
+    active = [s for s in sensors if s.active]
+    sigma = float((active or sensors)[0].sigma) if sensors else None
+    weight = _range_weights([s for s in sensors if not s.active], scenario.time)
     if ping_steps is None:
-        weight = information_rates(scenario)[1]
-        return np.flatnonzero(weight > 0), weight, sigma
-    weight = np.zeros(K + 1)
-    steps = np.asarray(list(ping_steps), dtype=int).reshape(-1)
+        pings = _range_weights(active, scenario.time)
+        return np.flatnonzero(pings > 0), weight + pings, sigma
+    steps = check_ping_steps(ping_steps, K, source=scenario.name)
     if steps.size and sigma is None:
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
                             "no range sensor", source=scenario.name)
-    steps = np.unique(check_ping_steps(steps, K, source=scenario.name))
-    weight[steps] = 1.0 / sigma**2 if sigma else 0.0
+    steps = np.unique(steps)
+    if sigma is not None:
+        weight[steps] += 1.0 / sigma**2
     return steps, weight, sigma
+
+
+def _range_weights(sensors: Sequence[RangeSensor], grid: TimeGrid) -> np.ndarray:
+    """Σ 1/σ_r² of ``sensors`` at each step k = 0..K of ``grid`` [m⁻²], shape (K + 1,)."""
+    w = np.zeros(grid.n_steps + 1)
+    for s in sensors:
+        st = measurement_steps(s, grid)
+        np.add.at(w, st[(st >= 0) & (st <= grid.n_steps)], 1.0 / float(s.sigma) ** 2)
+    return w
 
 
 def _check_prior_range_support(scenario: Scenario) -> None:

@@ -1,0 +1,55 @@
+"""Review tests of the closed-form LPC PCRB and its inputs (brehard2005 §4–5)."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+from tmaplan.bounds.closed_form import closed_form_pcrb
+from tmaplan.bounds.inputs import resolve_ping_steps
+from tmaplan.bounds.pcrb import SideAssumptionWarning
+from tmaplan.scenario import RangeSensor, load_problem
+
+
+def _quiet(fn, *args, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SideAssumptionWarning)
+        return fn(*args, **kw)
+
+
+@pytest.fixture(scope="module")
+def passive_range():
+    """sharma2024-range-only (a passive range sensor every step), 20 steps."""
+    sc = load_problem("sharma2024-range-only")
+    return sc.replace(time=dataclasses.replace(sc.time, horizon=20 * sc.time.dt))
+
+
+def test_explicit_pings_keep_the_passive_range_sensor(passive_range):
+    sc = passive_range
+    sig = next(s.sigma for s in sc.sensors if isinstance(s, RangeSensor))
+    steps, w, _ = resolve_ping_steps(sc, None)
+    assert steps.size == 0  # continuous range measurements are not pings
+    assert np.allclose(w[1:], 1.0 / sig**2)
+    steps, w2, _ = resolve_ping_steps(sc, [])
+    assert steps.size == 0 and np.array_equal(w2, w)
+    steps, w3, _ = resolve_ping_steps(sc, [3])
+    assert steps.tolist() == [3] and w3[3] == pytest.approx(2.0 / sig**2)
+    a = _quiet(closed_form_pcrb, sc, prior_samples=2000)
+    b = _quiet(closed_form_pcrb, sc, ping_steps=[], prior_samples=2000)
+    np.testing.assert_allclose(b.range_bound, a.range_bound, rtol=1e-12)
+    assert a.ping_steps.size == 0
+
+
+def test_explicit_pings_use_the_active_sensor_sigma(passive_range):
+    sc = passive_range
+    active = RangeSensor(kind="range", sigma=200.0, steps=(5,))
+    sc = sc.replace(sensors=(*sc.sensors, active))
+    steps, _, sig = resolve_ping_steps(sc, None)
+    assert steps.tolist() == [5] and sig == 200.0
+    steps, w2, sig = resolve_ping_steps(sc, [7])
+    assert sig == 200.0
+    assert w2[7] - w2[6] == pytest.approx(1.0 / 200.0**2)
+    assert w2[5] == pytest.approx(w2[6])

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from tmaplan.bounds.closed_form import closed_form_pcrb
-from tmaplan.bounds.inputs import resolve_ping_steps
+from tmaplan.bounds.inputs import check_ping_steps, resolve_ping_steps
 from tmaplan.bounds.pcrb import SideAssumptionWarning
+from tmaplan.errors import ArgumentError
 from tmaplan.scenario import RangeSensor, load_problem
 
 
@@ -53,3 +54,17 @@ def test_explicit_pings_use_the_active_sensor_sigma(passive_range):
     assert sig == 200.0
     assert w2[7] - w2[6] == pytest.approx(1.0 / 200.0**2)
     assert w2[5] == pytest.approx(w2[6])
+
+
+@pytest.mark.parametrize("steps", [[2.7], [True], ["3"], "12", [np.nan], [3.0], 5, [[1, 2], [3]]])
+def test_ping_steps_must_be_integers(steps):
+    with pytest.raises(ArgumentError, match="ping_steps"):
+        check_ping_steps(steps, 10)
+
+
+def test_ping_steps_accept_integer_sequences():
+    assert check_ping_steps(np.array([0, 10]), 10).tolist() == [0, 10]
+    assert check_ping_steps((np.int64(3), 4), 10).tolist() == [3, 4]
+    assert check_ping_steps([], 10).size == 0
+    with pytest.raises(ArgumentError, match=r"steps in \[0, 10\]"):
+        check_ping_steps([11], 10)

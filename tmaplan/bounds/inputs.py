@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, is_integer
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state, zero_prior_stds
@@ -132,12 +132,16 @@ def check_ping_steps(steps: Sequence[int] | np.ndarray, n_steps: int, *, field: 
     ------
     ArgumentError
         Naming ``field``, the valid range and the received steps, if a step is outside it
-        (a step past the horizon or before its start is refused, never dropped).
+        (a step past the horizon or before its start is refused, never dropped) or is not an
+        integer (a bool, a float, a string: never truncated or parsed).
     """
-    st = np.asarray(list(steps), dtype=int).reshape(-1)
-    if st.size and (st.min() < 0 or st.max() > n_steps):
-        raise ArgumentError(field, f"steps in [0, {int(n_steps)}]", st.tolist(), source=source)
-    return st
+    expected = f"integer steps in [0, {int(n_steps)}]"
+    if isinstance(steps, str | bytes) or not hasattr(steps, "__iter__"):
+        raise ArgumentError(field, f"a sequence of {expected}", steps, source=source)
+    raw = np.asarray(list(steps), dtype=object).reshape(-1)
+    if not all(is_integer(x, 0) and x <= n_steps for x in raw):
+        raise ArgumentError(field, expected, raw.tolist(), source=source)
+    return raw.astype(int)
 
 
 def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,

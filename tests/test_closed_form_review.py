@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tmaplan.bounds.closed_form import closed_form_pcrb
+from tmaplan.bounds.closed_form import closed_form_model, closed_form_pcrb
 from tmaplan.bounds.inputs import check_ping_steps, resolve_ping_steps
 from tmaplan.bounds.pcrb import SideAssumptionWarning
 from tmaplan.errors import ArgumentError
@@ -68,3 +68,32 @@ def test_ping_steps_accept_integer_sequences():
     assert check_ping_steps([], 10).size == 0
     with pytest.raises(ArgumentError, match=r"steps in \[0, 10\]"):
         check_ping_steps([11], 10)
+
+
+@pytest.fixture(scope="module")
+def engine():
+    sc = load_problem("brehard2005-s1")
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=20 * sc.time.dt))
+    return closed_form_model(sc, prior_samples=2000)
+
+
+@pytest.mark.parametrize("u", [np.ones(15), np.ones(30), np.full(21, np.nan),
+                               -np.ones(21), np.full(21, np.inf), np.ones((1, 21)), "x"])
+def test_evaluate_refuses_bad_ping_weights(engine, u):
+    with pytest.raises(ArgumentError, match="'u'"):
+        engine.evaluate(u)
+
+
+@pytest.mark.parametrize("u", [np.full((2, 21), np.nan), -np.ones((2, 21)),
+                               np.ones((2, 3, 21))])
+def test_evaluate_schedules_refuses_bad_ping_weights(engine, u):
+    with pytest.raises(ArgumentError, match="'u'"):
+        engine.evaluate_schedules(u)
+
+
+def test_evaluate_accepts_valid_ping_weights(engine):
+    u = np.zeros(21)
+    u[[0, 7]] = 1.0
+    var = engine.evaluate(u)[0]
+    rb = engine.evaluate_schedules(u[None, :], backend="numpy")[0]
+    np.testing.assert_allclose(rb, np.sqrt(engine.er2 * var[:, 1]), rtol=1e-9)

@@ -255,11 +255,13 @@ class ClosedFormEngine:
 
         Raises
         ------
+        ArgumentError
+            ``u`` not of shape (K + 1,), or with a NaN, infinite or negative weight.
         ObservabilityError
             If J₀ or some ``J_t + D11`` is not positive definite.
         """
         K = self.n_steps
-        u = np.zeros(K + 1) if u is None else np.asarray(u, float)
+        u = np.zeros(K + 1) if u is None else _ping_weights(u, (K + 1,), f"shape ({K + 1},)")
         scale = self._ping_scale(u)
         _, riccati_fn = _numeric_step_functions(self.A, self.Q, backend)
         J0 = np.array(self._start_entries(float(u[0]), scale))
@@ -285,11 +287,12 @@ class ClosedFormEngine:
         ``sqrt(tr P_pos)`` of the Cartesian bound ``E[J_X J_k⁻¹ J_Xᵀ]_pos`` (numpy only).
         ``reduce``: None, per step (S, K + 1); "mean" over the K + 1 steps (docs/cli.md);
         "terminal", the last step (S,). Raises :class:`ObservabilityError` if some
-        ``J_t + D11`` is not positive definite.
+        ``J_t + D11`` is not positive definite, :class:`ArgumentError` for weights ``u`` of
+        another shape, NaN, infinite or negative.
         """
-        u = np.atleast_2d(np.asarray(u, float))
         K = self.n_steps
-        if u.shape[1] != K + 1:
+        u = np.atleast_2d(_ping_weights(u, None, f"shape (S, {K + 1})"))
+        if u.ndim != 2 or u.shape[1] != K + 1:
             raise ArgumentError("u", f"shape (S, {K + 1})", u.shape)
         if reduce not in (None, "mean", "terminal"):
             raise ArgumentError("reduce", "None, 'mean' or 'terminal'", reduce)
@@ -509,6 +512,19 @@ def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple
             raise RuntimeError("backend='compiled': no working C compiler (set CC, or "
                                "TMAPLAN_JIT is 0)")
     return step_functions(A, Q)
+
+
+def _ping_weights(u: Any, shape: tuple[int, ...] | None, expected: str) -> np.ndarray:
+    """Ping weights ``u`` as a float array: finite, >= 0, of ``shape`` (if given)."""
+    try:
+        arr = np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError("u", f"ping weights (finite, >= 0) of {expected}", u) from None
+    if shape is not None and arr.shape != shape:
+        raise ArgumentError("u", expected, arr.shape)
+    if not np.all(np.isfinite(arr) & (arr >= 0.0)):
+        raise ArgumentError("u", "finite ping weights >= 0", arr)
+    return arr
 
 
 def _schedule_backend(backend: str) -> Any:

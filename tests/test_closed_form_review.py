@@ -8,7 +8,9 @@ import warnings
 import numpy as np
 import pytest
 
+from tmaplan.bounds._lpc_terms import SYM_INDEX
 from tmaplan.bounds.closed_form import closed_form_model, closed_form_pcrb
+from tmaplan.bounds.closed_form_engine import ClosedFormEngine
 from tmaplan.bounds.inputs import check_ping_steps, resolve_ping_steps
 from tmaplan.bounds.pcrb import SideAssumptionWarning
 from tmaplan.errors import ArgumentError
@@ -97,3 +99,38 @@ def test_evaluate_accepts_valid_ping_weights(engine):
     var = engine.evaluate(u)[0]
     rb = engine.evaluate_schedules(u[None, :], backend="numpy")[0]
     np.testing.assert_allclose(rb, np.sqrt(engine.er2 * var[:, 1]), rtol=1e-9)
+
+
+def _build_kw(engine):
+    return dict(mean=engine.moments[:4, 0], second_moment=engine.moments[4:, 0],
+                prior_information=engine.prior_information, observer=engine.observer,
+                dt=engine.dt, q=0.0025, bearing_info=engine.bearing_info, ping_sigma=100.0)
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("dt", -6.0), ("dt", np.nan), ("q", 0.0), ("q", -1.0), ("q", True), ("q", "0.1"),
+    ("ping_sigma", 0.0), ("ping_sigma", -100.0), ("ping_sigma", np.inf),
+    ("mean", np.zeros(3)), ("mean", np.full(4, np.nan)), ("prior_information", np.eye(3)),
+    ("second_moment", np.full((4, 4), np.inf)), ("bearing_info", np.full(21, np.nan)),
+    ("bearing_info", -np.ones(21)), ("bearing_info", np.ones(20))])
+def test_engine_build_refuses_bad_arguments(engine, field, value):
+    kw = _build_kw(engine)
+    kw["second_moment"] = _unpack(kw["second_moment"])
+    kw[field] = value
+    with pytest.raises(ArgumentError, match=f"'{field}'"):
+        ClosedFormEngine.build(**kw)
+
+
+def test_engine_build_reproduces_the_engine(engine):
+    kw = _build_kw(engine)
+    kw["second_moment"] = _unpack(kw["second_moment"])
+    kw["q"] = float(load_problem("brehard2005-s1").target.q)
+    again = ClosedFormEngine.build(**kw)
+    np.testing.assert_allclose(again.evaluate()[0], engine.evaluate()[0], rtol=1e-12)
+
+
+def _unpack(v):
+    M = np.empty((4, 4))
+    for n, (i, j) in enumerate(SYM_INDEX):
+        M[i, j] = M[j, i] = v[n]
+    return M

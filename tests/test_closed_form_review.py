@@ -9,9 +9,14 @@ import numpy as np
 import pytest
 
 from tmaplan.bounds._lpc_terms import SYM_INDEX
-from tmaplan.bounds.closed_form import closed_form_model, closed_form_pcrb
+from tmaplan.bounds.closed_form import (
+    closed_form_model,
+    closed_form_pcrb,
+    side_assumption_density,
+    side_density_gaussian,
+)
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine
-from tmaplan.bounds.inputs import check_ping_steps, resolve_ping_steps
+from tmaplan.bounds.inputs import check_ping_steps, prepare, resolve_ping_steps
 from tmaplan.bounds.pcrb import SideAssumptionWarning
 from tmaplan.errors import ArgumentError
 from tmaplan.scenario import RangeSensor, load_problem
@@ -134,3 +139,40 @@ def _unpack(v):
     for n, (i, j) in enumerate(SYM_INDEX):
         M[i, j] = M[j, i] = v[n]
     return M
+
+
+@pytest.fixture(scope="module")
+def short_s1():
+    sc = load_problem("brehard2005-s1")
+    return sc.replace(time=dataclasses.replace(sc.time, horizon=20 * sc.time.dt))
+
+
+@pytest.mark.parametrize("tol", [np.nan, -1.0, "0.1", None])
+def test_side_tol_is_checked(short_s1, tol):
+    with pytest.raises(ArgumentError, match="'side_tol'"):
+        closed_form_pcrb(short_s1, prior_samples=2000, side_tol=tol)
+
+
+@pytest.mark.parametrize("n", [2000.7, "2000", True, 5, np.float64(2000.0)])
+def test_prior_samples_must_be_an_integer(short_s1, n):
+    with pytest.raises(ArgumentError, match="'prior_samples'"):
+        prepare(short_s1, prior_samples=n)
+
+
+def test_rng_must_be_a_generator(short_s1):
+    with pytest.raises(ArgumentError, match="'rng'"):
+        prepare(short_s1, prior_samples=2000, rng=3)
+    inp = prepare(short_s1, prior_samples=np.int64(2000), rng=np.random.default_rng(1))
+    assert inp.prior_samples == 2000
+
+
+@pytest.mark.parametrize("floor", [0.0, -1.0, np.nan])
+def test_side_density_floor_is_checked(short_s1, floor):
+    inp = prepare(short_s1, prior_samples=2000)
+    with pytest.raises(ArgumentError, match="'floor'"):
+        side_assumption_density(inp, floor=floor)
+
+
+def test_side_density_gaussian_theta_is_checked():
+    with pytest.raises(ArgumentError, match="'theta'"):
+        side_density_gaussian(np.nan, np.zeros(2), np.eye(2))

@@ -311,9 +311,13 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
 
     if lpc:
         _check_prior_range_support(scenario)
+    if prior_samples is not None and not is_integer(prior_samples, 10):
+        raise ArgumentError("prior_samples", "an integer >= 10", prior_samples,
+                            source=scenario.name)
     n = int(prior_samples) if prior_samples is not None else scenario.prior.samples
-    if n < 10:
-        raise ArgumentError("prior_samples", ">= 10", n, source=scenario.name)
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise ArgumentError("rng", "a numpy.random.Generator", type(rng).__name__,
+                            source=scenario.name)
     rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
     X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
     cov_lpc = None

@@ -16,7 +16,13 @@ from tmaplan.bounds.closed_form import (
     side_density_gaussian,
 )
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine
-from tmaplan.bounds.inputs import check_ping_steps, prepare, resolve_ping_steps
+from tmaplan.bounds.inputs import (
+    check_ping_steps,
+    information_rates,
+    lpc_prior_information,
+    prepare,
+    resolve_ping_steps,
+)
 from tmaplan.bounds.pcrb import SideAssumptionWarning
 from tmaplan.errors import ArgumentError
 from tmaplan.scenario import RangeSensor, load_problem
@@ -176,3 +182,24 @@ def test_side_density_floor_is_checked(short_s1, floor):
 def test_side_density_gaussian_theta_is_checked():
     with pytest.raises(ArgumentError, match="'theta'"):
         side_density_gaussian(np.nan, np.zeros(2), np.eye(2))
+
+
+@pytest.mark.parametrize(("kw", "field"), [
+    ({"t_start": np.nan}, "t_start"), ({"t_start": "0"}, "t_start"),
+    ({"n_steps": -5}, "n_steps"), ({"n_steps": True}, "n_steps"), ({"n_steps": 2.5}, "n_steps")])
+def test_information_rates_arguments_are_checked(short_s1, kw, field):
+    with pytest.raises(ArgumentError, match=f"'{field}'"):
+        information_rates(short_s1, **kw)
+
+
+def test_information_rates_plan_window(short_s1):
+    b, r = information_rates(short_s1, t_start=short_s1.time.t0 + 12.0, n_steps=np.int64(4),
+                             include_start=False)
+    assert b.tolist() == [0.0] + [1 / 0.05**2] * 4 and not r.any()
+
+
+@pytest.mark.parametrize("w", [-np.ones(200), np.full(200, np.nan), np.ones(3), np.zeros(200)])
+def test_lpc_prior_information_weights_are_checked(short_s1, w):
+    X = prepare(short_s1, prior_samples=2000).prior_subsample[:200]
+    with pytest.raises(ArgumentError, match="'weights'"):
+        lpc_prior_information(X, w)

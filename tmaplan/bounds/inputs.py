@@ -11,13 +11,20 @@ initial state (moments and the LPC information ``J₀`` of brehard2005 eq. 56,
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, is_integer
+from tmaplan.errors import (
+    ArgumentError,
+    ObservabilityError,
+    ScenarioError,
+    as_real,
+    is_integer,
+)
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state, zero_prior_stds
@@ -211,10 +218,15 @@ def information_rates(scenario: Scenario, *, t_start: float | None = None,
     1/σ_β², brehard2005 eq. 47; a range ping on ln r: ``E r²/σ_r²``, eq. 51). Step 0 is at
     ``t_start`` (default ``scenario.time.t0``; the grid is extended past the horizon if a plan
     needs it), K = ``n_steps`` (default the scenario's); ``include_start=False`` leaves step 0
-    empty (a planner's belief at ``t_start`` already holds that measurement).
+    empty (a planner's belief at ``t_start`` already holds that measurement). A non-finite
+    ``t_start`` or an ``n_steps`` that is not an integer >= 0 is an :class:`ArgumentError`.
     """
     grid = scenario.time
-    k0 = 0 if t_start is None else round((t_start - grid.t0) / grid.dt)
+    if t_start is not None and not math.isfinite(as_real(t_start)):
+        raise ArgumentError("t_start", "a finite time [s]", t_start, source=scenario.name)
+    if n_steps is not None and not is_integer(n_steps, 0):
+        raise ArgumentError("n_steps", "an integer >= 0", n_steps, source=scenario.name)
+    k0 = 0 if t_start is None else round((float(t_start) - grid.t0) / grid.dt)
     K = grid.n_steps if n_steps is None else int(n_steps)
     if k0 + K > grid.n_steps:
         grid = TimeGrid(dt=grid.dt, horizon=grid.dt * max(k0 + K, 1), t0=grid.t0)
@@ -236,10 +248,15 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
     the outer product about the mean (docs/errata.md), normalised by Σw (n for equal weights,
     as :attr:`Belief.cov`). The bearing is centred on its circular mean first (a prior
     straddling β = ±π is handled). Samples [m, m/s] must be at non-zero range; raises
-    :class:`ObservabilityError` if the covariance is not positive definite.
+    :class:`ObservabilityError` if the covariance is not positive definite,
+    :class:`ArgumentError` for weights that are not finite, >= 0, of shape (n,) with Σw > 0.
     """
     Y = cart_to_lpc(np.asarray(samples, float))
     w = None if weights is None else np.asarray(weights, float)
+    if w is not None and not (w.shape == Y.shape[:1] and np.all(np.isfinite(w))
+                              and np.all(w >= 0.0) and w.sum() > 0.0):
+        raise ArgumentError("weights", f"finite weights >= 0 of shape ({Y.shape[0]},) with a "
+                            "positive sum", w)
     z = np.exp(1j * Y[:, 0])
     bm = np.angle(np.mean(z) if w is None else np.sum(w * z))
     Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm

@@ -10,6 +10,7 @@ side-assumption diagnostic of docs/errata.md (:func:`side_assumption_density`).
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from collections.abc import Sequence
@@ -21,7 +22,7 @@ from scipy import special
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, StepInformation
 from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.bounds.pcrb import PCRBResult, SideAssumptionWarning
-from tmaplan.errors import ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -61,7 +62,9 @@ def side_density_gaussian(theta: float, mean: np.ndarray, cov: np.ndarray) -> np
     ndarray, shape (...)
         Density [1/rad].
     """
-    u = np.array([np.sin(theta), np.cos(theta)])
+    if not math.isfinite(th := as_real(theta)):
+        raise ArgumentError("theta", "a finite bearing [rad]", theta)
+    u = np.array([np.sin(th), np.cos(th)])
     Ci = np.linalg.inv(cov)
     a = np.einsum("i,...ij,j->...", u, Ci, u)
     b = np.einsum("i,...ij,...j->...", u, Ci, mean)
@@ -133,8 +136,8 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
     rng : numpy.random.Generator, optional
         For those samples (default ``default_rng(scenario.prior.seed)``).
     side_tol : float
-        Tolerance on κ_k = (wrap period)·p_β(wrap); a :class:`SideAssumptionWarning` is
-        issued where it is exceeded.
+        Tolerance (finite, >= 0) on κ_k = (wrap period)·p_β(wrap); a
+        :class:`SideAssumptionWarning` is issued where it is exceeded.
 
     Returns
     -------
@@ -144,6 +147,8 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
         exact first two moments) and ``side_valid``.
     """
     t0 = time.perf_counter()
+    if not (math.isfinite(tol := as_real(side_tol)) and tol >= 0.0):
+        raise ArgumentError("side_tol", "a finite number >= 0", side_tol, source=scenario.name)
     inp = _inputs(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, rng=rng)
     engine = _engine(inp, float(scenario.target.q))
@@ -156,7 +161,7 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
     cov_lpc = np.linalg.inv(info)
     pos = np.sqrt(np.einsum("nij,nij->n", engine.position_weights(), cov_lpc))
     dens, kappa = side_assumption_density(inp)
-    valid = kappa <= side_tol
+    valid = kappa <= tol
     msgs: list[str] = []
     if not valid.all():
         bad = inp.times[~valid]
@@ -201,8 +206,8 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
 
     Given X₀ the relative position at step k is exactly Gaussian (linear dynamics), with mean
     ``(A^k X₀ + Σ A^{k−1−s} c_s)_pos`` and the process-noise covariance ``C_k``; the density is
-    the average over ``inp.prior_subsample`` of :func:`side_density_gaussian` (C_k is floored
-    at ``floor²·I`` [m²] so step 0 is a narrow kernel estimate).
+    the average over ``inp.prior_subsample`` of :func:`side_density_gaussian` (with ``C_k +
+    floor²·I`` [m²], ``floor`` > 0 [m], so step 0 is a narrow kernel estimate).
 
     Returns
     -------
@@ -211,6 +216,8 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
     kappa : ndarray, shape (K + 1,)
         (wrap period)·density: the brehard2005 eq. 25 correction 1 − κ of the β bound.
     """
+    if not (math.isfinite(fl := as_real(floor)) and fl > 0.0):
+        raise ArgumentError("floor", "a finite std > 0 [m]", floor)
     K, A, Q = inp.n_steps, inp.A, inp.Q
     X = inp.prior_subsample.copy()
     C = np.zeros((4, 4))
@@ -218,7 +225,7 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
     covs = np.empty((K + 1, 2, 2))
     for k in range(K + 1):
         means[k] = X[:, :2]
-        covs[k] = C[:2, :2] + floor**2 * np.eye(2)
+        covs[k] = C[:2, :2] + fl**2 * np.eye(2)
         if k < K:
             X = X @ A.T + inp.c[k]
             C = A @ C @ A.T + Q

@@ -23,6 +23,7 @@ of the ping information (eq. 51) from the exact second moments.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
@@ -38,7 +39,7 @@ from tmaplan.bounds._lpc_terms import (
     tichavsky_step,
     unpack_sym,
 )
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real
 from tmaplan.models.target import ncv_matrices
 
 if TYPE_CHECKING:
@@ -178,11 +179,24 @@ class ClosedFormEngine:
         ``c_t = −H Δv_t``, docs/conventions.md), dt [s], the NCV intensity q > 0 [m²/s³],
         the bearing information per step (K + 1,) [rad⁻²]
         (:func:`tmaplan.bounds.inputs.information_rates`) and σ_r of a ping [m]; ``backend``
-        ("auto", "compiled", "casadi") evaluates the moment recursion."""
+        ("auto", "compiled", "casadi") evaluates the moment recursion.
+
+        Raises :class:`ArgumentError` naming the argument for a non-positive or non-finite
+        ``dt``, ``q`` or ``ping_sigma``, arrays of another shape or with non-finite entries,
+        or a negative bearing information."""
         K = observer.position.shape[0] - 1
-        bearing_info = np.asarray(bearing_info, float)
-        if bearing_info.shape != (K + 1,):
-            raise ArgumentError("bearing_info", f"shape ({K + 1},)", bearing_info.shape)
+        for name, val in (("dt", dt), ("q", q)) + ((("ping_sigma", ping_sigma),)
+                                                  if ping_sigma is not None else ()):
+            x = as_real(val)
+            if not (math.isfinite(x) and x > 0.0):
+                raise ArgumentError(name, "a finite number > 0", val)
+        mean = _finite_array("mean", mean, (4,))
+        second_moment = _finite_array("second_moment", second_moment, (4, 4))
+        prior_information = _finite_array("prior_information", prior_information, (4, 4))
+        bearing_info = _finite_array("bearing_info", bearing_info, (K + 1,))
+        if np.any(bearing_info < 0.0):
+            raise ArgumentError("bearing_info", "Σ 1/σ_β² >= 0 [rad⁻²] at each step",
+                                bearing_info)
         A, Q = ncv_matrices(float(dt), float(q))
         dv = observer.velocity_increments
         c = -np.hstack([dt * dv, dv])
@@ -255,11 +269,13 @@ class ClosedFormEngine:
 
         Raises
         ------
+        ArgumentError
+            ``u`` not of shape (K + 1,), or with a NaN, infinite or negative weight.
         ObservabilityError
             If J₀ or some ``J_t + D11`` is not positive definite.
         """
         K = self.n_steps
-        u = np.zeros(K + 1) if u is None else np.asarray(u, float)
+        u = np.zeros(K + 1) if u is None else _ping_weights(u, (K + 1,), f"shape ({K + 1},)")
         scale = self._ping_scale(u)
         _, riccati_fn = _numeric_step_functions(self.A, self.Q, backend)
         J0 = np.array(self._start_entries(float(u[0]), scale))
@@ -285,11 +301,12 @@ class ClosedFormEngine:
         ``sqrt(tr P_pos)`` of the Cartesian bound ``E[J_X J_k⁻¹ J_Xᵀ]_pos`` (numpy only).
         ``reduce``: None, per step (S, K + 1); "mean" over the K + 1 steps (docs/cli.md);
         "terminal", the last step (S,). Raises :class:`ObservabilityError` if some
-        ``J_t + D11`` is not positive definite.
+        ``J_t + D11`` is not positive definite, :class:`ArgumentError` for weights ``u`` of
+        another shape, NaN, infinite or negative.
         """
-        u = np.atleast_2d(np.asarray(u, float))
         K = self.n_steps
-        if u.shape[1] != K + 1:
+        u = np.atleast_2d(_ping_weights(u, None, f"shape (S, {K + 1})"))
+        if u.ndim != 2 or u.shape[1] != K + 1:
             raise ArgumentError("u", f"shape (S, {K + 1})", u.shape)
         if reduce not in (None, "mean", "terminal"):
             raise ArgumentError("reduce", "None, 'mean' or 'terminal'", reduce)
@@ -509,6 +526,32 @@ def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple
             raise RuntimeError("backend='compiled': no working C compiler (set CC, or "
                                "TMAPLAN_JIT is 0)")
     return step_functions(A, Q)
+
+
+def _finite_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a finite float array of ``shape``, else :class:`ArgumentError`."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError(name, f"a finite array of shape {shape}", value) from None
+    if arr.shape != shape:
+        raise ArgumentError(name, f"shape {shape}", arr.shape)
+    if not np.all(np.isfinite(arr)):
+        raise ArgumentError(name, "finite entries", arr)
+    return arr
+
+
+def _ping_weights(u: Any, shape: tuple[int, ...] | None, expected: str) -> np.ndarray:
+    """Ping weights ``u`` as a float array: finite, >= 0, of ``shape`` (if given)."""
+    try:
+        arr = np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError("u", f"ping weights (finite, >= 0) of {expected}", u) from None
+    if shape is not None and arr.shape != shape:
+        raise ArgumentError("u", expected, arr.shape)
+    if not np.all(np.isfinite(arr) & (arr >= 0.0)):
+        raise ArgumentError("u", "finite ping weights >= 0", arr)
+    return arr
 
 
 def _schedule_backend(backend: str) -> Any:

@@ -11,13 +11,20 @@ initial state (moments and the LPC information ``J₀`` of brehard2005 eq. 56,
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
+from tmaplan.errors import (
+    ArgumentError,
+    ObservabilityError,
+    ScenarioError,
+    as_real,
+    is_integer,
+)
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.prior import relative_prior_samples, true_initial_state, zero_prior_stds
@@ -60,11 +67,12 @@ class PCRBInputs:
     ambiguity : {"none", "pi"}
         "pi" if any bearing sensor is π-ambiguous (brehard2005 eq. 4).
     ping_steps : ndarray of int
-        Steps with a range ping.
+        Steps with a range ping (active range sensors or an explicit list).
     ping_weight : ndarray, shape (K + 1,)
-        Σ 1/σ_r² of the pings at each step [m⁻²] (0 where there is none).
+        Σ 1/σ_r² of the range measurements at each step [m⁻²]: the pings and the passive
+        range sensors (0 where there is none).
     range_sigma : float or None
-        σ_r of the (first) range sensor [m].
+        σ_r of a ping [m] (:func:`resolve_ping_steps`).
     frequency_sensors : tuple of (FrequencySensor, ndarray)
         Each frequency sensor with its steps.
     prior_samples : int
@@ -131,36 +139,55 @@ def check_ping_steps(steps: Sequence[int] | np.ndarray, n_steps: int, *, field: 
     ------
     ArgumentError
         Naming ``field``, the valid range and the received steps, if a step is outside it
-        (a step past the horizon or before its start is refused, never dropped).
+        (a step past the horizon or before its start is refused, never dropped) or is not an
+        integer (a bool, a float, a string: never truncated or parsed).
     """
-    st = np.asarray(list(steps), dtype=int).reshape(-1)
-    if st.size and (st.min() < 0 or st.max() > n_steps):
-        raise ArgumentError(field, f"steps in [0, {int(n_steps)}]", st.tolist(), source=source)
-    return st
+    expected = f"integer steps in [0, {int(n_steps)}]"
+    if isinstance(steps, str | bytes) or not hasattr(steps, "__iter__"):
+        raise ArgumentError(field, f"a sequence of {expected}", steps, source=source)
+    raw = np.asarray(list(steps), dtype=object).reshape(-1)
+    if not all(is_integer(x, 0) and x <= n_steps for x in raw):
+        raise ArgumentError(field, expected, raw.tolist(), source=source)
+    return raw.astype(int)
 
 
 def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
                        ) -> tuple[np.ndarray, np.ndarray, float | None]:
-    """Ping steps and per-step ping weights Σ 1/σ_r² [m⁻²].
+    """Ping steps and per-step range weights Σ 1/σ_r² [m⁻²].
 
-    ``ping_steps=None``: the steps of the scenario's range sensors (each with its own σ).
-    An explicit list overrides them and uses the σ of the first range sensor; a non-empty list
-    without a range sensor raises :class:`ScenarioError`.
+    The passive range sensors (``active = false``: continuous range measurements, not pings)
+    always count at their own steps. ``ping_steps=None``: the active range sensors ping at
+    their own steps (each with its own σ). An explicit list replaces the active sensors'
+    steps and pings with the σ of the first active range sensor (of the first range sensor
+    if none is active); a non-empty list without a range sensor raises
+    :class:`ScenarioError`. The returned steps are those of the pings (not of the passive
+    range measurements); the returned σ is that of a ping.
     """
     K = scenario.time.n_steps
     sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
-    sigma = float(sensors[0].sigma) if sensors else None
+    active = [s for s in sensors if s.active]
+    sigma = float((active or sensors)[0].sigma) if sensors else None
+    weight = _range_weights([s for s in sensors if not s.active], scenario.time)
     if ping_steps is None:
-        weight = information_rates(scenario)[1]
-        return np.flatnonzero(weight > 0), weight, sigma
-    weight = np.zeros(K + 1)
-    steps = np.asarray(list(ping_steps), dtype=int).reshape(-1)
+        pings = _range_weights(active, scenario.time)
+        return np.flatnonzero(pings > 0), weight + pings, sigma
+    steps = check_ping_steps(ping_steps, K, source=scenario.name)
     if steps.size and sigma is None:
         raise ScenarioError("sensors", "a range sensor (kind = 'range') to ping with",
                             "no range sensor", source=scenario.name)
-    steps = np.unique(check_ping_steps(steps, K, source=scenario.name))
-    weight[steps] = 1.0 / sigma**2 if sigma else 0.0
+    steps = np.unique(steps)
+    if sigma is not None:
+        weight[steps] += 1.0 / sigma**2
     return steps, weight, sigma
+
+
+def _range_weights(sensors: Sequence[RangeSensor], grid: TimeGrid) -> np.ndarray:
+    """Σ 1/σ_r² of ``sensors`` at each step k = 0..K of ``grid`` [m⁻²], shape (K + 1,)."""
+    w = np.zeros(grid.n_steps + 1)
+    for s in sensors:
+        st = measurement_steps(s, grid)
+        np.add.at(w, st[(st >= 0) & (st <= grid.n_steps)], 1.0 / float(s.sigma) ** 2)
+    return w
 
 
 def _check_prior_range_support(scenario: Scenario) -> None:
@@ -191,10 +218,15 @@ def information_rates(scenario: Scenario, *, t_start: float | None = None,
     1/σ_β², brehard2005 eq. 47; a range ping on ln r: ``E r²/σ_r²``, eq. 51). Step 0 is at
     ``t_start`` (default ``scenario.time.t0``; the grid is extended past the horizon if a plan
     needs it), K = ``n_steps`` (default the scenario's); ``include_start=False`` leaves step 0
-    empty (a planner's belief at ``t_start`` already holds that measurement).
+    empty (a planner's belief at ``t_start`` already holds that measurement). A non-finite
+    ``t_start`` or an ``n_steps`` that is not an integer >= 0 is an :class:`ArgumentError`.
     """
     grid = scenario.time
-    k0 = 0 if t_start is None else round((t_start - grid.t0) / grid.dt)
+    if t_start is not None and not math.isfinite(as_real(t_start)):
+        raise ArgumentError("t_start", "a finite time [s]", t_start, source=scenario.name)
+    if n_steps is not None and not is_integer(n_steps, 0):
+        raise ArgumentError("n_steps", "an integer >= 0", n_steps, source=scenario.name)
+    k0 = 0 if t_start is None else round((float(t_start) - grid.t0) / grid.dt)
     K = grid.n_steps if n_steps is None else int(n_steps)
     if k0 + K > grid.n_steps:
         grid = TimeGrid(dt=grid.dt, horizon=grid.dt * max(k0 + K, 1), t0=grid.t0)
@@ -216,10 +248,15 @@ def lpc_prior_information(samples: np.ndarray, weights: np.ndarray | None = None
     the outer product about the mean (docs/errata.md), normalised by Σw (n for equal weights,
     as :attr:`Belief.cov`). The bearing is centred on its circular mean first (a prior
     straddling β = ±π is handled). Samples [m, m/s] must be at non-zero range; raises
-    :class:`ObservabilityError` if the covariance is not positive definite.
+    :class:`ObservabilityError` if the covariance is not positive definite,
+    :class:`ArgumentError` for weights that are not finite, >= 0, of shape (n,) with Σw > 0.
     """
     Y = cart_to_lpc(np.asarray(samples, float))
     w = None if weights is None else np.asarray(weights, float)
+    if w is not None and not (w.shape == Y.shape[:1] and np.all(np.isfinite(w))
+                              and np.all(w >= 0.0) and w.sum() > 0.0):
+        raise ArgumentError("weights", f"finite weights >= 0 of shape ({Y.shape[0]},) with a "
+                            "positive sum", w)
     z = np.exp(1j * Y[:, 0])
     bm = np.angle(np.mean(z) if w is None else np.sum(w * z))
     Y[:, 0] = wrap_angle(Y[:, 0] - bm) + bm
@@ -291,9 +328,13 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
 
     if lpc:
         _check_prior_range_support(scenario)
+    if prior_samples is not None and not is_integer(prior_samples, 10):
+        raise ArgumentError("prior_samples", "an integer >= 10", prior_samples,
+                            source=scenario.name)
     n = int(prior_samples) if prior_samples is not None else scenario.prior.samples
-    if n < 10:
-        raise ArgumentError("prior_samples", ">= 10", n, source=scenario.name)
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise ArgumentError("rng", "a numpy.random.Generator", type(rng).__name__,
+                            source=scenario.name)
     rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
     X0 = relative_prior_samples(scenario, n, rng, obs.state[0])
     cov_lpc = None

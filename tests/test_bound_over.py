@@ -119,3 +119,11 @@ def test_closed_loop_truth_bound_refuses_mismatched_pings():
         closed_loop_truth_bounds(sc, obs, tgt, [np.array([30])])
     with pytest.raises(ArgumentError, match="field 'ping_steps'"):
         closed_loop_truth_bounds(sc, obs, tgt, [np.array([-1]), np.array([], int)])
+    # pings on a scenario without an active range sensor were ignored silently
+    from tmaplan.errors import ScenarioError
+
+    quiet = sc.replace(sensors=tuple(s for s in sc.sensors if s.kind != "range"))
+    with pytest.raises(ScenarioError, match="active range sensor"):
+        closed_loop_truth_bounds(quiet, obs, tgt, [np.array([30]), np.array([], int)])
+    no_pings = closed_loop_truth_bounds(quiet, obs, tgt, [np.array([], int)] * 2)
+    assert np.isfinite(no_pings[0]).all()

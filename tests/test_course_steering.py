@@ -63,6 +63,9 @@ NAN, INF = float("nan"), float("inf")
     (SingleTurn(angle=1.0, time=1e6), "single-turn.time"),
     (Zigzag(leg_duration=INF, angle=0.5), "zigzag.leg_duration"),
     (Zigzag(leg_duration=NAN, angle=0.5), "zigzag.leg_duration"),
+    # shorter than a step (dt = 15 s): 1e-9 s hung building ~1e12 legs
+    (Zigzag(leg_duration=1e-9, angle=0.5), "zigzag.leg_duration"),
+    (Zigzag(leg_duration=14.0, angle=0.5), "zigzag.leg_duration"),
     (Zigzag(leg_duration=300.0, angle=NAN), "zigzag.angle"),
     (Zigzag(leg_duration=300.0, angle=-4.0), "zigzag.angle"),
     (Zigzag(leg_duration=300.0, angle=0.5, start=NAN), "zigzag.start"),

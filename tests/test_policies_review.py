@@ -74,6 +74,7 @@ def test_from_prior_refuses_a_sample_count_that_is_not_an_integer_ge_5(scenario,
 
 @pytest.mark.parametrize("call, field", [
     (lambda sc: baselines.zigzag_track(sc, np.nan, 0.5), "leg_duration"),
+    (lambda sc: baselines.zigzag_track(sc, 1e-9, 0.5), "leg_duration"),  # was a hang
     (lambda sc: baselines.zigzag_track(sc, 300.0, np.nan), "angle"),
     (lambda sc: baselines.single_turn_track(sc, np.nan, 100.0), "angle"),
     (lambda sc: baselines.single_turn_track(sc, 0.5, np.nan), "time"),

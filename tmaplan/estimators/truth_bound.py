@@ -31,7 +31,7 @@ import numpy as np
 
 from tmaplan.bounds.inputs import information_rates, prepare
 from tmaplan.bounds.pcrb import PCRBResult, conditional_information
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import range_of
 from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices, target_track
@@ -234,6 +234,13 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
     -------
     position, range : ndarray, shape (K + 1,)
         [m].
+
+    Raises
+    ------
+    ArgumentError
+        Not one ping array per run, shapes that differ, or a negative step.
+    ScenarioError
+        Pings on a scenario without an active range sensor.
     """
     K = scenario.n_steps
     obs, tgt = np.asarray(observer, float), np.asarray(target, float)
@@ -249,6 +256,10 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
                                                          for st in ping_steps],
                             source=scenario.name)
     active = [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
+    if not active and any(np.asarray(st).size for st in ping_steps):
+        # the pings were dropped without a word
+        raise ScenarioError("sensors", "an active range sensor (kind = 'range', active = "
+                            "true) for the runs' pings", "none", source=scenario.name)
     # the scenario without its active range sensors (their steps are the runs' pings); an
     # internal copy, not re-validated (it may still hold a ping budget)
     passive = dataclasses.replace(scenario, sensors=tuple(

@@ -167,13 +167,15 @@ def zigzag_track(scenario: Scenario, leg_duration: float, angle: float, *,
     The first turn (to ``c0 + angle/2``; negative ``angle`` starts to port) starts at t0, the
     next ones every ``leg_duration`` [s].
     """
-    if not (np.isfinite(leg := as_real(leg_duration)) and leg > 0):
-        raise ArgumentError("leg_duration", "a finite time > 0 [s]", leg_duration)
+    dt = scenario.time.dt
+    # a leg shorter than a step cannot be flown (and 1e-9 s built ~1e12 legs: a hang)
+    if not (np.isfinite(leg := as_real(leg_duration)) and leg >= dt):
+        raise ArgumentError("leg_duration", f"a finite time >= one step (dt = {dt:g} s)",
+                            leg_duration)
     angle = _finite("angle", angle, "angle [rad]")
     leg_duration = leg
     h, s, p = _start(scenario, heading0, speed, position0)
     K = scenario.time.n_steps if n_steps is None else int(n_steps)
-    dt = scenario.time.dt
     t0 = scenario.time.t0 if t0 is None else t0
     times = dt * np.arange(K + 1)
     n_legs = int(np.ceil(times[-1] / leg_duration)) + 1
@@ -295,7 +297,10 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
         > 0, ``switch_time`` not in (0, N − 1), ``n_arcs`` or ``n_starts`` not an integer
         >= 1.
     SolverError
-        If no start converges.
+        ``switch="fixed"``: if no start converges. ``switch="free"``: if the best IPOPT point
+        (IPOPT rarely converges on the kinks, so its status is reported, not required),
+        snapped to sample instants, is not a local optimum under one-sided perturbations of
+        every switch time, or snapping lost value.
     """
     import casadi as ca
 

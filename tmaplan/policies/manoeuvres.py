@@ -109,7 +109,7 @@ class Zigzag:
     Attributes
     ----------
     leg_duration : float
-        [s], finite and > 0.
+        [s], finite and at least one time step.
     angle : float
         Course of the first leg from the initial course [rad], in [−π, π] (negative: the
         first leg to port); each later turn is ``2·angle`` the other way.
@@ -124,8 +124,10 @@ class Zigzag:
 
     def _check(self, scenario: Scenario) -> None:
         """ArgumentError naming the first invalid field."""
-        if not (math.isfinite(leg := as_real(self.leg_duration)) and leg > 0):
-            raise ArgumentError("zigzag.leg_duration", "> 0 s", self.leg_duration)
+        dt = scenario.time.dt  # a shorter leg cannot be flown (1e-9 s hung building legs)
+        if not (math.isfinite(leg := as_real(self.leg_duration)) and leg >= dt):
+            raise ArgumentError("zigzag.leg_duration", f">= one step (dt = {dt:g} s)",
+                                self.leg_duration)
         if not (math.isfinite(a := as_real(self.angle)) and abs(a) <= math.pi):
             raise ArgumentError("zigzag.angle", "an angle in [−π, π] rad", self.angle)
         t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon

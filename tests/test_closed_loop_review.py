@@ -82,3 +82,29 @@ def test_closed_loop_assimilates_the_measurements_of_step_0():
     assert 0.55 < cross_std(with_b) / cross_std(no_b) < 0.85
     # nothing else at step 0: the runs differ only through that bearing
     assert np.array_equal(with_b.observer.position, no_b.observer.position)
+
+
+def test_controller_cannot_write_the_filters_particles(scenario):
+    # BeliefView handed the filter's own arrays: a controller could corrupt the filter
+    seen = {}
+
+    class Peek:
+        name = "peek"
+
+        def controller(self, sc):
+            return self
+
+        def act(self, belief, t):
+            from tmaplan.policies import Action
+
+            for field in ("particles", "weights"):
+                arr = getattr(belief, field)
+                with pytest.raises(ValueError, match="read-only"):
+                    arr[0] = 0.0
+                seen[field] = True
+            return Action(turn_rate=0.0)
+
+    target = draw_truth(scenario, np.random.default_rng(0), from_prior=True)
+    run_closed_loop(scenario, Peek(), target, noise_rng=np.random.default_rng(1),
+                    filter_rng=np.random.default_rng(2), n_particles=200)
+    assert seen == {"particles": True, "weights": True}

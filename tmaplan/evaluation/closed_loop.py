@@ -81,6 +81,13 @@ class ClosedLoopRun:
     alarm_pings: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, int))
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only view of the filter's array (a controller must not change the filter)."""
+    v = np.asarray(a).view()
+    v.flags.writeable = False
+    return v
+
+
 def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                     noise_rng: np.random.Generator, filter_rng: np.random.Generator,
                     n_particles: int = 5000, filter_q: float | None = None,
@@ -151,7 +158,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     def step(k: int, state: Any) -> tuple[np.ndarray, list[Measurement]]:
         nonlocal heading, pos
         belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
-                            particles=state.particles, weights=state.weights,
+                            particles=_read_only(state.particles),
+                            weights=_read_only(state.weights),
                             pings_used=len(pings), alarms=len(getattr(state, "log", ())))
         act = ctrl.act(belief, float(times[k]))
         u = float(act.turn_rate)

@@ -60,9 +60,10 @@ class BeliefView:
     position : ndarray, shape (2,)
         Own-ship position [m].
     particles : ndarray, shape (N, 4)
-        Particle filter's relative-state particles [m, m/s].
+        Particle filter's relative-state particles [m, m/s] (a read-only view in the
+        closed loop).
     weights : ndarray, shape (N,)
-        Normalised weights.
+        Normalised weights (read-only likewise).
     pings_used : int
         Pings emitted so far.
     alarms : int

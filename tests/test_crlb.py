@@ -365,3 +365,19 @@ def test_noise_std_of_the_wrong_length_names_the_field():
         crlb_from_data(constant_turn_model(), Z, bearings=[
             BearingData(times=t, observer_position=obs, sigma=SIG)], ranges=[
             RangeData(times=t[:5], observer_position=obs[:5], sigma=[1.0, 2.0])])
+
+
+def test_non_finite_fisher_information_is_an_observability_error():
+    # eigh ran before the finiteness check: an overflowed FIM raised numpy's LinAlgError
+    # (or was reported as "receives no information")
+    from tmaplan.bounds.crlb import _invert
+
+    fim = np.eye(4)
+    fim[1, 1] = np.inf
+    with pytest.raises(ObservabilityError, match=r"non-finite entries for 'y'"):
+        _invert(fim, ["x", "y", "vx", "vy"], np.ones(4))
+    fim[1, 1] = np.nan
+    with pytest.raises(ObservabilityError, match="non-finite"):
+        _invert(fim, ["x", "y", "vx", "vy"], np.ones(4))
+    cov, _ = _invert(np.diag([1.0, 4.0, 9.0, 16.0]), ["x", "y", "vx", "vy"], np.ones(4))
+    np.testing.assert_allclose(np.diag(cov), [1.0, 0.25, 1 / 9, 1 / 16])

@@ -198,3 +198,21 @@ def test_rng_must_be_a_generator(rng):
     """An int seed or None was an AttributeError deep in the sampling."""
     with pytest.raises(ArgumentError, match="field 'rng'"):
         monte_carlo_pcrb(load_problem("brehard2005-s1"), samples=10, rng=rng)
+
+
+def test_singular_lpc_recursion_is_an_observability_error(monkeypatch):
+    # the log-polar recursion's solve with J + D11 raised numpy's LinAlgError, not the
+    # documented ObservabilityError
+    from tmaplan.errors import ObservabilityError
+
+    sc = load_problem("ristic-bot-moderate")
+    solve = np.linalg.solve
+
+    def singular(a, b):
+        if np.shape(a) == (4, 4) and np.shape(b) == (4, 4):
+            raise np.linalg.LinAlgError("Singular matrix")
+        return solve(a, b)
+
+    monkeypatch.setattr(np.linalg, "solve", singular)
+    with pytest.raises(ObservabilityError, match="J \\+ D11 is singular at step 1"):
+        monte_carlo_pcrb(sc, samples=50, coords="lpc", rng=np.random.default_rng(0))

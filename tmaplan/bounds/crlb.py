@@ -154,9 +154,14 @@ def _invert(fim: np.ndarray, names: Sequence[str],
     receives only rounding-level information into a unit column.
     """
     diag = np.diag(fim)
+    if not np.all(np.isfinite(fim)):  # before eigh, which fails on them
+        bad = sorted({names[i] for i, j in zip(*np.nonzero(~np.isfinite(fim)))})
+        raise ObservabilityError(f"the Fisher information has non-finite entries for "
+                                 f"{', '.join(map(repr, bad))} (an overflow: a measurement "
+                                 "at zero range, or a huge time offset?)")
     fp = fim * physical[:, None] * physical[None, :]
     eig_p, vec_p = np.linalg.eigh(fp)
-    if np.any(diag <= 0.0) or not np.all(np.isfinite(fim)):
+    if np.any(diag <= 0.0):
         k = int(np.argmin(diag))
         raise ObservabilityError(
             f"parameter {names[k]!r} receives no information (FIM diagonal {diag[k]:.3g}); "

@@ -427,7 +427,10 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
             D12 = g1.T @ g2 / N
             D22 = g2.T @ g2 / N
             M = J + D11
-            J = D22 - D12.T @ np.linalg.solve(M, D12)
+            try:
+                J = D22 - D12.T @ np.linalg.solve(M, D12)
+            except np.linalg.LinAlgError as exc:  # the same solve, reported as documented
+                raise ObservabilityError(f"J + D11 is singular at step {t + 1}") from exc
         else:
             J = _inv_pd(Q + A @ cov[t] @ A.T, "predicted covariance", t + 1)
         J = J + measurement_information(Xn, t + 1, inp, coords)

@@ -72,6 +72,11 @@ def test_pi_ambiguous_likelihood_keeps_both_modes():
     near_wrap = np.array([1000.0 * np.sin(1.55), 1000.0 * np.cos(1.55), 0, 0])
     dens = np.exp(bearing_loglik(zz, near_wrap, 0.05, "pi"))
     assert np.trapezoid(dens, zz) == pytest.approx(1.0, abs=1e-6)
+    # a measured bearing given outside (−π/2, π/2] is the same ambiguous measurement: the
+    # back mode's 225° (= 45° mod π) missed the nearest wrap (d ± π) and had ≈ zero likelihood
+    for z_alt in (np.radians(225.0), np.radians(-135.0), np.radians(405.0)):
+        np.testing.assert_allclose(bearing_loglik(z_alt, np.stack([front, back]), 0.01, "pi"),
+                                   ll, rtol=1e-9)
 
 
 def test_turn_rate_track_is_exact_circle():

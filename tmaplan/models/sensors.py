@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tmaplan.geometry import Ambiguity, angle_diff, bearing_of, range_of
+from tmaplan.geometry import Ambiguity, angle_diff, bearing_of, range_of, wrap_half_angle
 
 __all__ = [
     "bearing_loglik",
@@ -60,7 +60,7 @@ def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
     Parameters
     ----------
     z : float or ndarray broadcastable to X[..., 0]
-        Measured bearing [rad].
+        Measured bearing [rad] (with ``"pi"``, any representative modulo π).
     X : ndarray, shape (..., 4)
     sigma : float
         [rad].
@@ -72,7 +72,9 @@ def bearing_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float,
     """
     b = bearing_of(X, ambiguity)
     if ambiguity == "pi":
-        d = np.asarray(z) - b
+        # the measured bearing is known modulo π: its representative in (−π/2, π/2] (the
+        # same value for a bearing already there), so that d ± π holds the nearest mode
+        d = wrap_half_angle(z) - b
         terms = np.stack([d, d - np.pi, d + np.pi], axis=0)
         ll = -0.5 * (terms / sigma) ** 2
         m = ll.max(axis=0)

@@ -37,9 +37,11 @@ Speed: the cloud is stored column-major and the batched kernels live in
 :mod:`tmaplan.estimators._pf_kernels` (O(N) systematic resampling, float32 Box–Muller noise).
 
 Degeneracy: when the effective sample size (ESS) falls below ``degeneracy_ess`` particles, or
-weights become non-finite, a :class:`DegeneracyWarning` is issued and the filter recovers by
-resampling and *roughening* (Gordon et al. 1993: Gaussian jitter scaled by the spread of the
-predicted cloud) instead of returning NaNs. The state records it in ``degenerate``.
+every weight becomes non-finite, a :class:`DegeneracyWarning` is issued and the filter recovers
+by resampling and *roughening* (Gordon et al. 1993: Gaussian jitter scaled by the spread of the
+predicted cloud) instead of returning NaNs. The state records it in ``degenerate``. Particles
+whose log-weight alone is NaN or infinite (e.g. one exactly at zero range) get weight zero;
+the warning follows only if the ESS of the rest is too small.
 """
 
 from __future__ import annotations

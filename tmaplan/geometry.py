@@ -209,8 +209,15 @@ def range_of(X: ArrayLike) -> FloatArray:
     -------
     ndarray or numpy scalar
         Ranges [m], shape (...).
+
+    Raises
+    ------
+    ValueError
+        If the last dimension is not 2 or 4 (as :func:`bearing_of`).
     """
     arr = np.asarray(X, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] not in (2, 4):
+        raise ValueError(f"X must have shape (..., 4) or (..., 2), got {arr.shape}")
     return _scalar_or_array(np.hypot(arr[..., 0], arr[..., 1]))
 
 

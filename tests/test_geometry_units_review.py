@@ -29,3 +29,25 @@ def test_range_of_valid_shapes_unchanged() -> None:
     assert range_of([3.0, 4.0, 1.0, 2.0]) == 5.0
     assert range_of(np.ones((2, 3, 4))).shape == (2, 3)
 
+
+@pytest.mark.parametrize("text, dimension", [("5 nm", "length"), ("12 nm/h", "speed"),
+                                             ("2 nm", "dimensionless")])
+def test_nm_is_refused_as_ambiguous(text: str, dimension: str) -> None:
+    # pint reads "nm" as the nanometre: "5 nm" of range silently became 5e-9 m
+    with pytest.raises(UnitError, match="nmi"):
+        to_si(text, dimension, "target.range")
+
+
+def test_nautical_miles_and_nanometres_spelled_out_still_work() -> None:
+    assert to_si("5 nmi", "length", "f") == 5 * 1852.0
+    assert to_si("12 nmi/h", "speed", "f") == pytest.approx(12 * 1852.0 / 3600.0)
+    assert to_si("5 nanometer", "length", "f") == pytest.approx(5e-9)
+
+
+@pytest.mark.parametrize("values", [types.MappingProxyType({"a": 1.0}), {1.0, 2.0},
+                                    frozenset({1.0})])
+def test_to_si_vector_refuses_mappings_and_sets(values: object) -> None:
+    # the docstring refuses a mapping; only a dict was; a set has no order
+    with pytest.raises(UnitError, match="field 'pos'"):
+        to_si_vector(values, "length", "pos")  # type: ignore[arg-type]
+

@@ -21,7 +21,8 @@ import functools
 import math
 import numbers
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING, Any, Final, cast
 
 from tmaplan.errors import UnitError
@@ -105,6 +106,10 @@ _QUANTITY_RE: Final[re.Pattern[str]] = re.compile(
 )
 
 
+# "nm": pint's nanometre, but a nautical mile to many a sailor ("5 nm" of range would be 5e-9 m)
+_AMBIGUOUS_NM_RE: Final[re.Pattern[str]] = re.compile(r"(?<![A-Za-z_])nm(?![A-Za-z_])")
+
+
 class _ParseError(Exception):
     """Internal: a string could not be converted; carries no field name."""
 
@@ -164,6 +169,9 @@ def _parse(text: str, dimension: str) -> float:
         unit = "1" + unit
     if not unit:
         value = magnitude
+    elif _AMBIGUOUS_NM_RE.search(unit):
+        raise _ParseError(f"unit {unit!r}: 'nm' is ambiguous (pint reads the nanometre); "
+                          "write 'nmi' for nautical miles or 'nanometer'")
     else:
         factor, root = _unit_factor(unit)
         if root != _si_root(dimension):
@@ -207,7 +215,9 @@ def to_si(value: Any, dimension: str, field: str) -> float:
     -----
     Strings are parsed once and cached, so repeated calls cost about a microsecond.
     An angular rate needs an explicit angle unit (``"rad/s"``, ``"deg/s"``, ``"rpm"``):
-    ``"1/s"`` and ``"Hz"`` are rejected because they are ambiguous by a factor 2π.
+    ``"1/s"`` and ``"Hz"`` are rejected because they are ambiguous by a factor 2π. For the
+    same reason ``"nm"`` (nanometre to pint, nautical mile to many) is rejected: write
+    ``"nmi"`` (or ``"nanometer"``).
 
     Examples
     --------
@@ -251,10 +261,11 @@ def to_si_vector(values: Iterable[Any], dimension: str, field: str) -> tuple[flo
     Raises
     ------
     tmaplan.errors.UnitError
-        If ``values`` is a string, a mapping or not iterable, or if any item is invalid.
+        If ``values`` is a string, a mapping, a set (no order) or not iterable, or if any
+        item is invalid.
     """
     _check_dimension(dimension)
-    if isinstance(values, str | bytes | dict) or not isinstance(values, Iterable):
+    if isinstance(values, str | bytes | Mapping | AbstractSet) or not isinstance(values, Iterable):
         raise UnitError(field, f"a list of {_expected(dimension)}", values)
     return tuple(to_si(item, dimension, f"{field}[{i}]") for i, item in enumerate(values))
 

@@ -51,3 +51,16 @@ def test_to_si_vector_refuses_mappings_and_sets(values: object) -> None:
     with pytest.raises(UnitError, match="field 'pos'"):
         to_si_vector(values, "length", "pos")  # type: ignore[arg-type]
 
+
+@pytest.mark.parametrize("name, expected", [
+    ("1e+06*range-bound", "1e+06*range-bound [m]"),
+    ("1e+06*range-bound+turn-penalty", "1e+06*range-bound [m] + turn-penalty [–]"),
+    ("2*mean-position-bound+1e+07*turn-penalty",
+     "2*mean-position-bound [m] + 1e+07*turn-penalty [–]"),
+    ("range-bound+turn-penalty", "range-bound [m] + turn-penalty [–]"),
+])
+def test_objective_label_keeps_exponent_weights(name: str, expected: str) -> None:
+    # Objective.__mul__ names a weight with format "g": 1e6 -> "1e+06", whose "+" was taken
+    # for a sum of terms ("1e [...] + 06*range-bound [m]")
+    assert objective_label(name) == expected
+

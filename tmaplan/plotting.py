@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -113,7 +114,8 @@ def objective_label(name: str) -> str:
     ``…position-bound``: m; ``relative…``: –) or none.
     """
     parts = []
-    for term in name.split("+"):
+    # a "+" after a digit and an "e" is a weight's exponent ("1e+06*range-bound"), not a sum
+    for term in re.split(r"(?<![0-9][eE])\+", name):
         base = term.split("*")[-1]
         unit = OBJECTIVE_UNITS.get(base)
         if unit is None:

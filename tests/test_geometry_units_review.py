@@ -64,3 +64,26 @@ def test_objective_label_keeps_exponent_weights(name: str, expected: str) -> Non
     # for a sum of terms ("1e [...] + 06*range-bound [m]")
     assert objective_label(name) == expected
 
+
+@pytest.mark.parametrize("kw, field", [
+    ({"n_steps": 10, "n_samples": 0}, "n_samples"),
+    ({"n_steps": 10, "n_samples": -2}, "n_samples"),
+    ({"n_steps": 10, "n_samples": 2.5}, "n_samples"),
+    ({"n_steps": -1, "n_samples": 1}, "n_steps"),
+    ({"n_steps": True, "n_samples": 1}, "n_steps"),
+])
+def test_param_layout_validates_its_sizes(kw: dict[str, object], field: str) -> None:
+    from tmaplan.planning.objectives import ParamLayout
+
+    # n_samples = 0 gave a layout of 4·0 samples while vector() packs one (the mean)
+    with pytest.raises(ArgumentError, match=field):
+        ParamLayout(**kw)  # type: ignore[arg-type]
+
+
+def test_objective_with_zero_samples_is_refused_by_name() -> None:
+    from tmaplan.planning.objectives import Objective, ObjectiveEvaluator, range_bound
+    from tmaplan.scenario import load_problem
+
+    with pytest.raises(ArgumentError, match="n_samples"):
+        ObjectiveEvaluator(load_problem("default"), Objective("rb", range_bound().terms, 0),
+                           n_steps=4)

@@ -33,7 +33,7 @@ from tmaplan.bounds.closed_form_engine import (
     pack_symmetric,
 )
 from tmaplan.bounds.fimdet import fim_bearings_generic, inverse_quadratic_generic, logdet_generic
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.scenario import RangeSensor
 
 if TYPE_CHECKING:
@@ -72,6 +72,13 @@ class ParamLayout:
 
     n_steps: int
     n_samples: int
+
+    def __post_init__(self) -> None:
+        # vector() packs at least one sample (the mean), so 0 samples would not fit the layout
+        if not is_integer(self.n_steps, 0):
+            raise ArgumentError("n_steps", "an integer >= 0", self.n_steps)
+        if not is_integer(self.n_samples, 1):
+            raise ArgumentError("n_samples", "an integer >= 1", self.n_samples)
 
     @property
     def size(self) -> int:

@@ -116,3 +116,19 @@ def test_prior_centre_ignores_a_bearing_known_modulo_pi() -> None:
     assert p is not None and p.bearing_mean is not None
     truth = float(bearing_of(np.array([3500.0, -3500.0])))
     assert abs(wrap_angle(p.bearing_mean - truth)) < 5 * p.bearing_std
+
+
+@pytest.mark.parametrize("kind", ["pf", "range-only"])
+def test_a_filter_with_another_time_step_is_refused(kind: str) -> None:
+    # Before: a configuration with dt = 1 s ran on the 6 s grid with the 1 s motion model.
+    from tmaplan.estimators import RangeOnlyConfig
+
+    sc = _short_straight((RangeSensor(sigma=100.0, every=1, first_step=0),))
+    sim = simulate(sc, np.random.default_rng(0))
+    cfg = (PFConfig(n_particles=50, dt=1.0, q=sc.target.q) if kind == "pf"
+           else RangeOnlyConfig(dt=1.0, q=sc.target.q))
+    with pytest.raises(ArgumentError) as info:
+        run(cfg, sc, sim, rng=np.random.default_rng(1))
+    assert info.value.field == "estimator.dt"
+    ok = dataclasses.replace(cfg, dt=sc.time.dt)  # type: ignore[type-var]
+    assert run(ok, sc, sim, rng=np.random.default_rng(1)).status in ("ok", "recovered")

@@ -386,8 +386,9 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
     Raises
     ------
     ArgumentError
-        Unknown name (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the
-        estimator applies to).
+        Unknown name, or a filter whose ``dt`` is not the scenario's time step
+        (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the estimator
+        applies to).
     """
     qf = float(scenario.target.q if q is None else q)
     if isinstance(estimator, str):
@@ -404,6 +405,11 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
     if not any(s.kind in est.applies_to for s in scenario.sensors):
         raise ScenarioError("sensors", f"a {' or '.join(sorted(est.applies_to))} sensor for "
                             f"the {est.name} estimator", None, source=scenario.name)
+    # A filter predicts one grid step with its own dt: another step is a wrong motion model.
+    dt = getattr(getattr(getattr(est, "filter", None), "config", None), "dt", None)
+    if dt is not None and not np.isclose(float(dt), scenario.time.dt, rtol=1e-9, atol=0.0):
+        raise ArgumentError("estimator.dt", f"the scenario's time step {scenario.time.dt:g} s "
+                            "(the filter predicts one grid step at a time)", dt)
     return est
 
 
@@ -429,7 +435,8 @@ def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyC
     n_particles : int
         PF only (when ``estimator`` is a name).
     q : float, optional
-        Filter process noise [m²/s³] (default: the scenario target's q).
+        Filter process noise [m²/s³] (default: the scenario target's q) when ``estimator`` is
+        a name (a configuration carries its own).
     r_min, r_max : float
         Range interval of the bearings-only initialisation [m] (brehard2004).
 
@@ -440,7 +447,8 @@ def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyC
     Raises
     ------
     ArgumentError
-        An unknown estimator, or ``rng`` neither a Generator nor None.
+        An unknown estimator, a filter whose ``dt`` is not the scenario's time step, or
+        ``rng`` neither a Generator nor None.
     """
     if rng is not None and not isinstance(rng, np.random.Generator):
         raise ArgumentError("rng", "a numpy.random.Generator or None", type(rng).__name__)

@@ -122,7 +122,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
 
     Fields of the polar prior that default to the truth (``bearing_mean``, ``range_mean``,
     ``speed_mean``, ``velocity_mean``) are replaced by a draw around the truth with the
-    prior's own std; the bearing mean is the measured bearing at step 0 when there is one.
+    prior's own std; the bearing mean is the measured bearing at step 0 when there is one
+    (from a sensor without ambiguity: a bearing known modulo π does not give the side).
     Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``.
     """
     from tmaplan.models.prior import true_initial_state
@@ -143,7 +144,9 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     if p.bearing_mean is None:
         z0 = None
         for ms in measurements or ():
-            if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0:
+            # A bearing known modulo π (in (−π/2, π/2]) does not say which side: not a centre.
+            if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0 \
+                    and getattr(scenario.sensors[ms.sensor], "ambiguity", "none") == "none":
                 z0 = float(ms.values[0])
         if z0 is None:
             z0 = float(bearing_of(rel) + p.bearing_std * rng.standard_normal())
@@ -207,7 +210,7 @@ class FilterEstimator:
         :class:`~tmaplan.estimators.range_only.RangeOnlyFilter`.
     init : {"prior", "bearings"}
         "prior": from the run's prior (:func:`run_prior`); "bearings": the particle filter from
-        the bearings-only batch initialisation (brehard2004).
+        the bearings-only batch initialisation (brehard2004) of the first bearing sensor.
     r_min, r_max : float
         Range interval of the bearings-only initialisation [m] (brehard2004).
     """
@@ -217,6 +220,10 @@ class FilterEstimator:
     r_min: float = 1000.0
     r_max: float = 40000.0
     bound: ClassVar[Literal["pcrb", "crlb"]] = "pcrb"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.init, str) or self.init not in ("prior", "bearings"):
+            raise ArgumentError("init", "'prior' or 'bearings'", self.init)
 
     @property
     def name(self) -> str:
@@ -235,28 +242,48 @@ class FilterEstimator:
 
     def estimate(self, scenario: Scenario, measurements: Sequence[MeasurementSet],
                  observer: ObserverTrack, rng: np.random.Generator) -> Track:
-        """Filter the run; NaN before the first estimate."""
+        """Filter the run; NaN before the first estimate.
+
+        From bearings, the filter starts at the batch centre (with the other sensors'
+        measurements there) and skips the batch's own bearings up to its end; measurements
+        before the centre are not used. Only :class:`DegeneracyWarning` s are counted (status
+        "recovered"); other warnings reach the caller.
+        """
         batches = measurement_batches(scenario, measurements, observer)
         dv = observer.velocity_increments
         details: Any = None
         k_end = 0
+        # Up to the end of the initialisation batch, the measurements not in it.
+        rest = batches
         with warnings.catch_warnings(record=True) as wlist:
             warnings.simplefilter("always", DegeneracyWarning)
             if self.init == "bearings":
-                state, k_end, details = self._from_bearings(scenario, measurements, dv, rng)
+                state, k_end, details, used = self._from_bearings(scenario, measurements, dv,
+                                                                  rng)
+                rest = measurement_batches(
+                    scenario, [ms for ms in measurements if ms is not used], observer)
+                # The batch holds the bearings of its centre, not the other sensors' there.
+                if rest.get(int(state.step)):
+                    state = self.filter.update(state, rest[int(state.step)], rng)
             else:
                 state = self.filter.init(run_prior(scenario, rng, measurements), rng)
                 state = self.filter.update(state, batches.get(0, []), rng)
 
             def step(k: int, _: Any) -> tuple[np.ndarray, list[Measurement]]:
-                # Before the end of the initialisation batch its bearings are already in.
-                ms = batches.get(k + 1, [])
-                return dv[k], ms if k >= k_end else [m for m in ms if m.kind != "bearing"]
+                # Up to the end of the initialisation batch its bearings are already in.
+                return dv[k], (batches if k >= k_end else rest).get(k + 1, [])
 
             first = int(state.step)
             fr = drive(self.filter, state, scenario.n_steps, step, rng)
+        # Count the degeneracy recoveries; hand every other warning on to the caller.
+        n_warn = 0
+        for w in wlist:
+            if issubclass(w.category, DegeneracyWarning):
+                n_warn += 1
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno,
+                                       source=w.source)
         ok = bool(np.isfinite(fr.estimates[first:]).all())
-        n_warn = len(wlist)
         return Track(estimator=self.name, times=scenario.times, estimates=fr.estimates,
                      covariances=fr.covariances, ess=fr.diagnostics, seconds=0.0,
                      status="failed" if not ok else ("recovered" if n_warn else "ok"),
@@ -265,12 +292,17 @@ class FilterEstimator:
                      first_step=first, details=details if details is not None else fr.state)
 
     def _from_bearings(self, scenario: Scenario, meas: Sequence[MeasurementSet],
-                       dv: np.ndarray, rng: np.random.Generator) -> tuple[Any, int, Any]:
-        """Particle cloud of the bearings-only initialisation, its batch end and details."""
+                       dv: np.ndarray, rng: np.random.Generator
+                       ) -> tuple[Any, int, Any, MeasurementSet]:
+        """Particle cloud of the bearings-only initialisation, its batch end, details and the
+        bearing set the batch is taken from."""
         if not isinstance(self.filter, ParticleFilter):
             raise ArgumentError("init", "'prior' for a filter other than the particle filter",
                                 self.init)
         b = [m for m in meas if m.kind == "bearing"]
+        if not b:
+            raise ArgumentError("measurements", "a bearing measurement set for the "
+                                "bearings-only initialisation", sorted({m.kind for m in meas}))
         steps, z = b[0].steps, b[0].values
         config = self.filter.config
         # The batch must not straddle an observer manoeuvre (eq. 13 assumes none).
@@ -283,7 +315,7 @@ class FilterEstimator:
             dt=config.dt * float(np.median(np.diff(steps))) if steps.size > 1 else None,
             ambiguity=getattr(scenario.sensors[b[0].sensor], "ambiguity", "none"))
         state = self.filter.from_particles(res.particles, step=int(steps[res.centre_index]))
-        return state, int(steps[res.end_index]), res
+        return state, int(steps[res.end_index]), res, b[0]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -354,8 +386,9 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
     Raises
     ------
     ArgumentError
-        Unknown name (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the
-        estimator applies to).
+        Unknown name, or a filter whose ``dt`` is not the scenario's time step
+        (:class:`~tmaplan.errors.ScenarioError`: a scenario without a sensor the estimator
+        applies to).
     """
     qf = float(scenario.target.q if q is None else q)
     if isinstance(estimator, str):
@@ -372,6 +405,11 @@ def estimator_for(estimator: EstimatorName | Estimator | PFConfig | MLEConfig
     if not any(s.kind in est.applies_to for s in scenario.sensors):
         raise ScenarioError("sensors", f"a {' or '.join(sorted(est.applies_to))} sensor for "
                             f"the {est.name} estimator", None, source=scenario.name)
+    # A filter predicts one grid step with its own dt: another step is a wrong motion model.
+    dt = getattr(getattr(getattr(est, "filter", None), "config", None), "dt", None)
+    if dt is not None and not np.isclose(float(dt), scenario.time.dt, rtol=1e-9, atol=0.0):
+        raise ArgumentError("estimator.dt", f"the scenario's time step {scenario.time.dt:g} s "
+                            "(the filter predicts one grid step at a time)", dt)
     return est
 
 
@@ -397,14 +435,23 @@ def run(estimator: EstimatorName | Estimator | PFConfig | MLEConfig | RangeOnlyC
     n_particles : int
         PF only (when ``estimator`` is a name).
     q : float, optional
-        Filter process noise [m²/s³] (default: the scenario target's q).
+        Filter process noise [m²/s³] (default: the scenario target's q) when ``estimator`` is
+        a name (a configuration carries its own).
     r_min, r_max : float
         Range interval of the bearings-only initialisation [m] (brehard2004).
 
     Returns
     -------
     Track
+
+    Raises
+    ------
+    ArgumentError
+        An unknown estimator, a filter whose ``dt`` is not the scenario's time step, or
+        ``rng`` neither a Generator nor None.
     """
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise ArgumentError("rng", "a numpy.random.Generator or None", type(rng).__name__)
     meas, obs = _observer_of(scenario, measurements, observer)
     est = estimator_for(estimator, scenario, n_particles=n_particles, q=q, r_min=r_min,
                         r_max=r_max)

@@ -87,3 +87,16 @@ def test_objective_with_zero_samples_is_refused_by_name() -> None:
     with pytest.raises(ArgumentError, match="n_samples"):
         ObjectiveEvaluator(load_problem("default"), Objective("rb", range_bound().terms, 0),
                            n_steps=4)
+
+
+def test_weighted_sum_objective_is_named_by_its_terms() -> None:
+    # 2 * (a + b) was named "2*range-bound+logdet", which reads (and is labelled) as 2a + b
+    from tmaplan.planning.objectives import make_objective
+
+    a, b = make_objective("range-bound"), make_objective("logdet")
+    assert (2 * (a + b)).name == "2*range-bound+2*logdet"
+    assert (2 * a).name == "2*range-bound"
+    assert (3 * (1e6 * a + b)).name == "3*1e+06*range-bound+3*logdet"
+    assert objective_label((2 * (a + b)).name).count("2*") == 2
+    # the value was right all along: the weights are on the terms
+    assert [w for w, _ in (2 * (a + 0.5 * b)).terms] == [2.0, 1.0]

@@ -25,6 +25,7 @@ cannot drift apart.
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal, get_args
 
@@ -153,8 +154,11 @@ class Objective:
                          max(self.n_samples, other.n_samples))
 
     def __mul__(self, w: float) -> Objective:
-        return Objective(f"{w:g}*{self.name}", tuple((w * a, f) for a, f in self.terms),
-                         self.n_samples)
+        # a sum's weight goes to each term ("2*(a+b)" is named "2*a+2*b", not "2*a+b"); a
+        # "+" after a digit and an "e" is a weight's exponent ("1e+06*a"), not a sum
+        terms = re.split(r"(?<![0-9][eE])\+", self.name)
+        name = "+".join(f"{w:g}*{t}" for t in terms)
+        return Objective(name, tuple((w * a, f) for a, f in self.terms), self.n_samples)
 
     __rmul__ = __mul__
 

@@ -259,6 +259,8 @@ def test_rank_costs_cli_json(tmp_path):
     assert "Rank correlations" in text
     # display units and the small-sample warning (2 runs), no SI candidate names
     assert "final range RMSE [km]" in text and "Warning: small sample" in text
+    # the ranking's intervals are bootstrap intervals of rank correlations, not t intervals
+    assert "runs per candidate" in text and "degree(s) of freedom" not in text
     assert not re.search(r"@\d+(\.\d+)?s<", text) and "np.float64(" not in text
 
 

@@ -102,6 +102,9 @@ def test_small_sample_warnings(one_run, three_runs):
     assert "undefined (no spread" in sample_warning(1)
     assert "2 degree(s) of freedom" in sample_warning(3)
     assert sample_warning(10) == ""
+    ranking = sample_warning(3, ranking=True)
+    assert "3 Monte Carlo runs per candidate" in ranking and "bootstrap" in ranking
+    assert "degree(s) of freedom" not in ranking and sample_warning(10, ranking=True) == ""
     text = differences_html(one_run)
     assert "undefined (1 run)" in text and "interval undefined" in text
     assert "no confidence interval with a single run" in text and "better than" not in text

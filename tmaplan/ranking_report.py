@@ -139,7 +139,7 @@ bootstrap percentile 95 % (runs and candidates resampled). Default objective of
 <code>tmaplan plan</code>: <code>{html.escape(result.default_objective)}</code>; of the
 closed-loop policies: <code>{html.escape(result.closed_loop_objective)}</code>.</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
-{sample_warning(spec.runs)}
+{sample_warning(spec.runs, ranking=True)}
 <h2>Rank correlations</h2>
 <table><tr><th>cost</th><th>Spearman ρ (time to accuracy)</th><th>95 % CI</th>
 <th>Kendall τ</th><th>Spearman ρ (final range RMSE)</th><th>95 % CI</th></tr>{rows}</table>

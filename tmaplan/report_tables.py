@@ -37,18 +37,27 @@ def _metric(metric: str) -> tuple[str, float, str]:
     return _METRICS.get(metric, (metric.replace("_", " "), 1.0, ""))
 
 
-def sample_warning(runs: int) -> str:
-    """HTML paragraph warning about too few runs ("" from :data:`FEW_RUNS` runs on)."""
+def sample_warning(runs: int, *, ranking: bool = False) -> str:
+    """HTML paragraph warning about too few runs ("" from :data:`FEW_RUNS` runs on).
+
+    ``ranking``: the runs are per candidate of a cost ranking (bootstrap intervals of rank
+    correlations), not the paired runs of a comparison (t intervals of differences)."""
     if runs >= FEW_RUNS:
         return ""
-    what = ("with a single run the confidence intervals of the paired differences are "
-            "undefined (no spread to estimate)" if runs < 2 else
-            f"with {runs} runs the 95 % intervals rest on {runs - 1} degree(s) of freedom and "
-            "are wide")
+    if ranking:
+        what = ("each candidate's Monte Carlo metrics rest on so few runs that the rank "
+                "correlations mostly measure their noise, and the bootstrap intervals are wide")
+        treat = "every correlation"
+    else:
+        what = ("with a single run the confidence intervals of the paired differences are "
+                "undefined (no spread to estimate)" if runs < 2 else
+                f"with {runs} runs the 95 % intervals rest on {runs - 1} degree(s) of freedom "
+                "and are wide")
+        treat = "every difference"
     return ("<p class='warning'><strong>Warning: small sample.</strong> "
-            f"This report has {runs} Monte Carlo run{'s' if runs != 1 else ''}: {what}. Treat "
-            f"every difference as indicative; use at least {FEW_RUNS} runs (30 or more for "
-            "conclusions).</p>")
+            f"This report has {runs} Monte Carlo run{'s' if runs != 1 else ''}"
+            f"{' per candidate' if ranking else ''}: {what}. Treat {treat} as indicative; use "
+            f"at least {FEW_RUNS} runs (30 or more for conclusions).</p>")
 
 
 def _ci(d: PairedDifference, unit: float, u: str) -> str:

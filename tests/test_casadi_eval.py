@@ -59,5 +59,8 @@ def test_planner_plan_function_matches_dm_call():
     P = np.concatenate([pl._parameters(b, ()), [0.0, pl.speed0, 1.0, 1.0]])
     x = pl._guesses(0.0, pl.speed0)[1][0]
     ref = [np.asarray(o.full()) for o in pl._f_eval.fn(x, P)]
-    for g, r in zip(pl._f_eval(x, P), ref):
+    got = pl._f_eval(x, P)
+    assert len(ref) == pl._f_eval.fn.n_out() >= 4  # objective, bound, track, constraints
+    for g, r in zip(got, ref, strict=True):
+        assert g.shape == r.shape
         np.testing.assert_array_equal(g, r)

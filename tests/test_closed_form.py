@@ -361,7 +361,8 @@ def test_compiled_paths_equal_reference_paths():
     K = ref.n_steps
     U = _schedules(K, np.random.default_rng(5))
     for u in (None, U[0], U[61]):
-        for a, b in zip(fast.evaluate(u, backend="compiled"), ref.evaluate(u, backend="casadi")):
+        for a, b in zip(fast.evaluate(u, backend="compiled"), ref.evaluate(u, backend="casadi"),
+                        strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-10, atol=0)
     full = ref.evaluate_schedules(U, backend="numpy")
     assert np.all(np.diff(full[60]) != 0) and full.shape == (301, K + 1)

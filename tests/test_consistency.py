@@ -159,7 +159,7 @@ def test_ping_gate_and_config_validation():
     far = Measurement(kind="range", value=13_000.0, sigma=50.0, ping=True)
     assert np.array_equal(pf.update(st, [far], np.random.default_rng(9)).particles, st.particles)
     for kw in ({"bearing_clutter": 1.0}, {"ping_gate": 0.0}):
-        with pytest.raises(ArgumentError):
+        with pytest.raises(ArgumentError, match=f"field '{next(iter(kw))}'"):
             PFConfig(n_particles=10, dt=1.0, q=0.0, **kw)
     with pytest.raises(ArgumentError, match="alpha"):
         MonitorConfig(alpha=0.0)

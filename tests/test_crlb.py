@@ -76,7 +76,7 @@ def test_file002_tables(key):
     ours = (res.std_of("x_final") / 1e3, res.std_of("y_final") / 1e3,
             res.std_of("radius") / 1e3, res.std_of("phase") / DEG,
             res.std_of("omega") / DEG, res.final_range_std / 1e3)
-    for o, printed in zip(ours, TABLES[key]):
+    for o, printed in zip(ours, TABLES[key], strict=True):
         if printed is not None:
             assert _close(o, *printed), (name, n_lines, o, printed)
     # the built-in problem file gives the same numbers

@@ -273,7 +273,7 @@ def test_bad_inputs():
     rel0[4] = 0.0
     with pytest.raises(ObservabilityError, match="observer is at the target"):
         logdet_fim_bearings(rel0, t, 0.01)
-    with pytest.raises(ArgumentError):
+    with pytest.raises(ArgumentError, match=r"field 'n'.*\[4, 5, 6, 8\].*received 7"):
         single_leg_det(0.1, 7)
 
 

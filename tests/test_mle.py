@@ -46,7 +46,7 @@ def test_crlb_reproduces_paper_tables(name: str, nf: int, paper: list) -> None:
     # Half a unit of the last printed digit (km with 2 decimals, degrees with 2, °/s with 3;
     # 4 for the corrected 0.0077), added to the ±3 % reconstruction tolerance.
     half_unit = [5.0, 5.0, 5.0, 0.005, 0.00005 if nf == 1 else 0.0005, 5.0]
-    for got, want, hu in zip(sd, paper, half_unit):
+    for got, want, hu in zip(sd, paper, half_unit, strict=True):
         if want is None:
             continue
         assert abs(got - want) <= 0.03 * want + hu, (got, want)

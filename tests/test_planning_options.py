@@ -68,13 +68,15 @@ def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
 
     _PLANNER_CACHE.clear()
     calls = {"n": 0}
+    plans = []
     real = HP.solve
 
     def flaky(self, *a, **kw):
         calls["n"] += 1
         if calls["n"] >= 2:  # every re-plan after the first fails
             raise PlanningError("simulated solver failure (status 'Maximum_Iterations')")
-        return real(self, *a, **kw)
+        plans.append(real(self, *a, **kw))
+        return plans[-1]
 
     monkeypatch.setattr(HP, "solve", flaky)
     s = default.replace(time=dataclasses.replace(default.time, horizon=900.0))
@@ -88,7 +90,14 @@ def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
     log = res.replans
     assert len(log) == 3 and log[0]["success"] and not log[1]["success"]
     assert "Maximum_Iterations" in log[1]["status"]
-    # after the failures the controller keeps flying the first plan's turn rates
-    first = np.asarray(res.turn_rate)
-    assert np.any(first[20:] != 0.0) or np.all(first == 0.0)
+    # after the failures the controller keeps flying the first plan's turn rates: at every
+    # step the rate of the first plan's control interval holding it (clipped to the limit)
+    (first,) = plans
+    interval = first.times[1] - first.times[0]
+    idx = ((s.times[:-1] - first.times[0]) // interval).astype(int)
+    assert idx[-1] < first.turn_rate.size  # the first plan covers the whole run
+    u_max = s.observer.turn_rate_max
+    np.testing.assert_allclose(res.turn_rate, np.clip(first.turn_rate[idx], -u_max, u_max),
+                               rtol=0, atol=1e-12)
+    assert np.ptp(res.turn_rate[20:]) > 0  # not a constant rate held from the last re-plan
     assert np.all(np.isfinite(res.estimate))

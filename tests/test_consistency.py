@@ -250,3 +250,21 @@ def test_monitor_config_refuses_non_finite_and_bool_values(field, value):
     gave NaN / shrunk rejuvenated speeds; True was taken as the integer 1."""
     with pytest.raises(ArgumentError, match=rf"monitor\.{field}"):
         MonitorConfig(**{field: value})
+
+
+def test_recovery_uses_the_prior_of_its_own_run():
+    # the monitor kept the scenario of its last init on the object: a state of an earlier
+    # scenario was rejuvenated within the later scenario's prior support
+    rng = np.random.default_rng(0)
+    bow, default = load_problem("bow-closing"), load_problem("default")
+    assert (bow.prior.range_min, bow.prior.range_max) == (16_000.0, 32_000.0)
+    assert default.prior.range_min == 5_000.0
+    pf = ParticleFilter(PFConfig(n_particles=3000, dt=bow.time.dt, q=bow.target.q))
+    mf = MonitoredFilter(pf, MonitorConfig())
+    st = mf.init(bow, rng)
+    mf.init(default, rng)  # the same filter object, another scenario
+    st = dataclasses.replace(st, history=((st.inner, np.zeros(2), st.velocity, ()),))
+    rec = mf._recover(st, rng, None, lost=True)
+    r = np.hypot(rec.inner.particles[:, 0], rec.inner.particles[:, 1])
+    # one 15-s step from the bow-closing support [16, 32] km (targets below 16 kn)
+    assert r.min() > 15_500.0

@@ -298,6 +298,8 @@ class MonitoredState:
         One entry per alarm: step, test, statistic, threshold, recovered.
     quiet : int
         Steps left without tests after a recovery.
+    prior : Prior or None
+        The scenario's prior (:meth:`MonitoredFilter.init`): the support of rejuvenation.
     """
 
     inner: Any
@@ -312,6 +314,7 @@ class MonitoredState:
     recoveries: int = 0
     log: tuple[dict[str, Any], ...] = ()
     quiet: int = 0
+    prior: Any = None
 
     @property
     def step(self) -> int:
@@ -362,14 +365,12 @@ class MonitoredFilter:
         if isinstance(inner, ParticleFilter):
             self._boosted = ParticleFilter(dataclasses.replace(
                 inner.config, q=inner.config.q * self.config.q_boost))
-        self._scenario: Scenario | None = None
 
     def init(self, scenario: Scenario, rng: np.random.Generator) -> MonitoredState:
         """The inner filter's initial state, the observer's initial velocity."""
         from tmaplan.models.target import initial_velocity
 
-        self._scenario = scenario
-        return MonitoredState(inner=self.inner.init(scenario, rng),
+        return MonitoredState(inner=self.inner.init(scenario, rng), prior=scenario.prior,
                               velocity=np.asarray(initial_velocity(scenario.observer), float))
 
     def wrap(self, inner_state: Any, observer_velocity: np.ndarray) -> MonitoredState:
@@ -466,7 +467,7 @@ class MonitoredFilter:
 
     # -- recovery ------------------------------------------------------------------------------
     def _rejuvenate(self, inner: Any, vbar: np.ndarray, rng: np.random.Generator,
-                    lost: bool) -> Any:
+                    lost: bool, prior: Any) -> Any:
         """Resampled cloud in which a fraction of particles, of total weight
         ``rejuvenation_weight``, carries new velocities (and, if ``lost``, new ranges)."""
         cfg, pf = self.config, self.inner
@@ -478,7 +479,7 @@ class MonitoredFilter:
         nr = ((u >= cfg.velocity_fraction) & (u < cfg.velocity_fraction + cfg.range_fraction)
               if lost else np.zeros(n, bool))
         if lost:  # velocities from the prior, ranges on the line of sight
-            speed_max, r_lo, r_hi = self._support(X)
+            speed_max, r_lo, r_hi = self._support(X, prior)
             sp = speed_max * np.sqrt(rng.random(nv.sum()))  # uniform on the speed disc
             b = np.arctan2(X[nr, 0], X[nr, 1])
             r = rng.uniform(r_lo, r_hi, nr.sum())
@@ -496,11 +497,10 @@ class MonitoredFilter:
                       np.log((1.0 - cfg.rejuvenation_weight) / max(n - k, 1)))
         return pf.from_particles(X, step=int(inner.step), log_weights=lw)
 
-    def _support(self, X: np.ndarray) -> tuple[float, float, float]:
+    def _support(self, X: np.ndarray, p: Any) -> tuple[float, float, float]:
         """Target speed bound [m/s] and range support [m] for rejuvenation: the prior's if it
         gives them, else from the cloud."""
         r = np.hypot(X[:, 0], X[:, 1])
-        p = self._scenario.prior if self._scenario is not None else None
         speed_max = (p.speed_max if p is not None and p.speed_max is not None
                      else 2.0 * float(np.median(np.hypot(X[:, 2], X[:, 3]))) + 5.0)
         r_med = float(np.median(r))
@@ -514,7 +514,7 @@ class MonitoredFilter:
         back) and filter forward again with boosted process noise."""
         hist = state.history[-(self.config.lookback if onset is None else max(int(onset), 1)):]
         post, _, vbar, _ = hist[0]
-        inner = self._rejuvenate(post, vbar, rng, lost=lost)
+        inner = self._rejuvenate(post, vbar, rng, lost=lost, prior=state.prior)
         for _, dv, _, meas in hist:
             inner = self._boosted.predict(inner, dv, rng)
             inner = self._boosted.update(inner, meas, rng)

@@ -68,5 +68,21 @@ def test_as_real_turns_what_is_not_a_real_number_into_nan():
     from tmaplan.errors import as_real
 
     assert as_real(2) == 2.0 and as_real(np.float32(0.5)) == 0.5 and as_real(-1e300) == -1e300
-    for bad in (True, False, "0.1", b"1", None, [1.0], object()):
+    for bad in (True, False, np.True_, "0.1", b"1", None, [1.0], object()):
         assert math.isnan(as_real(bad)), bad
+
+
+def test_finite_real_names_the_field_and_keeps_the_bounds():
+    import numpy as np
+
+    from tmaplan.errors import finite_real
+
+    assert finite_real("dt", np.float64(15), "a finite number > 0", lower=0.0, strict=True) == 15
+    assert finite_real("q", 0, "a finite number >= 0", lower=0.0) == 0.0
+    assert finite_real("t_ref", -1e9, "a finite time [s]") == -1e9
+    for value, kw in ((0.0, {"lower": 0.0, "strict": True}), (-1e-12, {"lower": 0.0}),
+                      (float("nan"), {}), (float("inf"), {}), (True, {}), ("1", {})):
+        with pytest.raises(ArgumentError) as exc:
+            finite_real("dt", value, "a finite number", source="default", **kw)
+        assert str(exc.value) == (f"default: field 'dt': expected a finite number, received "
+                                  f"{value!r}")

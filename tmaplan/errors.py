@@ -7,6 +7,7 @@ Messages name the offending field, the expected value and the received value.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 __all__ = [
@@ -18,6 +19,8 @@ __all__ = [
     "SolverError",
     "TmaplanError",
     "UnitError",
+    "as_real",
+    "finite_real",
     "is_integer",
 ]
 
@@ -117,11 +120,22 @@ def as_real(value: Any) -> float:
     conversion behind the real-valued checks of user input, so that the callers' finiteness
     tests refuse what ``float()`` would have accepted (``float("0.1")``, ``float(True)``) or
     raised on."""
-    import math
+    import numpy as np
 
-    if isinstance(value, bool | str | bytes):
+    if isinstance(value, bool | np.bool_ | str | bytes):
         return math.nan
     try:
         return float(value)
     except (TypeError, ValueError):
         return math.nan
+
+
+def finite_real(field: str, value: Any, expected: str, *, lower: float = -math.inf,
+                strict: bool = False, source: str | None = None) -> float:
+    """``value`` as a finite float ``>= lower`` (``> lower`` if ``strict``), else
+    :class:`ArgumentError` naming ``field``, ``expected`` and the received value: the one
+    check behind the finite real arguments (through :func:`as_real`)."""
+    v = as_real(value)
+    if not (math.isfinite(v) and (v > lower if strict else v >= lower)):
+        raise ArgumentError(field, expected, value, source=source)
+    return v

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds._lpc_terms import ldl
-from tmaplan.errors import ArgumentError, ObservabilityError, as_real, is_integer
+from tmaplan.errors import ArgumentError, ObservabilityError, as_real, finite_real, is_integer
 
 __all__ = [
     "SINGLE_LEG_COEFFICIENTS",
@@ -77,6 +77,9 @@ MAX_SUBSET_SAMPLES = 60
 # --------------------------------------------------------------------------------------------
 
 
+#: What a ``t_ref`` argument must be.
+_T_REF = "a finite reference time [s]"
+
 def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndarray, ...]:
     rel = np.asarray(rel_pos, dtype=float)
     t = np.asarray(times, dtype=float)
@@ -103,13 +106,6 @@ def _check_bearing_inputs(rel_pos: Any, times: Any, sigma: Any) -> tuple[np.ndar
         raise ObservabilityError("the observer is at the target (zero range): the bearing is "
                                  "undefined")
     return rel, t, s, r2
-
-
-def _check_t_ref(t_ref: Any) -> float:
-    tr = as_real(t_ref)
-    if not np.isfinite(tr):
-        raise ArgumentError("t_ref", "a finite reference time [s]", t_ref)
-    return tr
 
 
 def _rows(rel: np.ndarray, tau: np.ndarray, s: np.ndarray, r2: np.ndarray) -> np.ndarray:
@@ -140,9 +136,10 @@ def fim_bearings(rel_pos: Any, times: Any, sigma: Any, *, t_ref: float = 0.0) ->
         [1/m², 1/(m·m/s), 1/(m/s)²].
     """
     rel, t, s, _ = _check_bearing_inputs(rel_pos, times, sigma)
+    tr = finite_real("t_ref", t_ref, _T_REF)
     steps = (-1,) + (1,) * (rel.ndim - 2)  # steps along axis 0, batch axes after
     F = fim_bearings_generic(np.moveaxis(rel[..., 0], -1, 0), np.moveaxis(rel[..., 1], -1, 0),
-                             (t - _check_t_ref(t_ref)).reshape(steps),
+                             (t - tr).reshape(steps),
                              (1.0 / s**2).reshape(steps))
     return np.moveaxis(np.array(F), (0, 1), (-2, -1))
 
@@ -172,7 +169,7 @@ def logdet_fim_bearings(rel_pos: Any, times: Any, sigma: Any, *,
         ``log det F`` (F in SI units); ``-inf`` when F is exactly singular.
     """
     rel, t, s, r2 = _check_bearing_inputs(rel_pos, times, sigma)
-    tr = 0.5 * (t[0] + t[-1]) if t_ref is None else _check_t_ref(t_ref)
+    tr = 0.5 * (t[0] + t[-1]) if t_ref is None else finite_real("t_ref", t_ref, _T_REF)
     rows = _rows(rel, t - tr, s, r2)
     norms = np.sqrt(np.sum(rows * rows, axis=-2))  # (..., 4)
     safe = np.where(norms > 0, norms, 1.0)

@@ -8,8 +8,6 @@ particles.
 from __future__ import annotations
 
 import functools
-import math
-import numbers
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -40,16 +38,6 @@ def _rows(X: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # Input validation
 # --------------------------------------------------------------------------------------------
-
-
-def _check_real(field: str, value: Any, lower: float, strict: bool = False) -> None:
-    """ArgumentError unless ``value`` is a finite real (not a bool) ≥ ``lower`` (> if strict)."""
-    ok = (isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
-          and math.isfinite(value)
-          and (float(value) > lower if strict else float(value) >= lower))
-    if not ok:
-        raise ArgumentError(field, f"a finite number {'>' if strict else '>='} {lower:g}",
-                            value)
 
 
 def _check_measurement(m: Any) -> None:

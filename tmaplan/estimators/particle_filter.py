@@ -55,10 +55,9 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, finite_real, is_integer
 from tmaplan.estimators._pf_kernels import (
     _check_measurement,
-    _check_real,
     _dynamics,
     _ess,
     _frequency_update,
@@ -166,17 +165,15 @@ class PFConfig:
                                 self.bearing_clutter)
         if self.ping_gate is not None and not self.ping_gate > 0:
             raise ArgumentError("ping_gate", "> 0 (in σ) or None", self.ping_gate)
-        if not isinstance(self.n_particles, int | np.integer) or self.n_particles < 2:
+        if not is_integer(self.n_particles, 2):
             raise ArgumentError("n_particles", "an integer >= 2", self.n_particles)
-        _check_real("dt", self.dt, 0.0, strict=True)  # [s]
-        _check_real("q", self.q, 0.0)  # [m²/s³]
-        for name in ("bandwidth_scale", "degeneracy_ess", "roughening", "move_scale"):
-            _check_real(name, getattr(self, name), 0.0)
+        finite_real("dt", self.dt, "a finite number > 0", lower=0.0, strict=True)  # [s]
+        for name in ("q", "bandwidth_scale", "degeneracy_ess", "roughening", "move_scale"):
+            finite_real(name, getattr(self, name), "a finite number >= 0", lower=0.0)
         if self.variant not in ("bootstrap", "regularised", "resample-move"):
             raise ArgumentError("variant", "'bootstrap', 'regularised' or 'resample-move'",
                                 self.variant)
-        if (not isinstance(self.move_steps, int | np.integer) or isinstance(self.move_steps, bool)
-                or self.move_steps < 0):
+        if not is_integer(self.move_steps, 0):
             raise ArgumentError("move_steps", "an integer >= 0", self.move_steps)
         if not 0.0 <= self.ess_threshold <= 1.0:
             raise ArgumentError("ess_threshold", "in [0, 1]", self.ess_threshold)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError, PlanningError, as_real
+from tmaplan.errors import ArgumentError, PlanningError, as_real, finite_real
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
@@ -91,14 +91,6 @@ def _rate(scenario: Scenario, turn_rate: float | None) -> float:
     return float(limit)
 
 
-def _finite(field: str, value: float, unit: str) -> float:
-    """``value`` as a float, or ArgumentError naming ``field`` if it is not a finite real
-    (a NaN angle or time would give a NaN track, or no turn at all, without a word)."""
-    if not np.isfinite(v := as_real(value)):
-        raise ArgumentError(field, f"a finite {unit}", value)
-    return v
-
-
 def _course_program(times: np.ndarray, courses: Sequence[tuple[float, float]], heading0: float,
                     rate: float, dt: float) -> np.ndarray:
     """Turn rates (K,) steering at ``rate`` towards course c from time t, for (t, c) pairs."""
@@ -130,8 +122,8 @@ def single_turn_track(scenario: Scenario, angle: float, time: float, *,
                       speed: float | None = None, position0: Any = None,
                       turn_rate: float | None = None, t0: float | None = None) -> ObserverTrack:
     """One course change of ``angle`` [rad] (+ starboard) starting ``time`` [s] after t0."""
-    angle = _finite("angle", angle, "angle [rad]")
-    time = _finite("time", time, "time [s] after t0")
+    angle = finite_real("angle", angle, "a finite angle [rad]")
+    time = finite_real("time", time, "a finite time [s] after t0")
     h, s, p = _start(scenario, heading0, speed, position0)
     K = scenario.time.n_steps if n_steps is None else int(n_steps)
     dt = scenario.time.dt
@@ -150,9 +142,9 @@ def course_program_track(scenario: Scenario, courses: Sequence[tuple[float, floa
     dt = scenario.time.dt
     prog, prev = [], h
     for i, (t, c) in enumerate(courses):
-        t = _finite(f"courses[{i}].time", t, "time [s] after t0")
-        prev = prev + float(wrap_angle(_finite(f"courses[{i}].course", c, "course [rad]")
-                                       - prev))
+        t = finite_real(f"courses[{i}].time", t, "a finite time [s] after t0")
+        c = finite_real(f"courses[{i}].course", c, "a finite course [rad]")
+        prev = prev + float(wrap_angle(c - prev))
         prog.append((t, prev))
     u = _course_program(dt * np.arange(K + 1), prog, h, _rate(scenario, None), dt)
     return turn_rate_track(p, h, s, u, dt, scenario.time.t0)
@@ -172,7 +164,7 @@ def zigzag_track(scenario: Scenario, leg_duration: float, angle: float, *,
     if not (np.isfinite(leg := as_real(leg_duration)) and leg >= dt):
         raise ArgumentError("leg_duration", f"a finite time >= one step (dt = {dt:g} s)",
                             leg_duration)
-    angle = _finite("angle", angle, "angle [rad]")
+    angle = finite_real("angle", angle, "a finite angle [rad]")
     leg_duration = leg
     h, s, p = _start(scenario, heading0, speed, position0)
     K = scenario.time.n_steps if n_steps is None else int(n_steps)

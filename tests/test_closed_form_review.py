@@ -203,3 +203,15 @@ def test_lpc_prior_information_weights_are_checked(short_s1, w):
     X = prepare(short_s1, prior_samples=2000).prior_subsample[:200]
     with pytest.raises(ArgumentError, match="'weights'"):
         lpc_prior_information(X, w)
+
+
+def test_information_rates_of_a_subset_of_the_sensors():
+    # the one per-step information function also serves the passive/active range split
+    sc = load_problem("sharma2024-range-only")
+    b_all, r_all = information_rates(sc)
+    rng_sensors = [s for s in sc.sensors if s.kind == "range"]
+    b_r, r_r = information_rates(sc, sensors=rng_sensors)
+    assert not b_r.any() and np.array_equal(r_r, r_all) and r_all.any()
+    b_b, r_b = information_rates(sc, sensors=[s for s in sc.sensors if s.kind == "bearing"])
+    assert np.array_equal(b_b, b_all) and b_all.any() and not r_b.any()
+    assert not any(x.any() for x in information_rates(sc, sensors=[]))

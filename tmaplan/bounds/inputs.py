@@ -167,9 +167,9 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
     active = [s for s in sensors if s.active]
     sigma = float((active or sensors)[0].sigma) if sensors else None
-    weight = _range_weights([s for s in sensors if not s.active], scenario.time)
+    weight = information_rates(scenario, sensors=[s for s in sensors if not s.active])[1]
     if ping_steps is None:
-        pings = _range_weights(active, scenario.time)
+        pings = information_rates(scenario, sensors=active)[1]
         return np.flatnonzero(pings > 0), weight + pings, sigma
     steps = check_ping_steps(ping_steps, K, source=scenario.name)
     if steps.size and sigma is None:
@@ -179,15 +179,6 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     if sigma is not None:
         weight[steps] += 1.0 / sigma**2
     return steps, weight, sigma
-
-
-def _range_weights(sensors: Sequence[RangeSensor], grid: TimeGrid) -> np.ndarray:
-    """Σ 1/σ_r² of ``sensors`` at each step k = 0..K of ``grid`` [m⁻²], shape (K + 1,)."""
-    w = np.zeros(grid.n_steps + 1)
-    for s in sensors:
-        st = measurement_steps(s, grid)
-        np.add.at(w, st[(st >= 0) & (st <= grid.n_steps)], 1.0 / float(s.sigma) ** 2)
-    return w
 
 
 def _check_prior_range_support(scenario: Scenario) -> None:
@@ -211,15 +202,17 @@ def _check_prior_range_support(scenario: Scenario) -> None:
 
 def information_rates(scenario: Scenario, *, t_start: float | None = None,
                       n_steps: int | None = None, include_start: bool = True,
-                      ) -> tuple[np.ndarray, np.ndarray]:
+                      sensors: Sequence[Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bearing [rad⁻²] and range [m⁻²] information Σ 1/σ² per step k = 0..K, shape (K + 1,).
 
     The one per-step sensor-information function of the bounds and the planners (one bearing:
     1/σ_β², brehard2005 eq. 47; a range ping on ln r: ``E r²/σ_r²``, eq. 51). Step 0 is at
     ``t_start`` (default ``scenario.time.t0``; the grid is extended past the horizon if a plan
     needs it), K = ``n_steps`` (default the scenario's); ``include_start=False`` leaves step 0
-    empty (a planner's belief at ``t_start`` already holds that measurement). A non-finite
-    ``t_start`` or an ``n_steps`` that is not an integer >= 0 is an :class:`ArgumentError`.
+    empty (a planner's belief at ``t_start`` already holds that measurement); ``sensors``
+    counts only these of the scenario's sensors (default all; e.g. the passive range sensors).
+    A non-finite ``t_start`` or an ``n_steps`` that is not an integer >= 0 is an
+    :class:`ArgumentError`.
     """
     grid = scenario.time
     if t_start is not None and not math.isfinite(as_real(t_start)):
@@ -231,7 +224,7 @@ def information_rates(scenario: Scenario, *, t_start: float | None = None,
     if k0 + K > grid.n_steps:
         grid = TimeGrid(dt=grid.dt, horizon=grid.dt * max(k0 + K, 1), t0=grid.t0)
     info = {"bearing": np.zeros(K + 1), "range": np.zeros(K + 1)}
-    for s in scenario.sensors:
+    for s in scenario.sensors if sensors is None else sensors:
         if isinstance(s, BearingSensor | RangeSensor):
             st = measurement_steps(s, grid) - k0
             st = st[(st >= (0 if include_start else 1)) & (st <= K)]

@@ -268,3 +268,51 @@ def test_recovery_uses_the_prior_of_its_own_run():
     r = np.hypot(rec.inner.particles[:, 0], rec.inner.particles[:, 1])
     # one 15-s step from the bow-closing support [16, 32] km (targets below 16 kn)
     assert r.min() > 15_500.0
+
+
+def _steps_exact(cfg, bearings_per_step, offsets):
+    """Monitor an exactly known static state through steps with the given numbers of
+    noise-free bearings, offset by ``offsets[k]`` [rad] at step k; the states after each
+    step."""
+    mf = MonitoredFilter(_ExactFilter(), cfg)
+    st = mf.wrap(_Exact(0, X_TRUE, np.zeros((4, 4))), np.zeros(2))
+    b0, out = math.atan2(X_TRUE[0], X_TRUE[1]), []
+    for n, off in zip(bearings_per_step, offsets, strict=True):
+        st = mf.predict(st, None, np.random.default_rng(0))
+        st = mf.update(st, [_bearing(b0 + off)] * n, np.random.default_rng(0))
+        out.append(st)
+    return out
+
+
+def test_cusum_age_and_onset_count_steps_not_bearings():
+    # the age counted bearings: a fade (a step without bearings) did not age the statistic and
+    # a step with two bearings aged it twice, so a recovery restarted at the wrong step
+    cfg = MonitorConfig(recover=False, holdoff=0, window=1000, outliers=1000)
+    t_c = cfg.cusum_threshold
+    u = cfg.kappa + t_c / 2.5  # g⁺ crosses t_c at the third drifting bearing
+    per_step = [1] * 10 + [1, 0, 2, 0, 0]
+    offs = [0.0] * 10 + [u * SIGMA] * 5
+    states = _steps_exact(cfg, per_step, offs)
+    assert [s.age[0] for s in states[9:]] == [0, 1, 2, 3, 4, 5]
+    alarm = next(a for a in states[-1].log if a["test"] == "cusum")
+    # the drift began at the 11th step (index 10): the alarm at index 12 dates it 3 steps back
+    assert alarm["onset"] == 3 and alarm["step"] == states[12].step
+
+
+def test_recovery_refilters_at_most_lookback_steps(monkeypatch):
+    # with a GLR window longer than ``lookback`` the history is longer, and a CUSUM onset
+    # beyond ``lookback`` re-filtered all of it (the documented bound is ``lookback``)
+    cfg = MonitorConfig(lookback=16, glr_window=40)
+    pf = ParticleFilter(PFConfig(n_particles=200, dt=15.0, q=1e-3))
+    mf = MonitoredFilter(pf, cfg)
+    st = mf.wrap(pf.from_gaussian(X_TRUE, np.eye(4), np.random.default_rng(0)), np.zeros(2))
+    hist = tuple((st.inner, np.zeros(2), np.zeros(2), ()) for _ in range(40))
+    st = dataclasses.replace(st, history=hist)
+    calls = []
+    monkeypatch.setattr(mf, "_rejuvenate", lambda post, *a, **k: post)
+    monkeypatch.setattr(mf._boosted, "predict", lambda s, dv, rng: calls.append(1) or s)
+    monkeypatch.setattr(mf._boosted, "update", lambda s, m, rng: s)
+    for onset, expected in ((30, 16), (5, 5), (None, 16), (0, 1)):
+        calls.clear()
+        mf._recover(st, np.random.default_rng(0), onset, lost=False)
+        assert len(calls) == expected, onset

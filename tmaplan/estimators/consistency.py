@@ -396,8 +396,8 @@ class MonitoredFilter:
         cfg = self.config
         t_b, t_r, t_c = self._thresholds
         nis, (gp, gm), streak = list(state.nis), state.cusum, state.streak
-        ap, am = state.age
-        n_out = state.outliers
+        ap, am = state.age  # steps, not bearings: a step may hold 0 (a fade) or ≥ 2 of them
+        n_out, zp, zm = state.outliers, False, False  # zp/zm: g± was 0 within this step
         alarm: dict[str, Any] | None = None
         kept: list[Measurement] = []
         for m in measurements:
@@ -423,12 +423,13 @@ class MonitoredFilter:
             nis = ([*nis, e])[-cfg.window:]
             u = nu / math.sqrt(S)
             gp, gm = max(0.0, gp + u - cfg.kappa), max(0.0, gm - u - cfg.kappa)
-            ap, am = (ap + 1 if gp > 0 else 0), (am + 1 if gm > 0 else 0)
+            zp, zm = zp or gp == 0.0, zm or gm == 0.0
             if alarm is None and len(nis) == cfg.window and sum(nis) > t_b:
                 alarm = {"test": "bearing-window", "statistic": sum(nis), "threshold": t_b}
             if alarm is None and cfg.cusum and max(gp, gm) > t_c:
                 alarm = {"test": "cusum", "statistic": max(gp, gm), "threshold": t_c,
-                         "onset": ap if gp > gm else am}
+                         "onset": (1 if zp else ap + 1) if gp > gm else (1 if zm else am + 1)}
+        ap, am = (0 if gp == 0 else 1 if zp else ap + 1), (0 if gm == 0 else 1 if zm else am + 1)
         history = state.history
         if state.pending is not None:
             history = ((*history, (*state.pending, tuple(kept))))[-max(cfg.lookback,
@@ -438,8 +439,7 @@ class MonitoredFilter:
         filt = self._boosted if state.quiet > 0 else self.inner
         new = dataclasses.replace(state, inner=filt.update(state.inner, kept, rng),
                                   nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
-                                  outliers=n_out,
-                                  history=history,
+                                  outliers=n_out, history=history,
                                   pending=None, quiet=max(state.quiet - 1, 0))
         if state.quiet > 0 or alarm is None:
             return new
@@ -512,15 +512,15 @@ class MonitoredFilter:
                  onset: int | None, lost: bool) -> MonitoredState:
         """Rejuvenate a stored posterior (the CUSUM's change point, else ``lookback`` steps
         back) and filter forward again with boosted process noise."""
-        hist = state.history[-(self.config.lookback if onset is None else max(int(onset), 1)):]
+        k = self.config.lookback
+        hist = state.history[-(k if onset is None else min(max(int(onset), 1), k)):]
         post, _, vbar, _ = hist[0]
         inner = self._rejuvenate(post, vbar, rng, lost=lost, prior=state.prior)
         for _, dv, _, meas in hist:
             inner = self._boosted.predict(inner, dv, rng)
             inner = self._boosted.update(inner, meas, rng)
         return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0), age=(0, 0),
-                                   streak=0,
-                                   history=(), quiet=self.config.holdoff)
+                                   streak=0, history=(), quiet=self.config.holdoff)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

@@ -62,7 +62,8 @@ def test_receding_until_end_builds_its_planner_with_it(default):
         .controller(sc).planner.until_end
 
 
-@pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb"])
+@pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb",
+                                       "logdet"])
 def test_until_end_equals_a_horizon_that_stops_at_the_end(default, prior, objective):
     """Cross-check of the step weights: on the straight course (the first guess, IPOPT stopped
     before its first iteration), a 15-minute horizon that counts only the 5 minutes left

@@ -19,6 +19,7 @@ cannot drift apart.
   (lecadre1997 eq. 64–65, ranges not assumed constant) and ``I₀ = Cov(X₀)⁻¹`` the prior
   information, at the belief mean (``samples=1``) or averaged over deterministic belief
   samples. Computed in scaled units (km, 100 s) with an LDLᵀ log-determinant, reported in SI.
+  Step k's bearings count with its step weight w_k (``F = Σ_k w_k F_k``, :class:`ParamLayout`).
 * penalties: :func:`turn_penalty` (mean squared turn rate, normalised by u_max²).
 """
 
@@ -173,7 +174,8 @@ class Objective:
 def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanContext], Any],
                 samples: int = 1) -> Objective:
     """Objective of a per-step quantity (K+1, n) averaged over its n columns, at the last step
-    (``reduce="terminal"``, named ``names[0]``) or averaged over the steps ("mean")."""
+    (``reduce="terminal"``, named ``names[0]``; the step weights are not read) or averaged
+    over the steps with the step weights (``"mean"``, :class:`ParamLayout`)."""
     if reduce not in ("terminal", "mean"):
         raise ArgumentError("reduce", "'terminal' or 'mean'", reduce)
 
@@ -298,6 +300,9 @@ def position_bound(reduce: str = "terminal") -> Objective:
 
 def logdet(samples: int = 1) -> Objective:
     """``−log det`` of the bearing FIM of X₀ plus the prior information (lecadre1997).
+
+    The bearings of step k count with its step weight w_k (:class:`ParamLayout`,
+    ``F = Σ_k w_k F_k``): with ``until_end`` none after the scenario's end.
 
     Parameters
     ----------

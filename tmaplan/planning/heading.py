@@ -138,7 +138,7 @@ class HeadingPlanner:
             float(lim[0]), float(lim[1]))
         self.n_arcs = max(1, int(n_arcs))
         A, Q = ncv_matrices(dt, float(scenario.target.q))
-        self.layout = ParamLayout(n_steps=self.K, n_samples=self.objective.n_samples)
+        self.layout = ParamLayout(n_steps=self.K, n_samples=self.objective.layout_samples)
         sig = ping_sigma(scenario)
         self._ping_scale = 0.0 if sig is None else 1.0 / sig**2
         self.times = dt * np.arange(self.K + 1)

@@ -49,3 +49,4 @@ def test_the_default_objective_is_not_a_sum():
     128 draws are its own."""
     obj = make_objective(DEFAULT_OBJECTIVE)
     assert "+" not in obj.name and obj.n_samples == 128 and len(obj.terms) == 2
+

@@ -396,8 +396,9 @@ def test_final_time_matches_a_measurement_time_to_round_off_only():
     assert near.final_range == pytest.approx(crlb_from_data(
         constant_turn_model(), Z, bearings=bd, final_time=300.0).final_range, rel=1e-12)
     # a set measuring at t_N (ranges 2 ms after the bearings) gives its own observer position
-    rd = [RangeData(times=t + 0.002, observer_position=obs + [0.0, 500.0], sigma=10.0)]
+    shift = np.array([0.0, 500.0])
+    rd = [RangeData(times=t + 0.002, observer_position=obs + shift, sigma=10.0)]
     got = crlb_from_data(constant_turn_model(), Z, bearings=bd, ranges=rd, final_time=300.002)
     ref = crlb_from_data(constant_turn_model(), Z, bearings=bd, ranges=rd, final_time=300.002,
-                         final_observer_position=obs[300] + [0.0, 500.0])
+                         final_observer_position=obs[300] + shift)
     assert got.final_range == ref.final_range

@@ -381,3 +381,24 @@ def test_non_finite_fisher_information_is_an_observability_error():
         _invert(fim, ["x", "y", "vx", "vy"], np.ones(4))
     cov, _ = _invert(np.diag([1.0, 4.0, 9.0, 16.0]), ["x", "y", "vx", "vy"], np.ones(4))
     np.testing.assert_allclose(np.diag(cov), [1.0, 0.25, 1 / 9, 1 / 16])
+
+
+def test_final_time_matches_a_measurement_time_to_round_off_only():
+    """np.isclose's default rtol 1e-5 took a final time within 6 ms of a measurement at 300 s
+    (0.1 s at 10⁴ s) as that measurement's time: t_N = 300.002 s, between measurements, used
+    the observer position at 300 s without a word instead of asking for it, and with a second
+    set measuring at 300.002 s it took the first set's position at 300 s."""
+    t, obs, Z, bd = _halfturn_data()
+    with pytest.raises(ArgumentError, match="final_observer_position"):
+        crlb_from_data(constant_turn_model(), Z, bearings=bd, final_time=300.002)
+    # round-off still matches
+    near = crlb_from_data(constant_turn_model(), Z, bearings=bd, final_time=300.0 + 1e-12)
+    assert near.final_range == pytest.approx(crlb_from_data(
+        constant_turn_model(), Z, bearings=bd, final_time=300.0).final_range, rel=1e-12)
+    # a set measuring at t_N (ranges 2 ms after the bearings) gives its own observer position
+    shift = np.array([0.0, 500.0])
+    rd = [RangeData(times=t + 0.002, observer_position=obs + shift, sigma=10.0)]
+    got = crlb_from_data(constant_turn_model(), Z, bearings=bd, ranges=rd, final_time=300.002)
+    ref = crlb_from_data(constant_turn_model(), Z, bearings=bd, ranges=rd, final_time=300.002,
+                         final_observer_position=obs[300] + shift)
+    assert got.final_range == ref.final_range

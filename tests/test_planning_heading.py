@@ -360,3 +360,13 @@ def test_evaluator_scores_the_objective_the_planner_minimised():
     assert ue.evaluator(late)(plan.observer)[0] == pytest.approx(plan.objective, rel=1e-10)
     with pytest.raises(ArgumentError, match="turn_rate_max"):
         ObjectiveEvaluator(sc, obj, belief=bel, turn_rate_max=-1.0)
+
+
+def test_bearing_rate_arcs_merge_only_equal_rates():
+    """The free-switch bearing-rate plan merged consecutive arcs whose rates were
+    np.isclose (atol 1e-8): at rate_max 1e-9 rad per sample, +rate_max and −rate_max."""
+    from tmaplan.planning.baselines import _merge_arcs
+
+    r = 1e-9 * np.array([1.0, -1.0, 1.0, 1.0])
+    assert _merge_arcs(r, np.array([10.0, 20.0, 15.0, 15.0]), 60.0) == (
+        [1e-9, -1e-9, 1e-9], [10.0, 20.0, 30.0])

@@ -62,7 +62,8 @@ def test_receding_until_end_builds_its_planner_with_it(default):
         .controller(sc).planner.until_end
 
 
-@pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb"])
+@pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb",
+                                       "logdet"])
 def test_until_end_equals_a_horizon_that_stops_at_the_end(default, prior, objective):
     """Cross-check of the step weights: on the straight course (the first guess, IPOPT stopped
     before its first iteration), a 15-minute horizon that counts only the 5 minutes left
@@ -79,3 +80,20 @@ def test_until_end_equals_a_horizon_that_stops_at_the_end(default, prior, object
     assert np.allclose(counted.turn_rate, 0.0) and np.allclose(short.turn_rate, 0.0)
     assert counted.objective == pytest.approx(short.objective, rel=1e-10)
     assert abs(whole.objective - short.objective) > 1e-3 * abs(short.objective)
+
+
+def test_terminal_objectives_do_not_read_the_step_weights(default, prior):
+    """Documented (ParamLayout): a terminal objective is the value at the horizon's last step,
+    step weights or not; the mean one and logdet count only the weighted steps."""
+    from tmaplan.planning.baselines import straight_track
+    from tmaplan.planning.objectives import ObjectiveEvaluator
+
+    sc = default
+    end = sc.time.t0 + sc.time.dt * sc.time.n_steps
+    late = dataclasses.replace(prior, t=end - 300.0)
+    track = straight_track(sc, n_steps=60)
+    for name, same in (("range-bound", True), ("relative-range-crlb", True),
+                       ("mean-range-bound", False), ("logdet", False)):
+        a, b = (ObjectiveEvaluator(sc, name, n_steps=60, belief=late, until_end=u)(track)[0]
+                for u in (False, True))
+        assert (a == b) is same, name

@@ -256,7 +256,8 @@ def crlb_from_data(
         t_N [s] (default: the last measurement time).
     final_observer_position : ndarray, shape (2,), optional
         Observer position at t_N [m] (default: the observer position of a measurement at
-        t_N; required when t_N is not a measurement time).
+        t_N, to round-off, 1e-9·max(1, |t_N|) s; required when t_N is not a measurement
+        time).
     notes : sequence of str
         Caveats copied into the result.
 
@@ -292,9 +293,13 @@ def crlb_from_data(
                             "time)", final_time)
     if final_observer_position is None:
         # the observer position of a measurement at t_N (any measurement, not only the last
-        # of a set): in the first set measuring at t_N, its measurement closest to t_N
-        cand = [p[np.argmin(np.where(np.isclose(t, t_n), np.abs(t - t_n), np.inf))]
-                for t, p in sets if np.any(np.isclose(t, t_n))]
+        # of a set): in the first set measuring at t_N, its measurement closest to t_N. "At"
+        # is to round-off, 1e-9·max(1, |t_N|) s (10 µs at 10⁴ s), not np.isclose's default
+        # rtol 1e-5 (0.1 s at 10⁴ s: a neighbouring measurement of a fast set, or a t_N
+        # between measurements, passed as "at t_N")
+        tol = 1e-9 * max(1.0, abs(t_n))
+        cand = [p[np.argmin(np.abs(t - t_n))] for t, p in sets
+                if np.min(np.abs(t - t_n)) <= tol]
         if not cand:
             raise ArgumentError("final_observer_position", f"given when final_time ({t_n} s) "
                                 "is not a measurement time", None)

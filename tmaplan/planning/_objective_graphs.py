@@ -67,7 +67,11 @@ class ParamLayout:
     per step [rad⁻²], ping weights u_k ∈ [0, 1] per step and step weights w_k ∈ [0, 1]: how
     much step k counts in the objectives that sum or average over the steps (1 everywhere
     by default; 0 after the end of the scenario for a plan that must not count time the
-    mission does not have, :class:`tmaplan.planning.HeadingPlanner` ``until_end``).
+    mission does not have, :class:`tmaplan.planning.HeadingPlanner` ``until_end``): the
+    weighted means (``mean-*``, ``*time-to-accuracy``) weight step k's value by w_k, and
+    ``logdet`` its bearing information (``Σ_k w_k F_k``). The terminal objectives
+    (``range-bound``, ``position-bound``, ``relative-range-bound``, ``relative-range-crlb``)
+    are the value at the horizon's last step K and do not read the weights.
     """
 
     n_steps: int
@@ -218,7 +222,11 @@ def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
     Each belief sample is a deterministic relative track ``r_k = p₀ + t_k v₀ − d_k`` (d_k the
     own ship's displacement beyond constant velocity). The bearing FIM is
     :func:`tmaplan.bounds.fimdet.fim_bearings_generic` (lecadre1997 eq. 64–65), summed over
-    steps (``cumulative``: up to each step), plus ``I₀``, the prior information.
+    steps (``cumulative``: up to each step), plus ``I₀``, the prior information. The total
+    (not ``cumulative``) counts step k's bearing information with its step weight w_k
+    (:class:`ParamLayout`): ``Σ_k w_k F_k + I₀``. The cumulative sums are unweighted: the
+    objectives over them weight each step's value instead (the value at step k, from the
+    steps ≤ k, is the same for weights that are 1 up to some step and 0 after).
 
     The matrices are laid out samples × steps (n_samples, K+1): the FIM entries (n_samples, K+1)
     when ``cumulative``, else (n_samples, 1).
@@ -240,7 +248,8 @@ def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
     # floor the range at 100 m: a prior sample the own ship sails through would otherwise
     # give an infinite (NaN) information and stall the solver
     tt = ca.mtimes(ones_s, t)
-    F = fim_bearings_generic(rx, ry, tt, ca.mtimes(ones_s, ctx.param("bearing").T),
+    info = ctx.param("bearing") if cumulative else ctx.param("bearing") * ctx.param("weight")
+    F = fim_bearings_generic(rx, ry, tt, ca.mtimes(ones_s, info.T),
                              total=_running_sum(ns, K1) if cumulative else ca.sum2,
                              min_range=100.0 / _L)
     # prior information in the scaled units: I' = D⁻¹ I D⁻¹, D = diag(1/L, 1/L, T/L, T/L)
@@ -254,7 +263,12 @@ def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
 
 
 def logdet_graph(ctx: PlanContext) -> Any:
-    """``log det(F + I₀)`` [SI] averaged over the logdet samples (lecadre1997 eq. 64–65)."""
+    """``log det(F + I₀)`` [SI] averaged over the logdet samples (lecadre1997 eq. 64–65).
+
+    ``F = Σ_k w_k F_k``: the bearings of step k count with its step weight w_k
+    (:class:`ParamLayout`), so a step of weight 0 (after the scenario's end, ``until_end``)
+    adds no information.
+    """
     import casadi as ca
 
     terms = _sample_fim_terms(ctx, cumulative=False)

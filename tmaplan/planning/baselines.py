@@ -379,11 +379,13 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
 
 def _merge_arcs(rates: np.ndarray, dur: np.ndarray, H: float) -> tuple[list[float],
                                                                        list[float]]:
+    # arcs of the same rate merge; the rates are copies of ±rate_max, so "the same" is
+    # equality (np.isclose's atol 1e-8 merged +rate_max and −rate_max below 5e-9)
     keep = dur > 0.5
     r, d = rates[keep], dur[keep]
     mr, md = [float(r[0])], [float(d[0])]
     for ri, di in zip(r[1:], d[1:]):
-        if np.isclose(ri, mr[-1]):
+        if ri == mr[-1]:
             md[-1] += float(di)
         else:
             mr.append(float(ri))

@@ -85,8 +85,10 @@ class HeadingPlanner:
         Belief samples averaged by the ``logdet`` objective (1 = the mean).
     until_end : bool
         Count only the plan steps up to the scenario's end in the objectives that sum or
-        average over the steps (step weights 0 after it, :class:`ParamLayout`): a re-plan at
-        time t then optimises the time the mission has left, not a full horizon beyond it.
+        average over the steps, and in ``logdet``'s information (step weights 0 after it,
+        :class:`ParamLayout`): a re-plan at time t then optimises the time the mission has
+        left, not a full horizon beyond it. The terminal objectives (the value at the
+        horizon's last step) do not read the step weights.
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,
@@ -136,7 +138,7 @@ class HeadingPlanner:
             float(lim[0]), float(lim[1]))
         self.n_arcs = max(1, int(n_arcs))
         A, Q = ncv_matrices(dt, float(scenario.target.q))
-        self.layout = ParamLayout(n_steps=self.K, n_samples=self.objective.n_samples)
+        self.layout = ParamLayout(n_steps=self.K, n_samples=self.objective.layout_samples)
         sig = ping_sigma(scenario)
         self._ping_scale = 0.0 if sig is None else 1.0 / sig**2
         self.times = dt * np.arange(self.K + 1)

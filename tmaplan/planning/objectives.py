@@ -19,6 +19,7 @@ cannot drift apart.
   (lecadre1997 eq. 64–65, ranges not assumed constant) and ``I₀ = Cov(X₀)⁻¹`` the prior
   information, at the belief mean (``samples=1``) or averaged over deterministic belief
   samples. Computed in scaled units (km, 100 s) with an LDLᵀ log-determinant, reported in SI.
+  Step k's bearings count with its step weight w_k (``F = Σ_k w_k F_k``, :class:`ParamLayout`).
 * penalties: :func:`turn_penalty` (mean squared turn rate, normalised by u_max²).
 """
 
@@ -141,17 +142,39 @@ class Objective:
     ----------
     name : str
     terms : tuple of (float, callable)
-    n_samples : int
-        Belief samples needed (logdet averaging); 1 = the mean.
+    n_samples : int or None
+        Belief samples the terms average over (the parameter vector's ``samples``,
+        :class:`ParamLayout`); 1 = the mean; None = no term reads the samples (the layout
+        then packs the mean).
+
+    Notes
+    -----
+    The parameter vector holds one set of belief samples
+    (:meth:`tmaplan.planning.Belief.representative_samples`; the sets of two counts share
+    no draws), so a sum is defined only when its terms agree on the count: ``a + b`` takes
+    the count of the term that has one, and refuses two different counts
+    (``logdet(1) + relative_range_crlb(samples=16)``) instead of evaluating one of them
+    with the other's samples, which changed its value.
     """
 
     name: str
     terms: tuple[tuple[float, Term], ...]
-    n_samples: int = 1
+    n_samples: int | None = None
 
     def __add__(self, other: Objective) -> Objective:
+        a, b = self.n_samples, other.n_samples
+        if a is not None and b is not None and a != b:
+            raise ArgumentError("objective", "terms averaged over the same number of belief "
+                                "samples (a plan holds one sample set)",
+                                f"{self.name} over {a}, {other.name} over {b}")
         return Objective(f"{self.name}+{other.name}", self.terms + other.terms,
-                         max(self.n_samples, other.n_samples))
+                         a if a is not None else b)
+
+    @property
+    def layout_samples(self) -> int:
+        """Samples packed in the parameter vector (:class:`ParamLayout`): ``n_samples``, 1
+        (the mean) when no term reads them."""
+        return 1 if self.n_samples is None else self.n_samples
 
     def __mul__(self, w: float) -> Objective:
         # a sum's weight goes to each term ("2*(a+b)" is named "2*a+2*b", not "2*a+b"); a
@@ -171,9 +194,10 @@ class Objective:
 
 
 def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanContext], Any],
-                samples: int = 1) -> Objective:
+                samples: int | None = None) -> Objective:
     """Objective of a per-step quantity (K+1, n) averaged over its n columns, at the last step
-    (``reduce="terminal"``, named ``names[0]``) or averaged over the steps ("mean")."""
+    (``reduce="terminal"``, named ``names[0]``; the step weights are not read) or averaged
+    over the steps with the step weights (``"mean"``, :class:`ParamLayout`)."""
     if reduce not in ("terminal", "mean"):
         raise ArgumentError("reduce", "'terminal' or 'mean'", reduce)
 
@@ -299,6 +323,9 @@ def position_bound(reduce: str = "terminal") -> Objective:
 def logdet(samples: int = 1) -> Objective:
     """``−log det`` of the bearing FIM of X₀ plus the prior information (lecadre1997).
 
+    The bearings of step k count with its step weight w_k (:class:`ParamLayout`,
+    ``F = Σ_k w_k F_k``): with ``until_end`` none after the scenario's end.
+
     Parameters
     ----------
     samples : int
@@ -391,7 +418,7 @@ class ObjectiveEvaluator:
         self.n_steps = K
         dt = float(scenario.time.dt)
         A, Q = ncv_matrices(dt, float(scenario.target.q))
-        self.layout = ParamLayout(n_steps=K, n_samples=self.objective.n_samples)
+        self.layout = ParamLayout(n_steps=K, n_samples=self.objective.layout_samples)
         v = ca.MX.sym("v_obs", K + 1, 2)
         dsp = ca.MX.sym("disp", K + 1, 2)
         ur = ca.MX.sym("turn_rate", K, 1)

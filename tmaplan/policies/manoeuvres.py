@@ -10,7 +10,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, as_real, is_integer
+from tmaplan.errors import (
+    ArgumentError,
+    PlanningError,
+    ScenarioError,
+    as_real,
+    finite_real,
+    is_integer,
+)
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -125,9 +132,8 @@ class Zigzag:
     def _check(self, scenario: Scenario) -> None:
         """ArgumentError naming the first invalid field."""
         dt = scenario.time.dt  # a shorter leg cannot be flown (1e-9 s hung building legs)
-        if not (math.isfinite(leg := as_real(self.leg_duration)) and leg >= dt):
-            raise ArgumentError("zigzag.leg_duration", f">= one step (dt = {dt:g} s)",
-                                self.leg_duration)
+        finite_real("zigzag.leg_duration", self.leg_duration, f">= one step (dt = {dt:g} s)",
+                    lower=dt)
         if not (math.isfinite(a := as_real(self.angle)) and abs(a) <= math.pi):
             raise ArgumentError("zigzag.angle", "an angle in [−π, π] rad", self.angle)
         t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
@@ -425,8 +431,8 @@ def _check_receding(policy: Receding) -> None:
     """ArgumentError naming the first invalid time or step count of ``policy``."""
     for field in ("replan_interval", "horizon"):
         v = getattr(policy, field)
-        if v is not None and not (math.isfinite(x := as_real(v)) and x > 0):
-            raise ArgumentError(f"receding.{field}", "> 0 s", v)
+        if v is not None:
+            finite_real(f"receding.{field}", v, "> 0 s", lower=0.0, strict=True)
     n = policy.rti_steps
     if not is_integer(n, 1):
         raise ArgumentError("receding.rti_steps", "an integer >= 1", n)

@@ -143,3 +143,17 @@ def test_finite_real_sites_refuse_bools_and_strings_naming_the_field(site):
         with pytest.raises(ArgumentError) as exc:
             call(bad)
         assert exc.value.field == field and exc.value.received == bad
+
+
+def test_errors_survive_pickling_so_a_worker_process_can_raise_them():
+    # the default pickling rebuilt an ArgumentError (or SolverError) from its message alone
+    # and failed: an error raised in a process-pool worker broke the pool (BrokenProcessPool)
+    import pickle
+
+    from tmaplan.errors import SolverError, UnitError
+
+    for err in (ArgumentError("runs", ">= 1", 0), ScenarioError("target.model", "'ncv'",
+                "constant-turn", source="my.toml"), UnitError("time.dt", "a time", "3 m"),
+                SolverError("ipopt", "Infeasible_Problem_Detected", "restoration failed")):
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is type(err) and str(back) == str(err) and vars(back) == vars(err)

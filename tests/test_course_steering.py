@@ -50,6 +50,27 @@ def test_a_zigzag_flies_its_nominal_track_even_when_a_leg_change_exceeds_180_deg
     np.testing.assert_allclose(flown, nominal, atol=1e-9)
 
 
+@pytest.mark.parametrize("t0", [600.0, -600.0])
+def test_a_default_zigzag_starts_at_t0_whatever_t0_is(scenario, t0):
+    # the default start was 0 s: refused when t0 > 0; when t0 < 0 the closed loop flew
+    # straight until 0 s while the nominal track (from t0) was refused
+    import dataclasses
+
+    sc = dataclasses.replace(scenario, time=dataclasses.replace(scenario.time, t0=t0))
+    pol = Zigzag(leg_duration=600.0, angle=45.0 * DEG)
+    heading = pol.nominal_track(sc).heading
+    np.testing.assert_allclose(_fly(pol.controller(sc), sc, float(heading[0])),
+                               np.unwrap(heading), atol=1e-9)
+    # the zig-zag started at t0 explicitly, and the one at t0 = 0 shifted in time
+    started = Zigzag(leg_duration=600.0, angle=45.0 * DEG, start=t0).nominal_track(sc)
+    np.testing.assert_array_equal(started.heading, heading)
+    np.testing.assert_array_equal(pol.nominal_track(scenario).heading, heading)
+    assert heading[1] != heading[0]  # turning from the first step
+    with pytest.raises(ArgumentError) as exc:  # an absolute start before t0 stays refused
+        Zigzag(leg_duration=600.0, angle=0.5, start=t0 - 60.0).controller(sc)
+    assert exc.value.field == "zigzag.start"
+
+
 NAN, INF = float("nan"), float("inf")
 
 

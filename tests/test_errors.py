@@ -86,3 +86,74 @@ def test_finite_real_names_the_field_and_keeps_the_bounds():
             finite_real("dt", value, "a finite number", source="default", **kw)
         assert str(exc.value) == (f"default: field 'dt': expected a finite number, received "
                                   f"{value!r}")
+
+
+def _finite_real_sites():
+    """(field, call) of argument checks that went through np.isfinite without as_real."""
+    import numpy as np
+
+    from tmaplan.bounds.batch_fim import FrequencyData, batch_data
+    from tmaplan.estimators.init_bearings import initialise_from_bearings
+    from tmaplan.estimators.manoeuvre_glr import velocity_jump_glr
+    from tmaplan.estimators.range_only import (
+        RangeOnlyConfig,
+        range_only_update,
+        single_point_prior,
+    )
+    from tmaplan.models.tracks import cv_model
+
+    def init(**kw):
+        args = {"sigma": 0.01, "r_min": 1e3, "r_max": 1e4, "n_particles": 10,
+                "rng": np.random.default_rng(0), "q": 1e-4} | kw
+        return initialise_from_bearings(60.0 * np.arange(9), np.zeros(9), **args)
+
+    def prior(**kw):
+        args = {"r0": 5e3, "bearing0": 0.3, "sigma_r": 10.0, "sigma_bearing": 0.01,
+                "velocity_mean": np.zeros(2), "velocity_std": 1.0} | kw
+        return single_point_prior(**args)
+
+    def update(**kw):
+        args = {"r": 5e3, "sigma_r": 10.0} | kw
+        return range_only_update(prior(), config=RangeOnlyConfig(dt=10.0, q=1e-4), **args)
+
+    freq = {"times": np.arange(3.0), "observer_position": np.zeros((3, 2)),
+            "observer_velocity": np.zeros((3, 2)), "f0": np.array([100.0]),
+            "sigma": np.array([0.1])}
+    return [
+        ("sigma", lambda v: init(sigma=v)), ("q", lambda v: init(q=v)),
+        ("dt", lambda v: init(dt=v)), ("dt", lambda v: velocity_jump_glr([], v)),
+        ("dt", lambda v: RangeOnlyConfig(dt=v, q=0.0)),
+        ("q", lambda v: RangeOnlyConfig(dt=10.0, q=v)),
+        ("sagitta", lambda v: RangeOnlyConfig(dt=10.0, q=0.0, sagitta=v)),
+        ("r0", lambda v: prior(r0=v)),
+        ("bearing0", lambda v: prior(bearing0=v)), ("sigma_r", lambda v: prior(sigma_r=v)),
+        ("velocity_std", lambda v: prior(velocity_std=v)), ("r", lambda v: update(r=v)),
+        ("sigma_r", lambda v: update(sigma_r=v)),
+        ("frequencies.c", lambda v: batch_data(cv_model(), frequencies=FrequencyData(
+            **freq, c=v))),
+    ]
+
+
+@pytest.mark.parametrize("site", range(14))
+def test_finite_real_sites_refuse_bools_and_strings_naming_the_field(site):
+    # these checks used np.isfinite on the raw value: True passed as 1, "1" raised a bare
+    # TypeError of numpy; through finite_real both are an ArgumentError naming the field
+    field, call = _finite_real_sites()[site]
+    for bad in (True, "1"):
+        with pytest.raises(ArgumentError) as exc:
+            call(bad)
+        assert exc.value.field == field and exc.value.received == bad
+
+
+def test_errors_survive_pickling_so_a_worker_process_can_raise_them():
+    # the default pickling rebuilt an ArgumentError (or SolverError) from its message alone
+    # and failed: an error raised in a process-pool worker broke the pool (BrokenProcessPool)
+    import pickle
+
+    from tmaplan.errors import SolverError, UnitError
+
+    for err in (ArgumentError("runs", ">= 1", 0), ScenarioError("target.model", "'ncv'",
+                "constant-turn", source="my.toml"), UnitError("time.dt", "a time", "3 m"),
+                SolverError("ipopt", "Infeasible_Problem_Detected", "restoration failed")):
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is type(err) and str(back) == str(err) and vars(back) == vars(err)

@@ -148,3 +148,53 @@ def test_scenario_truth_follows_the_scenario_target_model(default):
     for k in range(ncv.n_steps):
         want.append(F @ want[-1] + w[k])
     assert np.array_equal(got, np.array(want))
+
+
+def test_prior_truth_follows_the_scenario_target_model(default):
+    # draw_truth(from_prior=True) (`compare --truth prior`, the default) propagated the drawn
+    # initial state in a straight line whatever the model: a multi-leg target's legs were
+    # dropped; a constant-turn circle cannot start from a drawn state, so it is refused
+    from tmaplan.scenario import Prior
+    from tmaplan.simulate import draw_truth
+
+    legs = Target(model="multi-leg", position=default.target.position, velocity=(3.0, 0.0),
+                  legs=(TargetLeg(start=600.0, velocity=(0.0, 3.0)),), q=0.0)
+    s = default.replace(target=legs)
+    x = draw_truth(s, np.random.default_rng(0), from_prior=True)
+    x0 = sample_prior(s, 1, np.random.default_rng(0))[0]  # the same draw
+    t, k = s.times, 40  # the leg starts at 600 s
+    np.testing.assert_allclose(x[:k], np.hstack([x0[:2] + t[:k, None] * x0[2:],
+                                                 np.tile(x0[2:], (k, 1))]), atol=1e-9)
+    np.testing.assert_allclose(x[k:, 2:], np.tile([0.0, 3.0], (t.size - k, 1)))
+    np.testing.assert_allclose(x[-1, :2], x0[:2] + 600.0 * x0[2:] + [0.0, 3.0 * (t[-1] - 600.0)])
+    # with process noise: the legs plus the noise an ncv truth of the same draw gets
+    def truth(**changes):
+        sc = s.replace(target=dataclasses.replace(legs, **({"q": 1e-4} | changes)))
+        return draw_truth(sc, np.random.default_rng(5), from_prior=True)
+
+    noise = truth(model="ncv", legs=()) - truth(model="ncv", legs=(), q=0.0)
+    np.testing.assert_allclose(truth() - truth(q=0.0), noise, atol=1e-6)
+
+    circle = load_problem("clavard2013-halfturn-cw")
+    prior = Prior(kind="gaussian", mean=(7530.0, 11000.0, 5.0, 0.0), std=(100.0, 100.0, 1.0, 1.0))
+    with pytest.raises(ScenarioError) as exc:
+        draw_truth(circle.replace(prior=prior), np.random.default_rng(0), from_prior=True)
+    assert (exc.value.field, exc.value.received) == ("target.model", "constant-turn")
+    # without a prior, from_prior flies the scenario's circle, as before
+    np.testing.assert_array_equal(draw_truth(circle, np.random.default_rng(0)),
+                                  draw_truth(circle, np.random.default_rng(0), from_prior=False))
+
+
+def test_prior_truth_of_an_ncv_target_is_unchanged(default):
+    # the drawn state through x_{k+1} = F x_k + L z_k, bit for bit (the quoted campaigns)
+    from tmaplan.models.target import ncv_matrices
+    from tmaplan.simulate import draw_truth
+
+    rng = np.random.default_rng(7)
+    got = draw_truth(default, np.random.default_rng(7), from_prior=True)
+    want = [sample_prior(default, 1, rng)[0]]
+    F, Q = ncv_matrices(default.time.dt, default.target.q)
+    w = rng.standard_normal((default.n_steps, 4)) @ np.linalg.cholesky(Q + 1e-30 * np.eye(4)).T
+    for k in range(default.n_steps):
+        want.append(F @ want[-1] + w[k])
+    assert np.array_equal(got, np.array(want))

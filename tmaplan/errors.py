@@ -7,6 +7,7 @@ Messages name the offending field, the expected value and the received value.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -59,6 +60,12 @@ class ArgumentError(TmaplanError, ValueError):
         where = f"{source}: " if source else ""
         super().__init__(f"{where}field '{field}': expected {expected}, received {received!r}")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt from the fields (the default, the message as the only argument, failed to
+        # unpickle: an error raised in a worker process broke the pool)
+        return (functools.partial(type(self), source=self.source),
+                (self.field, self.expected, self.received))
+
 
 class ScenarioError(ArgumentError):
     """A scenario (file, dict or dataclass) is invalid: ``field`` is the dotted path of the
@@ -101,8 +108,13 @@ class SolverError(PlanningError):
     def __init__(self, solver: str, status: str, message: str = "") -> None:
         self.solver = solver
         self.status = status
+        self.detail = message
         extra = f": {message}" if message else ""
         super().__init__(f"solver {solver} did not converge (status {status!r}){extra}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # as ArgumentError.__reduce__: it crosses process boundaries
+        return (type(self), (self.solver, self.status, self.detail))
 
 
 def is_integer(value: Any, minimum: int) -> bool:

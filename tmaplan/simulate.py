@@ -15,6 +15,7 @@ from typing import Any, Literal
 import numpy as np
 
 from tmaplan.display import short_repr
+from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.faults import apply_manoeuvres, corrupt_bearings, dropped
 from tmaplan.models.observer import ObserverTrack, observer_track
@@ -291,29 +292,44 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
                ) -> np.ndarray:
     """True absolute target track of a closed-loop run, shape (K + 1, 4).
 
-    With ``from_prior`` the initial state is drawn from the scenario's prior (one draw), then
-    propagated with the NCV model of intensity ``scenario.target.q``; otherwise the scenario's
-    own track is used (its initial state propagated by NCV; a multi-leg or constant-turn
-    target's legs or circle plus the same NCV noise). The faults' ``target_manoeuvres``
-    (unknown to the filter) are applied to the track.
+    With ``from_prior`` (and a prior) the initial state is drawn from the scenario's prior (one
+    draw); otherwise it is the scenario's. Either way the scenario's target model moves it: an
+    NCV target is propagated with the NCV model of intensity ``scenario.target.q``; a
+    multi-leg target flies its legs (velocity changes at known times) from that initial state;
+    a constant-turn target flies its circle (scenario truth only). The NCV noise of intensity
+    ``q`` is added to a multi-leg or constant-turn track through the same dynamics. The
+    faults' ``target_manoeuvres`` (unknown to the filter) are applied to the track.
+
+    Raises
+    ------
+    ScenarioError
+        ``from_prior`` with a prior and a constant-turn target: its circle (centre, radius,
+        phase, ω) is given, not an initial state a prior could replace.
     """
     from tmaplan.models.prior import sample_prior, true_initial_state
 
     prior = from_prior and scenario.prior is not None
+    model = scenario.target.model
+    if prior and model == "constant-turn":
+        raise ScenarioError("target.model", "'ncv' or 'multi-leg' to draw the truth from the "
+                            "prior (a constant-turn circle is given, not drawn; the "
+                            "scenario's truth: from_prior=False, compare --truth scenario)",
+                            model, source=scenario.name)
     x0 = sample_prior(scenario, 1, rng)[0] if prior else true_initial_state(scenario)
     K, dt = scenario.n_steps, scenario.time.dt
     F, Q = ncv_matrices(dt, scenario.target.q)
     L = np.linalg.cholesky(Q + 1e-30 * np.eye(4)) if scenario.target.q > 0 else np.zeros((4, 4))
     w = rng.standard_normal((K, 4)) @ L.T
     x = np.empty((K + 1, 4))
-    if prior or scenario.target.model == "ncv":
-        x[0] = x0
-    else:  # the scenario's legs or circle, plus the noise through the NCV dynamics
-        x[0] = 0.0
+    # ncv: x0 through the NCV dynamics; else the legs or circle plus the noise through them
+    x[0] = x0 if model == "ncv" else 0.0
     for k in range(K):  # recursion over time
         x[k + 1] = F @ x[k] + w[k]
-    if not (prior or scenario.target.model == "ncv"):
-        x += target_track(scenario.target, scenario.time, None)
+    if model != "ncv":
+        target = scenario.target if not prior else dataclasses.replace(
+            scenario.target, position=(float(x0[0]), float(x0[1])),
+            velocity=(float(x0[2]), float(x0[3])), course=None, speed=None)
+        x += target_track(target, scenario.time, None)
     return apply_manoeuvres(scenario.faults, x, scenario.times)
 
 

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, finite_real
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.target import circle_parameters, initial_velocity
 from tmaplan.models.tracks import (
@@ -268,8 +268,7 @@ def batch_data(track: TrackModel, *, bearings: Sequence[BearingData] = (),
             raise ArgumentError("frequencies.sigma", f"one std per line ({f0.size})", fs.size)
         if not (np.all(np.isfinite(f0)) and np.all(f0 > 0)):
             raise ArgumentError("frequencies.f0", "finite tones > 0 [Hz]", f0)
-        if not (np.isfinite(fd.c) and fd.c > 0):
-            raise ArgumentError("frequencies.c", "sound speed > 0 [m/s]", fd.c)
+        finite_real("frequencies.c", fd.c, "sound speed > 0 [m/s]", lower=0.0, strict=True)
         fs, c = _sigma(fs, fs.size, "frequencies.sigma"), float(fd.c)
     return TMAData(model=track.kind, leg_starts=np.asarray(track.change_times, float),
                    t0=track.t_ref, b_times=bt, b_values=np.zeros(bt.size), b_sigma=bs,

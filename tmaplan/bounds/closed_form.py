@@ -10,7 +10,6 @@ side-assumption diagnostic of docs/errata.md (:func:`side_assumption_density`).
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from collections.abc import Sequence
@@ -22,7 +21,7 @@ from scipy import special
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, StepInformation
 from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.bounds.pcrb import PCRBResult, SideAssumptionWarning
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real
+from tmaplan.errors import ObservabilityError, ScenarioError, finite_real
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -62,8 +61,7 @@ def side_density_gaussian(theta: float, mean: np.ndarray, cov: np.ndarray) -> np
     ndarray, shape (...)
         Density [1/rad].
     """
-    if not math.isfinite(th := as_real(theta)):
-        raise ArgumentError("theta", "a finite bearing [rad]", theta)
+    th = finite_real("theta", theta, "a finite bearing [rad]")
     u = np.array([np.sin(th), np.cos(th)])
     Ci = np.linalg.inv(cov)
     a = np.einsum("i,...ij,j->...", u, Ci, u)
@@ -147,8 +145,8 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
         exact first two moments) and ``side_valid``.
     """
     t0 = time.perf_counter()
-    if not (math.isfinite(tol := as_real(side_tol)) and tol >= 0.0):
-        raise ArgumentError("side_tol", "a finite number >= 0", side_tol, source=scenario.name)
+    tol = finite_real("side_tol", side_tol, "a finite number >= 0", lower=0.0,
+                      source=scenario.name)
     inp = _inputs(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, rng=rng)
     engine = _engine(inp, float(scenario.target.q))
@@ -216,8 +214,7 @@ def side_assumption_density(inp: PCRBInputs, floor: float = 1.0
     kappa : ndarray, shape (K + 1,)
         (wrap period)·density: the brehard2005 eq. 25 correction 1 − κ of the β bound.
     """
-    if not (math.isfinite(fl := as_real(floor)) and fl > 0.0):
-        raise ArgumentError("floor", "a finite std > 0 [m]", floor)
+    fl = finite_real("floor", floor, "a finite std > 0 [m]", lower=0.0, strict=True)
     K, A, Q = inp.n_steps, inp.A, inp.Q
     X = inp.prior_subsample.copy()
     C = np.zeros((4, 4))

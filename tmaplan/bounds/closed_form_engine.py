@@ -23,7 +23,6 @@ of the ping information (eq. 51) from the exact second moments.
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
@@ -39,7 +38,7 @@ from tmaplan.bounds._lpc_terms import (
     tichavsky_step,
     unpack_sym,
 )
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real
+from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, finite_real
 from tmaplan.models.target import ncv_matrices
 
 if TYPE_CHECKING:
@@ -187,9 +186,7 @@ class ClosedFormEngine:
         K = observer.position.shape[0] - 1
         for name, val in (("dt", dt), ("q", q)) + ((("ping_sigma", ping_sigma),)
                                                   if ping_sigma is not None else ()):
-            x = as_real(val)
-            if not (math.isfinite(x) and x > 0.0):
-                raise ArgumentError(name, "a finite number > 0", val)
+            finite_real(name, val, "a finite number > 0", lower=0.0, strict=True)
         mean = _finite_array("mean", mean, (4,))
         second_moment = _finite_array("second_moment", second_moment, (4, 4))
         prior_information = _finite_array("prior_information", prior_information, (4, 4))

@@ -32,7 +32,13 @@ from tmaplan.bounds.batch_fim import (
     fisher_information,
     true_parameters,
 )
-from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, as_real, is_integer
+from tmaplan.errors import (
+    ArgumentError,
+    ObservabilityError,
+    ScenarioError,
+    finite_real,
+    is_integer,
+)
 from tmaplan.geometry import range_of
 from tmaplan.models.tracks import (
     TrackModel,
@@ -287,10 +293,8 @@ def crlb_from_data(
     # final time and observer position
     sets = [(s[1], s[2]) for s in _observed(data)]
     t_last = max(float(np.max(s[0])) for s in sets)
-    t_n = t_last if final_time is None else as_real(final_time)
-    if not np.isfinite(t_n):
-        raise ArgumentError("final_time", "a finite time [s] (or None: the last measurement "
-                            "time)", final_time)
+    t_n = t_last if final_time is None else finite_real(
+        "final_time", final_time, "a finite time [s] (or None: the last measurement time)")
     if final_observer_position is None:
         # the observer position of a measurement at t_N (any measurement, not only the last
         # of a set): in the first set measuring at t_N, its measurement closest to t_N. "At"
@@ -376,11 +380,8 @@ def scenario_data(
     times = grid.times
     tgt = scenario.target
     notes: list[str] = []
-    t_ref_in = t_ref
-    t_ref = float(grid.t0) if t_ref is None else as_real(t_ref)
-    if not np.isfinite(t_ref):
-        raise ArgumentError("t_ref", "a finite reference time [s] (or None: t0)", t_ref_in,
-                            source=scenario.name)
+    t_ref = float(grid.t0) if t_ref is None else finite_real(
+        "t_ref", t_ref, "a finite reference time [s] (or None: t0)", source=scenario.name)
     if tgt.model == "constant-turn":
         model = constant_turn_model()
     else:

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds._lpc_terms import ldl
-from tmaplan.errors import ArgumentError, ObservabilityError, as_real, finite_real, is_integer
+from tmaplan.errors import ArgumentError, ObservabilityError, finite_real, is_integer
 
 __all__ = [
     "SINGLE_LEG_COEFFICIENTS",
@@ -574,9 +574,7 @@ def logdet_bearing_rate_approx(rates: Any, leg_lengths: Sequence[int], sigma: fl
         Sampling period [s].
     """
     for field, value in (("sigma", sigma), ("rng_", rng_), ("dt", dt)):
-        v = as_real(value)
-        if not (np.isfinite(v) and v > 0):
-            raise ArgumentError(field, "a finite value > 0", value)
+        finite_real(field, value, "a finite value > 0", lower=0.0, strict=True)
     p = bearing_rate_det_approx(rates, leg_lengths)
     with np.errstate(divide="ignore"):
         return np.log(p) + 4.0 * np.log(dt) - 8.0 * np.log(sigma * rng_)

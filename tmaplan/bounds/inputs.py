@@ -11,7 +11,6 @@ initial state (moments and the LPC information ``J₀`` of brehard2005 eq. 56,
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -22,7 +21,7 @@ from tmaplan.errors import (
     ArgumentError,
     ObservabilityError,
     ScenarioError,
-    as_real,
+    finite_real,
     is_integer,
 )
 from tmaplan.geometry import cart_to_lpc, wrap_angle
@@ -215,8 +214,8 @@ def information_rates(scenario: Scenario, *, t_start: float | None = None,
     :class:`ArgumentError`.
     """
     grid = scenario.time
-    if t_start is not None and not math.isfinite(as_real(t_start)):
-        raise ArgumentError("t_start", "a finite time [s]", t_start, source=scenario.name)
+    if t_start is not None:
+        finite_real("t_start", t_start, "a finite time [s]", source=scenario.name)
     if n_steps is not None and not is_integer(n_steps, 0):
         raise ArgumentError("n_steps", "an integer >= 0", n_steps, source=scenario.name)
     k0 = 0 if t_start is None else round((float(t_start) - grid.t0) / grid.dt)

@@ -38,7 +38,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import gammaln
 
-from tmaplan.errors import ArgumentError, EstimationError, is_integer
+from tmaplan.errors import ArgumentError, EstimationError, finite_real, is_integer
 from tmaplan.geometry import mp_to_cart, wrap_angle, wrap_half_angle
 
 __all__ = [
@@ -216,8 +216,7 @@ def _check_common(z: np.ndarray, t: np.ndarray, sigma: float, ambiguity: str) ->
     if not (np.isfinite(z).all() and np.isfinite(t).all()):
         raise ArgumentError("bearings", "finite bearings [rad] at finite times [s]",
                             "a NaN or infinite value")
-    if not (np.isfinite(sigma) and sigma > 0):
-        raise ArgumentError("sigma", "a finite bearing std > 0 [rad]", sigma)
+    finite_real("sigma", sigma, "a finite bearing std > 0 [rad]", lower=0.0, strict=True)
     if ambiguity not in ("none", "pi"):
         raise ArgumentError("ambiguity", "'none' or 'pi'", ambiguity)
 
@@ -320,10 +319,9 @@ def initialise_from_bearings(
         raise ArgumentError("r_min/r_max", "0 < r_min < r_max < inf [m]", (r_min, r_max))
     if not is_integer(n_particles, 1):
         raise ArgumentError("n_particles", "an integer >= 1", n_particles)
-    if not (np.isfinite(q) and q >= 0):
-        raise ArgumentError("q", "a finite process-noise intensity >= 0 [m²/s³]", q)
-    if dt is not None and not (np.isfinite(dt) and dt > 0):
-        raise ArgumentError("dt", "a finite bearing spacing > 0 [s] or None", dt)
+    finite_real("q", q, "a finite process-noise intensity >= 0 [m²/s³]", lower=0.0)
+    if dt is not None:
+        finite_real("dt", dt, "a finite bearing spacing > 0 [s] or None", lower=0.0, strict=True)
     if not 0.0 < alpha < 1.0:
         raise ArgumentError("alpha", "a probability in (0, 1)", alpha)
     if region not in ("consistent", "paper"):

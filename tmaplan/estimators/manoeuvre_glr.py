@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, finite_real, is_integer
 from tmaplan.geometry import wrap_angle
 
 __all__ = ["JumpTest", "glr_threshold", "velocity_jump_glr"]
@@ -138,8 +138,7 @@ def velocity_jump_glr(history: Sequence[Any], dt: float, *, min_after: int = 2,
     JumpTest or None
         None when the window has fewer than ``min_after`` + 1 steps or no measurement.
     """
-    if not (math.isfinite(dt) and dt > 0):
-        raise ArgumentError("dt", "a finite step > 0 s", dt)
+    finite_real("dt", dt, "a finite step > 0 s", lower=0.0, strict=True)
     if not is_integer(min_after, 1):
         raise ArgumentError("min_after", "an integer >= 1", min_after)
     if max_back is not None and not is_integer(max_back, min_after + 1):

@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from scipy.special import logsumexp
 
-from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.errors import ArgumentError, finite_real, is_integer
 from tmaplan.estimators.gvm_moments import (
     dirac_mixture,
     gvm2_from_gaussian,
@@ -147,10 +147,8 @@ class RangeOnlyConfig:
     prune: float = 1e-7
 
     def __post_init__(self) -> None:
-        if not (self.dt > 0 and np.isfinite(self.dt)):
-            raise ArgumentError("dt", "a finite step > 0 s", self.dt)
-        if not (self.q >= 0 and np.isfinite(self.q)):
-            raise ArgumentError("q", "a finite intensity >= 0 m²/s³", self.q)
+        finite_real("dt", self.dt, "a finite step > 0 s", lower=0.0, strict=True)
+        finite_real("q", self.q, "a finite intensity >= 0 m²/s³", lower=0.0)
         if self.mode not in ("mixture", "moments", "dirac"):
             raise ArgumentError("mode", "'mixture', 'moments' or 'dirac'", self.mode)
         if self.component_cov not in ("exact", "paper"):
@@ -161,8 +159,8 @@ class RangeOnlyConfig:
                           ("max_components", 1), ("max_sectors", 1)):
             if not is_integer(getattr(self, name), low):
                 raise ArgumentError(name, f"an integer >= {low}", getattr(self, name))
-        if not (self.sagitta > 0 and np.isfinite(self.sagitta)):
-            raise ArgumentError("sagitta", "a finite number > 0 (multiple of σ_r)", self.sagitta)
+        finite_real("sagitta", self.sagitta, "a finite number > 0 (multiple of σ_r)", lower=0.0,
+                    strict=True)
         if not 0.0 <= self.tail < 0.5:
             raise ArgumentError("tail", "a probability in [0, 0.5)", self.tail)
         if not 0.0 <= self.prune < 1.0:
@@ -242,14 +240,11 @@ def single_point_prior(r0: float, bearing0: float, sigma_r: float, sigma_bearing
     RangeOnlyState
     """
     v = np.asarray(velocity_mean, float)
-    if not (np.isfinite(r0) and r0 > 0):
-        raise ArgumentError("r0", "a finite range > 0 [m]", r0)
-    if not np.isfinite(bearing0):
-        raise ArgumentError("bearing0", "a finite bearing [rad]", bearing0)
+    finite_real("r0", r0, "a finite range > 0 [m]", lower=0.0, strict=True)
+    finite_real("bearing0", bearing0, "a finite bearing [rad]")
     for name, value in (("sigma_r", sigma_r), ("sigma_bearing", sigma_bearing),
                         ("velocity_std", velocity_std)):
-        if not (np.isfinite(value) and value >= 0):
-            raise ArgumentError(name, "a finite std >= 0", value)
+        finite_real(name, value, "a finite std >= 0", lower=0.0)
     if v.shape != (2,) or not np.isfinite(v).all():
         raise ArgumentError("velocity_mean", "a finite relative velocity of shape (2,) [m/s]",
                             v.tolist())
@@ -319,10 +314,8 @@ def range_only_update(state: RangeOnlyState, r: float, sigma_r: float,
     ArgumentError
         If ``r`` is not finite or ``sigma_r`` is not finite and > 0.
     """
-    if not np.isfinite(r):
-        raise ArgumentError("r", "a finite measured range [m]", r)
-    if not (np.isfinite(sigma_r) and sigma_r > 0):
-        raise ArgumentError("sigma_r", "a finite range std > 0 [m]", sigma_r)
+    finite_real("r", r, "a finite measured range [m]")
+    finite_real("sigma_r", sigma_r, "a finite range std > 0 [m]", lower=0.0, strict=True)
     if not r > 0:
         return state
     if config.mode == "mixture":

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, as_real
+from tmaplan.errors import ArgumentError, finite_real
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
 from tmaplan.estimators.particle_filter import PFConfig
@@ -132,8 +132,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         raise ArgumentError("target", f"a finite absolute target track of shape ({K + 1}, 4)",
                             f"shape {target.shape}" if target.shape != (K + 1, 4)
                             else "non-finite values")
-    if filter_q is not None and not (np.isfinite(as_real(filter_q)) and filter_q >= 0):
-        raise ArgumentError("filter_q", "a finite intensity >= 0 [m²/s³]", filter_q)
+    if filter_q is not None:
+        finite_real("filter_q", filter_q, "a finite intensity >= 0 [m²/s³]", lower=0.0)
     noise = draw_common_noise(scenario, noise_rng)
     v0 = initial_velocity(scenario.observer)
     heading, speed = (float(x) for x in course_speed(v0))

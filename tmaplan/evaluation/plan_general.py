@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, as_real, is_integer
+from tmaplan.errors import ArgumentError, as_real, finite_real, is_integer
 from tmaplan.evaluation.metrics import PairedDifference
 from tmaplan.evaluation.plan_check import plan_campaign, planned_differences, tune_single_turn
 from tmaplan.scenario import Scenario
@@ -91,8 +91,7 @@ class ProblemFamily:
                   and v[0] <= v[1] and (lo <= v[0] if closed else lo < v[0]) and v[1] <= hi)
             if not ok:
                 raise ArgumentError(name, f"(low, high) with low <= high, each {text}", v)
-        if not (math.isfinite(as_real(self.horizon_step)) and self.horizon_step > 0):
-            raise ArgumentError("horizon_step", "> 0 s", self.horizon_step)
+        finite_real("horizon_step", self.horizon_step, "> 0 s", lower=0.0, strict=True)
         if math.floor(self.horizon[1] / self.horizon_step + 1e-9) < math.ceil(
                 self.horizon[0] / self.horizon_step - 1e-9):
             raise ArgumentError("horizon", f"an interval holding a multiple of horizon_step "

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, as_real, is_integer
+from tmaplan.errors import ArgumentError, as_real, finite_real, is_integer
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
@@ -96,10 +96,8 @@ def ping_candidates(scenario: Scenario, times: np.ndarray, *,
         t = times[cand]
         cand = cand[~((t >= a) & (t <= b))]
     if min_spacing is not None:
-        spacing = as_real(min_spacing)
-        if not (np.isfinite(spacing) and spacing >= 0):
-            raise ArgumentError("min_spacing", "a finite time >= 0 s (None: "
-                                "planning.ping_min_spacing)", min_spacing)
+        spacing = finite_real("min_spacing", min_spacing, "a finite time >= 0 s (None: "
+                              "planning.ping_min_spacing)", lower=0.0)
     else:
         spacing = float(pl.ping_min_spacing if pl is not None else 0.0)
     return cand, max(1, math.ceil(spacing / float(scenario.time.dt) - 1e-9)), spacing

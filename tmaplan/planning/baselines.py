@@ -81,10 +81,8 @@ def _start(scenario: Scenario, heading0: float | None, speed: float | None,
 
 def _rate(scenario: Scenario, turn_rate: float | None) -> float:
     if turn_rate is not None:
-        if not (np.isfinite(r := as_real(turn_rate)) and r > 0):
-            raise ArgumentError("turn_rate", "a finite turn rate > 0 [rad/s] (None: "
-                                "observer.turn_rate_max)", turn_rate)
-        return r
+        return finite_real("turn_rate", turn_rate, "a finite turn rate > 0 [rad/s] (None: "
+                           "observer.turn_rate_max)", lower=0.0, strict=True)
     limit = scenario.observer.turn_rate_max
     if limit is None or limit <= 0:
         raise PlanningError(f"{scenario.name}: baselines need observer.turn_rate_max > 0")
@@ -161,9 +159,8 @@ def zigzag_track(scenario: Scenario, leg_duration: float, angle: float, *,
     """
     dt = scenario.time.dt
     # a leg shorter than a step cannot be flown (and 1e-9 s built ~1e12 legs: a hang)
-    if not (np.isfinite(leg := as_real(leg_duration)) and leg >= dt):
-        raise ArgumentError("leg_duration", f"a finite time >= one step (dt = {dt:g} s)",
-                            leg_duration)
+    leg = finite_real("leg_duration", leg_duration, f"a finite time >= one step (dt = {dt:g} s)",
+                      lower=dt)
     angle = finite_real("angle", angle, "a finite angle [rad]")
     leg_duration = leg
     h, s, p = _start(scenario, heading0, speed, position0)
@@ -300,8 +297,8 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
 
     if not is_integer(n_samples, 4):
         raise ArgumentError("n_samples", "an integer >= 4", n_samples)
-    if not (np.isfinite(as_real(rate_max)) and as_real(rate_max) > 0):
-        raise ArgumentError("rate_max", "a finite bearing rate > 0 [rad per sample]", rate_max)
+    rate_max = finite_real("rate_max", rate_max, "a finite bearing rate > 0 [rad per sample]",
+                           lower=0.0, strict=True)
     for field, value in (("n_arcs", n_arcs), ("n_starts", n_starts)):
         if not is_integer(value, 1):
             raise ArgumentError(field, "an integer >= 1", value)

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, ScenarioError, as_real
+from tmaplan.errors import ArgumentError, ScenarioError, as_real, finite_real
 from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
@@ -88,11 +88,10 @@ class AlarmResponse:
                 or self.extra_pings < 0):
             raise ArgumentError("alarm_response.extra_pings", "an integer >= 0",
                                 self.extra_pings)
-        if self.spacing is not None and not (math.isfinite(sp := as_real(self.spacing))
-                                             and sp > 0):
+        if self.spacing is not None:
             # (inf: the first ping of a response would be due at 0·inf = NaN, never)
-            raise ArgumentError("alarm_response.spacing", "a finite time > 0 [s]",
-                                self.spacing)
+            finite_real("alarm_response.spacing", self.spacing, "a finite time > 0 [s]",
+                        lower=0.0, strict=True)
 
     def wrap(self, controller: Controller, scenario: Scenario) -> AlarmResponder:
         """The per-run controller: ``controller`` plus the alarm pings

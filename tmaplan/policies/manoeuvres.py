@@ -10,7 +10,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, as_real, is_integer
+from tmaplan.errors import (
+    ArgumentError,
+    PlanningError,
+    ScenarioError,
+    as_real,
+    finite_real,
+    is_integer,
+)
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -104,7 +111,8 @@ class SingleTurn:
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class Zigzag:
     """Legs of ``leg_duration`` [s] alternately ``+angle`` and ``−angle`` [rad] about the
-    initial course, turning at the maximum rate; the first leg starts at ``start`` [s].
+    initial course, turning at the maximum rate; the first leg starts at ``start`` [s] (at t0
+    by default).
 
     Attributes
     ----------
@@ -113,36 +121,40 @@ class Zigzag:
     angle : float
         Course of the first leg from the initial course [rad], in [−π, π] (negative: the
         first leg to port); each later turn is ``2·angle`` the other way.
-    start : float
-        Start of the first leg [s], in [t0, t0 + horizon).
+    start : float, optional
+        Start of the first leg [s] on the scenario clock (absolute, like ``t0``), in
+        [t0, t0 + horizon); None (default): t0, whatever t0 is. :meth:`nominal_track` needs
+        the start at t0.
     """
 
     leg_duration: float
     angle: float
-    start: float = 0.0
+    start: float | None = None
     name: str = "zigzag"
 
-    def _check(self, scenario: Scenario) -> None:
-        """ArgumentError naming the first invalid field."""
+    def _check(self, scenario: Scenario) -> float:
+        """The start [s] of the first leg, or ArgumentError naming the first invalid field."""
         dt = scenario.time.dt  # a shorter leg cannot be flown (1e-9 s hung building legs)
-        if not (math.isfinite(leg := as_real(self.leg_duration)) and leg >= dt):
-            raise ArgumentError("zigzag.leg_duration", f">= one step (dt = {dt:g} s)",
-                                self.leg_duration)
+        finite_real("zigzag.leg_duration", self.leg_duration, f">= one step (dt = {dt:g} s)",
+                    lower=dt)
         if not (math.isfinite(a := as_real(self.angle)) and abs(a) <= math.pi):
             raise ArgumentError("zigzag.angle", "an angle in [−π, π] rad", self.angle)
         t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
+        if self.start is None:
+            return float(t0)
         if not (math.isfinite(t := as_real(self.start)) and t0 <= t < end):
             raise ArgumentError("zigzag.start", f"a time in [t0, t0 + horizon) = "
-                                f"[{t0:g}, {end:g}) s", self.start)
+                                f"[{t0:g}, {end:g}) s (None: t0)", self.start)
+        return t
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the zig-zag course schedule."""
-        self._check(scenario)
+        t = self._check(scenario)
         u_max, dt = _turn_limits(scenario)
         c0 = _initial_course(scenario)
         end = scenario.time.t0 + scenario.time.horizon
         sched = [(scenario.time.t0, c0)]
-        t, sign = float(self.start), 1.0
+        sign = 1.0
         while t < end:
             sched.append((t, c0 + sign * float(self.angle)))
             t += float(self.leg_duration)
@@ -153,8 +165,7 @@ class Zigzag:
         """The own-ship track flown (used to schedule pings offline)."""
         from tmaplan.planning.baselines import zigzag_track
 
-        self._check(scenario)
-        if self.start != scenario.time.t0:
+        if self._check(scenario) != scenario.time.t0:
             raise PlanningError("zigzag.nominal_track: only zig-zags starting at t0")
         return zigzag_track(scenario, float(self.leg_duration), 2.0 * float(self.angle))
 
@@ -425,8 +436,8 @@ def _check_receding(policy: Receding) -> None:
     """ArgumentError naming the first invalid time or step count of ``policy``."""
     for field in ("replan_interval", "horizon"):
         v = getattr(policy, field)
-        if v is not None and not (math.isfinite(x := as_real(v)) and x > 0):
-            raise ArgumentError(f"receding.{field}", "> 0 s", v)
+        if v is not None:
+            finite_real(f"receding.{field}", v, "> 0 s", lower=0.0, strict=True)
     n = policy.rti_steps
     if not is_integer(n, 1):
         raise ArgumentError("receding.rti_steps", "an integer >= 1", n)

@@ -24,6 +24,10 @@ RANGE_CASES = [
     (["plan", "default", "--horizon", "8 days"], "at most 604800 s"),
     (["plan", "default", "--horizon", "100000"], f"at most {MAX_PLAN_STEPS} steps"),
     (["plan", "default", "--horizon", "50 s"], "whole number (>= 1) of control intervals"),
+    # past the problem's 45 min: a track off its grid (refused by schedule --observer-plan)
+    (["plan", "default", "--horizon", "60 min"],
+     "--horizon': expected at most the problem's horizon of 2700 s (45 min), received "
+     "'3600 s (60 min)'"),
     (["plan", "default", "--control-interval", "20 s"], "whole number of steps of dt = 15 s"),
     (["plan", "default", "--starts", "0"], "--starts must be >= 1, received 0"),
     (["plan", "default", "--starts", "100"], "--starts must be <= 64"),

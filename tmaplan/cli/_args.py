@@ -57,6 +57,7 @@ __all__ = [
     "add_problem_argument",
     "add_seed_argument",
     "duration",
+    "frequency_lines",
     "integer",
     "json_path",
     "minutes",
@@ -138,6 +139,12 @@ def integer(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
 
     parse.__name__ = "integer"
     return parse
+
+
+def frequency_lines(text: str) -> int | None:
+    """Type of ``crlb`` / ``track --frequencies``: a number of lines >= 0, or ``all`` (None:
+    every line of the problem, the default of :func:`tmaplan.bounds.crlb.crlb`)."""
+    return None if text.strip().lower() == "all" else integer(0)(text)
 
 
 def seed(text: str) -> int:
@@ -356,7 +363,7 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
 
 def _check_frequencies(args: argparse.Namespace, scenario: Any) -> None:
     available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
-    if getattr(args, "frequencies", 0) > available:
+    if (getattr(args, "frequencies", 0) or 0) > available:
         raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
                           args.frequencies, scenario)
 

@@ -160,3 +160,26 @@ def test_rank_costs_report_command_keeps_every_setting(monkeypatch, tmp_path):
         "tmaplan.ranking_report.write_ranking_report": None})
     for part in ("--accuracy 0.2", "--plans none", "--cost-samples 50", "--resamples 10"):
         assert part in cmd, cmd
+
+
+def test_equal_policies_fingerprint_equally_with_numpy_scalars():
+    """``UniformPings(budget=np.int64(3)) == UniformPings(budget=3)``, but the fingerprint
+    hashed the repr (``np.int64(3)`` vs ``3``): the same campaign was keyed twice and a resume
+    recomputed every run. Numpy scalars now hash as the Python value they equal; the
+    fingerprints of policies with plain Python values are unchanged (pinned)."""
+    from tmaplan.evaluation.records import policy_fingerprint as fp
+    from tmaplan.policies import ScheduledPings, SingleTurn, UniformPings, Zigzag
+
+    turn = Combined(manoeuvre=SingleTurn(angle=1.0, time=600.0), ping=UniformPings(budget=3))
+    zig = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5),
+                   ping=ScheduledPings(steps=(3, 9)))
+    assert (fp(turn), fp(zig)) == ("2e5e615a6212ee4d", "3c56d468aa44a60d")  # stored keys
+    turn_np = Combined(manoeuvre=SingleTurn(angle=np.float64(1.0), time=np.float32(600.0)),
+                       ping=UniformPings(budget=np.int64(3)))
+    zig_np = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5),
+                      ping=ScheduledPings(steps=(np.int64(3), np.int32(9))))
+    assert turn_np == turn and zig_np == zig
+    assert fp(turn_np) == fp(turn) and fp(zig_np) == fp(zig)
+    assert fp(UniformPings(budget=4)) != fp(UniformPings(budget=np.int64(3)))
+    # booleans and mapping keys alike
+    assert fp({np.int64(2): np.True_, 10: "a"}) == fp({2: True, 10: "a"})

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -70,11 +71,20 @@ def test_debug_shows_traceback(tmp_path):
 
 
 def test_demo_writes_report(tmp_path):
+    # a compare in the same --out first: both wrote <out>/report.html (and rmse.png, ...),
+    # so the demo overwrote the compare's report; each now has its own directory
+    cj = tmp_path / "compare.json"
+    assert main(["compare", "default", "--policies", "straight", "--runs", "1", "--particles",
+                 "100", "--out", str(tmp_path), "--json", str(cj)]) == 0
+    compare_report = Path(json.loads(cj.read_text())["report"])
     # the demo at toy size: plan, schedule, compare every demo policy, report
     js = tmp_path / "demo.json"
     assert main(["demo", "--out", str(tmp_path), "--runs", "2", "--particles", "400",
                  "--workers", "1", "--json", str(js)]) == 0
-    text = (tmp_path / "report.html").read_text()
+    assert "tmaplan compare: default" in compare_report.read_text()  # not overwritten
+    assert compare_report == tmp_path / "default_compare" / "report.html"
+    assert json.loads(js.read_text())["report"] == str(tmp_path / "demo" / "report.html")
+    text = (tmp_path / "demo" / "report.html").read_text()
     assert text.count("data:image/png;base64,") == 5  # plan, schedule, rmse, tracks, tta
     d = json.loads(js.read_text())
     from tmaplan.cli.demo import DEMO_POLICIES

@@ -24,6 +24,10 @@ RANGE_CASES = [
     (["plan", "default", "--horizon", "8 days"], "at most 604800 s"),
     (["plan", "default", "--horizon", "100000"], f"at most {MAX_PLAN_STEPS} steps"),
     (["plan", "default", "--horizon", "50 s"], "whole number (>= 1) of control intervals"),
+    # past the problem's 45 min: a track off its grid (refused by schedule --observer-plan)
+    (["plan", "default", "--horizon", "60 min"],
+     "--horizon': expected at most the problem's horizon of 2700 s (45 min), received "
+     "'3600 s (60 min)'"),
     (["plan", "default", "--control-interval", "20 s"], "whole number of steps of dt = 15 s"),
     (["plan", "default", "--starts", "0"], "--starts must be >= 1, received 0"),
     (["plan", "default", "--starts", "100"], "--starts must be <= 64"),
@@ -258,3 +262,28 @@ def test_simulate_summary_is_named_in_minutes_and_has_no_prior_warning(capsys):
     assert out.err == ""
     assert "1000 steps of 6 s over 100 min" in out.out
     assert "1000 bearing (sensors[0])" in out.out
+
+
+def test_crlb_frequencies_all_is_the_library_default(tmp_path):
+    """`tmaplan crlb` counts no frequency line by default (as `track`, whose MLE bound is this
+    one), the library's crlb() every line: `--frequencies all` gives the library's default,
+    and the default's difference is visible in the JSON."""
+    from tmaplan.bounds.crlb import crlb
+
+    sc = load_problem("clavard2013-halfturn-cw")
+    lib = crlb(sc)  # library default: every line
+    default, every = tmp_path / "d.json", tmp_path / "a.json"
+    assert main(["crlb", sc.name, "--no-figure", "--json", str(default)]) == 0
+    assert main(["crlb", sc.name, "--frequencies", "all", "--no-figure", "--json",
+                 str(every)]) == 0
+    d, a = json.loads(default.read_text()), json.loads(every.read_text())
+    assert a["frequencies"] == len(sc.sensors_of("frequency")[0].f0) > 0 == d["frequencies"]
+    assert a["final_range_std"] == pytest.approx(lib.final_range_std, rel=1e-12)
+    assert d["final_range_std"] == pytest.approx(crlb(sc, frequencies=0).final_range_std,
+                                                 rel=1e-12)
+    # track takes the same value; its MLE bound is the CRLB of the same lines
+    tj = tmp_path / "t.json"
+    assert main(["track", sc.name, "--estimator", "mle", "--runs", "1", "--frequencies", "all",
+                 "--no-figure", "--json", str(tj)]) == 0
+    assert json.loads(tj.read_text())["bound_range"][-1] == pytest.approx(
+        lib.final_range_std, rel=1e-6)

@@ -78,6 +78,38 @@ def test_a_constant_cost_has_no_correlation():
     assert np.isnan(c.spearman) and np.isnan(c.kendall) and np.isnan(c.spearman_ci[0])
 
 
+def test_a_nan_cost_leaves_that_candidate_out_and_says_so():
+    """A cost undefined (NaN) on one candidate made its ρ, τ and intervals NaN silently; the
+    other candidates are ranked, the number left out is reported (``excluded``, warning)."""
+    tta, fre = _ordered_runs()
+    gappy = np.arange(6.0)
+    gappy[2] = np.nan
+    with pytest.warns(RuntimeWarning, match="'gappy': 1 of 6 candidates have a NaN cost"):
+        g, full = rank_correlations({"gappy": gappy, "full": np.arange(6.0)}, tta, fre,
+                                    censor=1e4, n_resamples=50)
+    one = pytest.approx(1.0, abs=1e-12)
+    assert g.spearman == one and g.kendall == one and g.spearman_rmse == one
+    assert g.spearman_ci == (one, one) and g.excluded == 1 and full.excluded == 0
+    assert np.isnan(g.values[2])  # the values are kept as given
+    # the same as ranking the five others alone
+    keep = np.arange(6) != 2
+    (alone,) = rank_correlations({"gappy": gappy[keep]}, tta[keep], fre[keep], censor=1e4,
+                                 n_resamples=50)
+    assert dataclasses.replace(alone, values=g.values, excluded=1) == g
+    # fewer than three defined values: no correlation
+    gappy[:4] = np.nan
+    (few,) = rank_correlations({"gappy": gappy}, tta, fre, censor=1e4, n_resamples=20)
+    assert np.isnan(few.spearman) and np.isnan(few.spearman_ci[0]) and few.excluded == 4
+
+
+def test_an_infinite_cost_is_ranked_as_the_worst():
+    # not a defect: an unbounded bound (unobservable track) is ranked, not left out
+    tta, fre = _ordered_runs()
+    (c,) = rank_correlations({"x": np.array([1.0, 2, 3, 4, 5, np.inf])}, tta, fre,
+                             censor=1e4, n_resamples=20)
+    assert c.spearman == pytest.approx(1.0, abs=1e-12) and c.excluded == 0
+
+
 def test_rank_correlations_need_three_candidates():
     tta, fre = _ordered_runs(C=2)
     with pytest.raises(ArgumentError, match="field 'candidates': expected >= 3"):
@@ -218,7 +250,13 @@ def test_rank_costs_end_to_end_resumes_and_ranks_an_oracle_first(scenario, tmp_p
     by_end = {tuple(np.round(c.policy.nominal_track(scenario).position[-1], 3)): t
               for c, t in zip(_small(scenario), first.time_to_accuracy)}
     oracle = {"oracle": lambda tr: by_end[tuple(np.round(tr.position[-1], 3))]}
+    worst = max(by_end.values())  # the oracle, undefined on one candidate: three ranked
+    oracle["gappy"] = lambda tr: (np.nan if oracle["oracle"](tr) == worst
+                                  else oracle["oracle"](tr))
     second = rank_costs(scenario, extra_costs=oracle, **kw)
+    gappy = next(c for c in second.to_json()["costs"] if c["name"] == "gappy")
+    assert gappy["excluded"] == 1 and gappy["spearman"] == pytest.approx(1.0, abs=1e-12)
+    assert second.skipped["cost gappy"].startswith("1 of 4 candidates with a NaN cost")
     assert second.campaign.computed_runs == () and second.campaign.loaded_runs == (0, 1)
     np.testing.assert_array_equal(second.time_to_accuracy, first.time_to_accuracy)
     assert len(set(first.time_to_accuracy)) == 4        # no ties: the oracle's order is strict

@@ -164,3 +164,40 @@ def test_plan_joint_history_never_reports_a_rejected_heading_block(scenario, mon
     res = joint.plan_joint(scenario, budget=2, belief=object())
     assert res.objective == 90.0
     assert all(b <= a for a, b in zip(res.history, res.history[1:])), res.history
+
+
+def test_the_offline_schedule_cache_is_bounded_lru(scenario, monkeypatch):
+    """``_SCHEDULE_CACHE`` grew by one schedule per (scenario, budget, method, objective,
+    track) for the life of the process; it keeps the most recently used ones only, and a
+    cached schedule is the scheduler's steps, read only."""
+    from collections import OrderedDict
+
+    import tmaplan.planning
+    import tmaplan.policies.pings as pings
+
+    real = tmaplan.planning.schedule_pings
+    calls = []
+
+    def counted(sc, *, budget, **kw):
+        calls.append(budget)
+        return real(sc, budget=budget, **kw)
+
+    monkeypatch.setattr(tmaplan.planning, "schedule_pings", counted)
+    monkeypatch.setattr(pings, "_SCHEDULE_CACHE", OrderedDict())
+    monkeypatch.setattr(pings, "_SCHEDULE_CACHE_SIZE", 2, raising=False)
+
+    def steps(budget):
+        return pings._offline_schedule(scenario, budget, "greedy", "mean-range-bound")
+
+    first = steps(1)
+    assert np.array_equal(first, real(scenario, budget=1, method="greedy",
+                                      objective="mean-range-bound").steps)
+    assert not first.flags.writeable
+    steps(2)
+    assert steps(1) is first and calls == [1, 2]   # a hit, now the most recent
+    steps(3)                                         # evicts budget 2, the least recent
+    assert len(pings._SCHEDULE_CACHE) == 2 and calls == [1, 2, 3]
+    assert steps(1) is first and calls == [1, 2, 3]
+    assert np.array_equal(steps(2), real(scenario, budget=2, method="greedy",
+                                         objective="mean-range-bound").steps)
+    assert calls == [1, 2, 3, 2] and len(pings._SCHEDULE_CACHE) == 2

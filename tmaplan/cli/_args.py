@@ -19,9 +19,10 @@ each is refused with its value in the message):
 ``--accuracy``         in (0, 1)
 ``--seed``             an integer >= 0 (``numpy.random.SeedSequence``)
 time flags             > 0 (``--min-spacing`` >= 0), at most :data:`MAX_DURATION`
-``plan --horizon``     at most :data:`MAX_PLAN_STEPS` grid steps (the heading OCP grows with
-                       the number of steps; ``plan default --starts 1`` took 3 s for 180
-                       steps, 12 s for 720 and 21 s for 1440 on 2 cores, ×4 with 4 starts)
+``plan --horizon``     at most the problem's ``time.horizon`` and :data:`MAX_PLAN_STEPS`
+                       grid steps (the heading OCP grows with the number of steps;
+                       ``plan default --starts 1`` took 3 s for 180 steps, 12 s for 720 and
+                       21 s for 1440 on 2 cores, ×4 with 4 starts)
 =====================  ==========================================================
 """
 
@@ -56,6 +57,7 @@ __all__ = [
     "add_problem_argument",
     "add_seed_argument",
     "duration",
+    "frequency_lines",
     "integer",
     "json_path",
     "minutes",
@@ -137,6 +139,12 @@ def integer(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
 
     parse.__name__ = "integer"
     return parse
+
+
+def frequency_lines(text: str) -> int | None:
+    """Type of ``crlb`` / ``track --frequencies``: a number of lines >= 0, or ``all`` (None:
+    every line of the problem, the default of :func:`tmaplan.bounds.crlb.crlb`)."""
+    return None if text.strip().lower() == "all" else integer(0)(text)
 
 
 def seed(text: str) -> int:
@@ -329,6 +337,10 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         raise _flag_error("--horizon", f"at most {MAX_PLAN_STEPS} steps of dt = {dt:g} s "
                           f"({_seconds_text(MAX_PLAN_STEPS * dt)}, documented limit)",
                           f"{_seconds_text(args.horizon)} = {k} steps", scenario)
+    h = float(scenario.time.horizon)
+    if k > scenario.n_steps:  # a plan past the problem's end: beyond its measurements
+        raise _flag_error("--horizon", f"at most the problem's horizon of {_seconds_text(h)}",
+                          _seconds_text(args.horizon), scenario)
     n = args.horizon / tc
     if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
         raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
@@ -351,7 +363,7 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
 
 def _check_frequencies(args: argparse.Namespace, scenario: Any) -> None:
     available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
-    if getattr(args, "frequencies", 0) > available:
+    if (getattr(args, "frequencies", 0) or 0) > available:
         raise _flag_error("--frequencies", f"0..{available} (lines of {scenario.name})",
                           args.frequencies, scenario)
 
@@ -429,7 +441,9 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
 
     Raises :class:`tmaplan.errors.ArgumentError` naming the flag for: ``plan --horizon`` /
     ``--control-interval`` not whole (``--control-interval`` alone: in the problem's planning
-    horizon) or over :data:`MAX_PLAN_STEPS`, ``plan --pings`` with an
+    horizon) or over :data:`MAX_PLAN_STEPS`, ``plan --horizon`` past the problem's
+    ``time.horizon`` (the plan's track would leave the problem's grid, which
+    ``schedule --observer-plan`` refuses), ``plan --pings`` with an
     objective that has no joint form or more pings than steps; ``schedule --budget`` over the
     number of steps; ``crlb`` / ``track --frequencies`` over the problem's lines;
     ``compare --policies`` empty or repeated; ``bound --ping-every``

@@ -1,4 +1,9 @@
-"""``tmaplan compare P --policies a,b,.. --runs N``: Monte Carlo policy comparison."""
+"""``tmaplan compare P --policies a,b,.. --runs N``: Monte Carlo policy comparison.
+
+The report and its figures go to ``<out>/P_compare/`` (``tmaplan demo`` writes to
+``<out>/demo/``, another problem to its own directory: no report overwrites another's); the
+runs are stored in ``<out>/campaign-<key>/`` and reloaded by the same campaign.
+"""
 
 from __future__ import annotations
 
@@ -55,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Run or resume the campaign, write figures and ``report.html``."""
+    """Run or resume the campaign, write figures and ``<out>/<problem>_compare/report.html``."""
     scenario = load(args.problem)
     policies = tuple(p.strip() for p in args.policies.split(",") if p.strip())
     spec = CampaignSpec(scenario=scenario, policies=policies, runs=args.runs,
@@ -69,7 +74,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                        f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
                        f"--particles {args.particles} --accuracy {args.accuracy} "
                        f"--truth {args.truth}")
-    report = write_report(result, args.out, command=cmd,
+    report = write_report(result, Path(args.out) / f"{scenario.name}_compare", command=cmd,
                           title=f"tmaplan compare: {scenario.name}")
     payload = result.to_json()
     for name, e in efficiency(result).items():

@@ -1,4 +1,8 @@
-"""``tmaplan crlb P [--frequencies N]``: CRLB of the batch estimate (docs/cli.md).
+"""``tmaplan crlb P [--frequencies N|all]``: CRLB of the batch estimate (docs/cli.md).
+
+``--frequencies`` defaults to 0 (bearings, and pings if any), as ``tmaplan track``, so that
+the bound ``track --estimator mle`` reports is this one; ``--frequencies all`` is the default
+of the library's :func:`tmaplan.bounds.crlb.crlb` (every frequency line of the problem).
 
 JSON (SI units): ``parameters`` (final-time parametrisation Z_N: target position at t_N, then
 the remaining motion parameters and the tones), ``std`` (CRLB std of each, same order),
@@ -17,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds.crlb import CRLBResult, crlb
-from tmaplan.cli._args import add_figure_arguments, add_problem_argument, integer
+from tmaplan.cli._args import add_figure_arguments, add_problem_argument, frequency_lines
 from tmaplan.scenario import Scenario, load
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
@@ -27,11 +31,13 @@ FINITE = ("final_range_std",)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """``P`` (problem name or .toml path), ``--frequencies N``, ``--out``, ``--no-figure``."""
+    """``P`` (problem name or .toml path), ``--frequencies N|all``, ``--out``,
+    ``--no-figure``."""
     add_problem_argument(parser)
-    parser.add_argument("--frequencies", type=integer(0), default=0, metavar="N",
-                        help="also use the first N frequency lines of the scenario "
-                             "(default 0: bearings, and pings if any, only)")
+    parser.add_argument("--frequencies", type=frequency_lines, default=0, metavar="N|all",
+                        help="also use the first N frequency lines of the scenario, or all "
+                             "(default 0: bearings, and pings if any, only, as `tmaplan "
+                             "track`; the library's crlb() uses all lines by default)")
     add_figure_arguments(parser)
 
 

@@ -6,7 +6,10 @@
 3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding``, without
    and with pings (scheduled and uniformly spaced), by paired Monte Carlo runs of the closed
    loop (particle filter, re-planning).
-4. Write the figures and a self-contained ``report.html`` to ``--out``.
+4. Write the figures and a self-contained ``report.html`` to ``<out>/demo/``
+   (:data:`REPORT_DIR`; ``tmaplan compare P`` writes to ``<out>/P_compare/``, so neither
+   overwrites the other's report). The runs are stored in ``<out>/campaign-<key>/``, shared
+   with ``compare`` and reloaded by a second demo.
 """
 
 from __future__ import annotations
@@ -47,6 +50,9 @@ FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 #: The problem the demo works on.
 PROBLEM = "default"
 
+#: Subdirectory of ``--out`` that holds the demo's report and figures.
+REPORT_DIR = "demo"
+
 #: Policies compared by the demo (manoeuvre[+ping]).
 DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
                  "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
@@ -72,7 +78,7 @@ def _say(args: argparse.Namespace, msg: str) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Plan, schedule, compare and write ``report.html``."""
+    """Plan, schedule, compare and write ``<out>/demo/report.html``."""
     t0 = time.perf_counter()
     for name, value, low in (("--runs", args.runs, 1), ("--particles", args.particles, 2),
                              ("--workers", args.workers, 1)):
@@ -93,6 +99,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str, Any]:
     scenario = load_problem(PROBLEM)
     belief = Belief.from_prior(scenario)
+    rep = out / REPORT_DIR  # the report and its figures; the runs stay in `out`
+    rep.mkdir(parents=True, exist_ok=True)
 
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
@@ -100,7 +108,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     # `receding` policies reuse it instead of solving again
     plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers, pool=pool)
     base = evaluate_baselines(scenario, planner.objective, evaluator=planner.evaluator(belief))
-    plan_fig = plot_plan(plan, base, belief, out / "plan.png",
+    plan_fig = plot_plan(plan, base, belief, rep / "plan.png",
                          objective=planner.objective.name)
     del plan_fig
     best = {k: v[0] for k, v in base.items()}
@@ -114,7 +122,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
     sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,
                            belief=belief)
-    plot_schedule(scenario, plan.observer, belief, sched, out / "schedule.png")
+    plot_schedule(scenario, plan.observer, belief, sched, rep / "schedule.png")
     _say(args, f"      pings at {', '.join(f'{t / 60:.1f}' for t in sched.times)} min: mean "
                f"range bound {sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m,"
                f" none {sched.no_ping_objective:.0f} m)")
@@ -128,10 +136,10 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     extra = _extra_html(plan, best, sched)
     cmd = (f"tmaplan demo --runs {args.runs} --particles {args.particles} --seed {args.seed} "
            f"--workers {args.workers} --out {args.out}")
-    report = write_report(result, out, command=cmd, title="tmaplan demo: problem 'default'",
+    report = write_report(result, rep, command=cmd, title="tmaplan demo: problem 'default'",
                           extra_html=extra,
-                          figures={"planned manoeuvre": out / "plan.png",
-                                   "ping schedule": out / "schedule.png"})
+                          figures={"planned manoeuvre": rep / "plan.png",
+                                   "ping schedule": rep / "schedule.png"})
     for name in result.policies:
         s = result.summary[name]
         tta = s["time_to_accuracy"]

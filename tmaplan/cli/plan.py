@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="objective (default: the problem's planning.objective)")
     parser.add_argument("--horizon", type=duration(), default=None, metavar="T",
                         help="planning horizon, seconds or with a unit ('30 min'; default: "
-                             "the problem's)")
+                             "the problem's; at most its time.horizon)")
     parser.add_argument("--control-interval", type=duration(), default=None, metavar="T",
                         help="duration of a piecewise-constant turn rate, seconds or with a "
                              "unit ('1 min')")

@@ -17,6 +17,7 @@ from tmaplan.cli._args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
+    frequency_lines,
     integer,
 )
 from tmaplan.cli._finite import require_finite
@@ -54,9 +55,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default="mixture",
                         help="range-only: Gaussian mixture over azimuth sectors (default), or "
                              "sharma2024's single-Gaussian moment / Dirac-mixture recursion")
-    parser.add_argument("--frequencies", type=integer(0), default=0, metavar="N",
-                        help="also use the first N frequency lines of the scenario (default 0: "
-                             "bearings, and pings if any, only; as `tmaplan crlb`)")
+    parser.add_argument("--frequencies", type=frequency_lines, default=0, metavar="N|all",
+                        help="also use the first N frequency lines of the scenario, or all "
+                             "(default 0: bearings, and pings if any, only; as `tmaplan crlb`)")
     parser.add_argument("--turn-direction", default="auto",
                         choices=("auto", "either", "clockwise", "anticlockwise"),
                         help="mle, constant-turn source: sense of turn searched (auto: the "
@@ -64,9 +65,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_figure_arguments(parser)
 
 
-def _with_lines(scenario: Scenario, n: int) -> Scenario:
-    """The scenario with only the first ``n`` lines of its frequency sensors (0: none)."""
+def _with_lines(scenario: Scenario, n: int | None) -> Scenario:
+    """The scenario with only the first ``n`` lines of its frequency sensors (0: none; None:
+    all)."""
     available = max((len(s.f0) for s in scenario.sensors_of("frequency")), default=0)
+    if n is None:
+        return scenario
     if n < 0 or n > available:
         raise ArgumentError("--frequencies", f"0..{available} (lines of {scenario.name})", n)
     if n == available:

@@ -314,15 +314,17 @@ class CostCorrelation:
     ----------
     name : str
     values : ndarray, shape (C,)
-        The cost of each candidate.
+        The cost of each candidate (NaN: undefined there; ±inf: ranked as the extremes).
     spearman, kendall : float
-        Spearman ρ and Kendall τ (τ-b) with the mean time to accuracy (NaN for a constant
-        cost).
+        Spearman ρ and Kendall τ (τ-b) with the mean time to accuracy over the candidates of
+        non-NaN cost (NaN for a constant cost or fewer than three such).
     spearman_ci, kendall_ci : tuple of float
         Bootstrap percentile 95 % intervals.
     spearman_rmse, kendall_rmse : float
         The same with the final range RMSE.
     spearman_rmse_ci : tuple of float
+    excluded : int
+        Candidates left out of the correlations and intervals for a NaN cost.
     """
 
     name: str
@@ -334,6 +336,7 @@ class CostCorrelation:
     spearman_rmse: float
     spearman_rmse_ci: tuple[float, float]
     kendall_rmse: float
+    excluded: int = 0
 
 
 def _metrics(tta: np.ndarray, fre: np.ndarray, censor: float) -> tuple[np.ndarray, np.ndarray]:
@@ -343,7 +346,7 @@ def _metrics(tta: np.ndarray, fre: np.ndarray, censor: float) -> tuple[np.ndarra
 
 
 def _rho(cost: np.ndarray, metric: np.ndarray) -> tuple[float, float]:
-    if np.ptp(cost) == 0 or np.ptp(metric) == 0:
+    if cost.size < 3 or np.all(cost == cost[0]) or np.all(metric == metric[0]):
         return float("nan"), float("nan")
     return (float(stats.spearmanr(cost, metric).statistic),
             float(stats.kendalltau(cost, metric).statistic))
@@ -357,7 +360,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
     Parameters
     ----------
     costs : mapping
-        Cost name -> values, shape (C,) (a NaN value makes that cost's correlations NaN).
+        Cost name -> values (C,); a candidate of NaN cost is left out (``excluded``, a warning).
     tta : ndarray, shape (C, R)
         Time to accuracy of each candidate in each run [s] (+inf: never; NaN refused).
     fre : ndarray, shape (C, R)
@@ -407,8 +410,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
                             "e.g. the horizon + dt", censor)
     for name, v in costs.items():
         if np.shape(v) != (C,):
-            raise ArgumentError(f"costs[{name!r}]", f"one value per candidate, shape ({C},)",
-                                np.shape(v))
+            raise ArgumentError(f"costs[{name!r}]", f"shape ({C},), one per candidate", np.shape(v))
     if not 0 < as_real(level) < 1:
         raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
     for field, value in (("n_resamples", n_resamples), ("seed", seed)):
@@ -418,8 +420,12 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
     out = []
     for name, v in costs.items():
         v = np.asarray(v, float)
-        s, k = _rho(v, m_tta)
-        s2, k2 = _rho(v, m_fre)
+        ok = np.flatnonzero(~np.isnan(v))  # NaN: undefined there, the others are ranked
+        if ok.size < C:
+            warnings.warn(f"cost {name!r}: {C - ok.size} of {C} candidates have a NaN cost, "
+                          "left out of its rank correlations", RuntimeWarning, stacklevel=2)
+        s, k = _rho(v[ok], m_tta[ok])
+        s2, k2 = _rho(v[ok], m_fre[ok])
 
         def stat(runs: np.ndarray, cand: np.ndarray, v: np.ndarray = v) -> np.ndarray:
             runs, cand = runs.astype(int), cand.astype(int)
@@ -430,20 +436,18 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
         if (np.isfinite(s) or np.isfinite(s2)) and R >= 2 and n_resamples > 0:
             with np.errstate(invalid="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # degenerate resamples (constant cost)
-                bs = stats.bootstrap((np.arange(R), np.arange(C)), stat, paired=False,
+                bs = stats.bootstrap((np.arange(R), ok), stat, paired=False,
                                      vectorized=False, n_resamples=int(n_resamples),
                                      confidence_level=level, method="percentile",
                                      random_state=np.random.default_rng(seed))
-            # percentiles of the resamples where the correlation is defined (a resample of
-            # one repeated candidate has none)
-            a = 100.0 * (1.0 - level) / 2.0
+            a = 100.0 * (1.0 - level) / 2.0  # percentiles of the resamples where defined
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # all NaN: interval NaN
                 lo, hi = np.nanpercentile(bs.bootstrap_distribution, [a, 100.0 - a], axis=-1)
             cis = [(float(lo[i]), float(hi[i])) for i in range(3)]
-        out.append(CostCorrelation(name=name, values=v, spearman=s, spearman_ci=cis[0],
-                                   kendall=k, kendall_ci=cis[1], spearman_rmse=s2,
-                                   spearman_rmse_ci=cis[2], kendall_rmse=k2))
+        out.append(CostCorrelation(name=name, values=v, excluded=C - ok.size, spearman=s,
+                                   spearman_ci=cis[0], kendall=k, kendall_ci=cis[1],
+                                   spearman_rmse=s2, spearman_rmse_ci=cis[2], kendall_rmse=k2))
     return tuple(out)
 
 
@@ -506,7 +510,8 @@ class CostRankingResult:
                        "spearman_ci": list(c.spearman_ci), "kendall": c.kendall,
                        "kendall_ci": list(c.kendall_ci), "spearman_rmse": c.spearman_rmse,
                        "spearman_rmse_ci": list(c.spearman_rmse_ci),
-                       "kendall_rmse": c.kendall_rmse, "values": c.values.tolist()}
+                       "kendall_rmse": c.kendall_rmse, "excluded": c.excluded,
+                       "values": c.values.tolist()}
                       for c in self.costs],
             "candidate_names": list(self.candidates),
             "families": list(self.families),
@@ -578,14 +583,14 @@ def rank_costs(scenario: Scenario, *, candidates: int | Sequence[Candidate] = 40
     values, aliases = evaluate_costs(
         scenario, {c.name: c.policy.nominal_track(scenario) for c in cands}, fns)
     skipped.update({f"cost {k}": f"alias of {v}" for k, v in aliases.items()})
-    times = scenario.times
-    censor = float(times[-1] - times[0] + (times[1] - times[0]))
+    censor = float(scenario.times[-1] - scenario.times[0] + (scenario.times[1] - scenario.times[0]))
     tta = np.stack([camp.summary[n]["time_to_accuracy_runs"] for n in names])
-    fre = np.stack([_final_errors(camp, n) for n in names])
+    fre = np.stack([camp.summary[n]["final_range_error_runs"] for n in names]).astype(float)
     cors = rank_correlations(values, tta, fre, censor=censor, n_resamples=n_resamples,
                              seed=seed)
-    cors = tuple(sorted(cors, key=lambda c: -c.spearman if np.isfinite(c.spearman)
-                        else np.inf))
+    skipped.update({f"cost {c.name}": f"{c.excluded} of {len(names)} candidates with a NaN "
+                    "cost left out of its correlations" for c in cors if c.excluded})
+    cors = tuple(sorted(cors, key=lambda c: -c.spearman if np.isfinite(c.spearman) else np.inf))
     m_tta, m_fre = _metrics(tta, fre, censor)
     return CostRankingResult(
         problem=scenario.name, candidates=tuple(names),
@@ -593,8 +598,3 @@ def rank_costs(scenario: Scenario, *, candidates: int | Sequence[Candidate] = 40
         final_range_rmse=m_fre, censor=censor, default_objective=default_objective(scenario),
         closed_loop_objective=CLOSED_LOOP_OBJECTIVE, skipped=skipped, campaign=camp,
         seconds=time.perf_counter() - t_start)
-
-
-def _final_errors(camp: CampaignResult, name: str) -> np.ndarray:
-    """Final range error of each run [m] (their RMS is the summary's ``final_range_rmse``)."""
-    return np.asarray(camp.summary[name]["final_range_error_runs"], float)

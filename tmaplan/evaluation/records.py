@@ -62,9 +62,11 @@ def policy_fingerprint(policy: Any) -> str:
     The canonical content is the policy's dataclass tree: every node's type name and every
     field that takes part in equality (``compare=True``; caches such as ``Receding.rti`` do
     not), except wall-clock timings; arrays by dtype, shape and bytes, floats by their exact
-    hex form, callables by qualified name, scenarios by :func:`scenario_hash`. Two policies
-    with the same name but different parameters (another tuned turn, another offline plan)
-    hash differently; the same plan re-computed bit for bit hashes the same.
+    hex form, callables by qualified name, scenarios by :func:`scenario_hash`, numpy scalars
+    as the Python value they equal (``np.int64(3)`` as ``3``, ``np.True_`` as ``True``: equal
+    policies hash the same). Two policies with the same name but different parameters
+    (another tuned turn, another offline plan) hash differently; the same plan re-computed
+    bit for bit hashes the same.
 
     Parameters
     ----------
@@ -75,7 +77,11 @@ def policy_fingerprint(policy: Any) -> str:
 
     h = hashlib.sha256()
 
+    def plain(x: Any) -> Any:
+        return x.item() if isinstance(x, np.generic) else x
+
     def feed(x: Any) -> None:
+        x = plain(x)  # a numpy scalar as the Python value it equals
         if isinstance(x, Scenario):
             h.update(b"S" + scenario_hash(x).encode())
         elif dataclasses.is_dataclass(x) and not isinstance(x, type):
@@ -94,7 +100,7 @@ def policy_fingerprint(policy: Any) -> str:
             h.update(b")")
         elif isinstance(x, Mapping):
             h.update(b"{")
-            for k in sorted(x, key=repr):
+            for k in sorted(x, key=lambda k: repr(plain(k))):
                 feed(k)
                 feed(x[k])
             h.update(b"}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections import OrderedDict
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -85,24 +86,35 @@ class ScheduledPings:
                                             self.method, self.objective))
 
 
-_SCHEDULE_CACHE: dict[tuple[Any, ...], np.ndarray] = {}
+#: Offline schedules kept by :func:`_offline_schedule`, least recently used evicted first: a
+#: campaign resolves one per scheduled policy (and manoeuvre track), so a long sequence of
+#: campaigns over many scenarios holds at most this many (each key keeps its scenario alive).
+_SCHEDULE_CACHE_SIZE = 64
+_SCHEDULE_CACHE: OrderedDict[tuple[Any, ...], np.ndarray] = OrderedDict()
 
 
 def _offline_schedule(scenario: Scenario, budget: int,
                       method: Literal["exact", "relaxed", "greedy"],
                       objective: PingObjectiveName,
                       track: Any = None) -> np.ndarray:
-    """Offline ping schedule from the prior along ``track`` (default: the scripted track)."""
+    """Offline ping steps from the prior along ``track`` (default: the scripted track), read
+    only; cached (:data:`_SCHEDULE_CACHE_SIZE` most recently used)."""
     tkey = None if track is None else np.asarray(track.position).tobytes()
     key = (scenario, budget, method, objective, tkey)  # a frozen Scenario hashes its fields
-    if key not in _SCHEDULE_CACHE:
-        from tmaplan.planning import schedule_pings
+    if key in _SCHEDULE_CACHE:
+        _SCHEDULE_CACHE.move_to_end(key)
+        return _SCHEDULE_CACHE[key]
+    from tmaplan.planning import schedule_pings
 
-        # the policy needs the steps only: no certificate (it costs a conic solve per track)
-        sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
-                               observer=track, gap_reference="none")
-        _SCHEDULE_CACHE[key] = np.asarray(sched.steps, dtype=int)
-    return _SCHEDULE_CACHE[key]
+    # the policy needs the steps only: no certificate (it costs a conic solve per track)
+    sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
+                           observer=track, gap_reference="none")
+    steps = np.array(sched.steps, dtype=int)
+    steps.flags.writeable = False  # shared by every caller
+    _SCHEDULE_CACHE[key] = steps
+    while len(_SCHEDULE_CACHE) > _SCHEDULE_CACHE_SIZE:
+        _SCHEDULE_CACHE.popitem(last=False)
+    return steps
 
 
 class _StepPings:

@@ -11,6 +11,7 @@ import types
 import numpy as np
 import pytest
 
+from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, PlanningError, ScenarioError
 from tmaplan.planning import baselines
 from tmaplan.planning.belief import Belief
@@ -168,10 +169,9 @@ def test_plan_joint_history_never_reports_a_rejected_heading_block(scenario, mon
 
 def test_the_offline_schedule_cache_is_bounded_lru(scenario, monkeypatch):
     """``_SCHEDULE_CACHE`` grew by one schedule per (scenario, budget, method, objective,
-    track) for the life of the process; it keeps the most recently used ones only, and a
+    track) for the life of the process; it keeps the most recently used ones only (the one
+    :class:`tmaplan.caching.LRUCache`), and a
     cached schedule is the scheduler's steps, read only."""
-    from collections import OrderedDict
-
     import tmaplan.planning
     import tmaplan.policies.pings as pings
 
@@ -183,8 +183,7 @@ def test_the_offline_schedule_cache_is_bounded_lru(scenario, monkeypatch):
         return real(sc, budget=budget, **kw)
 
     monkeypatch.setattr(tmaplan.planning, "schedule_pings", counted)
-    monkeypatch.setattr(pings, "_SCHEDULE_CACHE", OrderedDict())
-    monkeypatch.setattr(pings, "_SCHEDULE_CACHE_SIZE", 2, raising=False)
+    monkeypatch.setattr(pings, "_SCHEDULE_CACHE", LRUCache(2))
 
     def steps(budget):
         return pings._offline_schedule(scenario, budget, "greedy", "mean-range-bound")

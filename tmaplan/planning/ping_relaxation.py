@@ -59,6 +59,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from tmaplan.caching import LRUCache
+
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
 
@@ -367,8 +369,8 @@ def _trajectory(im: InformationMatrices, u: np.ndarray) -> np.ndarray:
     return J
 
 
-_CACHE: dict[bytes, Relaxation] = {}
-_CACHE_SIZE = 8
+#: Relaxations by content, the 8 most recently used (:mod:`tmaplan.caching`).
+_CACHE: LRUCache[bytes, Relaxation] = LRUCache(8)
 
 
 def relaxation_for(ev: PingEvaluator, cand: np.ndarray, gap: int) -> Relaxation:
@@ -385,8 +387,6 @@ def relaxation_for(ev: PingEvaluator, cand: np.ndarray, gap: int) -> Relaxation:
     h.update(f"{ev.objective}|{int(gap)}".encode())
     key = h.digest()
     if key not in _CACHE:
-        if len(_CACHE) >= _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = Relaxation(ev, cand, gap)
     return _CACHE[key]
 

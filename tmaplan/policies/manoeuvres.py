@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tmaplan.caching import LRUCache
 from tmaplan.errors import (
     ArgumentError,
     PlanningError,
@@ -211,7 +212,8 @@ class Planned:
         return plan.observer
 
 
-_PLAN_CACHE: dict[tuple[Scenario, str | None], Any] = {}
+#: Offline plans by (scenario, objective), the 32 most recently used (:mod:`tmaplan.caching`).
+_PLAN_CACHE: LRUCache[tuple[Scenario, str | None], Any] = LRUCache(32)
 
 
 def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1,
@@ -352,7 +354,9 @@ class Receding:
         return offline_plan(scenario, self.objective).observer
 
 
-_PLANNER_CACHE: dict[tuple[Scenario, str | None, float | None, bool], Any] = {}
+#: Heading planners (casadi problems built once) by (scenario, objective, horizon, until_end),
+#: the 16 most recently used.
+_PLANNER_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = LRUCache(16)
 
 
 def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
@@ -370,7 +374,8 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
     return _PLANNER_CACHE[key]
 
 
-_RTI_MODEL_CACHE: dict[tuple[Scenario, str | None, float | None, bool], Any] = {}
+#: Real-time-iteration models (or their pending futures), keyed as the planners.
+_RTI_MODEL_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = LRUCache(16)
 _RTI_CACHE: dict[tuple[Scenario, str | None, float | None, bool, str, int], Any] = {}
 
 

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
-from collections import OrderedDict
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.policies._base import Action, BeliefView, Controller
 
@@ -86,11 +86,9 @@ class ScheduledPings:
                                             self.method, self.objective))
 
 
-#: Offline schedules kept by :func:`_offline_schedule`, least recently used evicted first: a
-#: campaign resolves one per scheduled policy (and manoeuvre track), so a long sequence of
-#: campaigns over many scenarios holds at most this many (each key keeps its scenario alive).
-_SCHEDULE_CACHE_SIZE = 64
-_SCHEDULE_CACHE: OrderedDict[tuple[Any, ...], np.ndarray] = OrderedDict()
+#: Offline schedules kept by :func:`_offline_schedule`, the 64 most recently used
+#: (:mod:`tmaplan.caching`): a campaign resolves one per scheduled policy (and manoeuvre track).
+_SCHEDULE_CACHE: LRUCache[tuple[Any, ...], np.ndarray] = LRUCache(64)
 
 
 def _offline_schedule(scenario: Scenario, budget: int,
@@ -98,11 +96,10 @@ def _offline_schedule(scenario: Scenario, budget: int,
                       objective: PingObjectiveName,
                       track: Any = None) -> np.ndarray:
     """Offline ping steps from the prior along ``track`` (default: the scripted track), read
-    only; cached (:data:`_SCHEDULE_CACHE_SIZE` most recently used)."""
+    only; cached (:data:`_SCHEDULE_CACHE`)."""
     tkey = None if track is None else np.asarray(track.position).tobytes()
     key = (scenario, budget, method, objective, tkey)  # a frozen Scenario hashes its fields
     if key in _SCHEDULE_CACHE:
-        _SCHEDULE_CACHE.move_to_end(key)
         return _SCHEDULE_CACHE[key]
     from tmaplan.planning import schedule_pings
 
@@ -112,8 +109,6 @@ def _offline_schedule(scenario: Scenario, budget: int,
     steps = np.array(sched.steps, dtype=int)
     steps.flags.writeable = False  # shared by every caller
     _SCHEDULE_CACHE[key] = steps
-    while len(_SCHEDULE_CACHE) > _SCHEDULE_CACHE_SIZE:
-        _SCHEDULE_CACHE.popitem(last=False)
     return steps
 
 

@@ -12,7 +12,14 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators import FilterEstimator, ParticleFilter, PFConfig, run, run_prior
+from tmaplan.estimators import (
+    FilterEstimator,
+    ParticleFilter,
+    PFConfig,
+    run,
+    run_prior,
+    seed_bearings,
+)
 from tmaplan.geometry import bearing_of, wrap_angle
 from tmaplan.scenario import RangeSensor, load_problem
 from tmaplan.simulate import simulate
@@ -132,3 +139,24 @@ def test_a_filter_with_another_time_step_is_refused(kind: str) -> None:
     assert info.value.field == "estimator.dt"
     ok = dataclasses.replace(cfg, dt=sc.time.dt)  # type: ignore[type-var]
     assert run(ok, sc, sim, rng=np.random.default_rng(1)).status in ("ok", "recovered")
+
+
+def test_the_bearing_that_seeds_the_prior_is_not_assimilated_again() -> None:
+    # Before: run_prior centred the prior bearing on the step-0 bearing and the filter then
+    # assimilated that same bearing at step 0: its information counted twice.
+    sc = _short_straight()
+    sc = sc.replace(sensors=(dataclasses.replace(sc.sensors[0], first_step=0),))
+    sim = simulate(sc, np.random.default_rng(0))
+    seed = seed_bearings(sc, sim.measurements)
+    assert seed is sim.measurements[0] and seed.steps[0] == 0
+    p = run_prior(sc, np.random.default_rng(1), sim.measurements).prior
+    assert p is not None and p.bearing_mean == float(seed.values[0])
+    spy = _Spy(PFConfig(n_particles=100, dt=sc.time.dt, q=sc.target.q))
+    run(FilterEstimator(filter=spy, init="prior"), sc, sim, rng=np.random.default_rng(1))
+    assert [s for s, _ in spy.log] == list(range(1, sc.n_steps + 1))
+    # a prior with its own bearing mean is not seeded: the step-0 bearing is a measurement
+    own = sc.replace(prior=dataclasses.replace(sc.prior, bearing_mean=float(seed.values[0])))
+    assert seed_bearings(own, sim.measurements) is None
+    spy = _Spy(PFConfig(n_particles=100, dt=sc.time.dt, q=sc.target.q))
+    run(FilterEstimator(filter=spy, init="prior"), own, sim, rng=np.random.default_rng(1))
+    assert [s for s, _ in spy.log] == list(range(0, sc.n_steps + 1))

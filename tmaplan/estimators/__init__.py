@@ -68,6 +68,7 @@ from tmaplan.estimators.runner import (
     estimator_for,
     run,
     run_prior,
+    seed_bearings,
 )
 from tmaplan.simulate import measurement_batches
 
@@ -129,6 +130,7 @@ __all__ = [
     "reduce_mixture",
     "run",
     "run_prior",
+    "seed_bearings",
     "single_point_prior",
     "state_track",
     "systematic_resample",

@@ -11,9 +11,9 @@ filter / MLE configuration; the Monte Carlo evaluation is
 
 Priors. The papers centre their priors on the truth; following Ristic et al. (ristic2004, ch. 6)
 the *centre* of the prior is itself random per run: :func:`run_prior` draws the prior bearing
-(the measured bearing at step 0 when there is one), range, speed / velocity means from the
-prior around the truth, and the filter's particles are drawn around that centre. The estimator
-never sees the true state.
+(the measured bearing at step 0 when there is one, which the filter then does not assimilate
+a second time), range, speed / velocity means from the prior around the truth, and the
+filter's particles are drawn around that centre. The estimator never sees the true state.
 """
 
 from __future__ import annotations
@@ -59,6 +59,7 @@ __all__ = [
     "estimator_for",
     "run",
     "run_prior",
+    "seed_bearings",
 ]
 
 #: Estimator names (CLI ``track --estimator``); each is built by :data:`_NAMED` below, where a
@@ -123,7 +124,7 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     Fields of the polar prior that default to the truth (``bearing_mean``, ``range_mean``,
     ``speed_mean``, ``velocity_mean``) are replaced by a draw around the truth with the
     prior's own std; the bearing mean is the measured bearing at step 0 when there is one
-    (from a sensor without ambiguity: a bearing known modulo π does not give the side).
+    (:func:`seed_bearings`; the estimators then do not assimilate that bearing again).
     Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``.
     """
     from tmaplan.models.prior import true_initial_state
@@ -142,14 +143,9 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     rel = truth[:2] - np.asarray(scenario.observer.position, float)
     changes: dict[str, Any] = {}
     if p.bearing_mean is None:
-        z0 = None
-        for ms in measurements or ():
-            # A bearing known modulo π (in (−π/2, π/2]) does not say which side: not a centre.
-            if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0 \
-                    and getattr(scenario.sensors[ms.sensor], "ambiguity", "none") == "none":
-                z0 = float(ms.values[0])
-        if z0 is None:
-            z0 = float(bearing_of(rel) + p.bearing_std * rng.standard_normal())
+        seed = seed_bearings(scenario, measurements)
+        z0 = (float(seed.values[0]) if seed is not None
+              else float(bearing_of(rel) + p.bearing_std * rng.standard_normal()))
         changes["bearing_mean"] = z0
     if p.range_mean is None:
         r = float(range_of(rel)) + float(p.range_std or 0.0) * rng.standard_normal()
@@ -165,6 +161,25 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
         s = float(range_of(v)) + p.speed_std * rng.standard_normal()
         changes["speed_mean"] = float(max(s, p.speed_min))
     return scenario.replace(prior=dataclasses.replace(p, **changes))
+
+
+def seed_bearings(scenario: Scenario, measurements: Sequence[MeasurementSet] | None
+                  ) -> MeasurementSet | None:
+    """The bearing set whose step-0 bearing centres the prior in :func:`run_prior`, or None.
+
+    The first set of a sensor without ambiguity (a bearing known modulo π does not give the
+    side) with a bearing at step 0, when the scenario's polar prior leaves ``bearing_mean`` to
+    the run. As in ristic2004 (ch. 6) that bearing *seeds* the prior: a filter started from
+    the prior must not assimilate it again (its information would count twice).
+    """
+    p = scenario.prior
+    if p is None or p.kind != "polar" or p.bearing_mean is not None:
+        return None
+    for ms in measurements or ():
+        if ms.kind == "bearing" and ms.steps.size and ms.steps[0] == 0 \
+                and getattr(scenario.sensors[ms.sensor], "ambiguity", "none") == "none":
+            return ms
+    return None
 
 
 def _observer_of(scenario: Scenario, measurements: Any, observer: ObserverTrack | None
@@ -267,7 +282,10 @@ class FilterEstimator:
                     state = self.filter.update(state, rest[int(state.step)], rng)
             else:
                 state = self.filter.init(run_prior(scenario, rng, measurements), rng)
-                state = self.filter.update(state, batches.get(0, []), rng)
+                seed = seed_bearings(scenario, measurements)  # in the prior: not again
+                at0 = batches if seed is None else measurement_batches(
+                    scenario, [ms for ms in measurements if ms is not seed], observer)
+                state = self.filter.update(state, at0.get(0, []), rng)
 
             def step(k: int, _: Any) -> tuple[np.ndarray, list[Measurement]]:
                 # Up to the end of the initialisation batch its bearings are already in.

@@ -171,12 +171,12 @@ def test_equal_policies_fingerprint_equally_with_numpy_scalars():
     from tmaplan.policies import ScheduledPings, SingleTurn, UniformPings, Zigzag
 
     turn = Combined(manoeuvre=SingleTurn(angle=1.0, time=600.0), ping=UniformPings(budget=3))
-    zig = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5),
+    zig = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5, start=0.0),
                    ping=ScheduledPings(steps=(3, 9)))
     assert (fp(turn), fp(zig)) == ("2e5e615a6212ee4d", "3c56d468aa44a60d")  # stored keys
     turn_np = Combined(manoeuvre=SingleTurn(angle=np.float64(1.0), time=np.float32(600.0)),
                        ping=UniformPings(budget=np.int64(3)))
-    zig_np = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5),
+    zig_np = Combined(manoeuvre=Zigzag(leg_duration=300.0, angle=0.5, start=0.0),
                       ping=ScheduledPings(steps=(np.int64(3), np.int32(9))))
     assert turn_np == turn and zig_np == zig
     assert fp(turn_np) == fp(turn) and fp(zig_np) == fp(zig)

@@ -4,6 +4,7 @@ and estimator/bound combinations that cannot give a number refused with a reason
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -287,3 +288,15 @@ def test_crlb_frequencies_all_is_the_library_default(tmp_path):
                  "--no-figure", "--json", str(tj)]) == 0
     assert json.loads(tj.read_text())["bound_range"][-1] == pytest.approx(
         lib.final_range_std, rel=1e-6)
+
+
+def test_a_problem_planning_horizon_past_its_end_is_refused_by_plan(tmp_path, one_line_error):
+    # `--horizon 60 min` was refused, the same horizon from the problem's [planning] table
+    # planned 15 minutes past the problem's end (bearings that are never measured)
+    from tmaplan.scenario import dump
+
+    sc = load_problem("default")
+    f = tmp_path / "long.toml"
+    f.write_text(dump(sc.replace(planning=dataclasses.replace(sc.planning, horizon=3600.0))))
+    line = one_line_error(["plan", str(f), "--no-figure"])
+    assert "planning.horizon" in line and "2700 s (45 min)" in line and "3600 s" in line

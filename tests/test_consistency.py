@@ -297,6 +297,11 @@ def test_cusum_age_and_onset_count_steps_not_bearings():
     alarm = next(a for a in states[-1].log if a["test"] == "cusum")
     # the drift began at the 11th step (index 10): the alarm at index 12 dates it 3 steps back
     assert alarm["onset"] == 3 and alarm["step"] == states[12].step
+    # two drifting bearings at the first step, one at the next: the alarm is 2 steps after the
+    # change point (3 bearings)
+    states = _steps_exact(cfg, [1] * 10 + [2, 1], [0.0] * 10 + [u * SIGMA] * 2)
+    alarm = next(a for a in states[-1].log if a["test"] == "cusum")
+    assert alarm["onset"] == 2 and [s.age[0] for s in states[9:]] == [0, 1, 2]
 
 
 def test_recovery_refilters_at_most_lookback_steps(monkeypatch):

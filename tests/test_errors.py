@@ -101,6 +101,8 @@ def _finite_real_sites():
         single_point_prior,
     )
     from tmaplan.models.tracks import cv_model
+    from tmaplan.planning.objectives import ObjectiveEvaluator
+    from tmaplan.scenario import load_problem
 
     def init(**kw):
         args = {"sigma": 0.01, "r_min": 1e3, "r_max": 1e4, "n_particles": 10,
@@ -131,10 +133,12 @@ def _finite_real_sites():
         ("sigma_r", lambda v: update(sigma_r=v)),
         ("frequencies.c", lambda v: batch_data(cv_model(), frequencies=FrequencyData(
             **freq, c=v))),
+        ("turn_rate_max", lambda v: ObjectiveEvaluator(load_problem("default"),
+                                                       turn_rate_max=v)),
     ]
 
 
-@pytest.mark.parametrize("site", range(14))
+@pytest.mark.parametrize("site", range(15))
 def test_finite_real_sites_refuse_bools_and_strings_naming_the_field(site):
     # these checks used np.isfinite on the raw value: True passed as 1, "1" raised a bare
     # TypeError of numpy; through finite_real both are an ArgumentError naming the field
@@ -157,3 +161,12 @@ def test_errors_survive_pickling_so_a_worker_process_can_raise_them():
                 SolverError("ipopt", "Infeasible_Problem_Detected", "restoration failed")):
         back = pickle.loads(pickle.dumps(err))
         assert type(back) is type(err) and str(back) == str(err) and vars(back) == vars(err)
+    # its notes cross with it, and a received value that does not pickle crosses as its repr
+    err = ArgumentError("objective", "a known name", lambda x: x)
+    err.add_note("while resolving policy 'planned'")
+    back = pickle.loads(pickle.dumps(err))
+    assert back.__notes__ == ["while resolving policy 'planned'"]
+    assert back.received.startswith("<function") and back.field == "objective"
+    solver = SolverError("ipopt", "Maximum_Iterations_Exceeded")
+    solver.add_note("re-plan 3")
+    assert pickle.loads(pickle.dumps(solver)).__notes__ == ["re-plan 3"]

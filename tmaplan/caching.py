@@ -1,11 +1,15 @@
-"""A bounded least-recently-used mapping: the one cache of built objects kept per process
-(heading planners and offline plans of the policies, offline ping schedules, relaxations,
-casadi step functions).
+"""A bounded least-recently-used mapping: the one bounded cache of built objects kept per
+process (the policies' heading planners, offline plans, real-time iterations and baseline
+parameters, offline ping schedules, ping relaxations). The casadi one-step functions of the
+closed-form bound stay in plain dicts: a handful per process (one per (dt, q)), and a cache of
+their ``mapaccum`` s is keyed on their identity, which must not be reused.
 
 A campaign over many scenarios (a :class:`tmaplan.experiments.ProblemFamily`, a sequence of
 ``compare`` calls from Python) resolves a few of these per scenario; each key keeps its
 scenario alive, so an unbounded dict grows with every problem flown in the process. An entry
-is only ever rebuilt, never changed, so the bound changes run times, not results.
+is only ever rebuilt, never changed, so the bound changes run times, not results (a ping
+relaxation rebuilt after an eviction starts its conic solver cold, which can move a relaxed
+optimum within the solver's tolerance).
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ class LRUCache(OrderedDict[_K, _V]):
     """A mapping that keeps its ``maxsize`` most recently used entries (the recipe of the
     Python documentation, :class:`collections.OrderedDict`): a lookup ``cache[key]`` or an
     assignment makes an entry the most recent; an assignment beyond ``maxsize`` entries
-    evicts the least recent. ``key in cache`` does not count as a use.
+    evicts the least recent. ``key in cache`` and ``cache.get(key)`` do not count as a use.
 
     Parameters
     ----------
@@ -54,3 +58,10 @@ class LRUCache(OrderedDict[_K, _V]):
     def __reduce__(self) -> tuple[Any, ...]:
         # OrderedDict's rebuilds with no arguments; the bound is one
         return (type(self), (self.maxsize,), None, None, iter(list(self.items())))
+
+    def copy(self) -> LRUCache[_K, _V]:
+        """A shallow copy with the same bound and order."""
+        new: LRUCache[_K, _V] = type(self)(self.maxsize)
+        for k, v in self.items():
+            OrderedDict.__setitem__(new, k, v)
+        return new

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+import pickle
 from typing import Any
 
 __all__ = [
@@ -62,9 +63,15 @@ class ArgumentError(TmaplanError, ValueError):
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt from the fields (the default, the message as the only argument, failed to
-        # unpickle: an error raised in a worker process broke the pool)
+        # unpickle: an error raised in a worker process broke the pool), with its attributes
+        # (notes); a received value that does not pickle crosses as its repr
+        received = self.received
+        try:
+            pickle.dumps(received)
+        except Exception:  # any pickling failure: the repr still informs
+            received = repr(received)
         return (functools.partial(type(self), source=self.source),
-                (self.field, self.expected, self.received))
+                (self.field, self.expected, received), {**self.__dict__, "received": received})
 
 
 class ScenarioError(ArgumentError):
@@ -114,7 +121,7 @@ class SolverError(PlanningError):
 
     def __reduce__(self) -> tuple[Any, ...]:
         # as ArgumentError.__reduce__: it crosses process boundaries
-        return (type(self), (self.solver, self.status, self.detail))
+        return (type(self), (self.solver, self.status, self.detail), dict(self.__dict__))
 
 
 def is_integer(value: Any, minimum: int) -> bool:

@@ -324,8 +324,13 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
             raise _flag_error("--pings", f"at most the {scenario.n_steps} steps of the horizon",
                               args.pings, scenario)
     if args.horizon is None:
+        h = pl.horizon if pl is not None and pl.horizon else float(scenario.time.horizon)
+        if round(h / dt) > scenario.n_steps:  # a receding horizon may; an offline plan not
+            raise _scenario_error(
+                "planning.horizon", "at most the problem's horizon of "
+                f"{_seconds_text(float(scenario.time.horizon))} for an offline plan (or give "
+                "--horizon)", _seconds_text(h), scenario)
         if getattr(args, "control_interval", None) is not None:  # else rounded silently
-            h = pl.horizon if pl is not None and pl.horizon else float(scenario.time.horizon)
             n = h / tc
             if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
                 raise _flag_error("--control-interval", "a whole number (>= 1) of intervals in "

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 import numpy as np
 
 from tmaplan.bounds.inputs import information_rates
-from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, finite_real
 from tmaplan.models.target import ncv_matrices
 
 # The parameter layout, the plan context and the shared casadi graphs live in their own
@@ -409,8 +409,8 @@ class ObjectiveEvaluator:
 
         from tmaplan.planning.belief import Belief
 
-        if turn_rate_max is not None and not (np.isfinite(turn_rate_max) and turn_rate_max >= 0):
-            raise ArgumentError("turn_rate_max", "a finite value >= 0 rad/s", turn_rate_max)
+        if turn_rate_max is not None:
+            finite_real("turn_rate_max", turn_rate_max, "a finite value >= 0 rad/s", lower=0.0)
         self.scenario = scenario
         self.objective = make_objective(objective, samples=samples)
         self.belief = belief if belief is not None else Belief.from_prior(scenario)

@@ -6,6 +6,7 @@ import dataclasses
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from tmaplan.caching import LRUCache
 from tmaplan.errors import PlanningError
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
@@ -98,7 +99,8 @@ class _Both:
             self.m.offset_courses(angle)
 
 
-_BASELINE_CACHE: dict[Scenario, dict[str, Any]] = {}
+#: The baselines' best parameters by scenario, the 32 most recently used.
+_BASELINE_CACHE: LRUCache[Scenario, dict[str, Any]] = LRUCache(32)
 
 
 def _best_baselines(scenario: Scenario) -> dict[str, Any]:

@@ -376,7 +376,9 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
 
 #: Real-time-iteration models (or their pending futures), keyed as the planners.
 _RTI_MODEL_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = LRUCache(16)
-_RTI_CACHE: dict[tuple[Scenario, str | None, float | None, bool, str, int], Any] = {}
+#: Real-time iterations (each holds its planner and QP), the 16 most recently used.
+_RTI_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool, str, int], Any] = (
+    LRUCache(16))
 
 
 def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,

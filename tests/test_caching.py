@@ -42,6 +42,8 @@ def test_lru_refuses_a_bad_size(size):
     ("tmaplan.policies.manoeuvres", "_PLAN_CACHE"),
     ("tmaplan.policies.manoeuvres", "_PLANNER_CACHE"),
     ("tmaplan.policies.manoeuvres", "_RTI_MODEL_CACHE"),
+    ("tmaplan.policies.manoeuvres", "_RTI_CACHE"),
+    ("tmaplan.policies.combine", "_BASELINE_CACHE"),
     ("tmaplan.policies.pings", "_SCHEDULE_CACHE"),
     ("tmaplan.planning.ping_relaxation", "_CACHE"),
 ])
@@ -52,3 +54,12 @@ def test_the_per_process_caches_are_bounded(module, name):
 
     cache = getattr(importlib.import_module(module), name)
     assert isinstance(cache, LRUCache) and 1 <= cache.maxsize <= 64
+
+
+def test_lru_copy_keeps_bound_and_order():
+    c: LRUCache[str, int] = LRUCache(3)
+    c["a"], c["b"] = 1, 2
+    d = c.copy()
+    assert type(d) is LRUCache and d.maxsize == 3 and list(d.items()) == [("a", 1), ("b", 2)]
+    d["c"], d["e"] = 3, 4
+    assert list(d) == ["b", "c", "e"] and list(c) == ["a", "b"]

@@ -300,3 +300,25 @@ def test_a_problem_planning_horizon_past_its_end_is_refused_by_plan(tmp_path, on
     f.write_text(dump(sc.replace(planning=dataclasses.replace(sc.planning, horizon=3600.0))))
     line = one_line_error(["plan", str(f), "--no-figure"])
     assert "planning.horizon" in line and "2700 s (45 min)" in line and "3600 s" in line
+
+
+@pytest.mark.parametrize("verb", [["compare", "--policies", "straight"], ["rank-costs"]])
+def test_truths_from_the_prior_of_a_circling_target_are_refused_up_front(tmp_path, verb,
+                                                                           one_line_error,
+                                                                           monkeypatch):
+    # draw_truth refuses a constant-turn target with --truth prior, but only in the first run,
+    # after the offline plans (minutes); the verbs now check it before anything is planned
+    from tmaplan.scenario import Prior, dump
+
+    circle = load_problem("clavard2013-halfturn-cw")
+    prior = Prior(kind="gaussian", mean=(7530.0, 11000.0, 5.0, 0.0), std=(100.0, 100.0, 1.0, 1.0))
+    f = tmp_path / "circle.toml"
+    f.write_text(dump(circle.replace(prior=prior)))
+
+    def flown(*a, **k):
+        raise AssertionError("a run was flown before the check")
+
+    monkeypatch.setattr("tmaplan.evaluation.campaigns.draw_truth", flown)
+    monkeypatch.setattr("tmaplan.simulate.draw_truth", flown)  # rank-costs imports it late
+    line = one_line_error([verb[0], str(f), *verb[1:], "--out", str(tmp_path)])
+    assert "target.model" in line and "constant-turn" in line and "--truth scenario" in line

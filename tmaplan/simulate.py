@@ -34,6 +34,7 @@ __all__ = [
     "Measurement",
     "MeasurementSet",
     "Simulation",
+    "check_truth_source",
     "draw_common_noise",
     "draw_truth",
     "measure",
@@ -288,6 +289,19 @@ def simulate(scenario: Scenario, rng: np.random.Generator | None, *,
                       relative=tgt - obs.state, measurements=meas)
 
 
+def check_truth_source(scenario: Scenario, from_prior: bool) -> None:
+    """Whether :func:`draw_truth` can draw this scenario's truths (``from_prior``: from its
+    prior), else :class:`ScenarioError`: a constant-turn target's circle (centre, radius,
+    phase, ω) is given, not an initial state a prior could replace. Callers that fly many runs
+    check it before they plan (``tmaplan compare``, ``rank-costs``)."""
+    model = scenario.target.model
+    if from_prior and scenario.prior is not None and model == "constant-turn":
+        raise ScenarioError("target.model", "'ncv' or 'multi-leg' to draw the truth from the "
+                            "prior (a constant-turn circle is given, not drawn; the "
+                            "scenario's truth: from_prior=False, compare --truth scenario)",
+                            model, source=scenario.name)
+
+
 def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool = True
                ) -> np.ndarray:
     """True absolute target track of a closed-loop run, shape (K + 1, 4).
@@ -308,13 +322,9 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
     """
     from tmaplan.models.prior import sample_prior, true_initial_state
 
+    check_truth_source(scenario, from_prior)
     prior = from_prior and scenario.prior is not None
     model = scenario.target.model
-    if prior and model == "constant-turn":
-        raise ScenarioError("target.model", "'ncv' or 'multi-leg' to draw the truth from the "
-                            "prior (a constant-turn circle is given, not drawn; the "
-                            "scenario's truth: from_prior=False, compare --truth scenario)",
-                            model, source=scenario.name)
     x0 = sample_prior(scenario, 1, rng)[0] if prior else true_initial_state(scenario)
     K, dt = scenario.n_steps, scenario.time.dt
     F, Q = ncv_matrices(dt, scenario.target.q)

@@ -40,6 +40,7 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError, ScenarioError, UnitError
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
+from tmaplan.simulate import check_truth_source
 from tmaplan.units import to_si
 
 __all__ = [
@@ -404,6 +405,7 @@ def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
                               "particle filter, which starts from the prior (and --truth prior "
                               "draws the truths from it); add one (see the README's example)",
                               None, scenario)
+    check_truth_source(scenario, getattr(args, "truth", "prior") == "prior")
     turning = [p.strip() for p in args.policies.split(",")
                if p.strip() and p.strip().split("+")[0] != "straight"]
     if turning and scenario.observer.turn_rate_max is None:
@@ -467,6 +469,7 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     _check_json_target(args, scenario)
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
+             "rank-costs": lambda a, s: check_truth_source(s, True),
              "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)

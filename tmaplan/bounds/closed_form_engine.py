@@ -508,7 +508,7 @@ def lpc_position_bound_graph(graph: dict[str, Any]) -> Any:
 
 
 # ------------------------------------------------------------------- numeric helpers
-_ACC_CACHE: dict[tuple[int, int], Any] = {}
+_ACC_CACHE: dict[tuple[int, int], tuple[Any, Any]] = {}
 
 
 def _numeric_step_functions(A: np.ndarray, Q: np.ndarray, backend: str) -> tuple[Any, Any]:
@@ -590,7 +590,8 @@ def _call(fn: Any, args: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _accumulated(fn: Any, K: int) -> Any:
+    # keyed on identity; the entry holds ``fn`` itself, so its id cannot be reused by another
     key = (id(fn), K)
-    if key not in _ACC_CACHE:
-        _ACC_CACHE[key] = fn.mapaccum(f"{fn.name()}_acc", K)
-    return _ACC_CACHE[key]
+    if key not in _ACC_CACHE or _ACC_CACHE[key][0] is not fn:
+        _ACC_CACHE[key] = (fn, fn.mapaccum(f"{fn.name()}_acc", K))
+    return _ACC_CACHE[key][1]

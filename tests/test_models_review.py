@@ -120,6 +120,16 @@ def test_point_mass_outside_its_truncation_is_refused(default, changes, field):
     assert exc.value.field == field
 
 
+def test_point_mass_at_the_truth_outside_its_truncation_names_the_scenario(default):
+    # a given mean is refused at load (tests/data/invalid/68_*); the true range (12 km) only
+    # when sampled, and that error did not name the scenario
+    p = dataclasses.replace(default.prior, range_distribution="normal", range_std=0.0,
+                            range_min=15e3, centred_on_truth=True)
+    with pytest.raises(ScenarioError) as exc:
+        sample_prior(default.replace(prior=p), 4, np.random.default_rng(0))
+    assert exc.value.field == "prior.range_mean" and str(exc.value).startswith("default: ")
+
+
 def test_scenario_truth_follows_the_scenario_target_model(default):
     # draw_truth(from_prior=False) (`compare --truth scenario`) propagated the initial state of
     # a constant-turn or multi-leg target in a straight line.

@@ -118,6 +118,7 @@ def test_wrong_dimension_message() -> None:
         float("nan"),
         float("inf"),
         -math.inf,
+        10**400,  # a TOML integer beyond the float range (was a raw OverflowError)
         "nan",
         "inf m",
         "1e400 m",

@@ -6,8 +6,9 @@ the received value. :func:`check` is called by :func:`tmaplan.scenario.from_dict
 
 Plausibility limits (documented in the README's scenario section):
 
-* Speeds, in any unit: at most :data:`MAX_SPEED` = 150 m/s (≈ 292 kn) for the target, the
-  observer and the prior (speeds, velocity components and their stds). The sound speed of a
+* Speeds, in any unit: at most :data:`MAX_SPEED` = 150 m/s (≈ 292 kn) for the target (its
+  unmodelled manoeuvres of ``[faults]`` too), the observer and the prior (speeds, velocity
+  components and their stds). The sound speed of a
   frequency sensor is not a platform speed and is not limited.
 * Bare numbers are SI, so a bare angle is radians. A bare number beyond :data:`BARE_LIMITS`
   is almost surely degrees and is refused with a message suggesting the unit: a direction
@@ -68,6 +69,11 @@ def _err(field: str, expected: str, received: Any, source: str | None) -> Scenar
     return ScenarioError(field, expected, received, source=source)
 
 
+def _whole(ratio: float) -> bool:
+    """Whether ``ratio`` (an interval over a step) is a whole number >= 1, to 1e-9."""
+    return abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1
+
+
 def _check_velocity(obj: Any, field: str, source: str | None, *, required: bool) -> None:
     has_v = obj.velocity is not None
     has_cs = obj.course is not None
@@ -86,8 +92,7 @@ def check(s: Any, source: str | None) -> None:
         raise _err("name", "a non-empty name without '/', '\\' or control characters (the "
                    "command line names its output files after it)", name, source)
     g = s.time
-    k = g.horizon / g.dt
-    if abs(k - round(k)) > 1e-9 * max(1.0, k) or round(k) < 1:
+    if not _whole(g.horizon / g.dt):
         raise _err("time.horizon", f"a whole number (>= 1) of steps of dt = {g.dt} s",
                    g.horizon, source)
     n = g.n_steps
@@ -128,6 +133,9 @@ def check(s: Any, source: str | None) -> None:
         if leg.start <= g.t0:
             raise _err(f"target.legs[{i}].start", f"> t0 = {g.t0} s (target.position and its "
                        "velocity hold at t0)", leg.start, source)
+        if leg.start > g.t0 + g.horizon:
+            raise _err(f"target.legs[{i}].start", f"within the horizon ({g.t0}, "
+                       f"{g.t0 + g.horizon}] s", leg.start, source)
         last = leg.start
 
     o = s.observer
@@ -236,6 +244,7 @@ def check(s: Any, source: str | None) -> None:
                 if p.course_mode == "given" and p.course_mean is None:
                     raise _err("prior.course_mean", "a value for course_mode 'given'", None,
                                source)
+            _check_point_means(p, source)
             if t.model == "constant-turn" and (p.range_mean is None or p.bearing_mean is None):
                 raise _err("prior", "explicit means for a constant-turn target", None, source)
 
@@ -250,11 +259,10 @@ def check(s: Any, source: str | None) -> None:
             if b <= a:
                 raise _err(f"planning.ping_forbidden[{i}]", "[start, end] with end > start",
                            [a, b], source)
-        if pl.control_interval is not None:
-            m = pl.control_interval / g.dt
-            if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
-                raise _err("planning.control_interval", f"a whole number of steps of dt = "
-                           f"{g.dt} s", pl.control_interval, source)
+        if pl.control_interval is not None and not _whole(pl.control_interval / g.dt):
+            raise _err("planning.control_interval", f"a whole number of steps of dt = "
+                       f"{g.dt} s", pl.control_interval, source)
+        _check_planning_horizon(pl, g, source)
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)
@@ -262,6 +270,34 @@ def check(s: Any, source: str | None) -> None:
         from tmaplan._scenario_faults import check_faults
 
         check_faults(s.faults, g, source)
+
+
+def _check_planning_horizon(pl: Any, g: Any, source: str | None) -> None:
+    """The planning horizon (``planning.horizon``, default ``time.horizon``) is a whole number
+    (>= 1) of control intervals (``planning.control_interval``, default dt): the planner would
+    otherwise round it to one silently (a longer or shorter plan than the file says)."""
+    tc = pl.control_interval if pl.control_interval is not None else g.dt
+    if pl.horizon is not None and not _whole(pl.horizon / tc):
+        raise _err("planning.horizon", f"a whole number (>= 1) of control intervals of {tc} s "
+                   "(planning.control_interval, default dt)", pl.horizon, source)
+    if pl.horizon is None and not _whole(g.horizon / tc):
+        raise _err("planning.control_interval", f"a whole number of intervals in the planning "
+                   f"horizon (time.horizon = {g.horizon} s; or give planning.horizon)",
+                   pl.control_interval, source)
+
+
+def _check_point_means(p: Any, source: str | None) -> None:
+    """A normal range or speed prior with std 0 is a point mass at its mean: a given mean must
+    lie in the support (``models.prior`` refuses a truth-centred one when it samples)."""
+    parts = [("range", p.range_mean, p.range_std, p.range_min, p.range_max, "m")] \
+        if p.range_distribution == "normal" else []
+    if p.velocity_distribution == "speed-course" and p.speed_distribution == "normal":
+        parts.append(("speed", p.speed_mean, p.speed_std, p.speed_min, p.speed_max, "m/s"))
+    for name, mean, std, lo, hi, unit in parts:
+        top = math.inf if hi is None else hi
+        if mean is not None and not std and not lo <= mean <= top:
+            raise _err(f"prior.{name}_mean", f"a value within [{lo}, {top}] {unit} (prior."
+                       f"{name}_std is 0: every sample is the mean)", mean, source)
 
 
 # --------------------------------------------------------------------------------------------
@@ -380,6 +416,9 @@ def _speeds(s: Any) -> Iterator[tuple[str, float]]:
             yield "prior.mean", norm(p.mean[2:])
         if p.std is not None:
             yield "prior.std", norm(p.std[2:])
+    for i, m in enumerate(s.faults.target_manoeuvres if s.faults is not None else ()):
+        if m.speed is not None:
+            yield f"faults.target_manoeuvres[{i}].speed", m.speed
 
 
 def _check_speeds(s: Any, source: str | None) -> None:

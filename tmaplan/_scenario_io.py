@@ -41,10 +41,11 @@ def _adapter() -> TypeAdapter[Scenario]:
 
 def _loc(loc: tuple[Any, ...]) -> str:
     out = ""
-    for part in loc:
+    for i, part in enumerate(loc):
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in ("bearing", "range", "frequency"):  # discriminator tag in the path
+        elif i >= 2 and loc[i - 2] == "sensors" and isinstance(loc[i - 1], int) \
+                and part in ("bearing", "range", "frequency"):  # a sensor's discriminator tag
             continue
         else:
             out += ("." if out else "") + str(part)

@@ -129,7 +129,7 @@ class TargetLeg:
     Attributes
     ----------
     start : float
-        Time the leg starts [s] (absolute, on the scenario clock), after t0.
+        Time the leg starts [s] (absolute, on the scenario clock), in (t0, t0 + horizon].
     velocity : tuple of float, optional
         (v_x, v_y) [m/s], x East, y North.
     course : float, optional
@@ -456,7 +456,7 @@ class Planning:
     Attributes
     ----------
     horizon : float, optional
-        Planning horizon [s] (default: the scenario's).
+        Planning horizon [s], whole control intervals (default: the scenario's).
     objective : str
         Default heading objective (:data:`tmaplan.planning.objectives.OBJECTIVE_NAMES`:
         "logdet", "range-bound", "position-bound", "mean-relative-range-bound", ...).
@@ -471,7 +471,7 @@ class Planning:
     keep_out_range : float
         Minimum range to the target estimate [m].
     control_interval : float, optional
-        Duration of a piecewise-constant turn-rate control [s] (default: dt).
+        Piecewise-constant turn-rate control [s], whole steps of dt (default: dt).
     replan_interval : float, optional
         Receding-horizon re-planning interval [s].
     """

@@ -234,7 +234,10 @@ def to_si(value: Any, dimension: str, field: str) -> float:
             return _parse(value, dimension)
         except _ParseError as exc:
             raise UnitError(field, f"{_expected(dimension)} ({exc})", value) from None
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond the float range (TOML integers are unbounded)
+        number = math.inf
     if not math.isfinite(number):
         raise UnitError(field, f"{_expected(dimension)} (the value is not finite)", value)
     return number

@@ -33,13 +33,14 @@ def true_initial_state(scenario: Scenario) -> np.ndarray:
 
 
 def _truncnorm(mean: float, std: float, lo: float, hi: float, n: int,
-               rng: np.random.Generator, field: str) -> np.ndarray:
+               rng: np.random.Generator, field: str, source: str) -> np.ndarray:
     """``n`` draws of N(mean, std²) truncated to [lo, hi]; a point mass for ``std = 0``,
-    which must lie in [lo, hi] (``field`` names the mean in the error)."""
+    which must lie in [lo, hi] (``field`` names the mean, ``source`` the scenario in the
+    error)."""
     if std == 0.0:
         if not lo <= mean <= hi:
             raise ScenarioError(field, f"a value within [{lo}, {hi}] (the std is 0: every "
-                                "sample is the mean)", mean)
+                                "sample is the mean)", mean, source=source)
         return np.full(n, float(mean))
     a, b = (lo - mean) / std, (hi - mean) / std
     return stats.truncnorm.rvs(a, b, loc=mean, scale=std, size=n, random_state=rng)
@@ -84,7 +85,7 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
     if p.range_distribution == "normal":
         r_mean = p.range_mean if p.range_mean is not None else true_range
         rng_ = _truncnorm(r_mean, float(p.range_std or 0.0), p.range_min, hi, n, rng,
-                          "prior.range_mean")
+                          "prior.range_mean", scenario.name)
     elif p.range_distribution == "uniform":
         rng_ = rng.uniform(p.range_min, hi, n)
     else:
@@ -102,7 +103,7 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
         else:
             s_mean = p.speed_mean if p.speed_mean is not None else true_speed
             speed = _truncnorm(s_mean, p.speed_std, p.speed_min, s_hi, n, rng,
-                               "prior.speed_mean")
+                               "prior.speed_mean", scenario.name)
         if p.course_mode == "uniform":
             course = rng.uniform(-np.pi, np.pi, n)
         else:

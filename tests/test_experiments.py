@@ -67,6 +67,24 @@ def test_paired_difference_interval():
                           censor=10.0)
 
 
+
+def test_paired_difference_is_scipys_paired_t_interval_at_any_real_level():
+    """The interval is the paired t interval (n − 1 degrees of freedom) of scipy; a level
+    given as a numpy scalar (np.float32) was refused as not a confidence level."""
+    from scipy import stats
+
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(10.0, 3.0, 25), rng.normal(10.5, 3.0, 25)
+    for level in (0.95, np.float32(0.9), np.float64(0.8)):
+        d = paired_difference({"a": a, "b": b}, "a", "b", "m", level=level)
+        ci = stats.ttest_rel(a, b).confidence_interval(float(level))
+        assert (d.ci_low, d.ci_high) == pytest.approx((ci.low, ci.high), rel=1e-12)
+        assert d.level == float(level) and d.n == 25
+    from tmaplan.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match="level"):
+        paired_difference({"a": a, "b": b}, "a", "b", "m", level="0.95")
+
 def test_common_random_numbers(scenario):
     spec = _spec(scenario, policies=("straight", "zigzag"))
     pols = {"straight": Combined(manoeuvre=Straight()),

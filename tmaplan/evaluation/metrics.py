@@ -16,7 +16,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import course_speed, range_of, wrap_angle
 
 __all__ = [
@@ -192,8 +192,9 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
         that is not a finite number at least the largest finite value, or a value that is
         NaN, or infinite without ``censor`` (the difference would be NaN).
     """
-    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
+    if not 0 < as_real(level) < 1:  # a numpy scalar too (np.float32 was refused)
         raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
+    level = float(level)
     xa = np.asarray(values[a], float)
     xb = np.asarray(values[b], float)
     if xa.shape != xb.shape:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import PlanningError
-from tmaplan.evaluation.metrics import paired_difference, time_to_accuracy
+from tmaplan.evaluation.metrics import censor_time, paired_difference, time_to_accuracy
 from tmaplan.evaluation.records import RunRecord, scenario_hash
 from tmaplan.experiments import CampaignSpec, resolve_policies, run_campaign, run_one
 from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
@@ -36,6 +36,17 @@ def test_time_to_accuracy():
     assert time_to_accuracy(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
     assert time_to_accuracy(t, np.array([0.05] * 6), 0.1) == 0.0
     assert time_to_accuracy(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
+    # the README's "first time after which the error *stays* below": a dip is not enough
+    assert time_to_accuracy(t, np.array([0.5, 0.05, 0.05, 0.2, 0.5, 0.05]), 0.1) == 50.0
+    assert time_to_accuracy(t, np.array([0.05, np.nan, 0.05, 0.05, 0.05, 0.05]), 0.1) == 20.0
+
+
+def test_censor_time_is_the_horizon_plus_one_step(scenario):
+    """"Never" counts as the horizon + dt: 45.25 min on default (docs/findings.md), 30.25
+    min on bow-closing."""
+    assert censor_time(scenario.times) == 45.25 * 60.0
+    assert censor_time(load_problem("bow-closing").times) == 30.25 * 60.0
+    assert censor_time(np.array([100.0, 110.0, 120.0])) == 30.0
 
 
 def test_paired_difference_interval():

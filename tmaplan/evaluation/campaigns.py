@@ -32,7 +32,12 @@ from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
+from tmaplan.evaluation.metrics import (
+    PairedDifference,
+    censor_time,
+    paired_difference,
+    run_metrics,
+)
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -325,7 +330,7 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
             "recoveries": float(np.mean([r.policies[name].recoveries for r in runs])),
         }
-    censor = float(times[-1] - times[0] + (times[1] - times[0]))
+    censor = censor_time(times)
     diffs = []
     names = list(spec.policies)
     for i, a in enumerate(names):

@@ -22,6 +22,7 @@ from tmaplan.geometry import course_speed, range_of, wrap_angle
 __all__ = [
     "PairedDifference",
     "RunMetrics",
+    "censor_time",
     "paired_difference",
     "run_metrics",
     "runs_to_exclude_zero",
@@ -88,6 +89,21 @@ def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float)
     idx = np.nonzero(bad)[0]
     first_good = 0 if idx.size == 0 else idx[-1] + 1
     return float(times[first_good] - times[0])
+
+
+def censor_time(times: np.ndarray) -> float:
+    """The time to accuracy [s] that stands for "never": the horizon plus one step.
+
+    Every mean or paired difference of times to accuracy (campaigns, ``planned − X``, the
+    tuned turn, the cost ranking) replaces ``+inf`` by this value, later than any time a run
+    can reach, so a run never localised counts as later than one localised at the last step.
+
+    Parameters
+    ----------
+    times : ndarray, shape (K + 1,)
+        The time grid [s], K >= 1.
+    """
+    return float(times[-1] - times[0] + (times[1] - times[0]))
 
 
 def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,

@@ -23,7 +23,7 @@ import time
 import numpy as np
 from scipy import stats
 
-from tmaplan.evaluation.metrics import runs_to_exclude_zero
+from tmaplan.evaluation.metrics import censor_time, runs_to_exclude_zero
 from tmaplan.evaluation.plan_check import PLAN_BASELINES
 from tmaplan.experiments import (
     plan_campaign,
@@ -101,7 +101,7 @@ def main() -> None:
               f"({time.perf_counter() - t:.0f} s)")
         for k in camp.policies:
             tt = camp.summary[k]["time_to_accuracy_runs"]
-            c = camp.times[-1] - camp.times[0] + (camp.times[1] - camp.times[0])
+            c = censor_time(camp.times)
             mean = np.mean(np.where(np.isfinite(tt), tt, c)) / 60
             print(f"  {k:<14} mean time to accuracy {mean:5.1f} min, localised "
                   f"{100 * np.mean(np.isfinite(tt)):3.0f} %")

@@ -69,6 +69,11 @@ def test_a_failed_save_leaves_no_temporary_file(tmp_path, monkeypatch):
     ({"seed": 1.5}, "seed"),
     ({"policies": "straight"}, "policies"),  # was read as the policies 's', 't', ...
     ({"policies": ()}, "policies"),
+    # these ended in a bare TypeError ('<' between str and int) before the checks ran
+    ({"runs": "3"}, "runs"),
+    ({"n_particles": "300"}, "n_particles"),
+    ({"accuracy": "0.1"}, "accuracy"),
+    ({"accuracy": float("nan")}, "accuracy"),
 ])
 def test_campaign_spec_misreadings_are_refused_naming_the_field(scenario, change, field):
     spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=1, n_particles=50)
@@ -80,6 +85,8 @@ def test_campaign_spec_misreadings_are_refused_naming_the_field(scenario, change
     ({"backend": "process"}, "backend"),    # was found only after resolving the policies
     ({"max_new_runs": -1}, "max_new_runs"),  # was todo[:-1]: all runs but the last
     ({"max_new_runs": True}, "max_new_runs"),
+    ({"workers": "2"}, "workers"),           # a bare TypeError
+    ({"workers": 0}, "workers"),
 ])
 def test_run_campaign_misreadings_are_refused_naming_the_field(scenario, kw, field):
     spec = CampaignSpec(scenario=scenario, policies=("straight",), runs=2, n_particles=50)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import PlanningError
-from tmaplan.evaluation.metrics import paired_difference, time_to_accuracy
+from tmaplan.evaluation.metrics import censor_time, paired_difference, time_to_accuracy
 from tmaplan.evaluation.records import RunRecord, scenario_hash
 from tmaplan.experiments import CampaignSpec, resolve_policies, run_campaign, run_one
 from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
@@ -36,6 +36,17 @@ def test_time_to_accuracy():
     assert time_to_accuracy(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
     assert time_to_accuracy(t, np.array([0.05] * 6), 0.1) == 0.0
     assert time_to_accuracy(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
+    # the README's "first time after which the error *stays* below": a dip is not enough
+    assert time_to_accuracy(t, np.array([0.5, 0.05, 0.05, 0.2, 0.5, 0.05]), 0.1) == 50.0
+    assert time_to_accuracy(t, np.array([0.05, np.nan, 0.05, 0.05, 0.05, 0.05]), 0.1) == 20.0
+
+
+def test_censor_time_is_the_horizon_plus_one_step(scenario):
+    """"Never" counts as the horizon + dt: 45.25 min on default (docs/findings.md), 30.25
+    min on bow-closing."""
+    assert censor_time(scenario.times) == 45.25 * 60.0
+    assert censor_time(load_problem("bow-closing").times) == 30.25 * 60.0
+    assert censor_time(np.array([100.0, 110.0, 120.0])) == 30.0
 
 
 def test_paired_difference_interval():
@@ -66,6 +77,24 @@ def test_paired_difference_interval():
         paired_difference({"a": np.array([1.0, np.nan]), "b": np.zeros(2)}, "a", "b", "t",
                           censor=10.0)
 
+
+
+def test_paired_difference_is_scipys_paired_t_interval_at_any_real_level():
+    """The interval is the paired t interval (n − 1 degrees of freedom) of scipy; a level
+    given as a numpy scalar (np.float32) was refused as not a confidence level."""
+    from scipy import stats
+
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(10.0, 3.0, 25), rng.normal(10.5, 3.0, 25)
+    for level in (0.95, np.float32(0.9), np.float64(0.8)):
+        d = paired_difference({"a": a, "b": b}, "a", "b", "m", level=level)
+        ci = stats.ttest_rel(a, b).confidence_interval(float(level))
+        assert (d.ci_low, d.ci_high) == pytest.approx((ci.low, ci.high), rel=1e-12)
+        assert d.level == float(level) and d.n == 25
+    from tmaplan.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match="level"):
+        paired_difference({"a": a, "b": b}, "a", "b", "m", level="0.95")
 
 def test_common_random_numbers(scenario):
     spec = _spec(scenario, policies=("straight", "zigzag"))

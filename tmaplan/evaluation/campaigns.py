@@ -32,7 +32,12 @@ from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import PairedDifference, paired_difference, run_metrics
+from tmaplan.evaluation.metrics import (
+    PairedDifference,
+    censor_time,
+    paired_difference,
+    run_metrics,
+)
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -325,7 +330,7 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
             "recoveries": float(np.mean([r.policies[name].recoveries for r in runs])),
         }
-    censor = float(times[-1] - times[0] + (times[1] - times[0]))
+    censor = censor_time(times)
     diffs = []
     names = list(spec.policies)
     for i, a in enumerate(names):
@@ -418,19 +423,24 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     return computed
 
 
-def _check_arguments(spec: CampaignSpec, backend: str | None, max_new_runs: int | None,
-                     policies: Mapping[str, Policy] | None) -> None:
-    """ArgumentError for what :func:`run_campaign` would otherwise misread: a truth source
-    other than the two (read as "scenario"), a misspelt backend (found only after the
+def _check_arguments(spec: CampaignSpec, workers: int, backend: str | None,
+                     max_new_runs: int | None, policies: Mapping[str, Policy] | None) -> None:
+    """ArgumentError for what :func:`run_campaign` would otherwise misread: counts, seed and
+    accuracy that are not numbers in range (a string ended in a bare TypeError), a truth
+    source other than the two (read as "scenario"), a misspelt backend (found only after the
     policies are resolved), a negative ``max_new_runs`` (a slice from the end), ``policies``
     whose names are not the spec's (extra ones flown and left out of the results)."""
-    from tmaplan.errors import ArgumentError, is_integer
+    from tmaplan.errors import ArgumentError, as_real, is_integer
 
     if isinstance(spec.policies, str) or not spec.policies:
         raise ArgumentError("policies", "a non-empty tuple of policy specs", spec.policies)
-    for name, least in (("runs", 1), ("n_particles", 2), ("seed", 0)):
-        if not is_integer(v := getattr(spec, name), least):
+    for name, v, least in (("runs", spec.runs, 1), ("n_particles", spec.n_particles, 2),
+                           ("seed", spec.seed, 0), ("workers", workers, 1)):
+        if not is_integer(v, least):
             raise ArgumentError(name, f"an integer >= {least}", v)
+    if not 0 < as_real(spec.accuracy) < 1:
+        raise ArgumentError("accuracy", "a relative range error in (0, 1), e.g. 0.1",
+                            spec.accuracy)
     if spec.truth not in ("prior", "scenario"):
         raise ArgumentError("truth", "'prior' or 'scenario'", spec.truth)
     if backend not in (None, "serial", "processes", "dask"):
@@ -479,15 +489,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     CampaignResult
     """
     t0 = time.perf_counter()
-    if spec.runs < 1:
-        raise PlanningError(f"runs must be >= 1, received {spec.runs}")
-    if spec.n_particles < 2:
-        raise PlanningError(f"particles must be >= 2, received {spec.n_particles}")
-    if workers < 1:
-        raise PlanningError(f"workers must be >= 1, received {workers}")
-    if not 0 < spec.accuracy < 1:
-        raise PlanningError(f"accuracy must be in (0, 1), received {spec.accuracy}")
-    _check_arguments(spec, backend, max_new_runs, policies)
+    _check_arguments(spec, workers, backend, max_new_runs, policies)
     scenario = spec.scenario
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
     parsed = _parse(scenario, spec.policies) if policies is None else None

@@ -40,6 +40,7 @@ from scipy import stats
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
+from tmaplan.evaluation.metrics import censor_time
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.policies import (
     CLOSED_LOOP_OBJECTIVE,
@@ -54,17 +55,9 @@ from tmaplan.policies import (
 )
 from tmaplan.scenario import Scenario
 
-__all__ = [
-    "Candidate",
-    "CostCorrelation",
-    "CostRankingResult",
-    "candidate_manoeuvres",
-    "cost_functionals",
-    "default_objective",
-    "evaluate_costs",
-    "rank_correlations",
-    "rank_costs",
-]
+__all__ = ["Candidate", "CostCorrelation", "CostRankingResult", "candidate_manoeuvres",
+           "cost_functionals", "default_objective", "evaluate_costs", "rank_correlations",
+           "rank_costs"]
 
 #: Monte Carlo metrics the costs are ranked against (``time_to_accuracy``: mean over runs,
 #: censored; ``final_range_rmse``: RMS over runs of the final range error) [s], [m].
@@ -583,7 +576,7 @@ def rank_costs(scenario: Scenario, *, candidates: int | Sequence[Candidate] = 40
     values, aliases = evaluate_costs(
         scenario, {c.name: c.policy.nominal_track(scenario) for c in cands}, fns)
     skipped.update({f"cost {k}": f"alias of {v}" for k, v in aliases.items()})
-    censor = float(scenario.times[-1] - scenario.times[0] + (scenario.times[1] - scenario.times[0]))
+    censor = censor_time(scenario.times)
     tta = np.stack([camp.summary[n]["time_to_accuracy_runs"] for n in names])
     fre = np.stack([camp.summary[n]["final_range_error_runs"] for n in names]).astype(float)
     cors = rank_correlations(values, tta, fre, censor=censor, n_resamples=n_resamples,

@@ -16,12 +16,13 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import course_speed, range_of, wrap_angle
 
 __all__ = [
     "PairedDifference",
     "RunMetrics",
+    "censor_time",
     "paired_difference",
     "run_metrics",
     "runs_to_exclude_zero",
@@ -88,6 +89,21 @@ def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float)
     idx = np.nonzero(bad)[0]
     first_good = 0 if idx.size == 0 else idx[-1] + 1
     return float(times[first_good] - times[0])
+
+
+def censor_time(times: np.ndarray) -> float:
+    """The time to accuracy [s] that stands for "never": the horizon plus one step.
+
+    Every mean or paired difference of times to accuracy (campaigns, ``planned − X``, the
+    tuned turn, the cost ranking) replaces ``+inf`` by this value, later than any time a run
+    can reach, so a run never localised counts as later than one localised at the last step.
+
+    Parameters
+    ----------
+    times : ndarray, shape (K + 1,)
+        The time grid [s], K >= 1.
+    """
+    return float(times[-1] - times[0] + (times[1] - times[0]))
 
 
 def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
@@ -192,8 +208,9 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
         that is not a finite number at least the largest finite value, or a value that is
         NaN, or infinite without ``censor`` (the difference would be NaN).
     """
-    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
+    if not 0 < as_real(level) < 1:  # a numpy scalar too (np.float32 was refused)
         raise ArgumentError("level", "a confidence level in (0, 1), e.g. 0.95", level)
+    level = float(level)
     xa = np.asarray(values[a], float)
     xb = np.asarray(values[b], float)
     if xa.shape != xb.shape:

@@ -30,7 +30,7 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
-from tmaplan.evaluation.metrics import PairedDifference, paired_difference
+from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
 from tmaplan.policies import (
     Combined,
     LeadLag,
@@ -53,11 +53,6 @@ PLAN_BASELINES = ("straight", "single-turn", "leg-turn-leg", "lead-lag")
 TUNE_ANGLES = (60.0, 90.0, 120.0, 150.0)
 #: Turn times of the tuning grid, as fractions of the horizon.
 TUNE_FRACTIONS = (0.125, 0.25, 0.375, 0.5)
-
-
-def _censor(scenario: Scenario) -> float:
-    t = scenario.times
-    return float(t[-1] - t[0] + (t[1] - t[0]))
 
 
 def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
@@ -110,7 +105,7 @@ def tune_single_turn(scenario: Scenario, *, runs: int = 16, seed: int = 1000,
                         n_particles=n_particles, accuracy=accuracy)
     camp = run_campaign(spec, out_dir=out_dir, workers=workers,
                         policies={k: Combined(manoeuvre=v) for k, v in grid.items()})
-    c = _censor(scenario)
+    c = censor_time(scenario.times)
     scores = {k: float(np.mean(np.where(np.isfinite(t := camp.summary[k]
                                                     ["time_to_accuracy_runs"]), t, c)))
               for k in grid}
@@ -153,7 +148,7 @@ def select_plan(scenario: Scenario, plans: Mapping[str, Any], *, runs: int = 24,
     spec = CampaignSpec(scenario=scenario, policies=tuple(pols), runs=int(runs), seed=seed,
                         n_particles=n_particles, accuracy=accuracy)
     camp = run_campaign(spec, workers=workers, policies=pols)
-    c = _censor(scenario)
+    c = censor_time(scenario.times)
     scores = {}
     for k in plans:
         t = camp.summary[f"plan:{k}"]["time_to_accuracy_runs"]
@@ -218,8 +213,7 @@ def planned_differences(camp: CampaignResult, reference: str = "planned", *,
     """
     if reference not in camp.policies:
         raise ArgumentError("reference", f"one of {', '.join(camp.policies)}", reference)
-    t = camp.times
-    censor = float(t[-1] - t[0] + (t[1] - t[0]))
+    censor = censor_time(camp.times)
     tta: Mapping[str, Any] = {k: camp.summary[k]["time_to_accuracy_runs"]
                               for k in camp.policies}
     return {k: paired_difference(tta, reference, k, "time_to_accuracy", level=level,

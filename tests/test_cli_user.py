@@ -68,3 +68,46 @@ def test_plan_json_times_are_all_on_the_scenario_clock(tmp_path, capsys):
     assert all(T0 <= t <= end for t in d["switch_times"]), d["switch_times"]
     turn = d["baseline_params"]["single-turn"]["time"]
     assert T0 < turn < end, turn
+
+
+def test_schedule_figure_is_on_the_clock_of_its_ping_times(tmp_path, monkeypatch, capsys):
+    # the console and the JSON give the ping times on the scenario clock ("60.3, 61.3 min");
+    # the figure drew them (and its axis) from t0, at 0.3 and 1.3 min
+    import tmaplan.cli.schedule as schedule
+
+    figs = []
+
+    def keep(*a, **k):
+        figs.append(real(*a, **k))
+        return figs[-1]
+
+    real = schedule.plot_schedule
+    monkeypatch.setattr(schedule, "plot_schedule", keep)
+    assert main(["schedule", _scenario(tmp_path), "--method", "greedy", "--budget", "2",
+                 "--out", str(tmp_path), "--json", "-"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    ax = figs[0].axes[0]
+    lines = sorted(ln.get_xdata()[0] for ln in ax.lines if ln.get_color() == "C3")
+    assert lines == [t / 60.0 for t in d["ping_times"]] and min(lines) > T0 / 60.0
+    lo, hi = ax.get_xlim()
+    assert lo < T0 / 60.0 + 1 and hi > T0 / 60.0 + 9
+
+
+def test_compare_time_to_accuracy_axis_says_it_counts_from_t0(tmp_path, monkeypatch, capsys):
+    # time to accuracy is a duration since t0 (JSON, console); the figure said "time [min]"
+    # beside the RMSE figure whose "time [min]" is the scenario clock (60..70 min here)
+    import tmaplan.report as report
+
+    labels = {}
+    real = report.save_figure
+
+    def keep(fig, path, *a, **k):
+        labels[str(path).rsplit("/", 1)[-1]] = fig.axes[0].get_xlabel()
+        return real(fig, path, *a, **k)
+
+    monkeypatch.setattr(report, "save_figure", keep)
+    assert main(["compare", _scenario(tmp_path), "--policies", "straight+no-ping", "--runs",
+                 "1", "--particles", "200", "--out", str(tmp_path), "--json", "-"]) == 0
+    capsys.readouterr()
+    assert labels["time_to_accuracy.png"] == "time since t0 [min]"
+    assert labels["rmse.png"] == "time [min]"

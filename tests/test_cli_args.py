@@ -89,6 +89,16 @@ APPLICABILITY = [
     (["track", "default", "--estimator", "range-only"],
      ["range-only (range-only tracking of sharma2024) needs at least 3 range",
       "default has 0"]),
+    # an option of another estimator was silently ignored
+    (["track", "clavard2013-halfturn-cw", "--estimator", "mle", "--pf-variant", "bootstrap"],
+     ["field '--pf-variant': expected only with --estimator pf", "received 'bootstrap'"]),
+    (["track", "default", "--estimator", "pf-bearings", "--pf-variant", "regularised"],
+     ["field '--pf-variant'", "ignored by pf-bearings"]),
+    (["track", "default", "--range-only-mode", "dirac"],
+     ["field '--range-only-mode': expected only with --estimator range-only"]),
+    (["track", "clavard2013-halfturn-cw", "--estimator", "mle", "--particles", "500"],
+     ["field '--particles': expected only with --estimator pf or pf-bearings",
+      "received 500"]),
 ]
 
 

@@ -210,7 +210,7 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     curves = ev.per_step(ev.schedules([[], res.uniform_steps.tolist()]))
     fig, axes = new_figure(1, 1, size=(8.0, 5.0))
     ax = axes[0, 0]
-    t = (obs.times - obs.times[0]) / 60.0
+    t = obs.times / 60.0  # the scenario clock, as the console's and the JSON's ping times
     name = res.objective_name
     label = objective_label(name)
     mean = name.startswith("mean-")
@@ -225,7 +225,7 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
         else:  # terminal: the value at the last step
             ax.plot(t[-1], value, "o", color=color, ms=6)
     for tp in res.times:
-        ax.axvline((tp - obs.times[0]) / 60.0, color="C3", lw=0.8, alpha=0.6)
+        ax.axvline(tp / 60.0, color="C3", lw=0.8, alpha=0.6)
     ax.set_yscale("log")
     ax.set_xlabel("time [min] (red lines: ping times)")
     what = "position" if "position" in name else "range"

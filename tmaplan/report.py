@@ -160,7 +160,7 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
         t = result.summary[name]["time_to_accuracy_runs"]
         frac = [(t <= g).mean() for g in grid]
         ax.step(grid / 60, frac, where="post", **line_style(i), label=name)
-    ax.set_xlabel("time [min]")
+    ax.set_xlabel("time since t0 [min]")
     ax.set_ylabel("fraction of runs localised")
     ax.set_title(f"time to range accuracy ({100 * result.spec.accuracy:.3g}% of range, for good)")
     ax.set_ylim(-0.03, 1.03)  # curves at 0 and 1 stay visible

@@ -3,6 +3,9 @@
 The JSON carries the planned observer track on the scenario's grid (``observer``: ``times``,
 ``position``, ``velocity``, ``mean_velocity``, ``heading``, ``speed``, SI), so that
 ``tmaplan schedule P --observer-plan PLAN.json`` schedules pings along exactly this track.
+Every time in it is on the scenario clock (``t0`` included), the single-turn baseline's
+``baseline_params.time`` too (the library's :class:`~tmaplan.planning.baselines.Baseline`
+counts it from ``t0``); durations (``leg_duration``) are durations.
 """
 
 from __future__ import annotations
@@ -85,7 +88,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "switch_times": plan.switch_times, "objective": plan.objective,
         "range_bound": plan.range_bound, "range_bound_times": plan.observer.times,
         "baselines": {k: v[0].objective for k, v in base.items()},
-        "baseline_params": {k: v[0].params for k, v in base.items()},
+        "baseline_params": {k: _on_clock(v[0].params, scenario.time.t0)
+                            for k, v in base.items()},
         "solver": {"status": plan.status, "seconds": plan.seconds, "message": plan.message,
                    "iterations": plan.iterations, "transcription": plan.transcription},
         "observer": {"times": plan.observer.times, "position": plan.observer.position,
@@ -114,6 +118,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.json != "-":
             print(f"wrote {path}")
     return payload
+
+
+def _on_clock(params: dict[str, float], t0: float) -> dict[str, float]:
+    """Baseline parameters with the turn ``time`` [s after t0] on the scenario clock [s]."""
+    return {k: v + t0 if k == "time" else v for k, v in params.items()}
 
 
 def _joint(args: argparse.Namespace, scenario: Any,

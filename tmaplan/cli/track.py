@@ -40,19 +40,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_problem_argument(parser)
     parser.add_argument("--estimator", choices=ESTIMATORS, default="pf",
                         help="pf (prior), pf-bearings (brehard2004 init), mle, range-only")
-    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=10_000,
-                        help="particles (pf)")
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=None,
+                        help="particles (pf, pf-bearings; default 10000)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=20, help="Monte Carlo runs")
     add_seed_argument(parser, help="root SeedSequence seed (default 0)")
     parser.add_argument("--bound", choices=("truth", "prior"), default="truth",
                         help="filters: PCRB along the runs' truths (B2, default) or "
                              "averaged over prior draws")
     parser.add_argument("--pf-variant", choices=("regularised", "bootstrap", "resample-move"),
-                        default="regularised",
+                        default=None,
                         help="pf: regularised (default), bootstrap, or resample-move (exact "
                              "MH moves; better on ring-shaped range-only posteriors)")
     parser.add_argument("--range-only-mode", choices=("mixture", "moments", "dirac"),
-                        default="mixture",
+                        default=None,
                         help="range-only: Gaussian mixture over azimuth sectors (default), or "
                              "sharma2024's single-Gaussian moment / Dirac-mixture recursion")
     parser.add_argument("--frequencies", type=frequency_lines, default=0, metavar="N|all",
@@ -107,12 +107,30 @@ def _figure(res: Any, path: Path) -> None:
     plt.close(fig)
 
 
+#: Options that configure one estimator only: flag -> (Namespace name, estimators it applies
+#: to). Given with another estimator it would be silently ignored, so it is refused.
+_ESTIMATOR_OPTIONS = {"--particles": ("particles", ("pf", "pf-bearings")),
+                      "--pf-variant": ("pf_variant", ("pf",)),
+                      "--range-only-mode": ("range_only_mode", ("range-only",))}
+
+
+def _check_estimator_options(args: argparse.Namespace) -> None:
+    """Refuse an estimator-specific option given with an estimator it does not configure."""
+    for flag, (name, applies) in _ESTIMATOR_OPTIONS.items():
+        value = getattr(args, name, None)
+        if value is not None and args.estimator not in applies:
+            raise ArgumentError(flag, f"only with --estimator {' or '.join(applies)} (it is "
+                                      f"ignored by {args.estimator})", value)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
     if args.runs < 1:
         raise ArgumentError("--runs", ">= 1", args.runs)
-    if args.particles < 2:
-        raise ArgumentError("--particles", ">= 2", args.particles)
+    _check_estimator_options(args)
+    particles = 10_000 if getattr(args, "particles", None) is None else args.particles
+    if particles < 2:
+        raise ArgumentError("--particles", ">= 2", particles)
     scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
@@ -122,12 +140,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(f"\rrun {done}/{total}", end="", file=sys.stderr, flush=True)
 
     estimator: Any = args.estimator
-    mode: Any = getattr(args, "range_only_mode", "mixture")
+    mode: Any = getattr(args, "range_only_mode", None) or "mixture"
     if estimator == "range-only" and mode != "mixture":
         estimator = RangeOnlyConfig(dt=scenario.time.dt, q=float(scenario.target.q), mode=mode)
-    variant: Any = getattr(args, "pf_variant", "regularised")
+    variant: Any = getattr(args, "pf_variant", None) or "regularised"
     if estimator == "pf" and variant != "regularised":
-        estimator = PFConfig(n_particles=args.particles, dt=scenario.time.dt,
+        estimator = PFConfig(n_particles=particles, dt=scenario.time.dt,
                              q=float(scenario.target.q), variant=variant)
     turn: Any = getattr(args, "turn_direction", "auto")
     if turn != "auto":
@@ -135,7 +153,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             raise ArgumentError("--turn-direction", "only with --estimator mle", turn)
         estimator = MLEConfig(turn_direction=turn)
     res = monte_carlo(scenario, estimator, runs=args.runs, seed=args.seed,
-                      n_particles=args.particles, progress=progress,
+                      n_particles=particles, progress=progress,
                       bound=getattr(args, "bound", "truth"))
     if not isinstance(estimator, str):
         res = dataclasses.replace(res, estimator=args.estimator)

@@ -30,6 +30,11 @@ RANGE_CASES = [
      "--horizon': expected at most the problem's horizon of 2700 s (45 min), received "
      "'3600 s (60 min)'"),
     (["plan", "default", "--control-interval", "20 s"], "whole number of steps of dt = 15 s"),
+    # options of the joint plan without --pings were ignored
+    (["plan", "default", "--joint", "alternating"], "'--joint': expected only with --pings K"),
+    (["plan", "default", "--ping-stride", "3"], "'--ping-stride': expected only with --pings"),
+    (["plan", "default", "--pings", "2", "--joint", "alternating", "--ping-stride", "3"],
+     "'--ping-stride': expected only with --joint ocp"),
     (["plan", "default", "--starts", "0"], "--starts must be >= 1, received 0"),
     (["plan", "default", "--starts", "100"], "--starts must be <= 64"),
     (["plan", "default", "--starts", "2.5"], "--starts must be an integer >= 1"),

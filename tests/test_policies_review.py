@@ -200,3 +200,33 @@ def test_the_offline_schedule_cache_is_bounded_lru(scenario, monkeypatch):
     assert np.array_equal(steps(2), real(scenario, budget=2, method="greedy",
                                          objective="mean-range-bound").steps)
     assert calls == [1, 2, 3, 2] and len(pings._SCHEDULE_CACHE) == 2
+
+
+def test_short_horizons_keep_only_the_zigzags_that_can_be_flown():
+    # the zig-zag grid's legs of 1/8..1/3 of the horizon were built whatever the horizon:
+    # under 8 steps `plan` (and every planned policy) failed on an internal leg_duration error
+    import dataclasses
+
+    from tmaplan.planning.baselines import evaluate_baselines
+    from tmaplan.policies.combine import best_zigzag
+
+    sc = load_problem("default")
+
+    def short(k):
+        h = k * sc.time.dt
+        return sc.replace(time=dataclasses.replace(sc.time, horizon=h),
+                          planning=dataclasses.replace(sc.planning, horizon=h,
+                                                       control_interval=sc.time.dt,
+                                                       ping_budget=min(2, k),
+                                                       ping_min_spacing=sc.time.dt,
+                                                       replan_interval=None))
+
+    five = evaluate_baselines(short(5), "range-bound")
+    legs = {b.params["leg_duration"] for b in five["zigzag"]}
+    assert legs == {5 * sc.time.dt / 4, 5 * sc.time.dt / 3}  # 1/8 and 1/6 are under a step
+    assert len(five["single-turn"]) == len(evaluate_baselines(short(8), "range-bound")
+                                           ["single-turn"])
+    two = evaluate_baselines(short(2), "range-bound")
+    assert set(two) == {"straight", "single-turn"}
+    with pytest.raises(PlanningError, match="no zig-zag"):
+        best_zigzag(short(2))

@@ -313,6 +313,14 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
             raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
                               _seconds_text(tc), scenario)
+    joint, stride = getattr(args, "joint", None), getattr(args, "ping_stride", None)
+    if getattr(args, "pings", 0) == 0 and (joint is not None or stride is not None):
+        flag = "--joint" if joint is not None else "--ping-stride"
+        raise _flag_error(flag, "only with --pings K (K >= 1): a heading-only plan has no "
+                          "pings", joint if joint is not None else stride, scenario)
+    if joint == "alternating" and stride is not None:
+        raise _flag_error("--ping-stride", "only with --joint ocp (the alternating blocks "
+                          "search every step)", stride, scenario)
     if getattr(args, "pings", 0) > 0:
         from tmaplan.planning.joint import JOINT_OBJECTIVES
 

@@ -57,10 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the best single turns as well")
     parser.add_argument("--pings", type=integer(0), default=0, metavar="K",
                         help="plan K range pings with the headings (default 0: headings only)")
-    parser.add_argument("--joint", choices=("ocp", "alternating"), default="ocp",
+    parser.add_argument("--joint", choices=("ocp", "alternating"), default=None,
                         help="with --pings: one OCP (relaxed, rounded, polished, certified on "
                              "its pings) or alternating heading/ping blocks (default ocp)")
-    parser.add_argument("--ping-stride", type=integer(1), default=1, metavar="N",
+    parser.add_argument("--ping-stride", type=integer(1), default=None, metavar="N",
                         help="--joint ocp: candidate ping steps every N steps (default 1)")
     add_figure_arguments(parser)
 
@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if pings is not None:
             pj = pings[1]
             print(f"{scenario.name}: {args.pings} ping(s) at {minutes(pj['ping_times'])} "
-                  f"({args.joint}): objective {pj['objective']:.4g} m, lower bound "
+                  f"({args.joint or 'ocp'}): objective {pj['objective']:.4g} m, lower bound "
                   f"{pj['lower_bound']:.4g} m, gap {100 * pj['gap']:.2f} %")
         print(f"{scenario.name}: {objective_label(planner.objective.name)} = "
               f"{plan.objective:.4g} over "
@@ -133,10 +133,10 @@ def _joint(args: argparse.Namespace, scenario: Any,
     objective = args.objective or (pl.objective if pl is not None else "range-bound")
     kw = {"horizon": args.horizon, "control_interval": args.control_interval,
           "transcription": args.transcription, "n_starts": args.starts}
-    if args.joint == "ocp":
+    if args.joint in (None, "ocp"):
         r = plan_joint_ocp(scenario, budget=args.pings,
                            objective=objective,  # type: ignore[arg-type]
-                           ping_stride=args.ping_stride, belief=belief, **kw)
+                           ping_stride=args.ping_stride or 1, belief=belief, **kw)
         return r.heading, {"method": "ocp", **r.payload()}
     j = plan_joint(scenario, budget=args.pings, objective=objective,  # type: ignore[arg-type]
                    belief=belief, **kw)

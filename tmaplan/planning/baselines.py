@@ -181,7 +181,8 @@ def evaluate_baselines(scenario: Scenario, objective: str | Objective = "range-b
     """Every baseline of the grids, evaluated (name -> list sorted best first).
 
     Single turns: :data:`SINGLE_TURN_ANGLES` × both directions × :data:`SINGLE_TURN_FRACTIONS`
-    of the horizon; zig-zags: :data:`ZIGZAG_GRID` × both directions. ``evaluator`` (it
+    of the horizon; zig-zags: :data:`ZIGZAG_GRID` × both directions, those whose legs last at
+    least one time step (none, and no ``"zigzag"`` key, under 3 steps). ``evaluator`` (it
     replaces ``objective``, ``belief`` and ``n_steps``): to compare the baselines with a
     plan, pass :meth:`tmaplan.planning.HeadingPlanner.evaluator`, which scores the objective
     that planner minimised (its turn-rate normaliser, samples and step weights).
@@ -205,11 +206,14 @@ def evaluate_baselines(scenario: Scenario, objective: str | Objective = "range-b
                 add("single-turn", {"angle": ang, "time": f * H},
                     single_turn_track(scenario, ang, f * H, **kw))
     for f, a in ZIGZAG_GRID:
+        if f * H < scenario.time.dt * (1.0 - 1e-9):  # a leg shorter than a step: not flown
+            continue
         for sgn in (1.0, -1.0):
             ang = sgn * np.radians(a)
             add("zigzag", {"leg_duration": f * H, "angle": ang},
                 zigzag_track(scenario, f * H, ang, **kw))
-    return {k: sorted(v, key=lambda b: b.objective) for k, v in out.items()}
+    # a family none of whose grid fits the horizon (zig-zags under 3 steps) is left out
+    return {k: sorted(v, key=lambda b: b.objective) for k, v in out.items() if v}
 
 
 def baseline_objectives(scenario: Scenario, objective: str | Objective = "range-bound", *,

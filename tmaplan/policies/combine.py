@@ -123,7 +123,12 @@ def best_single_turn(scenario: Scenario) -> SingleTurn:
 
 def best_zigzag(scenario: Scenario) -> Zigzag:
     """The best zig-zag of the baseline grid (legs ⅛…⅓ of the horizon, 60°…120° total)."""
-    p = _best_baselines(scenario)["zigzag"]
+    best = _best_baselines(scenario)
+    if "zigzag" not in best:
+        raise PlanningError(f"{scenario.name}: no zig-zag of the baseline grid (legs ⅛…⅓ of the "
+                            f"horizon) lasts one time step of {scenario.time.dt:g} s; a horizon "
+                            "of at least 3 steps is needed")
+    p = best["zigzag"]
     return Zigzag(leg_duration=float(p["leg_duration"]), angle=0.5 * float(p["angle"]),
                   start=scenario.time.t0)
 

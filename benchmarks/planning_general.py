@@ -60,6 +60,8 @@ def main() -> None:
     a = ap.parse_args()
     if a.runs < 2:  # a paired interval needs two runs
         ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
+    if a.eval_seed is not None and a.eval_seed < 0:
+        ap.error(f"--eval-seed: a seed >= 0, got {a.eval_seed}")
     if a.problems < 2:  # the family means' t intervals need two problems
         ap.error(f"--problems: at least 2 problems, got {a.problems}")
     problems = random_problems(load_problem(a.base), a.problems, seed=a.seed)

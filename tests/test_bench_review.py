@@ -166,3 +166,18 @@ def test_benchmarks_refuse_too_few_runs_before_work(benchmark_script, monkeypatc
     with pytest.raises(SystemExit):
         bench.main()
     assert "at least 2" in capsys.readouterr().err
+
+
+def test_planning_general_eval_seeds(benchmark_script, monkeypatch, capsys):
+    # --eval-seed R: a seed of its own per problem (never the tuning seed); a negative root
+    # is refused before any work (SeedSequence raised a bare ValueError)
+    bench = benchmark_script("planning_general")
+    assert [bench.evaluation_seed(None, i) for i in range(3)] == [0, 0, 0]
+    seeds = [bench.evaluation_seed(2030, i) for i in range(30)]
+    assert len(set(seeds)) == 30 and 1000 not in seeds and min(seeds) >= 0
+    assert seeds == [bench.evaluation_seed(2030, i) for i in range(30)]  # reproducible
+    monkeypatch.setattr(bench, "random_problems", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(sys, "argv", ["planning_general.py", "--seed", "9", "--eval-seed", "-1"])
+    with pytest.raises(SystemExit):
+        bench.main()
+    assert "--eval-seed" in capsys.readouterr().err

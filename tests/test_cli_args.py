@@ -337,3 +337,22 @@ def test_truths_from_the_prior_of_a_circling_target_are_refused_up_front(tmp_pat
     monkeypatch.setattr("tmaplan.simulate.draw_truth", flown)  # rank-costs imports it late
     line = one_line_error([verb[0], str(f), *verb[1:], "--out", str(tmp_path)])
     assert "target.model" in line and "constant-turn" in line and "--truth scenario" in line
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).parent / "data" / "planning").glob(
+    "*.toml")), ids=lambda p: p.stem)
+def test_a_planning_horizon_of_no_whole_control_intervals_is_refused_by_the_planner(
+        path, one_line_error):
+    # the planner rounded it silently (a 60 min control interval in a 45 min problem planned
+    # 60 min); only planning reads these fields, so the file still loads for the other verbs
+    from tmaplan.errors import ScenarioError
+    from tmaplan.planning import HeadingPlanner
+    from tmaplan.scenario import load
+
+    head = dict(line[2:].split(": ", 1) for line in path.read_text().splitlines()[:2])
+    sc = load(path)  # loads: `track`, `crlb`, `schedule`, a straight `compare` do not plan
+    with pytest.raises(ScenarioError) as exc:
+        HeadingPlanner(sc)
+    assert exc.value.field == head["expect-field"] and head["expect"] in str(exc.value)
+    line = one_line_error(["plan", str(path), "--no-figure"])
+    assert head["expect-field"] in line

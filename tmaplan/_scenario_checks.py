@@ -262,7 +262,6 @@ def check(s: Any, source: str | None) -> None:
         if pl.control_interval is not None and not _whole(pl.control_interval / g.dt):
             raise _err("planning.control_interval", f"a whole number of steps of dt = "
                        f"{g.dt} s", pl.control_interval, source)
-        _check_planning_horizon(pl, g, source)
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)
@@ -270,20 +269,6 @@ def check(s: Any, source: str | None) -> None:
         from tmaplan._scenario_faults import check_faults
 
         check_faults(s.faults, g, source)
-
-
-def _check_planning_horizon(pl: Any, g: Any, source: str | None) -> None:
-    """The planning horizon (``planning.horizon``, default ``time.horizon``) is a whole number
-    (>= 1) of control intervals (``planning.control_interval``, default dt): the planner would
-    otherwise round it to one silently (a longer or shorter plan than the file says)."""
-    tc = pl.control_interval if pl.control_interval is not None else g.dt
-    if pl.horizon is not None and not _whole(pl.horizon / tc):
-        raise _err("planning.horizon", f"a whole number (>= 1) of control intervals of {tc} s "
-                   "(planning.control_interval, default dt)", pl.horizon, source)
-    if pl.horizon is None and not _whole(g.horizon / tc):
-        raise _err("planning.control_interval", f"a whole number of intervals in the planning "
-                   f"horizon (time.horizon = {g.horizon} s; or give planning.horizon)",
-                   pl.control_interval, source)
 
 
 def _check_point_means(p: Any, source: str | None) -> None:

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import check_ping_steps
-from tmaplan.errors import ArgumentError, PlanningError, SolverError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
@@ -52,10 +52,31 @@ from tmaplan.planning.objectives import (
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "plan_heading",
-           "safe_sinc"]
+__all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "check_planning_horizon",
+           "plan_heading", "safe_sinc"]
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
+
+
+def check_planning_horizon(scenario: Scenario) -> None:
+    """The scenario's planning horizon (``planning.horizon``, default ``time.horizon``) is a
+    whole number (>= 1) of control intervals (``planning.control_interval``, default dt), else
+    :class:`ScenarioError`: the planner would round it silently (a 60 min control interval in
+    a 45 min problem planned 60 min). Checked when a planner is built from the file's values,
+    not at load: only planning reads these fields."""
+    pl, g = scenario.planning, scenario.time
+    tc = pl.control_interval if pl is not None and pl.control_interval else g.dt
+    h = pl.horizon if pl is not None and pl.horizon else None
+    ratio = (h if h is not None else g.horizon) / tc
+    if abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1:
+        return
+    if h is not None:
+        raise ScenarioError("planning.horizon", f"a whole number (>= 1) of control intervals "
+                            f"of {tc:g} s (planning.control_interval, default dt)", h,
+                            source=scenario.name)
+    raise ScenarioError("planning.control_interval", "a whole number of intervals in the "
+                        f"planning horizon (time.horizon = {g.horizon:g} s; or give "
+                        "planning.horizon)", tc, source=scenario.name)
 
 
 class HeadingPlanner:
@@ -119,6 +140,8 @@ class HeadingPlanner:
             pl.control_interval if pl and pl.control_interval else dt)
         self.m = max(1, round(float(Tc) / dt))
         self.n = max(1, round(float(H) / (self.m * dt)))
+        if horizon is None and control_interval is None:
+            check_planning_horizon(scenario)
         self.dt, self.Tc = dt, self.m * dt
         self.K = self.n * self.m
         umax = turn_rate_max if turn_rate_max is not None else obs.turn_rate_max

@@ -170,3 +170,11 @@ def test_errors_survive_pickling_so_a_worker_process_can_raise_them():
     solver = SolverError("ipopt", "Maximum_Iterations_Exceeded")
     solver.add_note("re-plan 3")
     assert pickle.loads(pickle.dumps(solver)).__notes__ == ["re-plan 3"]
+
+
+def test_is_whole_count_is_round_off_tolerant_and_at_least_one():
+    from tmaplan.errors import is_whole_count
+
+    assert is_whole_count(180.0) and is_whole_count(2700.0 / 15.0) and is_whole_count(0.3 / 0.1)
+    assert not is_whole_count(22.5) and not is_whole_count(0.0) and not is_whole_count(0.4)
+    assert not is_whole_count(180.0 + 1e-6)

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ScenarioError, is_whole_count
 from tmaplan.units import KNOT
 
 __all__ = ["BARE_LIMITS", "MAX_SPEED", "check", "check_bare_numbers", "truth_fields",
@@ -69,11 +69,6 @@ def _err(field: str, expected: str, received: Any, source: str | None) -> Scenar
     return ScenarioError(field, expected, received, source=source)
 
 
-def _whole(ratio: float) -> bool:
-    """Whether ``ratio`` (an interval over a step) is a whole number >= 1, to 1e-9."""
-    return abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1
-
-
 def _check_velocity(obj: Any, field: str, source: str | None, *, required: bool) -> None:
     has_v = obj.velocity is not None
     has_cs = obj.course is not None
@@ -92,7 +87,7 @@ def check(s: Any, source: str | None) -> None:
         raise _err("name", "a non-empty name without '/', '\\' or control characters (the "
                    "command line names its output files after it)", name, source)
     g = s.time
-    if not _whole(g.horizon / g.dt):
+    if not is_whole_count(g.horizon / g.dt):
         raise _err("time.horizon", f"a whole number (>= 1) of steps of dt = {g.dt} s",
                    g.horizon, source)
     n = g.n_steps
@@ -259,7 +254,7 @@ def check(s: Any, source: str | None) -> None:
             if b <= a:
                 raise _err(f"planning.ping_forbidden[{i}]", "[start, end] with end > start",
                            [a, b], source)
-        if pl.control_interval is not None and not _whole(pl.control_interval / g.dt):
+        if pl.control_interval is not None and not is_whole_count(pl.control_interval / g.dt):
             raise _err("planning.control_interval", f"a whole number of steps of dt = "
                        f"{g.dt} s", pl.control_interval, source)
         if pl.ping_budget > n:

@@ -24,6 +24,7 @@ __all__ = [
     "as_real",
     "finite_real",
     "is_integer",
+    "is_whole_count",
 ]
 
 
@@ -132,6 +133,13 @@ def is_integer(value: Any, minimum: int) -> bool:
 
     return bool(not isinstance(value, bool) and isinstance(value, (int, np.integer))
                 and value >= minimum)
+
+
+def is_whole_count(ratio: float) -> bool:
+    """Whether ``ratio`` (an interval over its step, e.g. a horizon over the control interval)
+    is a whole number >= 1 to round-off (1e-9 relative): the one test behind the scenario's,
+    the planner's and the command line's "whole number of steps / intervals" rules."""
+    return abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1
 
 
 def as_real(value: Any) -> float:

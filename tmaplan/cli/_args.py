@@ -38,7 +38,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, ScenarioError, UnitError
+from tmaplan.errors import ArgumentError, ScenarioError, UnitError, is_whole_count
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
 from tmaplan.simulate import check_truth_source
 from tmaplan.units import to_si
@@ -310,7 +310,7 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         pl.control_interval if pl is not None and pl.control_interval else dt)
     if getattr(args, "control_interval", None) is not None:
         m = tc / dt
-        if abs(m - round(m)) > 1e-9 * max(1.0, m) or round(m) < 1:
+        if not is_whole_count(m):
             raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
                               _seconds_text(tc), scenario)
     joint, stride = getattr(args, "joint", None), getattr(args, "ping_stride", None)
@@ -341,7 +341,7 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
                 "--horizon)", _seconds_text(h), scenario)
         if getattr(args, "control_interval", None) is not None:  # else rounded silently
             n = h / tc
-            if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+            if not is_whole_count(n):
                 raise _flag_error("--control-interval", "a whole number (>= 1) of intervals in "
                                   f"the planning horizon of {_seconds_text(h)} (or give "
                                   "--horizon)", _seconds_text(tc), scenario)
@@ -356,7 +356,7 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         raise _flag_error("--horizon", f"at most the problem's horizon of {_seconds_text(h)}",
                           _seconds_text(args.horizon), scenario)
     n = args.horizon / tc
-    if abs(n - round(n)) > 1e-9 * max(1.0, n) or round(n) < 1:
+    if not is_whole_count(n):
         raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
                           f"{_seconds_text(tc)}", _seconds_text(args.horizon), scenario)
 

@@ -28,7 +28,13 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import check_ping_steps
-from tmaplan.errors import ArgumentError, PlanningError, ScenarioError, SolverError
+from tmaplan.errors import (
+    ArgumentError,
+    PlanningError,
+    ScenarioError,
+    SolverError,
+    is_whole_count,
+)
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
@@ -68,7 +74,7 @@ def check_planning_horizon(scenario: Scenario) -> None:
     tc = pl.control_interval if pl is not None and pl.control_interval else g.dt
     h = pl.horizon if pl is not None and pl.horizon else None
     ratio = (h if h is not None else g.horizon) / tc
-    if abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1:
+    if is_whole_count(ratio):
         return
     if h is not None:
         raise ScenarioError("planning.horizon", f"a whole number (>= 1) of control intervals "

@@ -32,7 +32,7 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import paired_difference, run_metrics
+from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
 from tmaplan.policies import Combined, Receding, parse_policy
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import draw_truth
@@ -137,7 +137,7 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
             extra = (f", median re-plan new/old {np.median(rp_n) / np.median(rp_o):.4f}"
                      if rp_o and rp_n else "")
             print(f"{'':<22}new/old seconds per run {new / old:.3f}{extra}")
-            censor = float(sc.times[-1] - sc.times[0] + sc.time.dt)
+            censor = censor_time(sc.times)
             for key, label, cen in (("tta", "time to accuracy [s]", censor),
                                     ("fre", "final range error [m]", None)):
                 vals = {p: np.array(metric[name][key, p]) for p in paths}
@@ -161,7 +161,7 @@ def _num(x):
 def pair(old_json, new_json, problem="default"):
     """Paired new - old intervals from two ``--json`` files (runs matched by seed and index)."""
     sc = load_problem(problem)
-    censor = float(sc.times[-1] - sc.times[0] + sc.time.dt)
+    censor = censor_time(sc.times)
     recs = {}
     for fn in (old_json, new_json):
         with open(fn) as fh:

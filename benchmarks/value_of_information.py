@@ -28,7 +28,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import paired_difference, run_metrics
+from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.objectives import ObjectiveEvaluator
@@ -111,7 +111,7 @@ def main() -> None:
         with open(a.json, "w") as fh:
             json.dump(rows, fh)
     sc = load_problem(a.problem)
-    censor = float(sc.times[-1] - sc.times[0] + sc.time.dt)
+    censor = censor_time(sc.times)
     ok = [r for r in rows if r["clairvoyant_objective"] is not None]
 
     def col(name: str) -> np.ndarray:

@@ -592,6 +592,6 @@ def _call(fn: Any, args: list[np.ndarray]) -> list[np.ndarray]:
 def _accumulated(fn: Any, K: int) -> Any:
     # keyed on identity; the entry holds ``fn`` itself, so its id cannot be reused by another
     key = (id(fn), K)
-    if key not in _ACC_CACHE or _ACC_CACHE[key][0] is not fn:
+    if key not in _ACC_CACHE:
         _ACC_CACHE[key] = (fn, fn.mapaccum(f"{fn.name()}_acc", K))
     return _ACC_CACHE[key][1]

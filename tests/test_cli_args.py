@@ -356,3 +356,19 @@ def test_a_planning_horizon_of_no_whole_control_intervals_is_refused_by_the_plan
     assert exc.value.field == head["expect-field"] and head["expect"] in str(exc.value)
     line = one_line_error(["plan", str(path), "--no-figure"])
     assert head["expect-field"] in line
+
+
+def test_a_failed_computation_names_its_problem(tmp_path, one_line_error):
+    """An error of the computation itself (not of a flag or a field) says which problem it
+    is about: a script running many problems can tell which one failed."""
+    from tmaplan.scenario import load_problem, save
+
+    sc = load_problem("default")
+    f = tmp_path / "few.toml"
+    save(dataclasses.replace(sc, name="few-bearings", planning=None,
+                             time=dataclasses.replace(sc.time, horizon=30.0)), f)
+    line = one_line_error(["crlb", str(f), "--no-figure"])
+    assert line.startswith("tmaplan crlb: error: few-bearings: too few measurements"), line
+    # flags and fields name themselves, without the problem in front
+    line = one_line_error(["bound", "default", "--samples", "50", "--no-figure"])
+    assert line.startswith("tmaplan bound: error: field '--samples'"), line

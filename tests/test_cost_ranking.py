@@ -293,7 +293,8 @@ def test_rank_costs_cli_json(tmp_path):
     assert all(isinstance(c["spearman_ci"], list) and len(c["spearman_ci"]) == 2
                for c in d["costs"])
     assert (tmp_path / "default_rank_costs.png").stat().st_size > 0
-    text = (tmp_path / "rank-costs.html").read_text()
+    assert d["report"] == str(tmp_path / "default_rank-costs.html")   # named by problem
+    text = (tmp_path / "default_rank-costs.html").read_text()
     assert "Rank correlations" in text
     # display units and the small-sample warning (2 runs), no SI candidate names
     assert "final range RMSE [km]" in text and "Warning: small sample" in text

@@ -110,6 +110,17 @@ def test_a_receding_replan_interval_must_be_a_positive_time(scenario, value):
         assert exc.value.received is value
 
 
+def test_a_receding_replan_interval_must_be_whole_steps(scenario):
+    """The controller acts on the grid: 1.5 steps would silently re-plan every 2 steps."""
+    pol = Receding(replan_interval=1.5 * scenario.time.dt)
+    for make in (pol.controller, pol.resolve):
+        with pytest.raises(ArgumentError) as exc:
+            make(scenario)
+        assert exc.value.field == "receding.replan_interval"
+        assert exc.value.expected.startswith("a whole number of steps of dt")
+    Receding(replan_interval=4 * scenario.time.dt).controller(scenario)   # whole: accepted
+
+
 @pytest.mark.parametrize(("kw", "field"), [
     ({"horizon": 0.0}, "receding.horizon"), ({"horizon": NAN}, "receding.horizon"),
     ({"rti_steps": 0}, "receding.rti_steps"), ({"rti_steps": 1.5}, "receding.rti_steps"),

@@ -23,7 +23,9 @@ def test_plan_json_and_figure(tmp_path, capsys):
     assert d["solver"]["status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
     assert d["times"][-1] - d["times"][0] == pytest.approx(1800.0)
     assert len(d["turn_rate"]) == len(d["times"]) - 1
-    assert (tmp_path / "default_plan.png").stat().st_size > 10_000
+    # named by problem and objective (a plan of another objective does not overwrite it)
+    assert d["figure"] == str(tmp_path / f"default_plan_{d['objective_name']}.png")
+    assert (tmp_path / f"default_plan_{d['objective_name']}.png").stat().st_size > 10_000
 
 
 def test_schedule_json_stdout(tmp_path, capsys):

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tmaplan.cli.demo import _extra_html
-from tmaplan.display import scenario_text, short_repr
+from tmaplan.display import scenario_text, short_repr, timespan
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.ranking_report import candidate_label
 from tmaplan.report import comparison_figures, rmse_figure, write_report
@@ -252,3 +252,24 @@ def test_an_accuracy_below_one_percent_is_not_printed_as_zero(one_run, tmp_path)
     text = write_report(res, tmp_path, command="tmaplan compare default").read_text()
     flat = " ".join(text.split())
     assert "below 0.5% and staying there" in flat and "below 0% " not in flat
+
+
+@pytest.mark.parametrize("seconds, text", [(40.0, "40 s"), (2700.0, "45 min"),
+                                           (750.0, "12.5 min"), (700.0, "11.67 min"),
+                                           (60.0, "1 min"), (float("nan"), "undefined")])
+def test_timespan_reads_as_a_person_writes_it(seconds, text):
+    """No ``0.666667 min`` in a console line: seconds below a minute, else at most two
+    decimals of a minute."""
+    assert timespan(seconds) == text
+
+
+def test_a_short_scenario_prints_its_horizon_in_seconds(capsys, tmp_path):
+    from tmaplan.cli import main
+
+    f = tmp_path / "short.toml"
+    from tmaplan.scenario import load_problem, save
+
+    sc = load_problem("default")
+    save(sc.replace(time=sc.time.__class__(dt=10.0, horizon=40.0, t0=sc.time.t0)), f)
+    assert main(["simulate", str(f), "--no-figure"]) == 0
+    assert "over 40 s;" in capsys.readouterr().out

@@ -177,6 +177,7 @@ INVALID = [
     ("planning.ping_budget", 1000, "planning.ping_budget", "<= the number of steps"),
     ("planning.ping_budget", -1, "planning.ping_budget", "greater than or equal to 0"),
     ("planning.control_interval", "25 s", "planning.control_interval", "whole number"),
+    ("planning.replan_interval", "100 s", "planning.replan_interval", "whole number"),
     ("name", _DELETE, "name", "required"),
     ("sensors", [], "sensors", "at least one sensor"),
 ]

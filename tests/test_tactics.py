@@ -139,6 +139,23 @@ def test_nominal_tracks_follow_the_rules_on_the_prior_mean(scenario):
     assert len(np.unique(np.round(lt.heading, 9))) > 3   # two turns
 
 
+def test_the_nominal_turn_uses_the_line_of_sight_at_the_turn_time_itself(scenario):
+    """A first leg that ends between grid steps: the doctrine course is set by the prior
+    mean's bearing at that instant (own ship on its straight first leg), not at the nearest
+    step (7.5 s off: about 2 mrad here)."""
+    from tmaplan.planning.belief import Belief
+
+    dt = scenario.time.dt
+    pol = LegTurnLeg(first_leg=100.5 * dt)
+    tr = pol.nominal_track(scenario)
+    t = pol.turn_time(scenario) - scenario.time.t0
+    m = Belief.from_prior(scenario).mean
+    vt = m[2:] + tr.velocity[0]
+    rel = m[:2] + (vt - tr.velocity[0]) * t        # own ship straight until the turn
+    beta = np.arctan2(rel[0], rel[1])
+    assert float(wrap_angle(beta - tr.heading[-1])) == pytest.approx(-0.5 * np.pi, abs=1e-9)
+
+
 def test_tactics_are_manoeuvre_policies_named_for_the_cli(scenario):
     for name, cls in (("leg-turn-leg", LegTurnLeg), ("lead-lag", LeadLag)):
         pol = parse_policy(name, scenario)

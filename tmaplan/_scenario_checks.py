@@ -254,9 +254,11 @@ def check(s: Any, source: str | None) -> None:
             if b <= a:
                 raise _err(f"planning.ping_forbidden[{i}]", "[start, end] with end > start",
                            [a, b], source)
-        if pl.control_interval is not None and not is_whole_count(pl.control_interval / g.dt):
-            raise _err("planning.control_interval", f"a whole number of steps of dt = "
-                       f"{g.dt} s", pl.control_interval, source)
+        for field in ("control_interval", "replan_interval"):
+            v = getattr(pl, field)
+            if v is not None and not is_whole_count(v / g.dt):
+                raise _err(f"planning.{field}", f"a whole number of steps of dt = {g.dt} s",
+                           v, source)
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)

@@ -21,7 +21,8 @@ from tmaplan.units import KNOT
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["angle", "distance", "minutes", "rate", "scenario_text", "short_repr", "speed"]
+__all__ = ["angle", "distance", "minutes", "rate", "scenario_text", "short_repr", "speed",
+           "timespan"]
 
 
 def _num(x: float, digits: int = 4) -> str:
@@ -40,6 +41,16 @@ def minutes(t: float) -> str:
     if t == math.inf:
         return "never"
     return "undefined" if not math.isfinite(t) else f"{t / 60.0:.1f} min"
+
+
+def timespan(t: float) -> str:
+    """A span for a sentence: ``"40 s"`` below a minute, else minutes to two decimals without
+    trailing zeros (``"45 min"``, ``"12.5 min"``, ``"11.67 min"``); ``t`` in s."""
+    if not math.isfinite(t):
+        return "undefined"
+    if abs(t) < 60.0:
+        return f"{t:.3g} s"
+    return f"{t / 60.0:.2f}".rstrip("0").rstrip(".") + " min"
 
 
 def speed(v: float) -> str:

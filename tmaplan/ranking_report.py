@@ -95,7 +95,8 @@ def plot_cost_ranking(result: CostRankingResult, path: str | Path) -> Figure:
 
 def write_ranking_report(result: CostRankingResult, out_dir: str | Path, *, command: str,
                          figure: Path | None = None) -> Path:
-    """Write ``rank-costs.html``: the ρ/τ table, the candidates' metrics and the figure.
+    """Write ``<out>/<problem>_rank-costs.html``: the ρ/τ table, the candidates' metrics and
+    the figure (rankings of other problems into the same directory are kept).
 
     Returns
     -------
@@ -152,6 +153,6 @@ closed-loop policies: <code>{html.escape(result.closed_loop_objective)}</code>.<
 """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    path = out / "rank-costs.html"
+    path = out / f"{spec.scenario.name}_rank-costs.html"
     path.write_text(doc, encoding="utf-8")
     return path

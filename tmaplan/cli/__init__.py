@@ -26,6 +26,7 @@ import numpy as np
 from tmaplan import __version__
 from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
+from tmaplan.errors import ArgumentError
 from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
@@ -146,7 +147,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        print(f"tmaplan {args.verb}: error: {exc}".replace("\n", " "), file=sys.stderr)
+        text = str(exc)
+        # a failure of the computation (not of a flag or a field, which name themselves)
+        # says which problem it is about
+        if problem is not None and not isinstance(exc, ArgumentError) and problem not in text:
+            text = f"{problem}: {text}"
+        print(f"tmaplan {args.verb}: error: {text}".replace("\n", " "), file=sys.stderr)
         return 1
     return 0
 

@@ -31,6 +31,7 @@ from tmaplan.cli._args import (
     integer,
     step_list,
 )
+from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
 
@@ -61,9 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "true track (default; ristic2004 ch. 6, the bound a filter can "
                              "approach) or average it over the prior (brehard2005); the closed "
                              "form and LPC are prior-averaged only")
-    parser.add_argument("--samples", type=integer(2, MAX_SAMPLES), default=1000,
+    parser.add_argument("--samples", type=integer(2, MAX_SAMPLES), default=None,
                         help="Monte Carlo samples (default 1000, as brehard2005 §6; with "
-                             "--over truth: realisations of the true track's process noise)")
+                             "--over truth: realisations of the true track's process noise; "
+                             "with --method closed-form only for the overlaid Monte Carlo "
+                             "bound of the figure)")
     pings = parser.add_mutually_exclusive_group()
     pings.add_argument("--ping-every", type=duration(), metavar="T",
                        help="a range ping at the first step at or after each multiple of T "
@@ -164,23 +167,37 @@ def _figure(results: list[Any], path: Path, title: str) -> None:
     plt.close(fig)
 
 
+def _samples(samples: int | None, method: str, overlay: bool) -> int:
+    """``--samples`` (default 1000); refused where no Monte Carlo bound is computed (the
+    closed form without the figure's overlay), which would silently ignore it."""
+    if samples is None:
+        return 1000
+    if method == "closed-form" and not overlay:
+        raise ArgumentError("--samples", "no --samples with --method closed-form unless its "
+                            "figure overlays the Monte Carlo bound (no --no-figure or "
+                            "--no-overlay); the closed form draws no samples", samples)
+    if samples < 2:
+        raise ArgumentError("--samples", ">= 2", samples)
+    return int(samples)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Compute the bound, write the figure, return the docs/cli.md JSON fields."""
     scenario = load(args.problem)
     coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
-    if args.samples < 2:
-        raise ArgumentError("--samples", ">= 2", args.samples)
+    overlay = not args.no_figure and not args.no_overlay
+    samples = _samples(args.samples, args.method, overlay)
     over = resolve_over(args.method, coords, getattr(args, "over", None))
     pings = ping_steps_from_args(scenario, args.ping_every, args.ping_steps)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = _compute(scenario, args.method, coords, args.samples, args.seed, pings, over)
+        res = _compute(scenario, args.method, coords, samples, args.seed, pings, over)
         results = [res]
-        if not args.no_figure and not args.no_overlay and coords == "lpc":
+        if overlay and coords == "lpc":
             other = "monte-carlo" if args.method == "closed-form" else "closed-form"
-            results.append(_compute(scenario, other, coords, args.samples, args.seed, pings))
-        elif not args.no_figure and not args.no_overlay:  # Cartesian: the other average
-            results.append(_compute(scenario, args.method, coords, args.samples, args.seed,
+            results.append(_compute(scenario, other, coords, samples, args.seed, pings))
+        elif overlay:  # Cartesian: the other average
+            results.append(_compute(scenario, args.method, coords, samples, args.seed,
                                     pings, "prior" if over == "truth" else "truth"))
     quiet = args.json == "-"
     notes = sorted({str(w.message) for w in caught})
@@ -199,7 +216,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         print(f"{scenario.name}: {args.method} PCRB in {coords} "
               f"({'conditioned on the true track' if over == 'truth' else 'over the prior'}), "
               f"{k} steps over "
-              f"{(res.times[-1] - res.times[0]) / 60:g} min, {len(res.ping_steps)} pings, "
+              f"{timespan(res.times[-1] - res.times[0])}, {len(res.ping_steps)} pings, "
               f"computed in {res.seconds:.3f} s")
         comps = _LPC_CONSOLE if coords == "lpc" else _CART_CONSOLE
         print("  final std: " + ", ".join(

@@ -22,6 +22,7 @@ import numpy as np
 
 from tmaplan.bounds.crlb import CRLBResult, crlb
 from tmaplan.cli._args import add_figure_arguments, add_problem_argument, frequency_lines
+from tmaplan.display import timespan
 from tmaplan.scenario import Scenario, load
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
@@ -59,7 +60,7 @@ def _figure(scenario: Scenario, res: CRLBResult, path: Path) -> None:
     half = 2.0 * np.sqrt(np.maximum(w, 0.0)) / 1e3
     ax.add_patch(Ellipse(tuple(np.asarray(res.final_position, float) / 1e3), 2 * half[1],
                          2 * half[0], angle=angle, fill=False, color="k", lw=1.4,
-                         label=f"CRLB 2σ at t_N = {res.final_time / 60:g} min"))
+                         label=f"CRLB 2σ at t_N = {timespan(res.final_time)}"))
     ax.legend(loc="best", fontsize=8, framealpha=0.6)
     ax.set_title(f"{scenario.name}: batch CRLB, range std {res.final_range_std / 1e3:.3g} km")
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -108,7 +109,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     }
     if args.json != "-":
         print(f"{scenario.name}: batch CRLB, model {res.model}, {n_tones} frequency line(s), "
-              f"t_N = {res.final_time / 60:g} min")
+              f"t_N = {timespan(res.final_time)}")
         print(f"{'parameter':<10} {'value':>12} {'std':>12}  unit")
         for name, unit, v, s in zip(res.final_parameters, units, res.final_values,
                                     res.final_std):

@@ -66,7 +66,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Plan, evaluate the baselines, write ``<out>/<problem>_plan.png``; return the payload."""
+    """Plan, evaluate the baselines, write the figure (:func:`figure_name`); return the
+    payload."""
     scenario = load(args.problem)
     planner = HeadingPlanner(scenario, objective=args.objective, horizon=args.horizon,
                              control_interval=args.control_interval,
@@ -112,12 +113,19 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))
     if not args.no_figure:
-        path = Path(args.out) / f"{scenario.name}_plan.png"
+        path = Path(args.out) / figure_name(scenario.name, planner.objective.name,
+                                            args.pings)
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
         payload["figure"] = str(path)
         if args.json != "-":
             print(f"wrote {path}")
     return payload
+
+
+def figure_name(problem: str, objective: str, pings: int = 0) -> str:
+    """``<problem>_plan_<objective>[_<K>pings].png``: plans of other objectives or ping
+    budgets into the same ``--out`` do not overwrite each other's figure."""
+    return f"{problem}_plan_{objective}{f'_{pings}pings' if pings > 0 else ''}.png"
 
 
 def _on_clock(params: dict[str, float], t0: float) -> dict[str, float]:

@@ -73,7 +73,7 @@ def _plans(text: str) -> tuple[str, ...] | None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Run (or resume) the ranking; write the figure and ``rank-costs.html``."""
+    """Run (or resume) the ranking; write the figure and ``<problem>_rank-costs.html``."""
     from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
 
     scenario = load(args.problem)

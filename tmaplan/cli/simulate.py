@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.cli._args import add_figure_arguments, add_problem_argument, add_seed_argument
+from tmaplan.display import timespan
 from tmaplan.plotting import plot_geometry
 from tmaplan.scenario import load
 from tmaplan.simulate import simulate
@@ -34,7 +35,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                            for m in sim.measurements)
         r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
         print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
-              f"{scenario.time.dt:g} s over {scenario.time.horizon / 60:g} min; range "
+              f"{scenario.time.dt:g} s over {timespan(scenario.time.horizon)}; range "
               f"{r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km (min {r.min() / 1e3:.2f} km); "
               f"measurements: {counts or 'none'}")
     if not args.no_figure:

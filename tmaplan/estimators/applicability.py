@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
 
 if TYPE_CHECKING:
@@ -152,7 +153,7 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         if drift > MLE_DRIFT_RATIO_MAX * res:
             return (f"{name} fits one deterministic track (clavard2013), but the target's "
                     f"process noise q = {q:g} m^2/s^3 moves it by {drift:.0f} m (1σ) over the "
-                    f"{t / 60:g} min horizon, {drift / res:.0f}× the finest measurement ({what}; "
+                    f"{timespan(t)} horizon, {drift / res:.0f}× the finest measurement ({what}; "
                     f"limit {MLE_DRIFT_RATIO_MAX:g}×): its χ² test would reject every run "
                     f"(NaN RMSE)")
     return None

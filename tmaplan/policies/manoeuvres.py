@@ -18,6 +18,7 @@ from tmaplan.errors import (
     as_real,
     finite_real,
     is_integer,
+    is_whole_count,
 )
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
@@ -343,7 +344,7 @@ class Receding:
 
     def resolve(self, scenario: Scenario) -> Receding:
         """The same policy with the real-time iteration's model computed (once per campaign)."""
-        _check_receding(self)
+        _check_receding(self, scenario)
         if not self.real_time or self.rti is not None:
             return self
         return dataclasses.replace(self, rti=_rti_model(scenario, self.objective, self.horizon,
@@ -439,12 +440,17 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
     return _RTI_CACHE[key].with_model(model)
 
 
-def _check_receding(policy: Receding) -> None:
+def _check_receding(policy: Receding, scenario: Scenario) -> None:
     """ArgumentError naming the first invalid time or step count of ``policy``."""
     for field in ("replan_interval", "horizon"):
         v = getattr(policy, field)
         if v is not None:
             finite_real(f"receding.{field}", v, "> 0 s", lower=0.0, strict=True)
+    v, dt = policy.replan_interval, scenario.time.dt
+    if v is not None and not is_whole_count(float(v) / dt):
+        # the controller acts on the grid: another interval would silently be rounded up
+        raise ArgumentError("receding.replan_interval", f"a whole number of steps of dt = "
+                            f"{dt:g} s", v)
     n = policy.rti_steps
     if not is_integer(n, 1):
         raise ArgumentError("receding.rti_steps", "an integer >= 1", n)
@@ -452,7 +458,7 @@ def _check_receding(policy: Receding) -> None:
 
 class _RecedingController:
     def __init__(self, policy: Receding, scenario: Scenario) -> None:
-        _check_receding(policy)
+        _check_receding(policy, scenario)
         pl = scenario.planning
         interval = policy.replan_interval if policy.replan_interval is not None else (
             pl.replan_interval if pl else None)

@@ -145,10 +145,13 @@ def _prior_line_of_sight(scenario: Scenario, t: float, track: ObserverTrack
     from tmaplan.planning.belief import Belief
 
     m = Belief.from_prior(scenario).mean
-    k = int(np.argmin(np.abs(track.times - t)))
+    # own position and velocity at t itself, between grid steps too (linear in time: exact
+    # on a straight leg)
+    own = np.array([np.interp(t, track.times, track.position[:, i]) for i in range(2)])
+    vel = np.array([np.interp(t, track.times, track.velocity[:, i]) for i in range(2)])
     vt = m[2:] + track.velocity[0]   # mean target velocity (absolute)
-    rel = m[:2] + vt * (t - scenario.time.t0) - (track.position[k] - track.position[0])
-    v = vt - track.velocity[k]
+    rel = m[:2] + vt * (t - scenario.time.t0) - (own - track.position[0])
+    v = vt - vel
     r2 = max(float(rel @ rel), 1.0)
     return float(bearing_of(rel)), float((rel[1] * v[0] - rel[0] * v[1]) / r2)
 

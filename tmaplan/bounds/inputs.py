@@ -26,7 +26,12 @@ from tmaplan.errors import (
 )
 from tmaplan.geometry import cart_to_lpc, wrap_angle
 from tmaplan.models.observer import ObserverTrack, observer_track
-from tmaplan.models.prior import relative_prior_samples, true_initial_state, zero_prior_stds
+from tmaplan.models.prior import (
+    relative_prior_covariance,
+    relative_prior_samples,
+    true_initial_state,
+    zero_prior_stds,
+)
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import (
     BearingSensor,
@@ -81,7 +86,8 @@ class PCRBInputs:
     S0 : ndarray, shape (4, 4)
         Raw second moment ``E X₀X₀ᵀ``.
     cov_cart0 : ndarray, shape (4, 4)
-        Covariance of X₀.
+        Covariance of X₀ (:func:`tmaplan.models.prior.relative_prior_covariance`: exact for a
+        gaussian prior, else of the samples, normalised by n as ``cov_lpc0``).
     cov_lpc0 : ndarray, shape (4, 4), or None
         Covariance of the LPC initial state (brehard2005 eq. 56, bearing centred on its circular
         mean).
@@ -351,5 +357,6 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
         times=np.asarray(grid.times), dt=float(grid.dt), A=A, Q=Q, observer=obs, c=c,
         bearing_info=bearing_info, ambiguity=ambiguity,
         ping_steps=steps, ping_weight=weight, range_sigma=sigma, frequency_sensors=tuple(freq),
-        prior_samples=n, m0=m0, S0=S0, cov_cart0=np.cov(X0, rowvar=False), cov_lpc0=cov_lpc,
+        prior_samples=n, m0=m0, S0=S0, cov_cart0=relative_prior_covariance(scenario, X0),
+        cov_lpc0=cov_lpc,
         prior_subsample=X0[:500].copy())

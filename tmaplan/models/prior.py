@@ -13,15 +13,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import stats
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
 from tmaplan.models.target import circle_state, initial_velocity
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Prior, Scenario
 
-__all__ = ["prior_relative_moments", "relative_prior_samples", "sample_prior",
-           "true_initial_state", "zero_prior_stds"]
+__all__ = ["prior_relative_moments", "relative_prior_covariance", "relative_prior_samples",
+           "sample_prior", "true_initial_state", "zero_prior_stds"]
 
 
 def true_initial_state(scenario: Scenario) -> np.ndarray:
@@ -176,7 +176,30 @@ def prior_relative_moments(scenario: Scenario, n: int | None = None,
     if scenario.prior is None:
         raise ScenarioError("prior", "a [prior] table (this computation needs a prior)", None,
                             source=scenario.name)
-    n = scenario.prior.samples if n is None else n
-    rng = np.random.default_rng(scenario.prior.seed) if rng is None else rng
+    p = scenario.prior
+    if p.kind == "gaussian":  # exact: no sampling error in the prior information
+        o = scenario.observer
+        mean = np.asarray(p.mean, float) if p.mean is not None else true_initial_state(scenario)
+        return (mean - np.concatenate([np.asarray(o.position, float), initial_velocity(o)]),
+                relative_prior_covariance(scenario, None))
+    n = p.samples if n is None else n
+    rng = np.random.default_rng(p.seed) if rng is None else rng
     x = relative_prior_samples(scenario, n, rng)
-    return x.mean(axis=0), np.cov(x, rowvar=False)
+    return x.mean(axis=0), relative_prior_covariance(scenario, x)
+
+
+def relative_prior_covariance(scenario: Scenario, samples: np.ndarray | None) -> np.ndarray:
+    """Covariance of the relative initial state, shape (4, 4) [m², m²/s, m²/s²].
+
+    Exact for a ``gaussian`` prior (diag(std²); the observer's initial state is a constant),
+    else the covariance of ``samples`` (n, 4) of :func:`relative_prior_samples`, normalised
+    by n like the LPC prior information (:func:`tmaplan.bounds.inputs.lpc_prior_information`)
+    and :attr:`tmaplan.planning.Belief.cov`.
+    """
+    p = scenario.prior
+    if p is not None and p.kind == "gaussian":
+        return np.diag(np.square(np.asarray(p.std, float)))
+    if samples is None:
+        raise ArgumentError("samples", "prior samples (n, 4) for a prior that is not gaussian",
+                            None, source=scenario.name)
+    return np.cov(np.asarray(samples, float), rowvar=False, bias=True)

@@ -22,6 +22,7 @@ Plausibility limits (documented in the README's scenario section):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Iterator
@@ -212,6 +213,7 @@ def check(s: Any, source: str | None) -> None:
     p = s.prior
     if p is not None:
         _check_prior(p, source)
+        _check_prior_keys(p, source)
         if p.kind == "gaussian":
             if p.std is None:
                 raise _err("prior.std", "[σ_x, σ_y, σ_vx, σ_vy] for a gaussian prior", None,
@@ -266,6 +268,44 @@ def check(s: Any, source: str | None) -> None:
         from tmaplan._scenario_faults import check_faults
 
         check_faults(s.faults, g, source)
+
+
+def _ignored_prior_keys(p: Any) -> dict[str, str]:
+    """Fields of prior ``p`` that :func:`tmaplan.models.prior.sample_prior` does not read,
+    each with the setting that makes it unused (``"kind"``, ``"range_distribution"``, …)."""
+    gaussian = ("mean", "std")
+    common = ("kind", "samples", "seed", "centred_on_truth")
+    polar = tuple(f.name for f in dataclasses.fields(p) if f.name not in gaussian + common)
+    speed_course = ("speed_distribution", "speed_mean", "speed_std", "speed_min", "speed_max",
+                    "course_mode", "course_mean", "course_std")
+    rules = (  # (selector, it makes the names unused, names); the first rule names the setting
+        ("kind", p.kind == "gaussian", polar),
+        ("kind", p.kind == "polar", gaussian),
+        ("range_distribution", p.range_distribution != "normal", ("range_mean", "range_std")),
+        ("velocity_distribution", p.velocity_distribution == "normal", speed_course),
+        ("velocity_distribution", p.velocity_distribution == "speed-course",
+         ("velocity_mean", "velocity_std")),
+        ("speed_distribution", p.speed_distribution == "uniform", ("speed_mean", "speed_std")),
+        ("course_mode", p.course_mode != "given", ("course_mean",)),
+        ("course_mode", p.course_mode == "uniform", ("course_std",)),
+    )
+    out: dict[str, str] = {}
+    for selector, unused, names in rules:
+        for name in names if unused else ():
+            out.setdefault(name, selector)
+    return out
+
+
+def _check_prior_keys(p: Any, source: str | None) -> None:
+    """Refuse a prior key that the chosen kind, distribution or course mode ignores, unless it
+    keeps its default (:func:`tmaplan.scenario.dump` writes defaults, so files round-trip)."""
+    ignored = _ignored_prior_keys(p)
+    for f in dataclasses.fields(p):
+        value = getattr(p, f.name)
+        if f.name in ignored and value != f.default:
+            selector = ignored[f.name]
+            raise _err(f"prior.{f.name}", f"not set with prior.{selector} = "
+                       f"{getattr(p, selector)!r} (it is ignored there)", value, source)
 
 
 def _check_point_means(p: Any, source: str | None) -> None:

@@ -67,6 +67,8 @@ def _convert_validation_error(exc: ValidationError, source: str | None) -> Scena
         expected = "kind = 'bearing', 'range' or 'frequency'"
         field += ".kind"
         received = received.get("kind") if isinstance(received, dict) else received
+    elif kind == "bool_type":  # booleans are strict: "yes", 1 or "on" is refused
+        expected = "a boolean (true or false)"
     else:
         cause = (e.get("ctx") or {}).get("error")
         if isinstance(cause, ScenarioError):  # a unit error raised by our own parser

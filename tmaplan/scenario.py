@@ -16,7 +16,7 @@ import dataclasses
 from typing import Annotated, Any, Literal, TypeVar, cast, dataclass_transform
 
 import numpy as np
-from pydantic import AfterValidator, ConfigDict, Field
+from pydantic import AfterValidator, ConfigDict, Field, StrictBool
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
 from tmaplan.models.faults import Faults
@@ -195,11 +195,11 @@ class Prior:
 
     ``kind = "polar"``: bearing ~ N(bearing_mean, bearing_std²) from the observer's initial
     position; range from ``range_distribution`` (``normal``: N(range_mean, range_std²)
-    truncated to [range_min, range_max]; ``uniform`` or ``log-uniform`` on
-    [range_min, range_max]); velocity either Cartesian normal (``velocity_mean``,
-    ``velocity_std`` > 0 per axis) or speed/course (``speed-course``: ``speed_distribution``
-    and ``course_mode`` are then required). ``kind = "gaussian"``: absolute Cartesian
-    N(mean, diag(std²)) with mean/std in [x, y, v_x, v_y] order.
+    truncated to [range_min, range_max]; ``uniform`` or ``log-uniform`` on [range_min,
+    range_max]); velocity Cartesian normal (``velocity_mean``, ``velocity_std`` > 0 per axis)
+    or ``speed-course`` (``speed_distribution`` and ``course_mode`` required). ``kind =
+    "gaussian"``: absolute N(mean, diag(std²)), [x, y, v_x, v_y]. A key that the kind, the
+    distributions or the course mode do not read is refused unless it keeps its default.
 
     A prior never takes the truth silently: a mean left out (``bearing_mean``, ``range_mean``,
     ``velocity_mean``, ``speed_mean`` of normal distributions, a gaussian ``mean``) is the true
@@ -269,7 +269,7 @@ class Prior:
     std: tuple[NonNegLength, NonNegLength, NonNegSpeed, NonNegSpeed] | None = None
     samples: PositiveInt = 100_000
     seed: NonNegInt = 0
-    centred_on_truth: bool = False
+    centred_on_truth: StrictBool = False
 
     @property
     def truth_fields(self) -> tuple[str, ...]:
@@ -409,7 +409,7 @@ class RangeSensor:
     period: PositiveTime | None = None
     every: PositiveInt | None = None
     first_step: NonNegInt = 1
-    active: bool = True
+    active: StrictBool = True
 
 
 @_frozen

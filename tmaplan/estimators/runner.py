@@ -151,7 +151,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
         r = float(range_of(rel)) + float(p.range_std or 0.0) * rng.standard_normal()
         lo = max(p.range_min, 1e-3)
         hi = p.range_max if p.range_max is not None else np.inf
-        changes["range_mean"] = float(np.clip(r, lo, hi))
+        if p.range_distribution == "normal":  # drawn anyway: the run's random stream stays
+            changes["range_mean"] = float(np.clip(r, lo, hi))
     v = truth[2:]
     if p.velocity_distribution == "normal" and p.velocity_mean is None:
         changes["velocity_mean"] = tuple(float(x) for x in v + p.velocity_std

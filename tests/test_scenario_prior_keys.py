@@ -1,0 +1,91 @@
+"""Prior keys that the chosen kind, distribution or course mode ignores are refused (unless
+left at their default), and scenario booleans are strict TOML booleans."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ScenarioError
+from tmaplan.estimators.runner import run_prior
+from tmaplan.evaluation.plan_general import random_problems
+from tmaplan.scenario import dump, from_dict, load_problem, loads, to_dict
+
+IGNORED = [  # (problem, key, value, the setting that ignores it)
+    ("default", "range_std", "1 km", "range_distribution = 'uniform'"),
+    ("default", "range_mean", "10 km", "range_distribution = 'uniform'"),
+    ("default", "velocity_mean", [0.0, 0.0], "velocity_distribution = 'speed-course'"),
+    ("default", "velocity_std", "2 kn", "velocity_distribution = 'speed-course'"),
+    ("default", "speed_mean", "5 kn", "speed_distribution = 'uniform'"),
+    ("default", "speed_std", "1 kn", "speed_distribution = 'uniform'"),
+    ("default", "course_mean", "10 deg", "course_mode = 'uniform'"),
+    ("default", "course_std", "10 deg", "course_mode = 'uniform'"),
+    ("default", "mean", [0.0, 0.0, 0.0, 0.0], "kind = 'polar'"),
+    ("ristic-bot-moderate", "course_mean", "10 deg", "course_mode = 'reciprocal-bearing'"),
+    ("brehard2005-s1", "speed_max", "15 kn", "velocity_distribution = 'normal'"),
+    ("brehard2005-s1", "course_mode", "uniform", "velocity_distribution = 'normal'"),
+    ("brehard2005-s1", "speed_distribution", "uniform", "velocity_distribution = 'normal'"),
+    ("gordon1993-bot", "bearing_std", "2 deg", "kind = 'gaussian'"),
+    ("gordon1993-bot", "range_min", "1 km", "kind = 'gaussian'"),
+    ("gordon1993-bot", "range_distribution", "uniform", "kind = 'gaussian'"),
+    ("gordon1993-bot", "velocity_std", "1 m/s", "kind = 'gaussian'"),
+]
+
+
+@pytest.mark.parametrize(("problem", "key", "value", "setting"), IGNORED)
+def test_an_ignored_prior_key_is_refused(problem, key, value, setting):
+    data = to_dict(load_problem(problem))
+    data["prior"][key] = value
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(data, source="case")
+    msg = str(exc.value)
+    assert msg.startswith(f"case: field 'prior.{key}': expected not set with prior.{setting} "
+                          "(it is ignored there), received "), msg
+
+
+@pytest.mark.parametrize(("problem", "key", "value"), [
+    ("gordon1993-bot", "bearing_std", "0 deg"),        # its default: written by dump
+    ("brehard2005-s1", "speed_min", 0.0),
+    ("ristic-bot-moderate", "range_max", "40 km"),     # a truncation bound of a normal range
+    ("ristic-bot-moderate", "speed_max", "30 kn"),     # ... and of a normal speed
+    ("contact-astern", "course_std", "5 deg"),         # course_mode "given"
+])
+def test_a_used_or_default_prior_key_is_accepted(problem, key, value):
+    data = to_dict(load_problem(problem))
+    data["prior"][key] = value
+    from_dict(data)
+
+
+def test_random_problems_still_round_trip():
+    for seed in (2027, 2028):
+        for s in random_problems(load_problem("default"), 30, seed=seed):
+            assert loads(dump(s)) == s
+
+
+def test_run_prior_keeps_a_uniform_range_prior_valid():
+    # Before: run_prior drew a range_mean for every polar prior, also a uniform range one
+    # (brehard2004-mp), which ignores it.
+    sc = load_problem("brehard2004-mp")
+    p = run_prior(sc, np.random.default_rng(3)).prior
+    assert p is not None and p.range_mean is None and p.bearing_mean is not None
+
+
+@pytest.mark.parametrize(("problem", "line", "field"), [
+    ("brehard2005-s1", "centred_on_truth = true", "prior.centred_on_truth"),
+    ("default", "active = true", "sensors[1].active"),
+])
+@pytest.mark.parametrize("value", ['"yes"', '"true"', "1", '"on"'])
+def test_booleans_are_strict(problem, line, field, value):
+    text = dump(load_problem(problem))
+    assert text.count(line) == 1
+    key = line.split(" = ")[0]
+    with pytest.raises(ScenarioError) as exc:
+        loads(text.replace(line, f"{key} = {value}"), source="case")
+    received = value.replace('"', "'")  # a string is quoted, a number is not
+    assert str(exc.value) == (f"case: field '{field}': expected a boolean (true or false), "
+                              f"received {received}")
+
+
+def test_toml_booleans_still_load():
+    text = dump(load_problem("default"))
+    assert loads(text.replace("active = true", "active = false")).sensors[1].active is False

@@ -127,3 +127,24 @@ def test_closed_loop_truth_bound_refuses_mismatched_pings():
         closed_loop_truth_bounds(quiet, obs, tgt, [np.array([30]), np.array([], int)])
     no_pings = closed_loop_truth_bounds(quiet, obs, tgt, [np.array([], int)] * 2)
     assert np.isfinite(no_pings[0]).all()
+
+
+def test_a_gaussian_prior_gives_its_exact_moments_to_the_bounds():
+    """J0 of a gaussian prior is diag(1/std²) exactly (ristic2004 ch. 6), not the inverse of a
+    1000-sample covariance (about ±4.5 % per variance); a polar prior's sample covariance is
+    normalised by n, like the LPC prior information and Belief.cov."""
+    from tmaplan.bounds.inputs import prepare
+    from tmaplan.models.prior import relative_prior_covariance, relative_prior_samples
+
+    sc = load_problem("gordon1993-bot")
+    p, o = sc.prior, sc.observer
+    m, P = prior_relative_moments(sc)
+    assert np.array_equal(P, np.diag(np.square(p.std)))
+    obs0 = np.concatenate([o.position, o.velocity])
+    np.testing.assert_allclose(m, np.asarray(p.mean) - obs0, atol=1e-12)
+    assert np.array_equal(prepare(sc, lpc=False).cov_cart0, P)
+
+    sc = load_problem("ristic-bot-moderate")
+    x = relative_prior_samples(sc, 50, np.random.default_rng(1))
+    d = x - x.mean(axis=0)
+    np.testing.assert_allclose(relative_prior_covariance(sc, x), d.T @ d / 50, rtol=1e-12)

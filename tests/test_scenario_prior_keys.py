@@ -22,11 +22,9 @@ IGNORED = [  # (problem, key, value, the setting that ignores it)
     ("default", "course_std", "10 deg", "course_mode = 'uniform'"),
     ("default", "mean", [0.0, 0.0, 0.0, 0.0], "kind = 'polar'"),
     ("ristic-bot-moderate", "course_mean", "10 deg", "course_mode = 'reciprocal-bearing'"),
-    ("brehard2005-s1", "speed_max", "15 kn", "velocity_distribution = 'normal'"),
     ("brehard2005-s1", "course_mode", "uniform", "velocity_distribution = 'normal'"),
     ("brehard2005-s1", "speed_distribution", "uniform", "velocity_distribution = 'normal'"),
     ("gordon1993-bot", "bearing_std", "2 deg", "kind = 'gaussian'"),
-    ("gordon1993-bot", "range_min", "1 km", "kind = 'gaussian'"),
     ("gordon1993-bot", "range_distribution", "uniform", "kind = 'gaussian'"),
     ("gordon1993-bot", "velocity_std", "1 m/s", "kind = 'gaussian'"),
 ]
@@ -49,6 +47,10 @@ def test_an_ignored_prior_key_is_refused(problem, key, value, setting):
     ("ristic-bot-moderate", "range_max", "40 km"),     # a truncation bound of a normal range
     ("ristic-bot-moderate", "speed_max", "30 kn"),     # ... and of a normal speed
     ("contact-astern", "course_std", "5 deg"),         # course_mode "given"
+    # the consistency monitor's rejuvenation bounds, read whatever the sampling
+    ("brehard2005-s1", "speed_max", "15 kn"),          # a normal velocity prior
+    ("gordon1993-bot", "range_min", "1 km"),           # a gaussian prior
+    ("gordon1993-bot", "range_max", "40 km"),
 ])
 def test_a_used_or_default_prior_key_is_accepted(problem, key, value):
     data = to_dict(load_problem(problem))

@@ -271,8 +271,10 @@ def check(s: Any, source: str | None) -> None:
 
 
 def _ignored_prior_keys(p: Any) -> dict[str, str]:
-    """Fields of prior ``p`` that :func:`tmaplan.models.prior.sample_prior` does not read,
-    each with the setting that makes it unused (``"kind"``, ``"range_distribution"``, …)."""
+    """Fields of prior ``p`` that :func:`tmaplan.models.prior.sample_prior` does not read (nor
+    the consistency monitor, which bounds its rejuvenation by ``range_min``, ``range_max``
+    and ``speed_max`` of any prior), each with the setting that makes it unused (``"kind"``,
+    ``"range_distribution"``, …)."""
     gaussian = ("mean", "std")
     common = ("kind", "samples", "seed", "centred_on_truth")
     polar = tuple(f.name for f in dataclasses.fields(p) if f.name not in gaussian + common)
@@ -289,10 +291,14 @@ def _ignored_prior_keys(p: Any) -> dict[str, str]:
         ("course_mode", p.course_mode != "given", ("course_mean",)),
         ("course_mode", p.course_mode == "uniform", ("course_std",)),
     )
+    # the support bounds of the consistency monitor's rejuvenation, whatever the sampling
+    # (tmaplan.estimators.consistency): never unused
+    monitor = ("range_min", "range_max", "speed_max")
     out: dict[str, str] = {}
     for selector, unused, names in rules:
         for name in names if unused else ():
-            out.setdefault(name, selector)
+            if name not in monitor:
+                out.setdefault(name, selector)
     return out
 
 

@@ -11,10 +11,19 @@ No re-planning policy that optimises the same cost can expect more than the clai
 gains over the offline plan; where that gain is small, a receding horizon has little to win
 (issue 13: ``receding`` against ``planned`` on ``bow-closing``).
 
+``--waiting`` asks *when* that knowledge must come, on the objective alone (no closed loop):
+per run, the true initial bearing rate, the side the clairvoyant plan turns to first, and
+the objective at the truth of holding course for w = 0…5 min and then flying the best (at
+the truth) of the offline plan, its mirror image and the clairvoyant plan, each delayed by
+w, against the offline plan. It is an upper bound on deciding after w minutes of bearings:
+the decision is taken with the truth itself.
+
 Usage::
 
     python benchmarks/value_of_information.py --problem bow-closing --runs 200 --seed 7 \
         --workers 2 [--json F]
+    python benchmarks/value_of_information.py --problem bow-closing --runs 40 --seed 9 \
+        --waiting --workers 2
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
+from tmaplan.models.observer import turn_rate_track
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.objectives import ObjectiveEvaluator
@@ -58,21 +68,81 @@ def _init(problem: str, particles: int) -> None:
                   planner=HeadingPlanner(sc, objective=obj), prior=Belief.from_prior(sc))
 
 
+#: holds of ``--waiting`` [min]
+HOLDS = (0, 1, 2, 3, 4, 5)
+
+
+def _clairvoyant(seed: int, i: int, mirror: bool = False) -> tuple:
+    """Run ``i``'s truth (its first stream), the belief at it and the clairvoyant plan (None
+    if no start converged); ``mirror`` adds the offline plan's mirror image to the starts."""
+    sc, planner, prior, plan = (_STATE[k] for k in ("sc", "planner", "prior", "plan"))
+    s_truth = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)[0]
+    target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
+    o = sc.observer
+    rel = target[0] - np.concatenate([np.asarray(o.position, float), initial_velocity(o)])
+    b = _AtTruth(**{f.name: getattr(prior, f.name) for f in dataclasses.fields(Belief)},
+                 truth=rel)
+    u0 = plan.turn_rate / planner.u_max
+    cands = [planner.solve(b, raise_on_failure=False),
+             planner.solve(b, starts=[u0], raise_on_failure=False)]
+    if mirror:
+        cands.append(planner.solve(b, starts=[-u0], raise_on_failure=False))
+    clair = min((c for c in cands if c.success), key=lambda c: c.objective, default=None)
+    return target, rel, b, clair
+
+
+def _wait(args: tuple[int, int]) -> dict:
+    """``--waiting`` for one run: initial bearing rate, the clairvoyant plan's first side and
+    the objective gain [s] of each hold in :data:`HOLDS` against the offline plan."""
+    seed, i = args
+    sc, planner, plan = (_STATE[k] for k in ("sc", "planner", "plan"))
+    with threadpool_limits(limits=1):
+        _, rel, b, clair = _clairvoyant(seed, i, mirror=True)
+        ev = ObjectiveEvaluator(sc, planner.objective, n_steps=planner.K, belief=b)
+        track, dt = plan.observer, sc.time.dt
+        base = ev(track)[0]
+        shapes = [np.diff(track.heading) / dt]                    # per step [rad/s]
+        shapes.append(-shapes[0])
+        if clair is not None:
+            shapes.append(np.diff(clair.observer.heading) / dt)
+        gains = []
+        for w in HOLDS:
+            n = round(60.0 * w / dt)
+            best = min(ev(turn_rate_track(track.position[0], track.heading[0],
+                                          float(track.speed[0]),
+                                          np.concatenate([np.zeros(n), u[:u.size - n]]), dt,
+                                          track.times[0]))[0] for u in shapes)
+            gains.append(best - base)
+    r2 = float(rel[:2] @ rel[:2])
+    side = None if clair is None else float(np.sign(np.mean(
+        clair.observer.heading[:round(240.0 / dt) + 1] - track.heading[0])))
+    return {"run": i, "seed": seed, "bearing_rate": (rel[1] * rel[2] - rel[0] * rel[3]) / r2,
+            "clairvoyant_side": side, "hold_gain": gains}
+
+
+def _waiting_summary(rows: list[dict]) -> None:
+    g = np.array([r["hold_gain"] for r in rows]) / 60.0
+    rate = np.degrees([r["bearing_rate"] for r in rows]) * 60.0
+    side = np.array([r["clairvoyant_side"] or 0.0 for r in rows])
+    stb = side > 0
+    print(f"  clairvoyant plan turns to starboard first on {stb.sum()} of {len(rows)} runs "
+          f"(initial bearing rate there {np.median(rate[stb]) if stb.any() else np.nan:+.3f} "
+          f"deg/min median, elsewhere {np.median(rate[~stb]) if (~stb).any() else np.nan:+.3f})")
+    if stb.any() and (~stb).any():
+        print(f"  gain of knowing the truth at t0: {g[stb, 0].mean():+.2f} min on those runs, "
+              f"{g[~stb, 0].mean():+.2f} on the others")
+    for j, w in enumerate(HOLDS):
+        se = g[:, j].std(ddof=1) / np.sqrt(len(g))
+        print(f"  hold {w} min, then the best shape at the truth, minus the offline plan: "
+              f"{g[:, j].mean():+.2f} min (s.e. {se:.2f}; objective, not flown)")
+
+
 def _run(args: tuple[int, int]) -> dict:
     seed, i = args
-    sc, planner, prior, plan = (_STATE[k] for k in ("sc", "planner", "prior", "plan"))
-    s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+    sc, planner, plan = (_STATE[k] for k in ("sc", "planner", "plan"))
+    _, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
     with threadpool_limits(limits=1):
-        target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
-        o = sc.observer
-        rel = target[0] - np.concatenate([np.asarray(o.position, float), initial_velocity(o)])
-        b = _AtTruth(**{f.name: getattr(prior, f.name) for f in dataclasses.fields(Belief)},
-                     truth=rel)
-        u0 = plan.turn_rate / planner.u_max
-        cands = [planner.solve(b, raise_on_failure=False),
-                 planner.solve(b, starts=[u0], raise_on_failure=False)]
-        clair = min((c for c in cands if c.success), key=lambda c: c.objective,
-                    default=None)
+        target, _, b, clair = _clairvoyant(seed, i)
         at_truth = ObjectiveEvaluator(sc, planner.objective, n_steps=planner.K, belief=b)
         out = {"run": i, "seed": seed, "clairvoyant_objective": None,
                "planned_objective_at_truth": at_truth(plan.observer)[0]}
@@ -100,16 +170,22 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--waiting", action="store_true",
+                    help="the objective of deciding after a hold (no closed loop)")
     a = ap.parse_args()
     if a.runs < 2:  # a paired interval needs two runs
         ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
     jobs = [(a.seed, i) for i in range(a.first_run, a.first_run + a.runs)]
     with ProcessPoolExecutor(a.workers, initializer=_init,
                              initargs=(a.problem, a.particles)) as ex:
-        rows = list(ex.map(_run, jobs))
+        rows = list(ex.map(_wait if a.waiting else _run, jobs))
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh)
+    if a.waiting:
+        print(f"{a.problem}, seed {a.seed}, runs {a.first_run}-{a.first_run + a.runs - 1}")
+        _waiting_summary(rows)
+        return
     sc = load_problem(a.problem)
     censor = censor_time(sc.times)
     ok = [r for r in rows if r["clairvoyant_objective"] is not None]

@@ -20,3 +20,21 @@ def test_clairvoyant_plan_is_optimal_at_the_truth(benchmark_script):
     assert abs(row["planned_objective_at_truth"] - plan.objective) > 1.0
     for name in ("planned", "clairvoyant"):
         assert row[name] is None or np.isfinite(row[name])
+
+
+def test_waiting_reproduces_the_clairvoyant_gain_and_charges_each_minute(benchmark_script):
+    """``--waiting`` on a run whose contact draws right (seed 9, run 3): the clairvoyant
+    plan turns to starboard first, where the offline plan turns to port; with no hold the
+    gain is at least the clairvoyant plan's (it is one of the shapes), and every minute of
+    holding course before the decision costs objective."""
+    bench = benchmark_script("value_of_information")
+    bench._init("bow-closing", 200)
+    row = bench._wait((9, 3))
+    clair = bench._run((9, 3))   # the same truth
+    g = np.array(row["hold_gain"])
+    assert row["clairvoyant_side"] == 1.0 and row["bearing_rate"] > 0.0
+    assert bench._STATE["plan"].observer.heading[8] < bench._STATE["plan"].observer.heading[0]
+    # (the shapes are re-integrated step by step: equal to the plans' tracks within 1 s)
+    assert g[0] <= clair["clairvoyant_objective"] - clair["planned_objective_at_truth"] + 1.0
+    assert g[0] < -30.0                       # something to win at t0 ...
+    assert np.all(np.diff(g) > 0.0)           # ... and less after each minute of holding

@@ -15,8 +15,9 @@ gains over the offline plan; where that gain is small, a receding horizon has li
 per run, the true initial bearing rate, the side the clairvoyant plan turns to first, and
 the objective at the truth of holding course for w = 0…5 min and then flying the best (at
 the truth) of the offline plan, its mirror image and the clairvoyant plan, each delayed by
-w, against the offline plan. It is an upper bound on deciding after w minutes of bearings:
-the decision is taken with the truth itself.
+w, against the offline plan: what deciding the side after w minutes of bearings can win when
+the decision is taken with the truth itself (the shapes are delayed, not re-optimised after
+the hold).
 
 Usage::
 

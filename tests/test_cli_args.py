@@ -358,17 +358,19 @@ def test_a_planning_horizon_of_no_whole_control_intervals_is_refused_by_the_plan
     assert head["expect-field"] in line
 
 
-def test_a_failed_computation_names_its_problem(tmp_path, one_line_error):
+@pytest.mark.parametrize("name", ["few-bearings", "x"])
+def test_a_failed_computation_names_its_problem(tmp_path, one_line_error, name):
     """An error of the computation itself (not of a flag or a field) says which problem it
-    is about: a script running many problems can tell which one failed."""
+    is about: a script running many problems can tell which one failed. A name that is
+    merely a word of the message ("x" in "(x, y, vx, vy)") still goes in front."""
     from tmaplan.scenario import load_problem, save
 
     sc = load_problem("default")
     f = tmp_path / "few.toml"
-    save(dataclasses.replace(sc, name="few-bearings", planning=None,
+    save(dataclasses.replace(sc, name=name, planning=None,
                              time=dataclasses.replace(sc.time, horizon=30.0)), f)
     line = one_line_error(["crlb", str(f), "--no-figure"])
-    assert line.startswith("tmaplan crlb: error: few-bearings: too few measurements"), line
+    assert line.startswith(f"tmaplan crlb: error: {name}: too few measurements"), line
     # flags and fields name themselves, without the problem in front
     line = one_line_error(["bound", "default", "--samples", "50", "--no-figure"])
     assert line.startswith("tmaplan bound: error: field '--samples'"), line

@@ -473,7 +473,7 @@ class Planning:
     control_interval : float, optional
         Piecewise-constant turn-rate control [s], whole steps of dt (default: dt).
     replan_interval : float, optional
-        Receding-horizon re-planning interval [s].
+        Receding-horizon re-planning interval [s], whole steps of dt.
     """
 
     horizon: PositiveTime | None = None

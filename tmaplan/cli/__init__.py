@@ -110,6 +110,13 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
     return parser, modules, parsers
 
 
+def _names_problem(text: str, problem: str) -> bool:
+    """Whether an error message already names ``problem`` as its source: in front
+    (``"<problem>: ..."``) or in parentheses (``"... (<problem>)"``), not merely as a word of
+    the message (a problem named ``x`` in ``"unknown parameters (x, y, vx, vy)"``)."""
+    return text.startswith(f"{problem}: ") or f"({problem})" in text
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tmaplan`` command. Returns the exit status.
 
@@ -150,7 +157,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         text = str(exc)
         # a failure of the computation (not of a flag or a field, which name themselves)
         # says which problem it is about
-        if problem is not None and not isinstance(exc, ArgumentError) and problem not in text:
+        if problem is not None and not isinstance(exc, ArgumentError) \
+                and not _names_problem(text, problem):
             text = f"{problem}: {text}"
         print(f"tmaplan {args.verb}: error: {text}".replace("\n", " "), file=sys.stderr)
         return 1

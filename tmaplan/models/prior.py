@@ -168,10 +168,12 @@ def relative_prior_samples(scenario: Scenario, n: int, rng: np.random.Generator,
 def prior_relative_moments(scenario: Scenario, n: int | None = None,
                            rng: np.random.Generator | None = None,
                            ) -> tuple[np.ndarray, np.ndarray]:
-    """Mean (4,) and covariance (4, 4) of the relative initial state, from prior samples.
+    """Mean (4,) and covariance (4, 4) of the relative initial state.
 
-    Defaults: ``n = scenario.prior.samples`` and ``rng = default_rng(scenario.prior.seed)``,
-    so the result is reproducible.
+    Exact for a ``gaussian`` prior (``n`` and ``rng`` are then unused: ``rng`` is not
+    advanced); else from ``n`` prior samples, the covariance normalised by n
+    (:func:`relative_prior_covariance`). Defaults: ``n = scenario.prior.samples`` and
+    ``rng = default_rng(scenario.prior.seed)``, so the result is reproducible.
     """
     if scenario.prior is None:
         raise ScenarioError("prior", "a [prior] table (this computation needs a prior)", None,

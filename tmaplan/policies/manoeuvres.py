@@ -259,7 +259,8 @@ class Receding:
     Attributes
     ----------
     replan_interval : float, optional
-        [s], finite and > 0; default (None): ``scenario.planning.replan_interval``.
+        [s], a whole number (>= 1) of steps of dt; default (None):
+        ``scenario.planning.replan_interval``.
     horizon : float, optional
         Look-ahead [s], finite and > 0; default: the planner's.
     objective : str

@@ -92,6 +92,13 @@ def _clairvoyant(seed: int, i: int, mirror: bool = False) -> tuple:
     return target, rel, b, clair
 
 
+def turn_rates(track, dt: float) -> np.ndarray:
+    """Per-step turn rates [rad/s] of ``track``, shape (K,): differences of the *unwrapped*
+    headings (``ObserverTrack.heading`` is wrapped to ±π; a plain difference turns 352° in
+    one step where a track crosses south)."""
+    return np.diff(np.unwrap(track.heading)) / dt
+
+
 def _wait(args: tuple[int, int]) -> dict:
     """``--waiting`` for one run: initial bearing rate, the clairvoyant plan's first side and
     the objective gain [s] of each hold in :data:`HOLDS` against the offline plan."""
@@ -102,10 +109,10 @@ def _wait(args: tuple[int, int]) -> dict:
         ev = ObjectiveEvaluator(sc, planner.objective, n_steps=planner.K, belief=b)
         track, dt = plan.observer, sc.time.dt
         base = ev(track)[0]
-        shapes = [np.diff(track.heading) / dt]                    # per step [rad/s]
+        shapes = [turn_rates(track, dt)]
         shapes.append(-shapes[0])
         if clair is not None:
-            shapes.append(np.diff(clair.observer.heading) / dt)
+            shapes.append(turn_rates(clair.observer, dt))
         gains = []
         for w in HOLDS:
             n = round(60.0 * w / dt)
@@ -116,7 +123,7 @@ def _wait(args: tuple[int, int]) -> dict:
             gains.append(best - base)
     r2 = float(rel[:2] @ rel[:2])
     side = None if clair is None else float(np.sign(np.mean(
-        clair.observer.heading[:round(240.0 / dt) + 1] - track.heading[0])))
+        np.unwrap(clair.observer.heading)[:round(240.0 / dt) + 1] - track.heading[0])))
     return {"run": i, "seed": seed, "bearing_rate": (rel[1] * rel[2] - rel[0] * rel[3]) / r2,
             "clairvoyant_side": side, "hold_gain": gains}
 

@@ -38,3 +38,19 @@ def test_waiting_reproduces_the_clairvoyant_gain_and_charges_each_minute(benchma
     assert g[0] <= clair["clairvoyant_objective"] - clair["planned_objective_at_truth"] + 1.0
     assert g[0] < -30.0                       # something to win at t0 ...
     assert np.all(np.diff(g) > 0.0)           # ... and less after each minute of holding
+
+
+def test_turn_rates_re_integrate_a_plan_that_crosses_south(benchmark_script):
+    """The offline plan of ``bow-closing`` turns through 180°, where the wrapped heading
+    jumps by 2π: its turn rates stay within the limit and re-integrate to the same track."""
+    from tmaplan.models.observer import turn_rate_track
+
+    bench = benchmark_script("value_of_information")
+    bench._init("bow-closing", 200)
+    tr, sc = bench._STATE["plan"].observer, bench._STATE["sc"]
+    assert np.any(np.abs(np.diff(tr.heading)) > np.pi)      # it does cross ±180°
+    u = bench.turn_rates(tr, sc.time.dt)
+    assert np.max(np.abs(u)) <= bench._STATE["planner"].u_max * (1 + 1e-6)   # (IPOPT bounds)
+    again = turn_rate_track(tr.position[0], tr.heading[0], float(tr.speed[0]), u, sc.time.dt,
+                            tr.times[0])
+    np.testing.assert_allclose(again.position, tr.position, atol=1e-6)

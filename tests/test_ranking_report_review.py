@@ -41,11 +41,12 @@ def test_cost_axes_carry_the_costs_units(tmp_path):
 
 def test_problem_name_is_escaped_in_the_page_title(tmp_path):
     """A scenario name may hold '<' and '&' (only '/', '\\' and control characters are
-    refused); the <title> wrote it raw, so '</title>' ended the title there."""
-    path = write_ranking_report(_result("a</title><b>&"), tmp_path, command="tmaplan x")
+    refused); the <title> wrote it raw. The report is named after the problem."""
+    path = write_ranking_report(_result("a<b>&<script>"), tmp_path, command="tmaplan x")
+    assert path.name == "a<b>&<script>_rank-costs.html"
     text = path.read_text()
-    assert "<title>tmaplan rank-costs: a&lt;/title&gt;&lt;b&gt;&amp;</title>" in text
-    assert text.count("</title>") == 1
+    assert "<title>tmaplan rank-costs: a&lt;b&gt;&amp;&lt;script&gt;</title>" in text
+    assert "<b>" not in text and "<script>" not in text
 
 
 def test_an_accuracy_below_one_percent_is_not_printed_as_zero(tmp_path):

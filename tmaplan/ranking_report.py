@@ -153,6 +153,6 @@ closed-loop policies: <code>{html.escape(result.closed_loop_objective)}</code>.<
 """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    path = out / f"{spec.scenario.name}_rank-costs.html"
+    path = out / f"{result.problem}_rank-costs.html"
     path.write_text(doc, encoding="utf-8")
     return path

@@ -4,9 +4,13 @@ Per policy, seconds per run split into planning (the controller's re-plans), fil
 particle filter's init, predict and update) and the rest (simulation, metrics), for
 
 * ``old``: today's re-planning path, a full IPOPT solve per re-plan (the first one cold, 4
-  starts), ``Receding(real_time=False)``;
+  starts), ``Receding(solver="ipopt")``;
 * ``new``: the real-time iteration, one condensed SQP step per re-plan from the shifted
-  previous plan (``Receding()``, :mod:`tmaplan.planning.rti`), IPOPT only as the fallback.
+  previous plan (``Receding(solver="real-time")``, CLI name ``receding-fast``,
+  :mod:`tmaplan.planning.rti`), IPOPT only as the fallback.
+
+(``receding`` names a receding policy here, flown by the path's solver; the default
+``Receding()``, five IPOPT starts per re-plan, is neither path.)
 
 Both paths run on the same truths and noise (common random numbers, the campaign's seeds), so
 the script also reports the paired difference new − old of the time to accuracy and of the final
@@ -67,8 +71,9 @@ def _policies(scenario, names, path):
     pols = {}
     for spec in names:
         p = parse_policy(spec, scenario)
-        if isinstance(p.manoeuvre, Receding) and path == "old":
-            p = Combined(manoeuvre=Receding(real_time=False), ping=p.ping)
+        if isinstance(p.manoeuvre, Receding):
+            p = Combined(manoeuvre=Receding(solver="ipopt" if path == "old" else "real-time"),
+                         ping=p.ping)
         pols[spec] = p.resolve(scenario)
     return pols, time.perf_counter() - t
 
@@ -188,12 +193,12 @@ def gaps(runs, particles, seed=1000, problem="default"):
     shifted previous plan (the real-time iteration's start) minus the IPOPT optimum from it,
     along the new path's runs (tuning seeds, default 1000: not the evaluation seeds)."""
     from tmaplan.planning import Belief
-    from tmaplan.policies import manoeuvres
+    from tmaplan.policies import receding
 
     sc = load_problem(problem)
-    pol = parse_policy("receding", sc).resolve(sc)
+    pol = parse_policy("receding-fast", sc).resolve(sc)
     out = defaultdict(list)
-    replan = manoeuvres._RecedingController._replan
+    replan = receding._RecedingController._replan
 
     def recorded(self, belief, t):
         b = Belief.from_particles(belief.particles, belief.weights, t=t,  # a posterior
@@ -207,7 +212,7 @@ def gaps(runs, particles, seed=1000, problem="default"):
         out[len(self.log)].append(pl._f_eval(x0, P)[0].item() - opt.objective)
         return replan(self, belief, t)
 
-    manoeuvres._RecedingController._replan = recorded
+    receding._RecedingController._replan = recorded
     try:
         for i in range(runs):
             s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
@@ -216,7 +221,7 @@ def gaps(runs, particles, seed=1000, problem="default"):
                 run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(s_noise),
                                 filter_rng=np.random.default_rng(s_filter), n_particles=particles)
     finally:
-        manoeuvres._RecedingController._replan = replan
+        receding._RecedingController._replan = replan
     print(f"{problem}: objective of the shifted previous plan - IPOPT optimum, {runs} runs "
           f"(seed {seed})")
     for k in sorted(out):

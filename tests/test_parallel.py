@@ -56,7 +56,7 @@ def test_receding_model_prefetched_on_a_worker_is_the_one_computed_here():
     import numpy as np
 
     from tmaplan.planning import Belief, HeadingPlanner
-    from tmaplan.policies import Receding, manoeuvres
+    from tmaplan.policies import Receding, manoeuvres, receding
     from tmaplan.scenario import from_dict, load_problem, to_dict
 
     d = to_dict(load_problem("default"))
@@ -66,16 +66,16 @@ def test_receding_model_prefetched_on_a_worker_is_the_one_computed_here():
     plan = HeadingPlanner(sc, objective=obj).solve(Belief.from_prior(sc))
     manoeuvres._PLAN_CACHE[(sc, obj)] = plan  # stands in for the multi-start's plan
     try:
-        here = manoeuvres._rti_model(sc, obj, None)
-        manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False))
+        here = receding._rti_model(sc, obj, None)
+        receding._RTI_MODEL_CACHE.pop((sc, obj, None, False))
         with process_pool(1) as pool:
-            manoeuvres.prefetch_receding_model(sc, obj, pool)
-            resolved = Receding(objective=obj).resolve(sc)
+            receding.prefetch_receding_model(sc, obj, pool)
+            resolved = Receding(objective=obj, solver="real-time").resolve(sc)
         assert np.array_equal(resolved.rti.hessian, here.hessian)
         assert resolved.rti.scale == here.scale and resolved.rti.hessian.shape == (43, 43)
     finally:
         manoeuvres._PLAN_CACHE.pop((sc, obj), None)
-        manoeuvres._RTI_MODEL_CACHE.pop((sc, obj, None, False), None)
+        receding._RTI_MODEL_CACHE.pop((sc, obj, None, False), None)
 
 
 def test_a_prefetch_whose_pool_went_away_is_computed_here(monkeypatch):
@@ -83,29 +83,29 @@ def test_a_prefetch_whose_pool_went_away_is_computed_here(monkeypatch):
     in-process computation; a failed one is reported and not kept."""
     from concurrent.futures import Future
 
-    from tmaplan.policies import manoeuvres
+    from tmaplan.policies import receding
 
     key = ("sc", "obj", None, False)
     cancelled: Future = Future()
     cancelled.cancel()
     calls = []
-    real = manoeuvres._rti_model
+    real = receding._rti_model
 
     def computed_here(scenario, objective, horizon, until_end=False):
         # the fallback's call: stands in for the in-process computation
         calls.append(scenario)
         return "model computed here"
 
-    monkeypatch.setitem(manoeuvres._RTI_MODEL_CACHE, key, cancelled)
-    monkeypatch.setattr(manoeuvres, "_rti_model", computed_here)
+    monkeypatch.setitem(receding._RTI_MODEL_CACHE, key, cancelled)
+    monkeypatch.setattr(receding, "_rti_model", computed_here)
     assert real("sc", "obj", None) == "model computed here" and calls == ["sc"]
-    assert key not in manoeuvres._RTI_MODEL_CACHE  # the cancelled future is not kept
+    assert key not in receding._RTI_MODEL_CACHE  # the cancelled future is not kept
     failed: Future = Future()
     failed.set_exception(ValueError("worker failed"))
-    manoeuvres._RTI_MODEL_CACHE[key] = failed
+    receding._RTI_MODEL_CACHE[key] = failed
     with pytest.raises(ValueError, match="worker failed"):
         real("sc", "obj", None)
-    assert key not in manoeuvres._RTI_MODEL_CACHE
+    assert key not in receding._RTI_MODEL_CACHE
 
 
 def test_a_payload_that_cannot_be_pickled_leaves_no_file(monkeypatch, tmp_path):

@@ -63,7 +63,7 @@ def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
     from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.planning.heading import HeadingPlanner as HP
     from tmaplan.policies import Combined, Receding
-    from tmaplan.policies.manoeuvres import _PLANNER_CACHE
+    from tmaplan.policies.receding import _PLANNER_CACHE
     from tmaplan.simulate import draw_truth
 
     _PLANNER_CACHE.clear()
@@ -83,7 +83,7 @@ def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
     rng = np.random.default_rng(0)
     # full IPOPT re-plans (the real-time iteration's own fallback is tested in test_rti.py)
     res = run_closed_loop(s, Combined(manoeuvre=Receding(replan_interval=300.0,
-                                                         real_time=False)),
+                                                         solver="ipopt")),
                           draw_truth(s, rng), noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=500)
     _PLANNER_CACHE.clear()

@@ -55,11 +55,14 @@ def test_receding_until_end_builds_its_planner_with_it(default):
     from tmaplan.policies import Receding
 
     sc = default
-    pol = Receding(until_end=True, horizon=900.0, objective="mean-range-bound").resolve(sc)
-    ctl = pol.controller(sc)
-    assert ctl.planner.until_end and ctl.rti.planner is ctl.planner
-    assert not Receding(horizon=900.0, objective="mean-range-bound").resolve(sc) \
-        .controller(sc).planner.until_end
+    for solver in ("real-time", "multi-start"):
+        pol = Receding(until_end=True, horizon=900.0, objective="mean-range-bound",
+                       solver=solver).resolve(sc)
+        ctl = pol.controller(sc)
+        assert ctl.planner.until_end
+        assert ctl.rti is None if solver == "multi-start" else ctl.rti.planner is ctl.planner
+        assert not Receding(horizon=900.0, objective="mean-range-bound",
+                            solver=solver).resolve(sc).controller(sc).planner.until_end
 
 
 @pytest.mark.parametrize("objective", ["expected-time-to-accuracy", "mean-relative-range-crlb",

@@ -144,7 +144,7 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     sc = small[0]
     rng = np.random.default_rng(3)
     target = draw_truth(sc, rng, from_prior=True)
-    pol = Receding(objective="mean-range-bound", horizon=900.0).resolve(sc)
+    pol = Receding(objective="mean-range-bound", horizon=900.0, solver="real-time").resolve(sc)
     assert pol.rti is not None and pol.resolve(sc) is pol
     res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=300)
@@ -167,7 +167,8 @@ def test_receding_full_solve_when_the_optimum_moves_far(small):
     solvers = {}
     for above, full in ((float("inf"), ()), (1e-9, ()), (float("inf"), (0, 2))):
         # the closed-loop objective (mean-range-bound saturates the turn rate: zero steps)
-        pol = Receding(horizon=900.0, full_above=above, full_solves=full).resolve(sc)
+        pol = Receding(horizon=900.0, full_above=above, full_solves=full,
+                       solver="real-time").resolve(sc)
         res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                               filter_rng=np.random.default_rng(2), n_particles=300)
         solvers[above, full] = [e.get("solver") for e in res.replans]
@@ -221,8 +222,11 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
 
     pol = parse_policy("receding-rti+uniform", small[0])
     assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_above == np.inf
-    assert pol.name == "receding-rti+uniform" and parse_policy("receding", small[0]) \
-        .manoeuvre.full_above == 0.01
+    assert pol.manoeuvre.solver == "real-time"
+    assert pol.name == "receding-rti+uniform"
+    fast = parse_policy("receding-fast", small[0]).manoeuvre
+    assert (fast.solver, fast.full_above, fast.name) == ("real-time", 0.01, "receding-fast")
+    assert parse_policy("receding", small[0]).manoeuvre == Receding()
 
 
 def test_receding_multi_start_finds_the_other_side(small):
@@ -233,7 +237,8 @@ def test_receding_multi_start_finds_the_other_side(small):
     from tmaplan.policies.plan_starts import turn_program
 
     sc, prior, planner, plan, _ = small
-    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(0,)).resolve(sc)
+    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(0,),
+                   solver="real-time").resolve(sc)
     ctrl = pol.controller(sc)
     mirrored = planner.solve(prior, starts=[-turn_program(plan.observer, planner)])
     ctrl.plan = mirrored
@@ -254,7 +259,8 @@ def test_receding_multi_start_in_closed_loop(small):
 
     sc = small[0]
     target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
-    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(1, 2)).resolve(sc)
+    pol = Receding(objective="mean-range-bound", horizon=900.0, multi_start=(1, 2),
+                   solver="real-time").resolve(sc)
     res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=300)
     starts = [e.get("start") for e in res.replans]
@@ -274,7 +280,7 @@ def test_receding_plans_against_a_posterior_that_holds_the_bearing_at_t(small):
     from tmaplan.policies._base import BeliefView
 
     sc, prior = small[0], small[1]
-    ctrl = Receding(objective="mean-range-bound", horizon=900.0, real_time=False).controller(sc)
+    ctrl = Receding(objective="mean-range-bound", horizon=900.0, solver="ipopt").controller(sc)
     seen = []
 
     class Planner:
@@ -318,3 +324,56 @@ def test_a_step_that_leaves_the_keep_out_violated_is_not_a_success(small):
     else:
         assert out.success and out.solver == "ipopt" and "keep-out" in out.message
         assert violation(out) <= 1e-6
+
+
+def test_receding_default_re_plans_from_five_starts(small):
+    """The default re-plan (``solver="multi-start"``) is, bit for bit, the configuration
+    measured in the README: the first re-plan a full solve warm-started from the plan from the
+    prior, every later one a five-start IPOPT solve, the best kept."""
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]  # flown for 15 minutes: three re-plans
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    kw = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
+    pol = Receding(**kw).resolve(sc)
+    assert pol.solver == "multi-start" and pol.rti is None and pol.resolve(sc) is pol
+    # the plan from the prior that the first re-plan starts from (horizon given: its solve)
+    assert np.allclose(pol.first_plan.turn_rate, small[3].turn_rate, atol=1e-6)
+    measured = Receding(**kw, solver="real-time", multi_start=tuple(range(1, 64)),
+                        full_solves=tuple(range(64))).resolve(sc)
+    runs = [run_closed_loop(sc, p, target, noise_rng=np.random.default_rng(1),
+                            filter_rng=np.random.default_rng(2), n_particles=300)
+            for p in (pol, measured)]
+    assert np.array_equal(runs[0].turn_rate, runs[1].turn_rate)
+    log = runs[0].replans
+    assert len(log) == 3 and all(e["success"] for e in log)
+    assert "start" not in log[0] and log[0]["solver"] == "ipopt"
+    assert all(e["start"].startswith("multi-start: ") for e in log[1:])
+    # not the real-time iteration's re-plans (which take a different track on this run)
+    fast = run_closed_loop(sc, Receding(**kw, solver="real-time").resolve(sc), target,
+                           noise_rng=np.random.default_rng(1),
+                           filter_rng=np.random.default_rng(2), n_particles=300)
+    assert {e["solver"] for e in fast.replans} != {"ipopt"}
+
+
+def test_receding_solver_is_checked(small):
+    from tmaplan.policies import Receding
+
+    for bad in ("fast", "", None, 1):
+        with pytest.raises(ArgumentError, match=r"receding.solver.*multi-start, real-time"):
+            Receding(solver=bad, objective="mean-range-bound", horizon=900.0).resolve(small[0])
+
+
+def test_multi_start_re_plan_after_a_failed_first_one_starts_from_the_first_plan(small):
+    """If the first re-plan fails, the next multi-start shifts the plan from the prior (not
+    an error for want of a previous plan)."""
+    from tmaplan.policies import Receding
+
+    sc, prior, _, plan, _ = small
+    ctrl = Receding(objective="mean-range-bound", horizon=900.0).resolve(sc).controller(sc)
+    assert ctrl.plan is None and ctrl.first is not None
+    best = ctrl.multi_start(prior, heading0=None, position0=None)
+    assert best.success and best.objective <= plan.objective + 1e-3 * abs(plan.objective)

@@ -30,8 +30,9 @@ from tmaplan.policies._base import (
 )
 from tmaplan.policies.alarms import AlarmResponder, AlarmResponse
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
-from tmaplan.policies.manoeuvres import Planned, Receding, SingleTurn, Straight, Zigzag
+from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, Zigzag
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
+from tmaplan.policies.receding import Receding
 from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 __all__ = [

@@ -19,7 +19,6 @@ from tmaplan.policies._base import (
 )
 from tmaplan.policies.manoeuvres import (
     Planned,
-    Receding,
     SingleTurn,
     Straight,
     Zigzag,
@@ -33,6 +32,7 @@ from tmaplan.policies.pings import (
     _budget,
     _offline_schedule,
 )
+from tmaplan.policies.receding import Receding
 from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 if TYPE_CHECKING:
@@ -141,7 +141,9 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "zigzag": best_zigzag,
     "planned": lambda sc: Planned(),
     "receding": lambda sc: Receding(),
-    "receding-rti": lambda sc: Receding(full_above=float("inf"), name="receding-rti"),
+    "receding-fast": lambda sc: Receding(solver="real-time", name="receding-fast"),
+    "receding-rti": lambda sc: Receding(solver="real-time", full_above=float("inf"),
+                                        name="receding-rti"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }
@@ -161,8 +163,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
     baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
-    planned, receding, receding-rti (real-time-iteration steps only, no periodic IPOPT
-    solve), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    planned, receding (IPOPT re-plans from five starts), receding-fast (real-time iteration
+    with an IPOPT fallback), receding-rti (real-time-iteration steps only, no IPOPT
+    fallback), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.
 

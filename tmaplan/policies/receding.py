@@ -1,0 +1,426 @@
+"""Receding-horizon re-planning on the particle filter's posterior (:class:`Receding`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from concurrent.futures import BrokenExecutor, CancelledError, Executor, Future
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tmaplan.caching import LRUCache
+from tmaplan.errors import (
+    ArgumentError,
+    PlanningError,
+    ScenarioError,
+    as_real,
+    finite_real,
+    is_integer,
+    is_whole_count,
+)
+from tmaplan.policies._base import (
+    CLOSED_LOOP_OBJECTIVE,
+    Action,
+    BeliefView,
+    Controller,
+    _turn_limits,
+    log,
+)
+from tmaplan.policies.manoeuvres import _PLAN_CACHE, _TurnRatePlayback, offline_plan
+
+if TYPE_CHECKING:
+    from tmaplan.models.observer import ObserverTrack
+    from tmaplan.scenario import Scenario
+
+__all__ = ["RECEDING_SOLVERS", "Receding", "prefetch_receding_model"]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Receding:
+    """Receding-horizon re-planning on the particle filter's posterior.
+
+    Every ``replan_interval`` [s] the heading OCP is re-solved from the current own-ship state
+    over ``horizon`` [s] with the filter's particles as the belief; its first segment is flown
+    until the next re-plan. If a re-plan fails, the previous plan is kept (and the failure
+    logged in the controller's ``log``).
+
+    How a re-plan is solved (``solver``):
+
+    * ``"multi-start"`` (default): the first re-plan by IPOPT warm-started from the offline
+      plan from the prior; every later one by IPOPT from five starts — the previous plan
+      shifted to the re-plan time, its mirror image (the same manoeuvre to the other side),
+      straight and the turn-early guesses to both sides — keeping the best (the log's
+      ``start`` names it). A warm-started solve stays
+      on the side the previous plan turned to, while the posterior may favour the other. It
+      is the only re-planning measured to beat ``planned`` on ``bow-closing`` (README,
+      "What is left for the re-plans"), at 6–10 times the planning time of the real-time
+      iteration.
+    * ``"real-time"``: one warm-started SQP step (:class:`tmaplan.planning.rti.
+      RealTimeIteration`, milliseconds) from the previous plan, the first one from the
+      offline plan from the prior, with a full IPOPT solve as the fallback (``full_above``,
+      ``full_solves``, ``multi_start``). CLI name ``receding-fast``.
+    * ``"ipopt"``: one IPOPT solve warm-started from the previous plan at every re-plan, the
+      first one cold, from the filter's belief.
+
+    Attributes
+    ----------
+    replan_interval : float, optional
+        [s], a whole number (>= 1) of steps of dt; default (None):
+        ``scenario.planning.replan_interval``.
+    horizon : float, optional
+        Look-ahead [s], finite and > 0; default: the planner's.
+    objective : str
+        Planning objective (default :data:`CLOSED_LOOP_OBJECTIVE`).
+    max_particles : int
+        Particles passed to the planner as belief samples (>= 5): a systematic subsample
+        when the filter has more, else all of them with their weights
+        (:meth:`tmaplan.planning.Belief.from_particles`).
+    solver : {"multi-start", "real-time", "ipopt"}
+        How the re-plans are solved (above).
+    qpsol : str
+        QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
+    rti_steps : int
+        SQP steps per re-plan of the real-time iteration, >= 1.
+    full_solves : tuple of int
+        With ``solver="real-time"``: re-plans (0 = the first) always solved by a full IPOPT
+        solve warm-started from the previous plan (default none).
+    full_above : float
+        With ``solver="real-time"``: when a real-time iteration step lowers the objective by
+        more than this fraction of its value at the shifted previous plan, the optimum has
+        moved far and a full IPOPT solve warm-started from the previous plan replaces the
+        step; ``inf``: never (``receding-rti``). On ``default`` (tuning seeds 1000, 28
+        re-plans of 3 runs, ``benchmarks/closed_loop.py --gaps``) the start was 100–320
+        objective units (10–30 %) from the IPOPT optimum at 5 re-plans, where the step
+        lowered the objective by 1.2–15 %, and at most 10 units at the others, where it
+        lowered it by at most 0.4 %: the default 1 % separates them.
+    full_tol : float, optional
+        IPOPT's tolerance for the full solves of ``"multi-start"`` and ``"real-time"``
+        (``tol`` of :meth:`tmaplan.planning.HeadingPlanner.solve`; None: the planner's 1e-7).
+        Default 1e-4: on ``default`` (runs 0–23 of seed 0, the two settings interleaved in
+        one process) a full solve took 1.00 s instead of 1.24 s, and over 100 paired runs
+        the closed loop did not change (time to accuracy +1.4 s [−64.3, +67.0], final range
+        error +5.6 m [−38.6, +49.8] against 1e-7; docs/findings.md).
+    until_end : bool
+        Count only the plan steps up to the scenario's end (``HeadingPlanner(until_end=True)``):
+        a re-plan at time t optimises the time the mission has left instead of a full
+        horizon that runs past the end, where the metrics stop counting. Off by default: on
+        ``bow-closing`` (30 min, 400 paired runs, seed 6) it changed the mean time to
+        accuracy by +0.6 s [−13.2, +14.4] against the real-time iteration (README).
+    multi_start : tuple of int
+        With ``solver="real-time"``: re-plans (0 = the first) solved from the five starts of
+        ``"multi-start"`` instead (default none).
+    rti : RTIModel, optional
+        The offline plan and the Hessian model of the real-time iteration
+        (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
+        (:meth:`resolve` computes it once per campaign, so that workers receive it).
+    first_plan : HeadingPlan, optional
+        With ``solver="multi-start"``: the offline plan from the prior that the first re-plan
+        starts from; computed once per scenario if not given (by :meth:`resolve`, once per
+        campaign).
+    replan_on_alarm : bool
+        Re-plan at once from the (recovered) posterior when the consistency monitor raised an
+        alarm since the last step (:attr:`BeliefView.alarms`), not only every
+        ``replan_interval``; a run without alarms is unchanged.
+    """
+
+    replan_interval: float | None = None
+    horizon: float | None = None
+    objective: str | None = CLOSED_LOOP_OBJECTIVE
+    max_particles: int = 2000
+    solver: str = "multi-start"
+    qpsol: str = "daqp"
+    rti_steps: int = 1
+    full_solves: tuple[int, ...] = ()
+    full_above: float = 0.01
+    full_tol: float | None = 1e-4
+    until_end: bool = False
+    multi_start: tuple[int, ...] = ()
+    rti: Any = dataclasses.field(default=None, compare=False, repr=False)
+    first_plan: Any = dataclasses.field(default=None, compare=False, repr=False)
+    replan_on_alarm: bool = True
+    name: str = "receding"
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller owning a planner built once for the whole run."""
+        return _RecedingController(self, scenario)
+
+    def resolve(self, scenario: Scenario) -> Receding:
+        """The same policy with what its re-plans start from computed (once per campaign):
+        the real-time iteration's model, or the multi-start's first plan."""
+        _check_receding(self, scenario)
+        if self.solver == "real-time" and self.rti is None:
+            return dataclasses.replace(self, rti=_rti_model(scenario, self.objective,
+                                                            self.horizon, self.until_end))
+        if self.solver == "multi-start" and self.first_plan is None:
+            return dataclasses.replace(self, first_plan=_first_plan(
+                scenario, self.objective, self.horizon, self.until_end))
+        return self
+
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
+        """The offline plan from the prior: the receding controller's first plan."""
+        return offline_plan(scenario, self.objective).observer
+
+
+#: How :class:`Receding` solves its re-plans.
+RECEDING_SOLVERS = ("multi-start", "real-time", "ipopt")
+
+#: Heading planners (casadi problems built once) by (scenario, objective, horizon, until_end),
+#: the 16 most recently used.
+_PLANNER_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = LRUCache(16)
+
+
+def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
+             until_end: bool = False) -> Any:
+    key = (scenario, objective, horizon, until_end)
+    if key not in _PLANNER_CACHE:
+        from tmaplan.planning import HeadingPlanner
+
+        kw: dict[str, Any] = {"until_end": until_end}
+        if objective is not None:
+            kw["objective"] = objective
+        if horizon is not None:
+            kw["horizon"] = horizon
+        _PLANNER_CACHE[key] = HeadingPlanner(scenario, **kw)
+    return _PLANNER_CACHE[key]
+
+
+#: Real-time-iteration models (or their pending futures), keyed as the planners.
+_RTI_MODEL_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = LRUCache(16)
+#: Real-time iterations (each holds its planner and QP), the 16 most recently used.
+_RTI_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool, str, int], Any] = (
+    LRUCache(16))
+
+
+def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
+               until_end: bool = False) -> Any:
+    """The real-time iteration's model at the offline plan from the prior (cached)."""
+    key = (scenario, objective, horizon, until_end)
+    if key not in _RTI_MODEL_CACHE:
+        from tmaplan.planning import Belief
+        from tmaplan.planning.rti import reference_model
+
+        planner = _planner(scenario, objective, horizon, until_end)
+        plan = _first_plan(scenario, objective, horizon, until_end)
+        _RTI_MODEL_CACHE[key] = reference_model(planner, plan, Belief.from_prior(scenario))
+    model = _RTI_MODEL_CACHE[key]
+    if isinstance(model, Future):  # computed on a worker (prefetch_receding_model)
+        try:
+            model = model.result()
+        except (CancelledError, BrokenExecutor):  # the pool went away first: compute here
+            del _RTI_MODEL_CACHE[key]
+            return _rti_model(scenario, objective, horizon, until_end)
+        except BaseException:
+            del _RTI_MODEL_CACHE[key]  # reported, and not kept: a later call tries again
+            raise
+        _RTI_MODEL_CACHE[key] = model
+    return model
+
+
+def _first_plan(scenario: Scenario, objective: str | None, horizon: float | None,
+                until_end: bool = False) -> Any:
+    """The plan from the prior that a receding controller's first re-plan starts from: the
+    offline plan (:func:`offline_plan`, cached), or with another horizon the planner's solve
+    from the prior."""
+    if horizon is None:
+        return offline_plan(scenario, objective)
+    key = (scenario, objective, horizon, until_end)
+    if key not in _FIRST_PLAN_CACHE:
+        from tmaplan.planning import Belief
+
+        _FIRST_PLAN_CACHE[key] = _planner(scenario, objective, horizon, until_end).solve(
+            Belief.from_prior(scenario))
+    return _FIRST_PLAN_CACHE[key]
+
+
+#: The first plans of another horizon than the offline plan's, keyed as the planners.
+_FIRST_PLAN_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any] = (
+    LRUCache(16))
+
+
+def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Executor) -> None:
+    """Start computing the real-time iteration's model of ``Receding(objective=objective)``
+    (the Hessian at the offline plan, about 5 s on ``default``) on a worker of ``pool``, so
+    that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
+    :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
+    this process. Needs the offline plan (:func:`offline_plan`), which the worker receives."""
+    key = (scenario, objective, None, False)
+    if key not in _RTI_MODEL_CACHE:
+        _RTI_MODEL_CACHE[key] = pool.submit(_rti_model_on_worker, scenario, objective,
+                                            offline_plan(scenario, objective))
+
+
+def _rti_model_on_worker(scenario: Scenario, objective: str | None, plan: Any) -> Any:
+    _PLAN_CACHE[(scenario, objective)] = plan
+    return _rti_model(scenario, objective, None)
+
+
+def _rti(policy: Receding, scenario: Scenario) -> Any:
+    """The policy's real-time iteration (casadi functions built once per process)."""
+    from tmaplan.planning.rti import RealTimeIteration
+
+    model = policy.rti if policy.rti is not None else _rti_model(
+        scenario, policy.objective, policy.horizon, policy.until_end)
+    key = (scenario, policy.objective, policy.horizon, policy.until_end, policy.qpsol,
+           policy.rti_steps)
+    if key not in _RTI_CACHE:
+        planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
+        _RTI_CACHE[key] = RealTimeIteration(planner, model, qpsol=policy.qpsol,
+                                            steps=policy.rti_steps)
+    return _RTI_CACHE[key].with_model(model)
+
+
+def _check_receding(policy: Receding, scenario: Scenario) -> None:
+    """ArgumentError naming the first invalid field of ``policy`` (before anything is
+    computed from it)."""
+    for field in ("replan_interval", "horizon"):
+        v = getattr(policy, field)
+        if v is not None:
+            finite_real(f"receding.{field}", v, "> 0 s", lower=0.0, strict=True)
+    v, dt = policy.replan_interval, scenario.time.dt
+    if v is not None and not is_whole_count(float(v) / dt):
+        # the controller acts on the grid: another interval would silently be rounded up
+        raise ArgumentError("receding.replan_interval", f"a whole number of steps of dt = "
+                            f"{dt:g} s", v)
+    n = policy.rti_steps
+    if not is_integer(n, 1):
+        raise ArgumentError("receding.rti_steps", "an integer >= 1", n)
+    if not isinstance(policy.solver, str) or policy.solver not in RECEDING_SOLVERS:
+        raise ArgumentError("receding.solver", f"one of {', '.join(RECEDING_SOLVERS)}",
+                            policy.solver)
+    for field in ("full_solves", "multi_start"):
+        idx = getattr(policy, field)
+        if not all(is_integer(i, 0) for i in idx):
+            raise ArgumentError(f"receding.{field}", "re-plan indices >= 0", idx)
+    mp = policy.max_particles
+    if not is_integer(mp, 5):
+        raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
+    if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
+        raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
+    from tmaplan.planning import HeadingPlanner
+
+    HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
+
+
+class _RecedingController:
+    def __init__(self, policy: Receding, scenario: Scenario) -> None:
+        _check_receding(policy, scenario)
+        pl = scenario.planning
+        interval = policy.replan_interval if policy.replan_interval is not None else (
+            pl.replan_interval if pl else None)
+        if interval is None:
+            raise ScenarioError("planning.replan_interval", "a re-planning interval for the "
+                                "receding policy", None, source=scenario.name)
+        self.interval = float(interval)
+        self.policy = policy
+        self.scenario = scenario
+        self.planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
+        self.rti = _rti(policy, scenario) if policy.solver == "real-time" else None
+        # what the first re-plan starts from (None: a cold start)
+        self.first = (self.rti.model.plan if self.rti is not None else
+                      (policy.first_plan if policy.first_plan is not None else _first_plan(
+                          scenario, policy.objective, policy.horizon, policy.until_end))
+                      if policy.solver == "multi-start" else None)
+        self.u_max, self.dt = _turn_limits(scenario)
+        self.plan: Any = None
+        self.playback: _TurnRatePlayback | None = None
+        self.next_replan = scenario.time.t0
+        self.log: list[dict[str, Any]] = []
+        self.alarms = 0
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        alarmed = self.policy.replan_on_alarm and belief.alarms > self.alarms
+        self.alarms = belief.alarms
+        if alarmed or t + 1e-9 >= self.next_replan:
+            self._replan(belief, t)
+            self.next_replan = t + self.interval
+        rate = self.playback.rate_at(t) if self.playback is not None else 0.0
+        return Action(turn_rate=rate)
+
+    def _replan(self, belief: BeliefView, t: float) -> None:
+        from tmaplan.planning import Belief
+
+        t0 = time.perf_counter()
+        # the filter's posterior at step k has assimilated the measurements at k (it predicts
+        # and updates to k before the controller acts at k; at step 0 it has updated with the
+        # measurements of step 0, if any): the plan counts the sensors from the next step
+        b = Belief.from_particles(belief.particles, belief.weights, t=t,
+                                  max_samples=self.policy.max_particles, assimilated=True)
+        entry: dict[str, Any] = {"t": t}
+        pol, n = self.policy, len(self.log)
+        full = {"heading0": belief.heading, "position0": belief.position,
+                "warm_start": self.plan or self.first, "tol": pol.full_tol}
+        try:
+            if (pol.solver == "multi-start" and n > 0) or (self.rti is not None
+                                                           and n in pol.multi_start):
+                plan = self.multi_start(b, heading0=belief.heading,
+                                        position0=belief.position)
+                entry["start"] = plan.message
+            elif pol.solver == "multi-start" or (self.rti is not None and n in pol.full_solves):
+                plan = self.planner.solve(b, **full)
+            elif self.rti is not None:
+                plan = self.rti.solve(b, previous=self.plan, heading0=belief.heading,
+                                      position0=belief.position)
+                start = (plan.warm or {}).get("start_objective")
+                if start is not None and (start - plan.objective > pol.full_above
+                                          * abs(start)):
+                    plan = self.planner.solve(b, **full)
+            else:
+                plan = self.planner.solve(b, heading0=belief.heading,
+                                          position0=belief.position, warm_start=self.plan)
+            entry.update(status=plan.status, success=True, solver=plan.solver)
+            self.plan = plan
+            self.playback = _TurnRatePlayback(plan, self.scenario)
+        except PlanningError as exc:  # keep flying the previous plan
+            entry.update(status=str(exc), success=False)
+            log.info("re-plan at t=%.0f s failed (%s); keeping the previous plan", t, exc)
+        entry["seconds"] = time.perf_counter() - t0
+        self.log.append(entry)
+
+    def multi_start(self, b: Any, *, heading0: float | None,
+                    position0: np.ndarray | None) -> Any:
+        """Full IPOPT re-plan from several starts, the best kept (its ``message`` names the
+        start): the previous plan shifted to ``b.t`` (warm), its mirror image (the same
+        manoeuvre to the other side), straight and the turn-early guesses to both sides.
+
+        Parameters
+        ----------
+        b : Belief
+            The belief to plan against, at ``b.t`` [s].
+        heading0 : float, optional
+            Own-ship heading [rad] (None: the scenario's initial course).
+        position0 : ndarray, shape (2,), optional
+            Own-ship position [m].
+
+        Returns
+        -------
+        HeadingPlan
+            The best of the converged solves.
+
+        Raises
+        ------
+        PlanningError
+            If no start converged.
+        """
+        prev = self.plan or self.first
+        if prev is None:
+            raise PlanningError("multi-start re-plan: no previous plan to start from")
+        pl = self.planner
+        kw = {"heading0": heading0, "position0": position0,
+              "tol": self.policy.full_tol, "raise_on_failure": False}
+        k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
+        u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
+        u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
+        u = np.resize(u, pl.n) if u.size != pl.n else u
+        j = np.arange(pl.n)
+        starts = {"mirrored": -u, "straight": np.zeros(pl.n),
+                  "early-port": np.where(j < pl.n / 4, -1.0, 0.0),
+                  "early-starboard": np.where(j < pl.n / 4, 1.0, 0.0)}
+        plans = {"warm": pl.solve(b, warm_start=prev, **kw)}
+        for name, s in starts.items():
+            plans[name] = pl.solve(b, starts=[s], **kw)
+        ok = {n: p for n, p in plans.items() if p.success and np.isfinite(p.objective)}
+        if not ok:
+            raise PlanningError(f"multi-start re-plan at t={b.t:.0f} s: no start converged")
+        name = min(ok, key=lambda n: ok[n].objective)
+        return dataclasses.replace(ok[name], message=f"multi-start: {name}")

@@ -56,10 +56,10 @@ class Receding:
       is the only re-planning measured to beat ``planned`` on ``bow-closing`` (README,
       "What is left for the re-plans"), at 6–10 times the planning time of the real-time
       iteration.
-    * ``"real-time"``: one warm-started SQP step (:class:`tmaplan.planning.rti.
-      RealTimeIteration`, milliseconds) from the previous plan, the first one from the
-      offline plan from the prior, with a full IPOPT solve as the fallback (``full_above``,
-      ``full_solves``, ``multi_start``). CLI name ``receding-fast``.
+    * ``"real-time"``: one warm-started SQP step
+      (:class:`tmaplan.planning.rti.RealTimeIteration`, milliseconds) from the previous plan,
+      the first one from the offline plan from the prior, with a full IPOPT solve as the
+      fallback (``full_above``, ``full_solves``, ``multi_start``). CLI name ``receding-fast``.
     * ``"ipopt"``: one IPOPT solve warm-started from the previous plan at every re-plan, the
       first one cold, from the filter's belief.
 

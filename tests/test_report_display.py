@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tmaplan.cli.demo import _extra_html
-from tmaplan.display import scenario_text, short_repr, timespan
+from tmaplan.display import minute_list, scenario_text, short_repr, timespan
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.ranking_report import candidate_label
 from tmaplan.report import comparison_figures, rmse_figure, write_report
@@ -261,6 +261,12 @@ def test_timespan_reads_as_a_person_writes_it(seconds, text):
     """No ``0.666667 min`` in a console line: seconds below a minute, else at most two
     decimals of a minute."""
     assert timespan(seconds) == text
+
+
+def test_minute_list_formats_scenario_times():
+    assert minute_list([840.0, 1620.0]) == "14.0, 27.0 min"
+    assert minute_list(np.array([600.0]), 0) == "10 min" == minute_list(600.0, 0)
+    assert minute_list([]) == "none"
 
 
 def test_a_short_scenario_prints_its_horizon_in_seconds(capsys, tmp_path):

@@ -21,8 +21,8 @@ from tmaplan.units import KNOT
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["angle", "distance", "minutes", "rate", "scenario_text", "short_repr", "speed",
-           "timespan"]
+__all__ = ["angle", "distance", "minute_list", "minutes", "rate", "scenario_text",
+           "short_repr", "speed", "timespan"]
 
 
 def _num(x: float, digits: int = 4) -> str:
@@ -41,6 +41,15 @@ def minutes(t: float) -> str:
     if t == math.inf:
         return "never"
     return "undefined" if not math.isfinite(t) else f"{t / 60.0:.1f} min"
+
+
+def minute_list(seconds: float | Any, digits: int = 1) -> str:
+    """Scenario times for console lines, in minutes: ``minute_list([840, 1620]) ==
+    "14.0, 27.0 min"``; ``"none"`` for no time (``seconds``: a scalar or a sequence, in s)."""
+    values = np.atleast_1d(np.asarray(seconds, float))
+    if values.size == 0:
+        return "none"
+    return ", ".join(f"{v / 60:.{digits}f}" for v in values) + " min"
 
 
 def timespan(t: float) -> str:

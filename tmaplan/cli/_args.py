@@ -32,11 +32,9 @@ import argparse
 import math
 import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NoReturn
-
-import numpy as np
 
 from tmaplan.errors import ArgumentError, ScenarioError, UnitError, is_whole_count
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
@@ -61,7 +59,6 @@ __all__ = [
     "frequency_lines",
     "integer",
     "json_path",
-    "minutes",
     "open_fraction",
     "out_dir",
     "preflight",
@@ -277,17 +274,6 @@ def add_figure_arguments(parser: argparse.ArgumentParser, *, report: bool = Fals
     parser.add_argument("--no-figure", action="store_true", help="do not write figures")
     parser.add_argument("--no-plot", action=_DeprecatedNoPlot, nargs=0, dest="no_figure",
                         help=argparse.SUPPRESS)
-
-
-def minutes(seconds: float | Sequence[float] | np.ndarray, digits: int = 1) -> str:
-    """Scenario times for console lines, in minutes.
-
-    ``minutes([840, 1620]) == '14.0, 27.0 min'``; ``'none'`` for no time.
-    """
-    values = np.atleast_1d(np.asarray(seconds, float))
-    if values.size == 0:
-        return "none"
-    return ", ".join(f"{v / 60:.{digits}f}" for v in values) + " min"
 
 
 # --------------------------------------------------------------------------------------------

@@ -20,8 +20,8 @@ from tmaplan.cli._args import (
     add_problem_argument,
     duration,
     integer,
-    minutes,
 )
+from tmaplan.display import minute_list
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
@@ -103,12 +103,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if args.json != "-":
         if pings is not None:
             pj = pings[1]
-            print(f"{scenario.name}: {args.pings} ping(s) at {minutes(pj['ping_times'])} "
+            print(f"{scenario.name}: {args.pings} ping(s) at {minute_list(pj['ping_times'])} "
                   f"({args.joint or 'ocp'}): objective {pj['objective']:.4g} m, lower bound "
                   f"{pj['lower_bound']:.4g} m, gap {100 * pj['gap']:.2f} %")
         print(f"{scenario.name}: {objective_label(planner.objective.name)} = "
               f"{plan.objective:.4g} over "
-              f"{minutes(plan.times[-1] - plan.times[0], 0)} ({plan.status}, solved in "
+              f"{minute_list(plan.times[-1] - plan.times[0], 0)} ({plan.status}, solved in "
               f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))

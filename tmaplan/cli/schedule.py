@@ -18,8 +18,8 @@ from tmaplan.cli._args import (
     add_problem_argument,
     duration,
     integer,
-    minutes,
 )
+from tmaplan.display import minute_list
 from tmaplan.errors import ArgumentError
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.planning.belief import Belief
@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if args.json != "-":
         along = f"along {args.observer_plan}" if args.observer_plan else "along the scripted track"
         print(f"{scenario.name}: {res.objective_name} = {res.objective:.4g} m with pings at "
-              f"{minutes(res.times)} {along} ({res.method}, {res.status}, "
+              f"{minute_list(res.times)} {along} ({res.method}, {res.status}, "
               f"lower bound {res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); "
               f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
     if not args.no_figure:

@@ -9,7 +9,7 @@ import pytest
 from tmaplan.errors import ScenarioError
 from tmaplan.estimators.runner import run_prior
 from tmaplan.evaluation.plan_general import random_problems
-from tmaplan.scenario import dump, from_dict, load_problem, loads, to_dict
+from tmaplan.scenario import dump, from_dict, list_problems, load_problem, loads, to_dict
 
 IGNORED = [  # (problem, key, value, the setting that ignores it)
     ("default", "range_std", "1 km", "range_distribution = 'uniform'"),
@@ -91,3 +91,44 @@ def test_booleans_are_strict(problem, line, field, value):
 def test_toml_booleans_still_load():
     text = dump(load_problem("default"))
     assert loads(text.replace("active = true", "active = false")).sensors[1].active is False
+
+
+_OTHER = {"kind": "gaussian", "range_distribution": "log-uniform",
+          "velocity_distribution": "speed-course", "speed_distribution": "uniform",
+          "course_mode": "uniform"}
+
+
+def _changed(name, value):
+    """A valid value of prior field ``name`` other than ``value``."""
+    if name in _OTHER:
+        return _OTHER[name] if value != _OTHER[name] else "normal" if name != "kind" else "polar"
+    if name in ("mean", "std"):
+        return (1234.0, 2345.0, 1.5, 2.5)
+    if name == "velocity_mean":
+        return (1.5, -2.5)
+    return 1.7 * value + 3.0 if value is not None else 3456.0
+
+
+@pytest.mark.parametrize("problem", [p["name"] for p in list_problems()])
+def test_a_prior_key_reported_as_ignored_does_not_change_the_draws(problem):
+    """Cross-check of the key check's table against the sampler it describes: changing any
+    key that ``_ignored_prior_keys`` reports as ignored leaves ``sample_prior``'s draws bit for
+    bit unchanged (if the sampler starts reading one, the table must change too)."""
+    import copy
+    import dataclasses
+
+    from tmaplan._scenario_checks import _ignored_prior_keys
+    from tmaplan.models.prior import sample_prior
+
+    sc = load_problem(problem)
+    if sc.prior is None:
+        pytest.skip("no prior")
+    ignored = _ignored_prior_keys(sc.prior)
+    base = sample_prior(sc, 64, np.random.default_rng(5))
+    assert ignored, "every built-in prior leaves some key unused"
+    for name in ignored:
+        p = dataclasses.replace(sc.prior, **{name: _changed(name, getattr(sc.prior, name))})
+        changed = copy.copy(sc)  # not validated: the key check would refuse the change
+        object.__setattr__(changed, "prior", p)
+        draws = sample_prior(changed, 64, np.random.default_rng(5))
+        assert np.array_equal(draws, base), (problem, name)

@@ -317,10 +317,12 @@ class _RecedingController:
         self.planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
         self.rti = _rti(policy, scenario) if policy.solver == "real-time" else None
         # what the first re-plan starts from (None: a cold start)
-        self.first = (self.rti.model.plan if self.rti is not None else
-                      (policy.first_plan if policy.first_plan is not None else _first_plan(
-                          scenario, policy.objective, policy.horizon, policy.until_end))
-                      if policy.solver == "multi-start" else None)
+        self.first: Any = None
+        if self.rti is not None:
+            self.first = self.rti.model.plan
+        elif policy.solver == "multi-start":
+            self.first = policy.first_plan if policy.first_plan is not None else _first_plan(
+                scenario, policy.objective, policy.horizon, policy.until_end)
         self.u_max, self.dt = _turn_limits(scenario)
         self.plan: Any = None
         self.playback: _TurnRatePlayback | None = None

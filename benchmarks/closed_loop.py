@@ -6,11 +6,7 @@ particle filter's init, predict and update) and the rest (simulation, metrics), 
 * ``old``: today's re-planning path, a full IPOPT solve per re-plan (the first one cold, 4
   starts), ``Receding(solver="ipopt")``;
 * ``new``: the real-time iteration, one condensed SQP step per re-plan from the shifted
-  previous plan (``Receding(solver="real-time")``, CLI name ``receding-fast``,
-  :mod:`tmaplan.planning.rti`), IPOPT only as the fallback.
-
-(``receding`` names a receding policy here, flown by the path's solver; the default
-``Receding()``, five IPOPT starts per re-plan, is neither path.)
+  previous plan (``Receding()``, :mod:`tmaplan.planning.rti`), IPOPT only as the fallback.
 
 Both paths run on the same truths and noise (common random numbers, the campaign's seeds), so
 the script also reports the paired difference new − old of the time to accuracy and of the final
@@ -196,7 +192,7 @@ def gaps(runs, particles, seed=1000, problem="default"):
     from tmaplan.policies import receding
 
     sc = load_problem(problem)
-    pol = parse_policy("receding-fast", sc).resolve(sc)
+    pol = parse_policy("receding", sc).resolve(sc)
     out = defaultdict(list)
     replan = receding._RecedingController._replan
 

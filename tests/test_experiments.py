@@ -148,7 +148,7 @@ def test_policies_respect_limits_and_budget(scenario):
 def test_backends_bit_identical(scenario):
     """Serial, 2 processes and Dask give the same results, the real-time-iteration receding
     policy included (its model is computed once in the parent and shipped to the workers)."""
-    spec = _spec(scenario, runs=2, policies=("straight", "zigzag+uniform", "receding-fast"))
+    spec = _spec(scenario, runs=2, policies=("straight", "zigzag+uniform", "receding"))
     pols = resolve_policies(scenario, spec.policies)
     serial = run_campaign(spec, policies=pols)
     procs = run_campaign(spec, workers=2, backend="processes", policies=pols)
@@ -163,15 +163,16 @@ def test_backends_bit_identical(scenario):
 
 @pytest.mark.timeout(300)
 def test_multi_start_receding_is_bit_identical_on_workers(scenario):
-    """The default receding policy (five-start re-plans, its first plan computed once in the
-    parent and shipped) flies the same on 2 processes as serially (10 minutes, 2 re-plans,
-    a 10-minute look-ahead)."""
+    """The five-start receding policy (its first plan computed once in the parent and shipped)
+    flies the same on 2 processes as serially (10 minutes, 2 re-plans, a 10-minute
+    look-ahead)."""
     from tmaplan.policies import Combined, Receding
 
     sc = scenario.replace(time=dataclasses.replace(scenario.time, horizon=600.0))
     spec = _spec(sc, runs=2, policies=("receding",))
     pols = {"receding": Combined(manoeuvre=Receding(objective="mean-range-bound",
-                                                    horizon=600.0)).resolve(sc)}
+                                                    horizon=600.0, solver="multi-start")
+                                 ).resolve(sc)}
     assert pols["receding"].manoeuvre.first_plan is not None
     serial = run_campaign(spec, policies=pols)
     procs = run_campaign(spec, workers=2, backend="processes", policies=pols)

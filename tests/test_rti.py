@@ -224,9 +224,10 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
     assert isinstance(pol.manoeuvre, Receding) and pol.manoeuvre.full_above == np.inf
     assert pol.manoeuvre.solver == "real-time"
     assert pol.name == "receding-rti+uniform"
-    fast = parse_policy("receding-fast", small[0]).manoeuvre
-    assert (fast.solver, fast.full_above, fast.name) == ("real-time", 0.01, "receding-fast")
-    assert parse_policy("receding", small[0]).manoeuvre == Receding()
+    default = parse_policy("receding", small[0]).manoeuvre
+    assert default == Receding() and (default.solver, default.full_above) == ("real-time", 0.01)
+    multi = parse_policy("receding-multistart", small[0]).manoeuvre
+    assert (multi.solver, multi.name) == ("multi-start", "receding-multistart")
 
 
 def test_receding_multi_start_finds_the_other_side(small):
@@ -326,10 +327,10 @@ def test_a_step_that_leaves_the_keep_out_violated_is_not_a_success(small):
         assert violation(out) <= 1e-6
 
 
-def test_receding_default_re_plans_from_five_starts(small):
-    """The default re-plan (``solver="multi-start"``) is, bit for bit, the configuration
-    measured in the README: the first re-plan a full solve warm-started from the plan from the
-    prior, every later one a five-start IPOPT solve, the best kept."""
+def test_multi_start_solver_is_the_measured_configuration(small):
+    """``solver="multi-start"`` is, bit for bit, the configuration measured in the README: the
+    first re-plan a full solve warm-started from the plan from the prior, every later one a
+    five-start IPOPT solve, the best kept."""
     from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.policies import Receding
     from tmaplan.simulate import draw_truth
@@ -338,8 +339,8 @@ def test_receding_default_re_plans_from_five_starts(small):
     sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
     target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
     kw = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
-    pol = Receding(**kw).resolve(sc)
-    assert pol.solver == "multi-start" and pol.rti is None and pol.resolve(sc) is pol
+    pol = Receding(**kw, solver="multi-start").resolve(sc)
+    assert pol.rti is None and pol.resolve(sc) is pol
     # the plan from the prior that the first re-plan starts from (horizon given: its solve)
     assert np.allclose(pol.first_plan.turn_rate, small[3].turn_rate, atol=1e-6)
     measured = Receding(**kw, solver="real-time", multi_start=tuple(range(1, 64)),
@@ -373,7 +374,8 @@ def test_multi_start_re_plan_after_a_failed_first_one_starts_from_the_first_plan
     from tmaplan.policies import Receding
 
     sc, prior, _, plan, _ = small
-    ctrl = Receding(objective="mean-range-bound", horizon=900.0).resolve(sc).controller(sc)
+    ctrl = Receding(objective="mean-range-bound", horizon=900.0, solver="multi-start") \
+        .resolve(sc).controller(sc)
     assert ctrl.plan is None and ctrl.first is not None
     best = ctrl.multi_start(prior, heading0=None, position0=None)
     assert best.success and best.objective <= plan.objective + 1e-3 * abs(plan.objective)

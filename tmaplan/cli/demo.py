@@ -3,11 +3,9 @@
 1. Plan a manoeuvre offline from the prior (heading OCP, :data:`CLOSED_LOOP_OBJECTIVE`)
    and compare it with the baselines (straight, best single turn, best zig-zag).
 2. Schedule the ping budget along the planned track (closed-form PCRB, ``relaxed``).
-3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding-fast``,
-   without and with pings (scheduled and uniformly spaced), by paired Monte Carlo runs of the
-   closed loop (particle filter, re-planning). ``receding-fast`` re-plans by real-time
-   iterations, so that the demo takes minutes; ``receding`` (five IPOPT starts per re-plan)
-   is 6–10 times slower to plan (``tmaplan compare default --policies planned,receding``).
+3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding``, without
+   and with pings (scheduled and uniformly spaced), by paired Monte Carlo runs of the closed
+   loop (particle filter, re-planning).
 4. Write the figures and a self-contained ``report.html`` to ``<out>/demo/``
    (:data:`REPORT_DIR`; ``tmaplan compare P`` writes to ``<out>/P_compare/``, so neither
    overwrites the other's report). The runs are stored in ``<out>/campaign-<key>/``, shared
@@ -57,9 +55,9 @@ PROBLEM = "default"
 REPORT_DIR = "demo"
 
 #: Policies compared by the demo (manoeuvre[+ping]).
-DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding-fast",
+DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
                  "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
-                 "receding-fast+scheduled")
+                 "receding+scheduled")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -108,7 +106,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
-    # `receding-fast` policies reuse it instead of solving again
+    # `receding` policies reuse it instead of solving again
     plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers, pool=pool)
     base = evaluate_baselines(scenario, planner.objective, evaluator=planner.evaluator(belief))
     plan_fig = plot_plan(plan, base, belief, rep / "plan.png",
@@ -119,7 +117,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                f", best single turn {best['single-turn'].objective:.4g}, best zig-zag "
                f"{best['zigzag'].objective:.4g}); {plan.status}, {plan.seconds:.1f} s")
 
-    if pool is not None:  # receding-fast's Hessian model on a worker while this process schedules
+    if pool is not None:  # receding's Hessian model on a worker while this process schedules
         prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
     budget = scenario.planning.ping_budget if scenario.planning else 0
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")

@@ -141,7 +141,8 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "zigzag": best_zigzag,
     "planned": lambda sc: Planned(),
     "receding": lambda sc: Receding(),
-    "receding-fast": lambda sc: Receding(solver="real-time", name="receding-fast"),
+    "receding-multistart": lambda sc: Receding(solver="multi-start",
+                                               name="receding-multistart"),
     "receding-rti": lambda sc: Receding(solver="real-time", full_above=float("inf"),
                                         name="receding-rti"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
@@ -163,9 +164,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
     baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
-    planned, receding (IPOPT re-plans from five starts), receding-fast (real-time iteration
-    with an IPOPT fallback), receding-rti (real-time-iteration steps only, no IPOPT
-    fallback), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    planned, receding (real-time iteration with an IPOPT fallback), receding-rti
+    (real-time-iteration steps only, no IPOPT fallback), receding-multistart (IPOPT re-plans
+    from five starts), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.
 

@@ -47,19 +47,20 @@ class Receding:
 
     How a re-plan is solved (``solver``):
 
-    * ``"multi-start"`` (default): the first re-plan by IPOPT warm-started from the offline
-      plan from the prior; every later one by IPOPT from five starts — the previous plan
-      shifted to the re-plan time, its mirror image (the same manoeuvre to the other side),
-      straight and the turn-early guesses to both sides — keeping the best (the log's
-      ``start`` names it). A warm-started solve stays
-      on the side the previous plan turned to, while the posterior may favour the other. It
-      is the only re-planning measured to beat ``planned`` on ``bow-closing`` (README,
-      "What is left for the re-plans"), at 6–10 times the planning time of the real-time
-      iteration.
-    * ``"real-time"``: one warm-started SQP step
+    * ``"real-time"`` (default): one warm-started SQP step
       (:class:`tmaplan.planning.rti.RealTimeIteration`, milliseconds) from the previous plan,
       the first one from the offline plan from the prior, with a full IPOPT solve as the
-      fallback (``full_above``, ``full_solves``, ``multi_start``). CLI name ``receding-fast``.
+      fallback (``full_above``, ``full_solves``, ``multi_start``).
+    * ``"multi-start"``: the first re-plan by IPOPT warm-started from the offline plan from
+      the prior; every later one by IPOPT from five starts — the previous plan shifted to the
+      re-plan time, its mirror image (the same manoeuvre to the other side), straight and
+      the turn-early guesses to both sides — keeping the best (the log's ``start`` names
+      it); CLI name ``receding-multistart``. A warm-started solve stays on the side the
+      previous plan turned to, while the posterior may favour the other. At 6–10 times the
+      planning time, it did not localise reliably sooner: on ``bow-closing`` its
+      ``receding-multistart − planned`` was −0.79 [−1.34, −0.25] min on 400 runs of seed 10
+      and +0.74 [+0.07, +1.40] min on 300 runs of seed 12 (README, "What is left for the
+      re-plans").
     * ``"ipopt"``: one IPOPT solve warm-started from the previous plan at every re-plan, the
       first one cold, from the filter's belief.
 
@@ -128,7 +129,7 @@ class Receding:
     horizon: float | None = None
     objective: str | None = CLOSED_LOOP_OBJECTIVE
     max_particles: int = 2000
-    solver: str = "multi-start"
+    solver: str = "real-time"
     qpsol: str = "daqp"
     rti_steps: int = 1
     full_solves: tuple[int, ...] = ()

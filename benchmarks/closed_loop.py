@@ -67,9 +67,8 @@ def _policies(scenario, names, path):
     pols = {}
     for spec in names:
         p = parse_policy(spec, scenario)
-        if isinstance(p.manoeuvre, Receding):
-            p = Combined(manoeuvre=Receding(solver="ipopt" if path == "old" else "real-time"),
-                         ping=p.ping)
+        if isinstance(p.manoeuvre, Receding) and path == "old":
+            p = Combined(manoeuvre=Receding(solver="ipopt"), ping=p.ping)
         pols[spec] = p.resolve(scenario)
     return pols, time.perf_counter() - t
 

@@ -40,9 +40,10 @@ def test_lru_refuses_a_bad_size(size):
 
 @pytest.mark.parametrize(("module", "name"), [
     ("tmaplan.policies.manoeuvres", "_PLAN_CACHE"),
-    ("tmaplan.policies.manoeuvres", "_PLANNER_CACHE"),
-    ("tmaplan.policies.manoeuvres", "_RTI_MODEL_CACHE"),
-    ("tmaplan.policies.manoeuvres", "_RTI_CACHE"),
+    ("tmaplan.policies.receding", "_PLANNER_CACHE"),
+    ("tmaplan.policies.receding", "_RTI_MODEL_CACHE"),
+    ("tmaplan.policies.receding", "_RTI_CACHE"),
+    ("tmaplan.policies.receding", "_FIRST_PLAN_CACHE"),
     ("tmaplan.policies.combine", "_BASELINE_CACHE"),
     ("tmaplan.policies.pings", "_SCHEDULE_CACHE"),
     ("tmaplan.planning.ping_relaxation", "_CACHE"),

@@ -353,11 +353,12 @@ def test_multi_start_solver_is_the_measured_configuration(small):
     assert len(log) == 3 and all(e["success"] for e in log)
     assert "start" not in log[0] and log[0]["solver"] == "ipopt"
     assert all(e["start"].startswith("multi-start: ") for e in log[1:])
-    # not the real-time iteration's re-plans (which take a different track on this run)
+    # not the real-time iteration's re-plans, which fly another track on this run
     fast = run_closed_loop(sc, Receding(**kw, solver="real-time").resolve(sc), target,
                            noise_rng=np.random.default_rng(1),
                            filter_rng=np.random.default_rng(2), n_particles=300)
     assert {e["solver"] for e in fast.replans} != {"ipopt"}
+    assert not np.array_equal(fast.turn_rate, runs[0].turn_rate)
 
 
 def test_receding_solver_is_checked(small):
@@ -366,11 +367,14 @@ def test_receding_solver_is_checked(small):
     for bad in ("fast", "", None, 1):
         with pytest.raises(ArgumentError, match=r"receding.solver.*multi-start, real-time"):
             Receding(solver=bad, objective="mean-range-bound", horizon=900.0).resolve(small[0])
+    # checked before resolve computes the real-time iteration's model
+    with pytest.raises(ArgumentError, match=r"receding.qpsol.*daqp"):
+        Receding(qpsol="bogus", objective="mean-range-bound", horizon=900.0).resolve(small[0])
 
 
-def test_multi_start_re_plan_after_a_failed_first_one_starts_from_the_first_plan(small):
-    """If the first re-plan fails, the next multi-start shifts the plan from the prior (not
-    an error for want of a previous plan)."""
+def test_multi_start_without_a_previous_plan_starts_from_the_first_plan(small):
+    """Before any re-plan succeeded (e.g. the first one failed), a multi-start re-plan shifts
+    the plan from the prior (not an error for want of a previous plan)."""
     from tmaplan.policies import Receding
 
     sc, prior, _, plan, _ = small

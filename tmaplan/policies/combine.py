@@ -66,7 +66,8 @@ class Combined:
 
     def resolve(self, scenario: Scenario) -> Combined:
         """The same policy with its offline parts computed (the heading plan of
-        :class:`Planned`, the real-time iteration model of :class:`Receding`, the schedule of
+        :class:`Planned`, the real-time iteration model or the first plan of
+        :class:`Receding`, the schedule of
         :class:`ScheduledPings` along the track the manoeuvre nominally flies), so that the
         controllers of all runs share them."""
         man, ping = self.manoeuvre, self.ping
@@ -164,9 +165,10 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
     baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
-    planned, receding (real-time iteration with an IPOPT fallback), receding-rti
-    (real-time-iteration steps only, no IPOPT fallback), receding-multistart (IPOPT re-plans
-    from five starts), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    planned, receding (real-time iteration, a full IPOPT re-solve when the optimum moved
+    far), receding-rti (real-time-iteration steps only: no full re-solve when the optimum
+    moves far; a rejected step still falls back to IPOPT), receding-multistart (IPOPT
+    re-plans from five starts), leg-turn-leg, lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.
 

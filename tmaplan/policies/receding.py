@@ -57,10 +57,10 @@ class Receding:
       the turn-early guesses to both sides — keeping the best (the log's ``start`` names
       it); CLI name ``receding-multistart``. A warm-started solve stays on the side the
       previous plan turned to, while the posterior may favour the other. At 6–10 times the
-      planning time, it did not localise reliably sooner: on ``bow-closing`` its
-      ``receding-multistart − planned`` was −0.79 [−1.34, −0.25] min on 400 runs of seed 10
-      and +0.74 [+0.07, +1.40] min on 300 runs of seed 12 (README, "What is left for the
-      re-plans").
+      planning time, it did not localise reliably sooner: on ``bow-closing``, against
+      ``planned``, −0.95 [−1.59, −0.30] min on runs 100–399 of seed 10 (five-start re-plans
+      up to the sixth) and +0.74 [+0.07, +1.40] min on 300 runs of seed 12 (README, "What
+      is left for the re-plans").
     * ``"ipopt"``: one IPOPT solve warm-started from the previous plan at every re-plan, the
       first one cold, from the filter's belief.
 
@@ -80,9 +80,10 @@ class Receding:
     solver : {"multi-start", "real-time", "ipopt"}
         How the re-plans are solved (above).
     qpsol : str
-        QP solver of the real-time iteration (:data:`tmaplan.planning.rti.QP_SOLVERS`).
+        With ``solver="real-time"``: QP solver of the real-time iteration
+        (:data:`tmaplan.planning.rti.QP_SOLVERS`).
     rti_steps : int
-        SQP steps per re-plan of the real-time iteration, >= 1.
+        With ``solver="real-time"``: SQP steps per re-plan of the real-time iteration, >= 1.
     full_solves : tuple of int
         With ``solver="real-time"``: re-plans (0 = the first) always solved by a full IPOPT
         solve warm-started from the previous plan (default none).
@@ -112,9 +113,10 @@ class Receding:
         With ``solver="real-time"``: re-plans (0 = the first) solved from the five starts of
         ``"multi-start"`` instead (default none).
     rti : RTIModel, optional
-        The offline plan and the Hessian model of the real-time iteration
-        (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario if not given
-        (:meth:`resolve` computes it once per campaign, so that workers receive it).
+        With ``solver="real-time"``: the offline plan and the Hessian model of the real-time
+        iteration (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario
+        if not given (:meth:`resolve` computes it once per campaign, so that workers receive
+        it).
     first_plan : HeadingPlan, optional
         With ``solver="multi-start"``: the offline plan from the prior that the first re-plan
         starts from; computed once per scenario if not given (by :meth:`resolve`, once per
@@ -221,8 +223,8 @@ def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
 def _first_plan(scenario: Scenario, objective: str | None, horizon: float | None,
                 until_end: bool = False) -> Any:
     """The plan from the prior that a receding controller's first re-plan starts from: the
-    offline plan (:func:`offline_plan`, cached), or with another horizon the planner's solve
-    from the prior."""
+    offline plan (:func:`~tmaplan.policies.manoeuvres.offline_plan`, cached), or with another
+    horizon the planner's solve from the prior (cached)."""
     if horizon is None:
         return offline_plan(scenario, objective)
     key = (scenario, objective, horizon, until_end)
@@ -244,7 +246,8 @@ def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Exe
     (the Hessian at the offline plan, about 5 s on ``default``) on a worker of ``pool``, so
     that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
     :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
-    this process. Needs the offline plan (:func:`offline_plan`), which the worker receives."""
+    this process. Needs the offline plan
+    (:func:`~tmaplan.policies.manoeuvres.offline_plan`), which the worker receives."""
     key = (scenario, objective, None, False)
     if key not in _RTI_MODEL_CACHE:
         _RTI_MODEL_CACHE[key] = pool.submit(_rti_model_on_worker, scenario, objective,
@@ -299,8 +302,11 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
     if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
         raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
     from tmaplan.planning import HeadingPlanner
+    from tmaplan.planning.rti import QP_SOLVERS
 
     HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
+    if policy.solver == "real-time" and policy.qpsol not in QP_SOLVERS:
+        raise ArgumentError("receding.qpsol", f"one of {', '.join(QP_SOLVERS)}", policy.qpsol)
 
 
 class _RecedingController:

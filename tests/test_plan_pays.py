@@ -244,7 +244,7 @@ _RECEDING_NOT_SOONER = {
                                  "−1.6 [−3.9, +0.8]), −0.1 [−0.4, +0.3] min at 400 runs "
                                  "of seed 5 and −0.04 [−0.13, +0.06] min at 6000 runs of "
                                  "seed 8: no gain (receding-multistart: −0.95 on seed 10, "
-                                 "+0.74 on seed 12; README)",
+                                 "+0.74 on seed 12, −0.20 on seed 15; README)",
 }
 
 

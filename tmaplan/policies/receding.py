@@ -59,8 +59,10 @@ class Receding:
       previous plan turned to, while the posterior may favour the other. At 6–10 times the
       planning time, it did not localise reliably sooner: on ``bow-closing``, against
       ``planned``, −0.95 [−1.59, −0.30] min on runs 100–399 of seed 10 (five-start re-plans
-      up to the sixth) and +0.74 [+0.07, +1.40] min on 300 runs of seed 12 (README, "What
-      is left for the re-plans").
+      up to the sixth), +0.74 [+0.07, +1.40] min on 300 runs of seed 12 and −0.20 [−0.76,
+      +0.37] min on 300 runs of seed 15; pooled −0.15 [−0.51, +0.20] min, although it
+      localised 5–10 percentage points more runs by the horizon on each (README, "What is
+      left for the re-plans").
     * ``"ipopt"``: one IPOPT solve warm-started from the previous plan at every re-plan, the
       first one cold, from the filter's belief.
 

@@ -23,9 +23,10 @@ def test_plan_json_and_figure(tmp_path, capsys):
     assert d["solver"]["status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
     assert d["times"][-1] - d["times"][0] == pytest.approx(1800.0)
     assert len(d["turn_rate"]) == len(d["times"]) - 1
-    # named by problem and objective (a plan of another objective does not overwrite it)
-    assert d["figure"] == str(tmp_path / f"default_plan_{d['objective_name']}.png")
-    assert (tmp_path / f"default_plan_{d['objective_name']}.png").stat().st_size > 10_000
+    # named by problem, objective and the settings given (another plan does not overwrite it)
+    name = f"default_plan_{d['objective_name']}_h30min_2starts.png"
+    assert d["figure"] == str(tmp_path / name)
+    assert (tmp_path / name).stat().st_size > 10_000
 
 
 def test_schedule_json_stdout(tmp_path, capsys):
@@ -50,3 +51,24 @@ def test_schedule_error_is_one_line(capsys):
     assert rc == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "budget" in err[0]
+
+
+def test_plan_figure_names_every_setting_away_from_its_default():
+    """Plans of other settings into the same --out do not overwrite each other's figure; the
+    default plan keeps its short name."""
+    from tmaplan.cli.plan import figure_name
+
+    obj = "expected-time-to-accuracy"
+    assert figure_name("default", obj) == f"default_plan_{obj}.png"
+    assert figure_name("default", obj, 2) == f"default_plan_{obj}_2pings.png"
+    names = {figure_name("default", obj, **kw) for kw in (
+        {}, {"horizon": 1800.0}, {"horizon": 1500.0}, {"control_interval": 60.0},
+        {"control_interval": 90.0}, {"transcription": "bang-bang"}, {"starts": 8})}
+    assert len(names) == 7
+    assert figure_name("default", obj, horizon=1800.0, control_interval=90.0,
+                       transcription="bang-bang") == \
+        f"default_plan_{obj}_h30min_ci90s_bang-bang.png"
+    assert figure_name("default", obj, 3, joint="alternating", ping_stride=2) == \
+        f"default_plan_{obj}_3pings_alternating_stride2.png"
+    # joint settings name nothing without pings (they are not used there)
+    assert figure_name("default", obj, joint="alternating") == f"default_plan_{obj}.png"

@@ -113,8 +113,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))
     if not args.no_figure:
-        path = Path(args.out) / figure_name(scenario.name, planner.objective.name,
-                                            args.pings)
+        path = Path(args.out) / figure_name(
+            scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
+            control_interval=args.control_interval, transcription=args.transcription,
+            starts=args.starts, joint=args.joint, ping_stride=args.ping_stride)
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
         payload["figure"] = str(path)
         if args.json != "-":
@@ -122,10 +124,27 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     return payload
 
 
-def figure_name(problem: str, objective: str, pings: int = 0) -> str:
-    """``<problem>_plan_<objective>[_<K>pings].png``: plans of other objectives or ping
-    budgets into the same ``--out`` do not overwrite each other's figure."""
-    return f"{problem}_plan_{objective}{f'_{pings}pings' if pings > 0 else ''}.png"
+def figure_name(problem: str, objective: str, pings: int = 0, *,
+                horizon: float | None = None, control_interval: float | None = None,
+                transcription: str = "direct", starts: int = 4, joint: str | None = None,
+                ping_stride: int | None = None) -> str:
+    """``<problem>_plan_<objective>[_<K>pings][_<setting>...].png``, one suffix per plan
+    setting given away from its default (``h30min``, ``ci1min``, ``bang-bang``,
+    ``8starts``, ``alternating``, ``stride2``; times [s] in minutes or seconds): plans of
+    other objectives, ping budgets or settings into the same ``--out`` do not overwrite each
+    other's figure, and the default plan keeps its short name."""
+    def span(t: float) -> str:
+        return f"{t / 60:g}min" if t >= 60 and float(t / 60).is_integer() else f"{t:g}s"
+
+    parts = [f"{problem}_plan_{objective}"]
+    parts += [f"{pings}pings"] if pings > 0 else []
+    parts += [f"h{span(horizon)}"] if horizon is not None else []
+    parts += [f"ci{span(control_interval)}"] if control_interval is not None else []
+    parts += [transcription] if transcription != "direct" else []
+    parts += [f"{starts}starts"] if starts != 4 else []
+    parts += ["alternating"] if pings > 0 and joint == "alternating" else []
+    parts += [f"stride{ping_stride}"] if pings > 0 and ping_stride not in (None, 1) else []
+    return "_".join(parts) + ".png"
 
 
 def _on_clock(params: dict[str, float], t0: float) -> dict[str, float]:

@@ -371,6 +371,24 @@ def test_a_failed_computation_names_its_problem(tmp_path, one_line_error, name):
                              time=dataclasses.replace(sc.time, horizon=30.0)), f)
     line = one_line_error(["crlb", str(f), "--no-figure"])
     assert line.startswith(f"tmaplan crlb: error: {name}: too few measurements"), line
-    # flags and fields name themselves, without the problem in front
+    # flags name themselves, without the problem in front
     line = one_line_error(["bound", "default", "--samples", "50", "--no-figure"])
     assert line.startswith("tmaplan bound: error: field '--samples'"), line
+
+
+def test_a_field_error_without_a_source_names_its_problem(monkeypatch, one_line_error):
+    """A field error raised without its source (e.g. a scenario field checked deep in a
+    computation) gets the problem's name in front; one with a source keeps its own."""
+    import tmaplan.cli.crlb as verb
+    from tmaplan.errors import ScenarioError
+
+    def failing(args, source=None):
+        raise ScenarioError("prior.range_std", "> 0 m", 0.0, source=source)
+
+    monkeypatch.setattr(verb, "run", failing)
+    line = one_line_error(["crlb", "default", "--no-figure"])
+    assert line == ("tmaplan crlb: error: default: field 'prior.range_std': expected > 0 m, "
+                    "received 0.0"), line
+    monkeypatch.setattr(verb, "run", lambda args: failing(args, source="other.toml"))
+    line = one_line_error(["crlb", "default", "--no-figure"])
+    assert line.startswith("tmaplan crlb: error: other.toml: field 'prior.range_std'"), line

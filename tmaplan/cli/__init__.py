@@ -155,10 +155,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         text = str(exc)
-        # a failure of the computation (not of a flag or a field, which name themselves)
-        # says which problem it is about
-        if problem is not None and not isinstance(exc, ArgumentError) \
-                and not _names_problem(text, problem):
+        # every error but a flag's says which problem it is about: a field error with its
+        # source names it already (the file or problem it came from); a failure of the
+        # computation, or a field error without a source, gets the problem's name in front
+        named = isinstance(exc, ArgumentError) and (exc.source is not None
+                                                    or exc.field.startswith("-"))
+        if problem is not None and not named and not _names_problem(text, problem):
             text = f"{problem}: {text}"
         print(f"tmaplan {args.verb}: error: {text}".replace("\n", " "), file=sys.stderr)
         return 1

@@ -361,6 +361,16 @@ def test_multi_start_solver_is_the_measured_configuration(small):
     assert not np.array_equal(fast.turn_rate, runs[0].turn_rate)
 
 
+def test_receding_says_whether_resolve_needs_the_offline_plan():
+    from tmaplan.policies import Receding
+
+    assert Receding().needs_offline_plan and Receding(solver="multi-start").needs_offline_plan
+    assert not Receding(solver="ipopt").needs_offline_plan
+    assert not Receding(horizon=900.0).needs_offline_plan  # its own solve from the prior
+    assert not Receding(solver="multi-start", first_plan=object()).needs_offline_plan
+    assert not Receding(rti=object()).needs_offline_plan
+
+
 def test_receding_solver_is_checked(small):
     from tmaplan.policies import Receding
 

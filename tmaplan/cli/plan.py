@@ -39,6 +39,11 @@ HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline mano
 FINITE = ("objective",)
 
 
+#: Defaults of ``--transcription`` and ``--starts`` (a figure's name omits them).
+TRANSCRIPTION = "direct"
+STARTS = 4
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``plan``."""
     add_problem_argument(parser)
@@ -50,8 +55,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--control-interval", type=duration(), default=None, metavar="T",
                         help="duration of a piecewise-constant turn rate, seconds or with a "
                              "unit ('1 min')")
-    parser.add_argument("--transcription", choices=("direct", "bang-bang"), default="direct")
-    parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=4,
+    parser.add_argument("--transcription", choices=("direct", "bang-bang"),
+                        default=TRANSCRIPTION)
+    parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=STARTS,
                         help="built-in initial guesses of the bang-bang transcription "
                              "(default 4); the direct one starts from straight, the tactics "
                              "and the best single turns as well")
@@ -126,7 +132,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 def figure_name(problem: str, objective: str, pings: int = 0, *,
                 horizon: float | None = None, control_interval: float | None = None,
-                transcription: str = "direct", starts: int = 4, joint: str | None = None,
+                transcription: str = TRANSCRIPTION, starts: int = STARTS,
+                joint: str | None = None,
                 ping_stride: int | None = None) -> str:
     """``<problem>_plan_<objective>[_<K>pings][_<setting>...].png``, one suffix per plan
     setting given away from its default (``h30min``, ``ci1min``, ``bang-bang``,
@@ -140,8 +147,8 @@ def figure_name(problem: str, objective: str, pings: int = 0, *,
     parts += [f"{pings}pings"] if pings > 0 else []
     parts += [f"h{span(horizon)}"] if horizon is not None else []
     parts += [f"ci{span(control_interval)}"] if control_interval is not None else []
-    parts += [transcription] if transcription != "direct" else []
-    parts += [f"{starts}starts"] if starts != 4 else []
+    parts += [transcription] if transcription != TRANSCRIPTION else []
+    parts += [f"{starts}starts"] if starts != STARTS else []
     parts += ["alternating"] if pings > 0 and joint == "alternating" else []
     parts += [f"stride{ping_stride}"] if pings > 0 and ping_stride not in (None, 1) else []
     return "_".join(parts) + ".png"

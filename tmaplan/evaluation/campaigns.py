@@ -175,9 +175,7 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
         for pol in parsed.values():
             m = pol.manoeuvre
             if (isinstance(m, Planned) and m.plan is None) or (
-                    isinstance(m, Receding) and m.horizon is None and (
-                        (m.solver == "real-time" and m.rti is None)
-                        or (m.solver == "multi-start" and m.first_plan is None))):
+                    isinstance(m, Receding) and m.needs_offline_plan):
                 offline_plan(scenario, m.objective, workers=workers, pool=pool)
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 

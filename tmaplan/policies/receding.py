@@ -150,6 +150,16 @@ class Receding:
         """A controller owning a planner built once for the whole run."""
         return _RecedingController(self, scenario)
 
+    @property
+    def needs_offline_plan(self) -> bool:
+        """Whether :meth:`resolve` will compute the offline plan from the prior
+        (:func:`~tmaplan.policies.manoeuvres.offline_plan`): the start of the real-time
+        iteration's model or the multi-start's first plan, unless given or of another
+        horizon. A campaign solves it first, its starts on the workers."""
+        return self.horizon is None and (
+            (self.solver == "real-time" and self.rti is None)
+            or (self.solver == "multi-start" and self.first_plan is None))
+
     def resolve(self, scenario: Scenario) -> Receding:
         """The same policy with what its re-plans start from computed (once per campaign):
         the real-time iteration's model, or the multi-start's first plan."""

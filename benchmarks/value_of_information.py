@@ -25,6 +25,8 @@ Usage::
         --workers 2 [--json F]
     python benchmarks/value_of_information.py --problem bow-closing --runs 40 --seed 9 \
         --waiting --workers 2
+    python benchmarks/value_of_information.py --problem default --family 2028:0 --runs 200 \
+        --seed 16 --workers 2    # problem default-s2028-0 of planning_general.py --seed 2028
 """
 
 from __future__ import annotations
@@ -39,13 +41,14 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
+from tmaplan.experiments import random_problems
 from tmaplan.models.observer import turn_rate_track
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.objectives import ObjectiveEvaluator
 from tmaplan.policies import Combined, Planned
 from tmaplan.policies.manoeuvres import offline_plan
-from tmaplan.scenario import load_problem
+from tmaplan.scenario import Scenario, load_problem
 from tmaplan.simulate import draw_truth
 
 _STATE: dict = {}
@@ -61,8 +64,17 @@ class _AtTruth(Belief):
         return np.tile(self.truth, (max(int(n), 1), 1))
 
 
-def _init(problem: str, particles: int) -> None:
-    sc = load_problem(problem)
+def _problem(problem: str, family: tuple[int, int] | None) -> Scenario:
+    """The built-in ``problem``, or problem ``i`` of the random family ``(seed, i)`` drawn
+    from it (:func:`tmaplan.experiments.random_problems`, as ``planning_general.py``)."""
+    if family is None:
+        return load_problem(problem)
+    seed, i = family
+    return random_problems(load_problem(problem), i + 1, seed=seed)[i]
+
+
+def _init(problem: str, family: tuple[int, int] | None, particles: int) -> None:
+    sc = _problem(problem, family)
     obj = sc.planning.objective
     plan = offline_plan(sc, obj)
     _STATE.update(sc=sc, obj=obj, plan=plan, particles=particles,
@@ -177,24 +189,34 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--family", default=None, metavar="SEED:I",
+                    help="problem I of the random family of seed SEED drawn from --problem")
     ap.add_argument("--json", default=None)
     ap.add_argument("--waiting", action="store_true",
                     help="the objective of deciding after a hold (no closed loop)")
     a = ap.parse_args()
     if a.runs < 2:  # a paired interval needs two runs
         ap.error(f"--runs: at least 2 paired runs, got {a.runs}")
+    family = None
+    if a.family is not None:
+        try:
+            family = tuple(int(v) for v in a.family.split(":"))
+        except ValueError:
+            family = ()
+        if len(family) != 2 or min(family) < 0:
+            ap.error(f"--family: SEED:I, two integers >= 0, got {a.family!r}")
+    sc = _problem(a.problem, family)
     jobs = [(a.seed, i) for i in range(a.first_run, a.first_run + a.runs)]
     with ProcessPoolExecutor(a.workers, initializer=_init,
-                             initargs=(a.problem, a.particles)) as ex:
+                             initargs=(a.problem, family, a.particles)) as ex:
         rows = list(ex.map(_wait if a.waiting else _run, jobs))
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh)
     if a.waiting:
-        print(f"{a.problem}, seed {a.seed}, runs {a.first_run}-{a.first_run + a.runs - 1}")
+        print(f"{sc.name}, seed {a.seed}, runs {a.first_run}-{a.first_run + a.runs - 1}")
         _waiting_summary(rows)
         return
-    sc = load_problem(a.problem)
     censor = censor_time(sc.times)
     ok = [r for r in rows if r["clairvoyant_objective"] is not None]
 
@@ -203,7 +225,7 @@ def main() -> None:
 
     d = paired_difference({"clairvoyant": col("clairvoyant"), "planned": col("planned")},
                           "clairvoyant", "planned", "time to accuracy [s]", censor=censor)
-    print(f"{a.problem}, seed {a.seed}, runs {a.first_run}-{a.first_run + a.runs - 1} "
+    print(f"{sc.name}, seed {a.seed}, runs {a.first_run}-{a.first_run + a.runs - 1} "
           f"({len(ok)} with a clairvoyant plan), {a.particles} particles")
     print(f"  clairvoyant - planned, time to 10 % range accuracy: {d.mean / 60:+.2f} min "
           f"[{d.ci_low / 60:+.2f}, {d.ci_high / 60:+.2f}] (n={d.n})")

@@ -3,6 +3,8 @@ left at their default), and scenario booleans are strict TOML booleans."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -131,3 +133,20 @@ def test_a_prior_key_reported_as_ignored_does_not_change_the_draws(problem):
         object.__setattr__(changed, "prior", p)
         draws = sample_prior(changed, 64, np.random.default_rng(5))
         assert np.array_equal(draws, base), (problem, name)
+
+
+@pytest.mark.parametrize("name", [p["name"] for p in list_problems()])
+def test_run_prior_keeps_the_truth_opt_in_only_while_used(name):
+    # a prior whose every mean is given refuses centred_on_truth = true (it would do
+    # nothing, tests/data/invalid/71_*); run_prior fills the means from the truth, so its
+    # scenario drops the opt-in unless course_mode "true" still takes the truth
+    sc = load_problem(name)
+    if sc.prior is None:
+        pytest.skip("no prior")
+    drawn = run_prior(sc, np.random.default_rng(5)).prior
+    assert drawn.centred_on_truth == (sc.prior.centred_on_truth and bool(drawn.truth_fields))
+    assert drawn.truth_fields in ((), ("course_mode",))
+    if sc.prior.centred_on_truth and not drawn.truth_fields:
+        with pytest.raises(ScenarioError) as exc:
+            sc.replace(prior=dataclasses.replace(drawn, centred_on_truth=True))
+        assert exc.value.field == "prior.centred_on_truth"

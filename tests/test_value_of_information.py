@@ -6,12 +6,18 @@ that objective is not the prior's (the draws really are the truth)."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
+import pytest
+
+from tmaplan.experiments import random_problems
+from tmaplan.scenario import load_problem
 
 
 def test_clairvoyant_plan_is_optimal_at_the_truth(benchmark_script):
     bench = benchmark_script("value_of_information")
-    bench._init("bow-closing", 500)
+    bench._init("bow-closing", None, 500)
     row = bench._run((11, 0))
     plan = bench._STATE["plan"]
     assert row["clairvoyant_objective"] is not None
@@ -28,7 +34,7 @@ def test_waiting_reproduces_the_clairvoyant_gain_and_charges_each_minute(benchma
     gain is at least the clairvoyant plan's (it is one of the shapes), and every minute of
     holding course before the decision costs objective."""
     bench = benchmark_script("value_of_information")
-    bench._init("bow-closing", 200)
+    bench._init("bow-closing", None, 200)
     row = bench._wait((9, 3))
     clair = bench._run((9, 3))   # the same truth
     g = np.array(row["hold_gain"])
@@ -46,7 +52,7 @@ def test_turn_rates_re_integrate_a_plan_that_crosses_south(benchmark_script):
     from tmaplan.models.observer import turn_rate_track
 
     bench = benchmark_script("value_of_information")
-    bench._init("bow-closing", 200)
+    bench._init("bow-closing", None, 200)
     tr, sc = bench._STATE["plan"].observer, bench._STATE["sc"]
     assert np.any(np.abs(np.diff(tr.heading)) > np.pi)      # it does cross ±180°
     u = bench.turn_rates(tr, sc.time.dt)
@@ -54,3 +60,18 @@ def test_turn_rates_re_integrate_a_plan_that_crosses_south(benchmark_script):
     again = turn_rate_track(tr.position[0], tr.heading[0], float(tr.speed[0]), u, sc.time.dt,
                             tr.times[0])
     np.testing.assert_allclose(again.position, tr.position, atol=1e-6)
+
+
+def test_family_names_the_problem_of_planning_general(benchmark_script, monkeypatch, capsys):
+    # --family SEED:I flies problem I of planning_general.py --seed SEED (the same draw)
+    bench = benchmark_script("value_of_information")
+    assert bench._problem("default", (2028, 3)) == random_problems(
+        load_problem("default"), 12, seed=2028)[3]
+    assert bench._problem("bow-closing", None) == load_problem("bow-closing")
+    monkeypatch.setattr(bench, "ProcessPoolExecutor",
+                        lambda *a, **k: pytest.fail("work started"))
+    for bad in ("2028", "2028:-1", "a:1", "1:2:3"):
+        monkeypatch.setattr(sys, "argv", ["value_of_information.py", "--family", bad])
+        with pytest.raises(SystemExit):
+            bench.main()
+        assert f"--family: SEED:I, two integers >= 0, got '{bad}'" in capsys.readouterr().err

@@ -498,9 +498,13 @@ def _check_prior(p: Any, source: str | None) -> None:
                        "'speed-course': \"uniform\", \"given\" (with course_mean and "
                        "course_std), \"reciprocal-bearing\", or \"true\" (the true course, "
                        "on purpose)", None, source)
+    taken = truth_fields(p)
+    if p.centred_on_truth and not taken:
+        raise _err("prior.centred_on_truth", "false (or the key left out): every mean of this "
+                   "prior is given, so nothing would be centred on the truth", True, source)
     if p.centred_on_truth:
         return
-    for name in truth_fields(p):
+    for name in taken:
         if name == "course_mode":  # "true" is itself the explicit choice
             continue
         raise _err(f"prior.{name}", f"a value: without '{name}' the prior would take the "

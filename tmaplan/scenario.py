@@ -243,7 +243,8 @@ class Prior:
     seed : int
         Seed of those samples, so bounds are reproducible.
     centred_on_truth : bool
-        Allow omitted means to be the target's true initial values (see above).
+        Allow omitted means to be the target's true initial values (see above); refused
+        when every mean is given (it would have no effect).
     """
 
     kind: Literal["polar", "gaussian"] = "polar"

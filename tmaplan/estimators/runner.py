@@ -125,7 +125,9 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     ``speed_mean``, ``velocity_mean``) are replaced by a draw around the truth with the
     prior's own std; the bearing mean is the measured bearing at step 0 when there is one
     (:func:`seed_bearings`; the estimators then do not assimilate that bearing again).
-    Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``.
+    Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``. The drawn prior
+    keeps ``centred_on_truth`` only while a field (``course_mode = "true"``) still takes the
+    truth: a scenario whose every mean is given refuses the opt-in.
     """
     from tmaplan.models.prior import true_initial_state
 
@@ -139,7 +141,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
             return scenario
         mean = truth + np.asarray(p.std, float) * rng.standard_normal(4)
         m0, m1, m2, m3 = (float(x) for x in mean)
-        return scenario.replace(prior=dataclasses.replace(p, mean=(m0, m1, m2, m3)))
+        return scenario.replace(prior=dataclasses.replace(p, mean=(m0, m1, m2, m3),
+                                                          centred_on_truth=False))
     rel = truth[:2] - np.asarray(scenario.observer.position, float)
     changes: dict[str, Any] = {}
     if p.bearing_mean is None:
@@ -161,7 +164,10 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
             and p.speed_mean is None:
         s = float(range_of(v)) + p.speed_std * rng.standard_normal()
         changes["speed_mean"] = float(max(s, p.speed_min))
-    return scenario.replace(prior=dataclasses.replace(p, **changes))
+    drawn = dataclasses.replace(p, **changes)
+    # the opt-in stays only while something (course_mode "true") still comes from the truth
+    return scenario.replace(prior=dataclasses.replace(
+        drawn, centred_on_truth=bool(drawn.truth_fields) and p.centred_on_truth))
 
 
 def seed_bearings(scenario: Scenario, measurements: Sequence[MeasurementSet] | None

@@ -178,3 +178,20 @@ def test_is_whole_count_is_round_off_tolerant_and_at_least_one():
     assert is_whole_count(180.0) and is_whole_count(2700.0 / 15.0) and is_whole_count(0.3 / 0.1)
     assert not is_whole_count(22.5) and not is_whole_count(0.0) and not is_whole_count(0.4)
     assert not is_whole_count(180.0 + 1e-6)
+
+
+def test_whole_steps_rules_say_the_same_thing_everywhere():
+    # the scenario file, the re-planner and the command line (tests/test_cli_args.py) word
+    # "whole steps of dt" once (whole_steps_text); the scenario's said "dt = 15.0 s"
+    import dataclasses
+
+    from tmaplan.policies import Receding
+    from tmaplan.scenario import load_problem
+
+    sc = load_problem("default")
+    with pytest.raises(ScenarioError) as a:
+        sc.replace(planning=dataclasses.replace(sc.planning, replan_interval=20.0))
+    with pytest.raises(ArgumentError) as b:
+        Receding(replan_interval=20.0).resolve(sc)
+    for exc in (a, b):
+        assert exc.value.expected == "a whole number of steps of dt = 15 s"

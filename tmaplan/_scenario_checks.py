@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ScenarioError, is_whole_count
+from tmaplan.errors import ScenarioError, is_whole_count, whole_steps_text
 from tmaplan.units import KNOT
 
 __all__ = ["BARE_LIMITS", "MAX_SPEED", "check", "check_bare_numbers", "truth_fields",
@@ -259,8 +259,7 @@ def check(s: Any, source: str | None) -> None:
         for field in ("control_interval", "replan_interval"):
             v = getattr(pl, field)
             if v is not None and not is_whole_count(v / g.dt):
-                raise _err(f"planning.{field}", f"a whole number of steps of dt = {g.dt} s",
-                           v, source)
+                raise _err(f"planning.{field}", whole_steps_text(g.dt), v, source)
         if pl.ping_budget > n:
             raise _err("planning.ping_budget", f"<= the number of steps ({n})", pl.ping_budget,
                        source)

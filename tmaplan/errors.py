@@ -25,6 +25,7 @@ __all__ = [
     "finite_real",
     "is_integer",
     "is_whole_count",
+    "whole_steps_text",
 ]
 
 
@@ -140,6 +141,13 @@ def is_whole_count(ratio: float) -> bool:
     is a whole number >= 1 to round-off (1e-9 relative): the one test behind the scenario's,
     the planner's and the command line's "whole number of steps / intervals" rules."""
     return abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio) and round(ratio) >= 1
+
+
+def whole_steps_text(dt: float) -> str:
+    """The expected value of a duration that must be whole steps of ``dt`` [s], worded once
+    for the scenario's, the re-planner's and the command line's errors (with
+    :func:`is_whole_count`)."""
+    return f"a whole number of steps of dt = {dt:g} s"
 
 
 def as_real(value: Any) -> float:

@@ -36,7 +36,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NoReturn
 
-from tmaplan.errors import ArgumentError, ScenarioError, UnitError, is_whole_count
+from tmaplan.errors import (
+    ArgumentError,
+    ScenarioError,
+    UnitError,
+    is_whole_count,
+    whole_steps_text,
+)
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
 from tmaplan.simulate import check_truth_source
 from tmaplan.units import to_si
@@ -297,8 +303,8 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
     if getattr(args, "control_interval", None) is not None:
         m = tc / dt
         if not is_whole_count(m):
-            raise _flag_error("--control-interval", f"a whole number of steps of dt = {dt:g} s",
-                              _seconds_text(tc), scenario)
+            raise _flag_error("--control-interval", whole_steps_text(dt), _seconds_text(tc),
+                              scenario)
     joint, stride = getattr(args, "joint", None), getattr(args, "ping_stride", None)
     if getattr(args, "pings", 0) == 0 and (joint is not None or stride is not None):
         flag = "--joint" if joint is not None else "--ping-stride"

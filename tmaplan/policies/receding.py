@@ -18,6 +18,7 @@ from tmaplan.errors import (
     finite_real,
     is_integer,
     is_whole_count,
+    whole_steps_text,
 )
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
@@ -296,8 +297,7 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
     v, dt = policy.replan_interval, scenario.time.dt
     if v is not None and not is_whole_count(float(v) / dt):
         # the controller acts on the grid: another interval would silently be rounded up
-        raise ArgumentError("receding.replan_interval", f"a whole number of steps of dt = "
-                            f"{dt:g} s", v)
+        raise ArgumentError("receding.replan_interval", whole_steps_text(dt), v)
     n = policy.rti_steps
     if not is_integer(n, 1):
         raise ArgumentError("receding.rti_steps", "an integer >= 1", n)

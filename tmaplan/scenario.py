@@ -243,8 +243,7 @@ class Prior:
     seed : int
         Seed of those samples, so bounds are reproducible.
     centred_on_truth : bool
-        Allow omitted means to be the target's true initial values (see above); refused
-        when every mean is given (it would have no effect).
+        Allow omitted means to be the true initial values (above); refused if all are given.
     """
 
     kind: Literal["polar", "gaussian"] = "polar"

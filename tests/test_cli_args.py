@@ -29,7 +29,7 @@ RANGE_CASES = [
     (["plan", "default", "--horizon", "60 min"],
      "--horizon': expected at most the problem's horizon of 2700 s (45 min), received "
      "'3600 s (60 min)'"),
-    (["plan", "default", "--control-interval", "20 s"], "whole number of steps of dt = 15 s"),
+    (["plan", "default", "--control-interval", "20 s"], "(>= 1) of steps of dt = 15 s"),
     # options of the joint plan without --pings were ignored
     (["plan", "default", "--joint", "alternating"], "'--joint': expected only with --pings K"),
     (["plan", "default", "--ping-stride", "3"], "'--ping-stride': expected only with --pings"),

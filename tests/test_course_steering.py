@@ -117,7 +117,7 @@ def test_a_receding_replan_interval_must_be_whole_steps(scenario):
         with pytest.raises(ArgumentError) as exc:
             make(scenario)
         assert exc.value.field == "receding.replan_interval"
-        assert exc.value.expected.startswith("a whole number of steps of dt")
+        assert exc.value.expected.startswith("a whole number (>= 1) of steps of dt")
     Receding(replan_interval=4 * scenario.time.dt).controller(scenario)   # whole: accepted
 
 

@@ -182,7 +182,8 @@ def test_is_whole_count_is_round_off_tolerant_and_at_least_one():
 
 def test_whole_steps_rules_say_the_same_thing_everywhere():
     # the scenario file, the re-planner and the command line (tests/test_cli_args.py) word
-    # "whole steps of dt" once (whole_steps_text); the scenario's said "dt = 15.0 s"
+    # "whole steps of dt" once (whole_steps_text); the scenario's said "dt = 15.0 s", the
+    # others had no "(>= 1)"
     import dataclasses
 
     from tmaplan.policies import Receding
@@ -193,5 +194,7 @@ def test_whole_steps_rules_say_the_same_thing_everywhere():
         sc.replace(planning=dataclasses.replace(sc.planning, replan_interval=20.0))
     with pytest.raises(ArgumentError) as b:
         Receding(replan_interval=20.0).resolve(sc)
-    for exc in (a, b):
-        assert exc.value.expected == "a whole number of steps of dt = 15 s"
+    with pytest.raises(ScenarioError) as c:
+        sc.replace(time=dataclasses.replace(sc.time, horizon=2694.0))
+    for exc in (a, b, c):
+        assert exc.value.expected == "a whole number (>= 1) of steps of dt = 15 s"

@@ -136,17 +136,39 @@ def test_a_prior_key_reported_as_ignored_does_not_change_the_draws(problem):
 
 
 @pytest.mark.parametrize("name", [p["name"] for p in list_problems()])
-def test_run_prior_keeps_the_truth_opt_in_only_while_used(name):
+def test_run_prior_drops_the_truth_opt_in(name):
     # a prior whose every mean is given refuses centred_on_truth = true (it would do
-    # nothing, tests/data/invalid/71_*); run_prior fills the means from the truth, so its
-    # scenario drops the opt-in unless course_mode "true" still takes the truth
+    # nothing, tests/data/invalid/71_*); run_prior gives every mean from the truth, so its
+    # scenario drops the opt-in
     sc = load_problem(name)
     if sc.prior is None:
         pytest.skip("no prior")
     drawn = run_prior(sc, np.random.default_rng(5)).prior
-    assert drawn.centred_on_truth == (sc.prior.centred_on_truth and bool(drawn.truth_fields))
+    assert not drawn.centred_on_truth
     assert drawn.truth_fields in ((), ("course_mode",))
-    if sc.prior.centred_on_truth and not drawn.truth_fields:
-        with pytest.raises(ScenarioError) as exc:
-            sc.replace(prior=dataclasses.replace(drawn, centred_on_truth=True))
-        assert exc.value.field == "prior.centred_on_truth"
+    with pytest.raises(ScenarioError) as exc:
+        sc.replace(prior=dataclasses.replace(drawn, centred_on_truth=True))
+    assert exc.value.field == "prior.centred_on_truth"
+
+
+def test_course_mode_true_alone_does_not_need_the_opt_in():
+    # "true" is itself the explicit choice: with every mean given the opt-in is refused
+    sc = load_problem("default")
+    given = dataclasses.replace(sc.prior, course_mode="true")
+    assert given.truth_fields == ("course_mode",)
+    assert sc.replace(prior=given).prior == given
+    with pytest.raises(ScenarioError) as exc:
+        sc.replace(prior=dataclasses.replace(given, centred_on_truth=True))
+    assert exc.value.field == "prior.centred_on_truth"
+    assert str(exc.value).endswith("received 'true'")
+
+
+def test_random_problems_keep_the_opt_in_only_for_a_mean_still_omitted():
+    # random_problem gives the bearing mean: a base that took only it from the truth gives
+    # problems without the opt-in; one whose normal speed mean is the truth keeps it
+    base = load_problem("default")
+    p = dataclasses.replace(base.prior, bearing_mean=None, centred_on_truth=True)
+    for prior, kept in ((p, False), (dataclasses.replace(
+            p, speed_distribution="normal", speed_std=1.0), True)):
+        for s in random_problems(base.replace(prior=prior), 3, seed=4):
+            assert s.prior.centred_on_truth is kept and s.prior.bearing_mean is not None

@@ -89,8 +89,7 @@ def check(s: Any, source: str | None) -> None:
                    "command line names its output files after it)", name, source)
     g = s.time
     if not is_whole_count(g.horizon / g.dt):
-        raise _err("time.horizon", f"a whole number (>= 1) of steps of dt = {g.dt} s",
-                   g.horizon, source)
+        raise _err("time.horizon", whole_steps_text(g.dt), g.horizon, source)
     n = g.n_steps
     t = s.target
     if t.model in ("ncv", "multi-leg"):
@@ -497,15 +496,14 @@ def _check_prior(p: Any, source: str | None) -> None:
                        "'speed-course': \"uniform\", \"given\" (with course_mean and "
                        "course_std), \"reciprocal-bearing\", or \"true\" (the true course, "
                        "on purpose)", None, source)
-    taken = truth_fields(p)
-    if p.centred_on_truth and not taken:
+    # course_mode "true" is itself the explicit choice: only omitted means need the opt-in
+    means = [name for name in truth_fields(p) if name != "course_mode"]
+    if p.centred_on_truth and not means:
         raise _err("prior.centred_on_truth", "false (or the key left out): every mean of this "
-                   "prior is given, so nothing would be centred on the truth", True, source)
+                   "prior is given, so nothing would be centred on the truth", "true", source)
     if p.centred_on_truth:
         return
-    for name in taken:
-        if name == "course_mode":  # "true" is itself the explicit choice
-            continue
+    for name in means:
         raise _err(f"prior.{name}", f"a value: without '{name}' the prior would take the "
                    "target's true initial value; add the key, or set prior.centred_on_truth "
                    "= true to centre the prior on the truth on purpose (as the papers' bounds "

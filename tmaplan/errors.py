@@ -145,9 +145,9 @@ def is_whole_count(ratio: float) -> bool:
 
 def whole_steps_text(dt: float) -> str:
     """The expected value of a duration that must be whole steps of ``dt`` [s], worded once
-    for the scenario's, the re-planner's and the command line's errors (with
-    :func:`is_whole_count`)."""
-    return f"a whole number of steps of dt = {dt:g} s"
+    for the scenario's (``time.horizon``, ``planning.*_interval``), the re-planner's and the
+    command line's errors (with :func:`is_whole_count`)."""
+    return f"a whole number (>= 1) of steps of dt = {dt:g} s"
 
 
 def as_real(value: Any) -> float:

@@ -125,9 +125,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     ``speed_mean``, ``velocity_mean``) are replaced by a draw around the truth with the
     prior's own std; the bearing mean is the measured bearing at step 0 when there is one
     (:func:`seed_bearings`; the estimators then do not assimilate that bearing again).
-    Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``. The drawn prior
-    keeps ``centred_on_truth`` only while a field (``course_mode = "true"``) still takes the
-    truth: a scenario whose every mean is given refuses the opt-in.
+    Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``. Every mean being
+    given then, the drawn prior has ``centred_on_truth`` off (a prior refuses it then).
     """
     from tmaplan.models.prior import true_initial_state
 
@@ -164,10 +163,8 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
             and p.speed_mean is None:
         s = float(range_of(v)) + p.speed_std * rng.standard_normal()
         changes["speed_mean"] = float(max(s, p.speed_min))
-    drawn = dataclasses.replace(p, **changes)
-    # the opt-in stays only while something (course_mode "true") still comes from the truth
-    return scenario.replace(prior=dataclasses.replace(
-        drawn, centred_on_truth=bool(drawn.truth_fields) and p.centred_on_truth))
+    # every mean is given now: the truth opt-in goes (a prior refuses it then)
+    return scenario.replace(prior=dataclasses.replace(p, **changes, centred_on_truth=False))
 
 
 def seed_bearings(scenario: Scenario, measurements: Sequence[MeasurementSet] | None

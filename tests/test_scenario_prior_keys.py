@@ -145,7 +145,7 @@ def test_run_prior_drops_the_truth_opt_in(name):
     sc = load_problem(name)
     drawn = run_prior(sc, np.random.default_rng(5)).prior
     assert not drawn.centred_on_truth
-    assert drawn.truth_fields in ((), ("course_mode",))
+    assert drawn.truth_fields in ((), ("course_mode",)) and drawn.truth_means == ()
     with pytest.raises(ScenarioError) as exc:
         sc.replace(prior=dataclasses.replace(drawn, centred_on_truth=True))
     assert exc.value.field == "prior.centred_on_truth"
@@ -155,7 +155,7 @@ def test_course_mode_true_alone_does_not_need_the_opt_in():
     # "true" is itself the explicit choice: with every mean given the opt-in is refused
     sc = load_problem("default")
     given = dataclasses.replace(sc.prior, course_mode="true")
-    assert given.truth_fields == ("course_mode",)
+    assert given.truth_fields == ("course_mode",) and given.truth_means == ()
     assert sc.replace(prior=given).prior == given
     with pytest.raises(ScenarioError) as exc:
         sc.replace(prior=dataclasses.replace(given, centred_on_truth=True))

@@ -496,8 +496,7 @@ def _check_prior(p: Any, source: str | None) -> None:
                        "'speed-course': \"uniform\", \"given\" (with course_mean and "
                        "course_std), \"reciprocal-bearing\", or \"true\" (the true course, "
                        "on purpose)", None, source)
-    # course_mode "true" is itself the explicit choice: only omitted means need the opt-in
-    means = [name for name in truth_fields(p) if name != "course_mode"]
+    means = p.truth_means  # course_mode "true" is itself the explicit choice
     if p.centred_on_truth and not means:
         raise _err("prior.centred_on_truth", "false (or the key left out): every mean of this "
                    "prior is given, so nothing would be centred on the truth", "true", source)

@@ -5,9 +5,8 @@ state, constraints and scripted manoeuvres, the sensors and optional planning se
 TOML; every dimensional value may be a plain SI number or a string with a unit (``"12 kn"``,
 ``"3.5 km"``, ``"45 deg"``, ``"10 min"``), see :mod:`tmaplan.units`.
 
-Load -> dump -> load is the identity: values are stored in SI and dumped with ``repr`` floats.
-Every invalid value raises :class:`tmaplan.errors.ScenarioError` naming the field, the expected
-and the received value.
+Load -> dump -> load is the identity (SI values, ``repr`` floats). Every invalid value raises
+:class:`tmaplan.errors.ScenarioError` naming the field, the expected and the received value.
 """
 
 from __future__ import annotations
@@ -201,12 +200,10 @@ class Prior:
     "gaussian"``: absolute N(mean, diag(std²)), [x, y, v_x, v_y]. A key that the kind, the
     distributions or the course mode do not read is refused unless it keeps its default.
 
-    A prior never takes the truth silently: a mean left out (``bearing_mean``, ``range_mean``,
-    ``velocity_mean``, ``speed_mean`` of normal distributions, a gaussian ``mean``) is the true
-    initial value only with ``centred_on_truth = true`` (the papers' "prior centred on the
-    truth", brehard2005, ristic2004 B2), else an error naming the key; ``course_mode =
-    "true"`` is explicit. A velocity prior is required. :attr:`truth_fields` lists what comes
-    from the truth; the command line warns about it on every run.
+    A prior never takes the truth silently (the command line warns on every run): a mean left
+    out (:attr:`truth_means`) is the true initial value only with ``centred_on_truth = true``
+    (the papers' "prior centred on the truth", brehard2005, ristic2004 B2), else an error
+    naming the key; ``course_mode = "true"`` is explicit. A velocity prior is required.
 
     Attributes
     ----------
@@ -243,7 +240,7 @@ class Prior:
     seed : int
         Seed of those samples, so bounds are reproducible.
     centred_on_truth : bool
-        Allow omitted means to be the true initial values (above); refused if all are given.
+        Allow :attr:`truth_means` (above); refused when there is none.
     """
 
     kind: Literal["polar", "gaussian"] = "polar"
@@ -273,11 +270,14 @@ class Prior:
 
     @property
     def truth_fields(self) -> tuple[str, ...]:
-        """Fields whose value is the target's true initial value (omitted means, and
-        ``course_mode`` when "true"), in file order; empty if the prior does not use it."""
+        """Fields that take the truth (:attr:`truth_means`, ``course_mode`` when "true")."""
         from tmaplan._scenario_checks import truth_fields
-
         return truth_fields(self)
+
+    @property
+    def truth_means(self) -> tuple[str, ...]:
+        """Omitted means of normal distributions (or gaussian ``mean``), in file order."""
+        return tuple(f for f in self.truth_fields if f != "course_mode")
 
 
 @_frozen

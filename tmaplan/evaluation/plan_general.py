@@ -171,8 +171,8 @@ def random_problem(base: Scenario, rng: np.random.Generator, *,
                                     range_max=r_max, speed_max=v_max,
                                     speed_min=min(prior.speed_min, 0.5 * v_max))
     # the bearing mean is given now: the truth opt-in stays only for a mean still omitted
-    new_prior = dataclasses.replace(new_prior, centred_on_truth=prior.centred_on_truth and any(
-        f != "course_mode" for f in new_prior.truth_fields))
+    new_prior = dataclasses.replace(new_prior, centred_on_truth=prior.centred_on_truth
+                                    and bool(new_prior.truth_means))
     r0 = 0.5 * (r_min + r_max)
     x0, y0 = base.observer.position
     t_course = (float(prior.course_mean) if prior.course_mode == "given"

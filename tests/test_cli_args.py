@@ -36,7 +36,7 @@ RANGE_CASES = [
     (["plan", "default", "--pings", "2", "--joint", "alternating", "--ping-stride", "3"],
      "'--ping-stride': expected only with --joint ocp"),
     (["plan", "default", "--starts", "0"], "--starts must be >= 1, received 0"),
-    (["plan", "default", "--starts", "100"], "--starts must be <= 64"),
+    (["plan", "default", "--starts", "100"], "--starts must be <= 7"),
     (["plan", "default", "--starts", "2.5"], "--starts must be an integer >= 1"),
     (["schedule", "default", "--min-spacing", "-5"], "--min-spacing must be a duration >= 0"),
     (["schedule", "default", "--budget", "-1"], "--budget must be >= 0, received -1"),
@@ -213,7 +213,7 @@ def test_schedule_along_a_saved_plan(tmp_path, capsys, one_line_error):
     from tmaplan.policies.plan_starts import plan_from_prior
 
     plan_js, sched_js = tmp_path / "plan.json", tmp_path / "sched.json"
-    assert main(["plan", "default", "--horizon", "15 min", "--starts", "1", "--no-figure",
+    assert main(["plan", "default", "--horizon", "15 min", "--no-figure",
                  "--json", str(plan_js)]) == 0
     assert main(["schedule", "default", "--budget", "2", "--method", "greedy",
                  "--observer-plan", str(plan_js), "--no-figure", "--json", str(sched_js)]) == 0
@@ -255,7 +255,7 @@ def test_a_scenario_written_from_the_readme_plans_and_compares(tmp_path, capsys)
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
     f = tmp_path / "my.toml"
     f.write_text(readme.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
-    assert main(["plan", str(f), "--horizon", "20 min", "--starts", "1", "--no-figure",
+    assert main(["plan", str(f), "--horizon", "20 min", "--no-figure",
                  "--json", "-"]) == 0
     out = capsys.readouterr()
     d = json.loads(out.out)

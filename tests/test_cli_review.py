@@ -128,7 +128,8 @@ def test_observer_plan_with_null_values_is_refused(tmp_path):
     n = sc.n_steps + 1
     obs = {"times": sc.times.tolist(), "position": np.zeros((n, 2)).tolist(),
            "velocity": np.ones((n, 2)).tolist(), "mean_velocity": np.ones((n, 2)).tolist(),
-           "heading": np.zeros(n).tolist(), "speed": np.ones(n).tolist()}
+           "heading": np.zeros(n).tolist(),
+           "speed": np.full(n, 6 * 1852 / 3600).tolist()}  # default's 6 kn
     f = tmp_path / "plan.json"
     f.write_text(json.dumps({"problem": "default", "observer": obs}), encoding="utf-8")
     assert read_observer_plan(f, sc).times.shape == (n,)  # the valid file is read

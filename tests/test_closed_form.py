@@ -272,16 +272,26 @@ def test_prior_mass_at_zero_range_is_an_error(s1):
         closed_form_pcrb(bad)
 
 
+def _unchecked(sc, prior):
+    """``sc`` with ``prior``, not validated: a scenario refuses these zero stds at load
+    (tests/test_scenario_spreads.py); the bound still names them for one built otherwise."""
+    import copy
+
+    out = copy.copy(sc)
+    object.__setattr__(out, "prior", prior)
+    return out
+
+
 def test_non_positive_definite_prior_information_is_an_error(s1):
     # a zero std of the scenario's prior is named as the field at fault
-    bad = s1.replace(prior=dataclasses.replace(s1.prior, bearing_std=0.0))
+    bad = _unchecked(s1, dataclasses.replace(s1.prior, bearing_std=0.0))
     with pytest.raises(ScenarioError, match=r"prior\.bearing_std.*J0.*not positive definite"):
         closed_form_pcrb(bad)
     g = load_problem("gordon1993-bot")
     assert g.prior.kind == "gaussian"
     std = list(g.prior.std)
     std[0] = std[1] = 0.0  # the position known exactly: bearing and ln r have no spread
-    bad = g.replace(prior=dataclasses.replace(g.prior, std=tuple(std)))
+    bad = _unchecked(g, dataclasses.replace(g.prior, std=tuple(std)))
     with pytest.raises(ScenarioError, match=r"prior\.std\[0\].*prior\.std\[1\]"):
         closed_form_pcrb(bad)
     # a belief (not a scenario) that is degenerate keeps the observability error

@@ -256,7 +256,8 @@ def test_compare_cli_json_identical_for_any_worker_count(tmp_path):
     (["--particles", "1"], "particles must be >= 2, received 1"),
     (["--workers", "0"], "workers must be >= 1, received 0"),
     (["--accuracy", "2"], "accuracy must be in (0, 1), received 2.0"),
-    (["--policies", "straight,loop"], "unknown policy 'loop'"),
+    (["--policies", "straight,loop"],
+     "field '--policies': expected names MANOEUVRE[+PING] with MANOEUVRE in"),
 ])
 def test_compare_rejects_bad_input_with_one_line(args, message, tmp_path, capsys):
     from tmaplan.cli import main

@@ -110,7 +110,7 @@ def test_wheel_install_outside_the_checkout(tmp_path):
                            "--json", "-"], cwd=work, env=env))
     assert len(sim["times"]) == len(sim["target"]) > 1
     plan = json.loads(_run([str(venv / "bin" / "tmaplan"), "plan", "default", "--horizon", "600",
-                            "--starts", "1", "--no-plot", "--json", "-"], cwd=work, env=env))
+                            "--no-plot", "--json", "-"], cwd=work, env=env))
     assert plan["times"][-1] == pytest.approx(600.0)
     assert plan["solver"]["status"] and plan["objective"] is not None
     assert not (work / "out").exists() or not any((work / "out").iterdir())

@@ -11,7 +11,7 @@ from tmaplan.cli import main
 
 def test_plan_json_and_figure(tmp_path, capsys):
     out = tmp_path / "plan.json"
-    rc = main(["plan", "default", "--horizon", "1800", "--starts", "2", "--out",
+    rc = main(["plan", "default", "--horizon", "1800", "--out",
                str(tmp_path), "--json", str(out)])
     assert rc == 0
     d = json.loads(out.read_text())
@@ -24,7 +24,7 @@ def test_plan_json_and_figure(tmp_path, capsys):
     assert d["times"][-1] - d["times"][0] == pytest.approx(1800.0)
     assert len(d["turn_rate"]) == len(d["times"]) - 1
     # named by problem, objective and the settings given (another plan does not overwrite it)
-    name = f"default_plan_{d['objective_name']}_h30min_2starts.png"
+    name = f"default_plan_{d['objective_name']}_h30min.png"
     assert d["figure"] == str(tmp_path / name)
     assert (tmp_path / name).stat().st_size > 10_000
 

@@ -277,7 +277,8 @@ def test_readme_prior_without_velocity_names_the_keys_to_add():
 
 
 def test_course_mode_true_is_an_explicit_choice():
-    d = _set(_base(), "prior.course_mode", "true")
+    # (with a spread: a zero course_std is refused, tests/test_scenario_spreads.py)
+    d = _set(_set(_base(), "prior.course_mode", "true"), "prior.course_std", "10 deg")
     s = from_dict(d)
     assert s.prior.truth_fields == ("course_mode",) and not s.prior.centred_on_truth
 

@@ -154,7 +154,7 @@ def test_run_prior_drops_the_truth_opt_in(name):
 def test_course_mode_true_alone_does_not_need_the_opt_in():
     # "true" is itself the explicit choice: with every mean given the opt-in is refused
     sc = load_problem("default")
-    given = dataclasses.replace(sc.prior, course_mode="true")
+    given = dataclasses.replace(sc.prior, course_mode="true", course_std=0.1)  # std > 0
     assert given.truth_fields == ("course_mode",) and given.truth_means == ()
     assert sc.replace(prior=given).prior == given
     with pytest.raises(ScenarioError) as exc:

@@ -209,3 +209,16 @@ def test_logarithmic_units_are_refused(text: str) -> None:
         to_si(text, "dimensionless", "faults.missed_ping_probability")
     assert info.value.field == "faults.missed_ping_probability"
     assert to_si("50 %", "dimensionless", "p") == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("text", ["nan deg", "inf s", "-Infinity km", " +INF "])
+def test_a_non_finite_number_is_called_so(text: str) -> None:
+    # it used to say "the string does not start with a number"
+    with pytest.raises(UnitError, match=r"field 'f'.*the value is not finite"):
+        to_si(text, "length", "f")
+
+
+@pytest.mark.parametrize("text", ["information", "infs", "nanometer", "km"])
+def test_a_word_is_still_not_a_number(text: str) -> None:
+    with pytest.raises(UnitError, match="does not start with a number"):
+        to_si(text, "length", "f")

@@ -199,6 +199,7 @@ def check(s: Any, source: str | None) -> None:
         if getattr(sen, "first_step", 0) > n:
             raise _err(f"{f}.first_step", f"a step within the horizon, 0..{n}",
                        sen.first_step, source)
+        _check_sensor_keys(sen, f, source)
         if sen.kind == "frequency":
             if len(sen.f0) == 0:
                 raise _err(f"{f}.f0", "at least one frequency line", sen.f0, source)
@@ -243,6 +244,7 @@ def check(s: Any, source: str | None) -> None:
             _check_point_means(p, source)
             if t.model == "constant-turn" and (p.range_mean is None or p.bearing_mean is None):
                 raise _err("prior", "explicit means for a constant-turn target", None, source)
+        _check_prior_spreads(p, source)
 
     est = s.estimation
     if est is not None and est.turn_direction != "either" and t.model != "constant-turn":
@@ -314,7 +316,9 @@ def _check_prior_keys(p: Any, source: str | None) -> None:
 
 def _check_point_means(p: Any, source: str | None) -> None:
     """A normal range or speed prior with std 0 is a point mass at its mean: a given mean must
-    lie in the support (``models.prior`` refuses a truth-centred one when it samples)."""
+    lie in the support; with std > 0 the support must keep a non-negligible mass of the
+    normal (:func:`tmaplan.models.prior.check_truncated_normal`). ``models.prior`` refuses a
+    truth-centred mean for either when it samples."""
     parts = [("range", p.range_mean, p.range_std, p.range_min, p.range_max, "m")] \
         if p.range_distribution == "normal" else []
     if p.velocity_distribution == "speed-course" and p.speed_distribution == "normal":
@@ -324,6 +328,57 @@ def _check_point_means(p: Any, source: str | None) -> None:
         if mean is not None and not std and not lo <= mean <= top:
             raise _err(f"prior.{name}_mean", f"a value within [{lo}, {top}] {unit} (prior."
                        f"{name}_std is 0: every sample is the mean)", mean, source)
+        if mean is not None and std:
+            from tmaplan.models.prior import check_truncated_normal
+
+            check_truncated_normal(name, mean, std, lo, top, unit, source)
+
+
+def _check_prior_spreads(p: Any, source: str | None) -> None:
+    """Every std the prior samples is > 0 but the point masses a normal range or speed allows
+    (``range_std``, ``speed_std``: :func:`_check_point_means`) and the course about the
+    reciprocal bearing (it follows the bearing's spread). Any other zero std leaves the prior
+    without a density: its covariance is singular, so the bounds' prior information (its
+    inverse) does not exist (NaN or "singular matrix" at step 0)."""
+    from tmaplan.models.prior import zero_prior_stds
+
+    why = ("a zero std leaves the prior without a density, and the bounds without its "
+           "information, the inverse of the prior covariance")
+    zero = zero_prior_stds(p, point_masses=False)  # the one list of the prior's zero stds
+    if not zero:
+        return
+    field = zero[0]
+    if field.startswith("prior.std["):
+        raise _err(field, f"> 0 ({why})", 0.0, source)
+    if field == "prior.bearing_std":
+        raise _err(field, f"> 0 for a polar prior, e.g. \"2 deg\" ({why}; 0 is the default "
+                   "when the key is left out)", p.bearing_std, source)
+    if field == "prior.course_std":
+        raise _err(field, f"> 0 with prior.course_mode = {p.course_mode!r} ({why}; 0 is the "
+                   "default when the key is left out)", p.course_std, source)
+    raise _err(field, f"> 0 ({why})", getattr(p, field.removeprefix("prior.")), source)
+
+
+def _check_sensor_keys(sen: Any, field: str, source: str | None) -> None:
+    """Refuse a sensor key that :func:`tmaplan.scenario.measurement_steps` ignores given the
+    others, unless it keeps its default (as :func:`_check_prior_keys` for the prior): a
+    bearing or frequency sensor's ``first_step`` and ``every`` when it lists ``steps``, a
+    range sensor's ``first_step`` without ``every``."""
+    ignored: tuple[str, ...]
+    if sen.kind == "range":
+        ignored = ("first_step",) if sen.every is None else ()
+        setting = f"without {field}.every (it only starts the ranging every n steps)"
+    else:
+        ignored = ("first_step", "every") if sen.steps is not None else ()
+        steps = list(sen.steps or ())
+        shown = steps if len(steps) <= 10 else f"[{len(steps)} steps]"
+        setting = (f"with {field}.steps = {shown} (it is ignored there: the sensor measures "
+                   "at the listed steps only)")
+    defaults = {f.name: f.default for f in dataclasses.fields(sen)}
+    for name in ignored:
+        value = getattr(sen, name)
+        if value != defaults[name]:
+            raise _err(f"{field}.{name}", f"not set {setting}", value, source)
 
 
 # --------------------------------------------------------------------------------------------

@@ -211,10 +211,10 @@ class Prior:
     bearing_mean : float, optional
         [rad]; None: the true initial bearing.
     bearing_std : float
-        [rad].
+        [rad], > 0 (give it: 0, the default, leaves the prior without a density).
     range_distribution : {"normal", "uniform", "log-uniform"}
     range_mean, range_std : float, optional
-        [m]; range_mean None: the true initial range.
+        [m]; range_mean None: the true initial range; range_std 0: a point mass at the mean.
     range_min : float
         Lower truncation / support bound [m] (keeps ln r and 1/r finite).
     range_max : float, optional
@@ -226,15 +226,15 @@ class Prior:
         Per-axis std [m/s].
     speed_distribution : {"normal", "uniform"}
     speed_mean, speed_std, speed_min, speed_max : float
-        [m/s]; speed_mean None: true speed.
+        [m/s]; speed_mean None: true speed; speed_std 0: a point mass at the mean.
     course_mode : {"true", "given", "reciprocal-bearing", "uniform"}, optional
         Course mean: the true course, ``course_mean``, the bearing + π (target heading at the
         observer, Ristic et al. 2004), or uniform on the circle. Required for
         ``speed-course``.
     course_mean, course_std : float, optional
-        [rad].
+        [rad]; course_std > 0 for course_mode "given" and "true".
     mean, std : tuple of 4 floats, optional
-        Gaussian prior, [x, y, v_x, v_y] in [m, m, m/s, m/s].
+        Gaussian prior, [x, y, v_x, v_y] in [m, m, m/s, m/s]; each std > 0.
     samples : int
         Number of prior samples used where a bound needs prior moments (brehard2005 eq. 56).
     seed : int
@@ -364,7 +364,7 @@ class BearingSensor:
     every : int
         Steps between measurements.
     steps : tuple of int, optional
-        Explicit measurement steps.
+        Explicit measurement steps (``first_step`` and ``every`` then keep their default 1).
     ambiguity : {"none", "pi"}
         "pi": bearing known modulo π, in (−π/2, π/2] (linear array, brehard2005 eq. 4).
     """
@@ -398,7 +398,7 @@ class RangeSensor:
     every : int, optional
         Continuous ranging every n steps (range-only tracking).
     first_step : int
-        First step for ``every``.
+        First step for ``every`` (without ``every`` it keeps its default 1).
     active : bool
         True for an active sonar ping (reveals own ship; counts against the budget).
     """

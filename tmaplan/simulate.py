@@ -40,6 +40,7 @@ __all__ = [
     "measure",
     "measure_step",
     "measurement_batches",
+    "ping_sensors",
     "reading",
     "simulate",
 ]
@@ -364,12 +365,17 @@ class CommonNoise:
     fault: np.ndarray | None = None
 
 
+def ping_sensors(scenario: Scenario) -> list[RangeSensor]:
+    """The active range sensors of ``scenario``: a closed-loop ping uses the first of them
+    (none: a ping policy cannot ping)."""
+    return [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
+
+
 def _closed_loop_sensors(scenario: Scenario) -> tuple[list[Any], list[Any], list[Any]]:
     """Bearing sensors, passive range sensors and active (ping) range sensors."""
     bs = [s for s in scenario.sensors if isinstance(s, BearingSensor)]
     rs = [s for s in scenario.sensors if isinstance(s, RangeSensor) and not s.active]
-    ps = [s for s in scenario.sensors if isinstance(s, RangeSensor) and s.active]
-    return bs, rs, ps
+    return bs, rs, ping_sensors(scenario)
 
 
 def draw_common_noise(scenario: Scenario, rng: np.random.Generator) -> CommonNoise:

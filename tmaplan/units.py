@@ -106,6 +106,10 @@ _QUANTITY_RE: Final[re.Pattern[str]] = re.compile(
 )
 
 
+# "nan", "inf", "-infinity" in front of a unit: a number, but not a finite one
+_NON_FINITE_RE: Final[re.Pattern[str]] = re.compile(r"^\s*[+-]?(?:nan|inf(?:inity)?)(?![A-Za-z_])",
+                                                    re.IGNORECASE)
+
 # "nm": pint's nanometre, but a nautical mile to many a sailor ("5 nm" of range would be 5e-9 m)
 _AMBIGUOUS_NM_RE: Final[re.Pattern[str]] = re.compile(r"(?<![A-Za-z_])nm(?![A-Za-z_])")
 
@@ -162,6 +166,8 @@ def _parse(text: str, dimension: str) -> float:
     """
     match = _QUANTITY_RE.match(text)
     if match is None:
+        if _NON_FINITE_RE.match(text):
+            raise _ParseError("the value is not finite")
         raise _ParseError("the string does not start with a number")
     magnitude = float(match["number"])
     unit = match["unit"]

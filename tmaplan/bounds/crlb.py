@@ -60,6 +60,7 @@ __all__ = [
     "crlb",
     "crlb_from_data",
     "cv_model",
+    "information_covariance",
     "multi_leg_model",
     "scenario_data",
 ]
@@ -281,14 +282,13 @@ def crlb_from_data(
     """
     theta = np.asarray(theta, dtype=float)
     data = batch_data(model, bearings=bearings, ranges=ranges, frequencies=frequencies)
-    counts = _check_geometry(data, theta)
     n_tones = data.n_lines
-    names = tuple(model.names) + tuple(f"f0[{q}]" for q in range(n_tones))
+    names = _names(data)
     units = tuple(model.units) + ("Hz",) * n_tones
-    values = np.concatenate([theta, [] if frequencies is None
-                             else np.asarray(frequencies.f0, float).reshape(-1)[:n_tones]])
-    fim = fisher_information(data, values)
-    cov, cond = _invert(fim, names, _physical_scales(data, theta))
+    tones = (np.zeros(0) if frequencies is None
+             else np.asarray(frequencies.f0, float).reshape(-1)[:n_tones])
+    fim, cov, cond, counts = _information(data, theta, tones)
+    values = np.concatenate([theta, tones])
 
     # final time and observer position
     sets = [(s[1], s[2]) for s in _observed(data)]
@@ -339,6 +339,51 @@ def crlb_from_data(
         final_covariance=final_cov, final_std=np.sqrt(np.clip(np.diag(final_cov), 0.0, None)),
         final_position=pos_n[0], final_range=r_n, final_range_std=std_r,
         final_range_rsd=std_r / r_n, n_measurements=counts, notes=tuple(notes))
+
+
+def information_covariance(data: TMAData, values: np.ndarray) -> np.ndarray:
+    """Inverse of the batch Fisher information at ``values``, with :func:`crlb_from_data`'s checks.
+
+    Parameters
+    ----------
+    data : TMAData
+        Measurement sets and track model (:func:`tmaplan.bounds.batch_fim.tma_data`).
+    values : ndarray, shape (dim + n_lines,)
+        Motion parameters, then the tones [SI].
+
+    Returns
+    -------
+    ndarray, shape (dim + n_lines, dim + n_lines)
+        The CRLB of the parameters.
+
+    Raises
+    ------
+    ObservabilityError
+        Too few measurements, the observer at the target, or a singular FIM (the same
+        one-line reasons as :func:`crlb`).
+    """
+    values = np.asarray(values, dtype=float)
+    dim = data.track.dim
+    if values.shape != (dim + data.n_lines,):
+        raise ArgumentError("values", f"{dim + data.n_lines} parameters "
+                            f"{_names(data)}", values)
+    return _information(data, values[:dim], values[dim:])[1]
+
+
+def _information(data: TMAData, theta: np.ndarray, tones: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, float, dict[str, int]]:
+    """FIM, its inverse, the scaled condition number and the measurement counts at the motion
+    parameters ``theta`` and the ``tones``, after the geometry checks
+    (:func:`_check_geometry`, :func:`_invert`)."""
+    counts = _check_geometry(data, theta)
+    fim = fisher_information(data, np.concatenate([theta, tones]))
+    cov, cond = _invert(fim, _names(data), _physical_scales(data, theta))
+    return fim, cov, cond, counts
+
+
+def _names(data: TMAData) -> tuple[str, ...]:
+    """Parameter names: the motion model's, then one ``f0[q]`` per tone."""
+    return tuple(data.track.names) + tuple(f"f0[{q}]" for q in range(data.n_lines))
 
 
 # --------------------------------------------------------------------------------------------

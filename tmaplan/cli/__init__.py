@@ -17,6 +17,7 @@ import argparse
 import importlib
 import json
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ import numpy as np
 from tmaplan import __version__
 from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
+from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
 from tmaplan.scenario import load, load_problem
 
@@ -117,6 +119,15 @@ def _names_problem(text: str, problem: str) -> bool:
     return text.startswith(f"{problem}: ") or f"({problem})" in text
 
 
+def _one_line_warning(verb: str) -> Any:
+    """A :func:`warnings.showwarning` that prints ``tmaplan VERB: warning: Category: text``."""
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: str | None = None) -> None:
+        text = str(message).replace("\n", " ")
+        print(f"tmaplan {verb}: warning: {category.__name__}: {text}", file=sys.stderr)
+    return show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tmaplan`` command. Returns the exit status.
 
@@ -142,7 +153,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             scenario = load(args.problem) if fixed is None else load_problem(fixed)
             problem = scenario.name
             preflight(args, scenario)
-        payload = modules[args.verb].run(args)
+        else:  # (preflight checks them with the problem)
+            check_outputs(args)
+        with warnings.catch_warnings():
+            if not args.debug:  # one line, as errors are (--debug: Python's, with the source)
+                warnings.showwarning = _one_line_warning(args.verb)
+            payload = modules[args.verb].run(args)
         require_finite(payload, getattr(modules[args.verb], "FINITE", ()), source=problem)
         if isinstance(payload, dict) and problem is not None:
             payload.setdefault("problem", problem)

@@ -14,7 +14,9 @@ each is refused with its value in the message):
 ``--particles``        2 .. :data:`MAX_PARTICLES`
 ``--samples``          2 .. :data:`MAX_SAMPLES`
 ``--workers``          1 .. :data:`MAX_WORKERS`
-``--starts``           1 .. :data:`MAX_STARTS`
+``--starts``           1 .. :data:`MAX_STARTS` (``plan``: 1 .. 4 with ``--transcription
+                       bang-bang``; only where the built-in guesses are solved,
+                       :data:`PLAN_STARTS`)
 ``--budget``           >= 0 (and at most the number of steps, checked by the scheduler)
 ``--accuracy``         in (0, 1)
 ``--seed``             an integer >= 0 (``numpy.random.SeedSequence``)
@@ -33,17 +35,19 @@ import math
 import re
 import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any, NoReturn
 
+from tmaplan.cli._paths import _fail, check_json_path, check_out_dir, check_outputs
 from tmaplan.errors import (
     ArgumentError,
+    PlanningError,
     ScenarioError,
     UnitError,
     is_whole_count,
     whole_steps_text,
 )
 from tmaplan.estimators.applicability import MLE_DRIFT_RATIO_MAX
+from tmaplan.planning.heading import BUILT_IN_STARTS
 from tmaplan.simulate import check_truth_source
 from tmaplan.units import to_si
 
@@ -56,6 +60,7 @@ __all__ = [
     "MAX_STARTS",
     "MAX_WORKERS",
     "MLE_DRIFT_RATIO_MAX",
+    "PLAN_STARTS",
     "OneLineParser",
     "UsageError",
     "add_figure_arguments",
@@ -68,6 +73,8 @@ __all__ = [
     "open_fraction",
     "out_dir",
     "preflight",
+    "repeated",
+    "seconds_text",
     "seed",
     "step_list",
 ]
@@ -80,8 +87,11 @@ MAX_SAMPLES = 1_000_000
 """Largest ``--samples`` of a Monte Carlo bound."""
 MAX_WORKERS = 256
 """Largest ``--workers``."""
-MAX_STARTS = 64
-"""Largest ``--starts`` (multi-start initial guesses of the heading OCP)."""
+PLAN_STARTS = BUILT_IN_STARTS
+"""``plan --starts``: the heading planner's built-in initial guesses by transcription
+(:class:`tmaplan.planning.HeadingPlanner`), the most that a value can start from."""
+MAX_STARTS = max(PLAN_STARTS.values())
+"""Largest ``--starts`` (built-in initial guesses of the heading OCP, :data:`PLAN_STARTS`)."""
 MAX_DURATION = 7 * 86400.0
 """Largest value of a time flag [s] (one week)."""
 MAX_PLAN_STEPS = 1440
@@ -115,10 +125,6 @@ class OneLineParser(argparse.ArgumentParser):
 # --------------------------------------------------------------------------------------------
 # Types (callables for ``type=``): raise ArgumentTypeError("must be ..., received ...")
 # --------------------------------------------------------------------------------------------
-
-
-def _fail(constraint: str, received: Any) -> NoReturn:
-    raise argparse.ArgumentTypeError(f"must be {constraint}, received {received}")
 
 
 def integer(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
@@ -168,7 +174,7 @@ def open_fraction(text: str) -> float:
     return value
 
 
-def _seconds_text(value: float) -> str:
+def seconds_text(value: float) -> str:
     """A duration for messages: ``'100000 s (27.8 h)'``."""
     if value >= 7200:
         return f"{value:g} s ({value / 3600:.3g} h)"
@@ -193,8 +199,8 @@ def duration(*, allow_zero: bool = False,
         if value < 0 or (value == 0 and not allow_zero):
             _fail(f"a duration {lower} s", repr(text))
         if value > maximum:
-            _fail(f"at most {_seconds_text(maximum)} (documented limit)",
-                  f"{text!r} = {_seconds_text(value)}")
+            _fail(f"at most {seconds_text(maximum)} (documented limit)",
+                  f"{text!r} = {seconds_text(value)}")
         return value
 
     parse.__name__ = "duration"
@@ -211,21 +217,22 @@ def step_list(text: str) -> list[int]:
         _fail("at least one step", repr(text))
     if min(steps) < 0:
         _fail("steps >= 0", min(steps))
+    twice = repeated(steps)
+    if twice is not None:
+        _fail(f"distinct steps, each once ({twice} is repeated)", repr(text))
     return steps
 
 
 def out_dir(text: str) -> str:
-    """Type of ``--out``: a directory (created when needed), not an existing file."""
-    if Path(text).exists() and not Path(text).is_dir():
-        _fail("a directory", f"{text!r} (an existing file)")
-    return text
+    """Type of ``--out``: a directory (created when needed), not an existing file nor a path
+    under one (:func:`tmaplan.cli._paths.check_out_dir`)."""
+    return check_out_dir(text)
 
 
 def json_path(text: str) -> str:
-    """Type of ``--json``: ``-`` (stdout) or a file path, not an existing directory."""
-    if text != "-" and Path(text).is_dir():
-        _fail("a file path or '-' (stdout)", f"{text!r} (an existing directory)")
-    return text
+    """Type of ``--json``: ``-`` (stdout) or a file path, not an existing directory nor a path
+    under an existing file (:func:`tmaplan.cli._paths.check_json_path`)."""
+    return check_json_path(text)
 
 
 # --------------------------------------------------------------------------------------------
@@ -295,7 +302,29 @@ def _scenario_error(field: str, constraint: str, received: Any, scenario: Any) -
     return ScenarioError(field, constraint, received, source=scenario.name)
 
 
+def _check_starts(args: argparse.Namespace, scenario: Any) -> None:
+    """``plan --starts`` only where the planner's built-in initial guesses are solved: the
+    bang-bang transcription, or the first heading solve of a joint plan (``--pings``); the
+    direct plan without pings is multi-started from the manoeuvres it must beat
+    (:func:`tmaplan.policies.plan_starts.plan_from_prior`), whatever ``--starts``."""
+    starts = getattr(args, "starts", None)
+    if starts is None:
+        return
+    tr = getattr(args, "transcription", "direct")
+    if tr == "direct" and getattr(args, "pings", 0) == 0:
+        raise _flag_error("--starts", "only with --transcription bang-bang (at most "
+                          f"{PLAN_STARTS['bang-bang']}) or --pings K (at most "
+                          f"{PLAN_STARTS['direct']} with the direct transcription): the direct "
+                          "plan without pings starts from straight, the tactics, the best "
+                          "single turns and 4 fixed guesses, whatever --starts", starts,
+                          scenario)
+    if starts > PLAN_STARTS[tr]:
+        raise _flag_error("--starts", f"at most {PLAN_STARTS[tr]} with --transcription {tr} "
+                          "(the planner's built-in initial guesses)", starts, scenario)
+
+
 def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
+    _check_starts(args, scenario)
     dt = float(scenario.time.dt)
     pl = scenario.planning
     tc = args.control_interval if getattr(args, "control_interval", None) is not None else (
@@ -303,7 +332,7 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
     if getattr(args, "control_interval", None) is not None:
         m = tc / dt
         if not is_whole_count(m):
-            raise _flag_error("--control-interval", whole_steps_text(dt), _seconds_text(tc),
+            raise _flag_error("--control-interval", whole_steps_text(dt), seconds_text(tc),
                               scenario)
     joint, stride = getattr(args, "joint", None), getattr(args, "ping_stride", None)
     if getattr(args, "pings", 0) == 0 and (joint is not None or stride is not None):
@@ -329,28 +358,28 @@ def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
         if round(h / dt) > scenario.n_steps:  # a receding horizon may; an offline plan not
             raise _scenario_error(
                 "planning.horizon", "at most the problem's horizon of "
-                f"{_seconds_text(float(scenario.time.horizon))} for an offline plan (or give "
-                "--horizon)", _seconds_text(h), scenario)
+                f"{seconds_text(float(scenario.time.horizon))} for an offline plan (or give "
+                "--horizon)", seconds_text(h), scenario)
         if getattr(args, "control_interval", None) is not None:  # else rounded silently
             n = h / tc
             if not is_whole_count(n):
                 raise _flag_error("--control-interval", "a whole number (>= 1) of intervals in "
-                                  f"the planning horizon of {_seconds_text(h)} (or give "
-                                  "--horizon)", _seconds_text(tc), scenario)
+                                  f"the planning horizon of {seconds_text(h)} (or give "
+                                  "--horizon)", seconds_text(tc), scenario)
         return
     k = round(args.horizon / dt)
     if k > MAX_PLAN_STEPS:
         raise _flag_error("--horizon", f"at most {MAX_PLAN_STEPS} steps of dt = {dt:g} s "
-                          f"({_seconds_text(MAX_PLAN_STEPS * dt)}, documented limit)",
-                          f"{_seconds_text(args.horizon)} = {k} steps", scenario)
+                          f"({seconds_text(MAX_PLAN_STEPS * dt)}, documented limit)",
+                          f"{seconds_text(args.horizon)} = {k} steps", scenario)
     h = float(scenario.time.horizon)
     if k > scenario.n_steps:  # a plan past the problem's end: beyond its measurements
-        raise _flag_error("--horizon", f"at most the problem's horizon of {_seconds_text(h)}",
-                          _seconds_text(args.horizon), scenario)
+        raise _flag_error("--horizon", f"at most the problem's horizon of {seconds_text(h)}",
+                          seconds_text(args.horizon), scenario)
     n = args.horizon / tc
     if not is_whole_count(n):
         raise _flag_error("--horizon", f"a whole number (>= 1) of control intervals of "
-                          f"{_seconds_text(tc)}", _seconds_text(args.horizon), scenario)
+                          f"{seconds_text(tc)}", seconds_text(args.horizon), scenario)
 
 
 def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
@@ -361,7 +390,7 @@ def _check_bound(args: argparse.Namespace, scenario: Any) -> None:
                               None, scenario)
     if args.ping_every is not None and args.ping_every < scenario.time.dt:
         raise _flag_error("--ping-every", f">= dt = {scenario.time.dt:g} s",
-                          _seconds_text(args.ping_every), scenario)
+                          seconds_text(args.ping_every), scenario)
     if args.ping_steps is not None and max(args.ping_steps) > scenario.n_steps:
         raise _flag_error("--ping-steps", f"steps within 0..{scenario.n_steps}",
                           max(args.ping_steps), scenario)
@@ -378,10 +407,13 @@ def _check_schedule(args: argparse.Namespace, scenario: Any) -> None:
     if args.budget is not None and args.budget > scenario.n_steps:
         raise _flag_error("--budget", f"at most the {scenario.n_steps} steps of the horizon",
                           args.budget, scenario)
-    if args.observer_plan is not None:
-        from tmaplan.cli.schedule import read_observer_plan
+    from tmaplan.cli.schedule import check_options, check_spacing, read_observer_plan
 
-        read_observer_plan(args.observer_plan, scenario)
+    check_options(args, scenario)
+    track = None
+    if args.observer_plan is not None:
+        track = read_observer_plan(args.observer_plan, scenario)
+    check_spacing(args, scenario, track)
 
 
 def _check_track(args: argparse.Namespace, scenario: Any) -> None:
@@ -391,15 +423,47 @@ def _check_track(args: argparse.Namespace, scenario: Any) -> None:
     turn = getattr(args, "turn_direction", "auto")
     if turn != "auto" and args.estimator != "mle":
         raise _flag_error("--turn-direction", "only with --estimator mle", turn, scenario)
+    model = scenario.target.model
+    if turn in ("clockwise", "anticlockwise") and model != "constant-turn":
+        raise _flag_error("--turn-direction", "'auto' or 'either' unless the target model is "
+                          f"'constant-turn' ({scenario.name}'s is '{model}')", turn, scenario)
     _check_frequencies(args, scenario)
     check_applicable(args.estimator, scenario, bound=args.bound, cli=True)
 
 
+def repeated(values: list[Any]) -> Any:
+    """The first value given twice in ``values``, else None: the one test behind the list
+    flags' "each once" rule (``--policies``, ``--plans``, ``--ping-steps``)."""
+    seen: set[Any] = set()
+    for v in values:
+        if v in seen:
+            return v
+        seen.add(v)
+    return None
+
+
 def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
+    from tmaplan.policies.combine import check_policy
+
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
-    if not names or len(set(names)) != len(names):
+    if not names:
         raise _flag_error("--policies", "one or more distinct MANOEUVRE[+PING], comma-separated",
                           args.policies, scenario)
+    twice = repeated(names)
+    if twice is not None:
+        raise _flag_error("--policies", f"one or more distinct MANOEUVRE[+PING], each once "
+                          f"({twice} is repeated)", args.policies, scenario)
+    for name in names:
+        try:
+            check_policy(name, scenario)
+        except ArgumentError as exc:  # the policy's rule, on the flag that named it
+            raise _flag_error("--policies", exc.expected, exc.received, scenario) from None
+        except PlanningError:  # an unknown name
+            from tmaplan.policies.combine import MANOEUVRES, PINGS
+
+            raise _flag_error("--policies", f"names MANOEUVRE[+PING] with MANOEUVRE in "
+                              f"{', '.join(sorted(MANOEUVRES))} and PING in "
+                              f"{', '.join(sorted(PINGS))}", name, scenario) from None
     if scenario.prior is None:
         raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
                               "particle filter, which starts from the prior (and --truth prior "
@@ -430,19 +494,6 @@ def _truth_note(verb: str, scenario: Any) -> None:
               file=sys.stderr)
 
 
-def _check_json_target(args: argparse.Namespace, scenario: Any) -> None:
-    """``--json PATH`` must not be a file the verb reads: writing it would destroy the input."""
-    out = getattr(args, "json", None)
-    if out is None or out == "-":
-        return
-    target = Path(out).resolve()
-    for what, value in (("problem file", getattr(args, "problem", None)),
-                        ("--observer-plan file", getattr(args, "observer_plan", None))):
-        if value is not None and Path(value).is_file() and Path(value).resolve() == target:
-            raise _flag_error("--json", f"a path other than the {what} it would overwrite",
-                              out, scenario)
-
-
 def preflight(args: argparse.Namespace, scenario: Any) -> None:
     """Checks of the arguments that need the scenario, before any work starts.
 
@@ -463,10 +514,12 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     drift being the NCV position std ``sqrt(q T³/3)``). Then prints a one-line warning on
     stderr when the scenario's prior takes values from the truth (``prior.centred_on_truth``
     or ``course_mode = "true"``): every run of a verb that uses the prior says so.
-    ``--json PATH`` naming an input of the verb (the problem file, ``--observer-plan``) is
-    refused: the output would overwrite it.
+    Output paths first (:func:`tmaplan.cli._paths.check_outputs`): ``--json PATH`` naming an
+    input of the verb (the problem file, ``--observer-plan``) or an existing file that is not
+    a JSON document is refused (the output would overwrite it), as is a ``--json`` or
+    ``--out`` where no file can be created.
     """
-    _check_json_target(args, scenario)
+    check_outputs(args, scenario.name)
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
              "rank-costs": lambda a, s: check_truth_source(s, True),

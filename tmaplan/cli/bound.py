@@ -53,7 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``tmaplan bound``."""
     add_problem_argument(parser)
     parser.add_argument("--method", choices=("closed-form", "monte-carlo"),
-                        default="closed-form")
+                        default="closed-form",
+                        help="closed-form (in LPC) or monte-carlo (default closed-form)")
     parser.add_argument("--coords", choices=("lpc", "cartesian"), default=None,
                         help="coordinates (closed form: lpc only; default lpc for the closed "
                              "form, cartesian for Monte Carlo)")
@@ -72,7 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="a range ping at the first step at or after each multiple of T "
                             "(seconds or with a unit: '80 s')")
     pings.add_argument("--ping-steps", type=step_list, metavar="K,K,..",
-                       help="range pings at these steps")
+                       help="range pings at these steps, each once")
     add_seed_argument(parser, help="Monte Carlo seed (default 0)")
     add_figure_arguments(parser)
     parser.add_argument("--no-overlay", action="store_true",

@@ -36,12 +36,17 @@ HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figur
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 
+#: Default of ``--policies``.
+POLICIES = "straight,single-turn,zigzag"
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``compare``."""
     add_problem_argument(parser)
-    parser.add_argument("--policies", default="straight,single-turn,zigzag",
-                        help=f"comma-separated MANOEUVRE[+PING] (manoeuvres: "
-                             f"{', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)})")
+    parser.add_argument("--policies", default=POLICIES,
+                        help=f"comma-separated MANOEUVRE[+PING], each once (default {POLICIES}; "
+                             f"manoeuvres: {', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)}, "
+                             "a ping policy only with a range sensor)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
@@ -54,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "scenario's")
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
-                   help="local worker processes")
+                   help="local worker processes (default 1)")
     g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
     add_figure_arguments(parser, report=True)
 

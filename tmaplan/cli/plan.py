@@ -16,6 +16,7 @@ from typing import Any
 
 from tmaplan.cli._args import (
     MAX_STARTS,
+    PLAN_STARTS,
     add_figure_arguments,
     add_problem_argument,
     duration,
@@ -56,11 +57,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="duration of a piecewise-constant turn rate, seconds or with a "
                              "unit ('1 min')")
     parser.add_argument("--transcription", choices=("direct", "bang-bang"),
-                        default=TRANSCRIPTION)
-    parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=STARTS,
-                        help="built-in initial guesses of the bang-bang transcription "
-                             "(default 4); the direct one starts from straight, the tactics "
-                             "and the best single turns as well")
+                        default=TRANSCRIPTION,
+                        help=f"heading OCP: direct (a turn rate per control interval; default "
+                             f"{TRANSCRIPTION}) or bang-bang (the durations of arcs at full "
+                             "and zero turn rate)")
+    parser.add_argument("--starts", type=integer(1, MAX_STARTS), default=None,
+                        help=f"built-in initial guesses of the heading solve (default {STARTS}): "
+                             f"with --transcription bang-bang (at most "
+                             f"{PLAN_STARTS['bang-bang']}) or --pings K (direct: at most "
+                             f"{PLAN_STARTS['direct']}); refused with the direct transcription "
+                             "without pings, which starts from straight, the tactics, the best "
+                             "single turns and 4 fixed guesses")
     parser.add_argument("--pings", type=integer(0), default=0, metavar="K",
                         help="plan K range pings with the headings (default 0: headings only)")
     parser.add_argument("--joint", choices=("ocp", "alternating"), default=None,
@@ -77,7 +84,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     scenario = load(args.problem)
     planner = HeadingPlanner(scenario, objective=args.objective, horizon=args.horizon,
                              control_interval=args.control_interval,
-                             transcription=args.transcription, n_starts=args.starts)
+                             transcription=args.transcription, n_starts=_starts(args))
     belief = Belief.from_prior(scenario)
     pings = _joint(args, scenario, belief) if args.pings > 0 else None
     if pings is not None:
@@ -122,7 +129,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         path = Path(args.out) / figure_name(
             scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
             control_interval=args.control_interval, transcription=args.transcription,
-            starts=args.starts, joint=args.joint, ping_stride=args.ping_stride)
+            starts=_starts(args), joint=args.joint, ping_stride=args.ping_stride)
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
         payload["figure"] = str(path)
         if args.json != "-":
@@ -137,7 +144,7 @@ def figure_name(problem: str, objective: str, pings: int = 0, *,
                 ping_stride: int | None = None) -> str:
     """``<problem>_plan_<objective>[_<K>pings][_<setting>...].png``, one suffix per plan
     setting given away from its default (``h30min``, ``ci1min``, ``bang-bang``,
-    ``8starts``, ``alternating``, ``stride2``; times [s] in minutes or seconds): plans of
+    ``2starts``, ``alternating``, ``stride2``; times [s] in minutes or seconds): plans of
     other objectives, ping budgets or settings into the same ``--out`` do not overwrite each
     other's figure, and the default plan keeps its short name."""
     def span(t: float) -> str:
@@ -154,6 +161,13 @@ def figure_name(problem: str, objective: str, pings: int = 0, *,
     return "_".join(parts) + ".png"
 
 
+def _starts(args: argparse.Namespace) -> int:
+    """``--starts`` (default :data:`STARTS`); the preflight refused it where it has no effect
+    (:func:`tmaplan.cli._args.preflight`), so a figure named ``_<N>starts`` was started from
+    N guesses."""
+    return STARTS if args.starts is None else int(args.starts)
+
+
 def _on_clock(params: dict[str, float], t0: float) -> dict[str, float]:
     """Baseline parameters with the turn ``time`` [s after t0] on the scenario clock [s]."""
     return {k: v + t0 if k == "time" else v for k, v in params.items()}
@@ -166,7 +180,7 @@ def _joint(args: argparse.Namespace, scenario: Any,
     pl = scenario.planning
     objective = args.objective or (pl.objective if pl is not None else "range-bound")
     kw = {"horizon": args.horizon, "control_interval": args.control_interval,
-          "transcription": args.transcription, "n_starts": args.starts}
+          "transcription": args.transcription, "n_starts": _starts(args)}
     if args.joint in (None, "ocp"):
         r = plan_joint_ocp(scenario, budget=args.pings,
                            objective=objective,  # type: ignore[arg-type]

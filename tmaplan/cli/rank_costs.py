@@ -19,6 +19,7 @@ from tmaplan.cli._args import (
     command_line,
     integer,
     open_fraction,
+    repeated,
 )
 from tmaplan.errors import ArgumentError
 from tmaplan.experiments import rank_costs
@@ -53,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bootstrap resamples of the intervals (default 999)")
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
-                   help="local worker processes")
+                   help="local worker processes (default 1)")
     g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
     add_figure_arguments(parser)
 
@@ -69,6 +70,10 @@ def _plans(text: str) -> tuple[str, ...] | None:
     if bad or not names:
         raise ArgumentError("--plans", f"'all', 'none' or names of {', '.join(OBJECTIVE_NAMES)}",
                             text)
+    twice = repeated(list(names))
+    if twice is not None:
+        raise ArgumentError("--plans", f"'all', 'none' or distinct objective names, each once "
+                            f"({twice} is repeated)", text)
     return names
 
 

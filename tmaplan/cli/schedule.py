@@ -14,14 +14,17 @@ from typing import Any
 import numpy as np
 
 from tmaplan.cli._args import (
+    MAX_WORKERS,
     add_figure_arguments,
     add_problem_argument,
     duration,
     integer,
 )
 from tmaplan.display import minute_list
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.geometry import course_speed
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.target import initial_velocity
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
 from tmaplan.plotting import plot_schedule
@@ -32,6 +35,23 @@ HELP = "schedule active range pings under a budget (closed-form PCRB)"
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("objective",)
 
+#: Defaults of ``--method``, ``--objective`` and ``--time-limit`` [s].
+METHOD = "relaxed"
+OBJECTIVE = "mean-range-bound"
+TIME_LIMIT = 600.0
+
+#: Options read by some methods only: flag -> (Namespace name, where it applies, whether the
+#: method and objective read it). Given where it is not read it would be silently ignored, so
+#: it is refused (:func:`check_options`).
+_METHOD_OPTIONS: dict[str, tuple[str, str, Any]] = {
+    "--time-limit": ("time_limit", "only with --method exact (the enumeration's limit)",
+                     lambda method, objective: method == "exact"),
+    "--workers": ("workers", "only with --method exact and --objective mean-range-bound or "
+                  "terminal-range-bound (the processes of the tree search)",
+                  lambda method, objective: method == "exact"
+                  and objective != "mean-position-bound"),
+}
+
 _TRACK_KEYS = ("times", "position", "velocity", "mean_velocity", "heading", "speed")
 
 
@@ -40,16 +60,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_problem_argument(parser)
     parser.add_argument("--budget", type=integer(0), default=None,
                         help="maximum number of pings (default: planning.ping_budget)")
-    parser.add_argument("--method", choices=("exact", "relaxed", "greedy"), default="relaxed")
-    parser.add_argument("--objective", choices=PING_OBJECTIVES, default="mean-range-bound")
+    parser.add_argument("--method", choices=("exact", "relaxed", "greedy"), default=METHOD,
+                        help=f"exact (enumeration), relaxed (convex relaxation, rounded and "
+                             f"polished) or greedy (default {METHOD})")
+    parser.add_argument("--objective", choices=PING_OBJECTIVES, default=OBJECTIVE,
+                        help=f"what the pings minimise (default {OBJECTIVE})")
     parser.add_argument("--min-spacing", type=duration(allow_zero=True), default=None,
                         metavar="T", help="minimum time between pings, seconds or with a unit "
                                           "('2 min'; default: the problem's)")
-    parser.add_argument("--time-limit", type=duration(), default=600.0, metavar="T",
+    parser.add_argument("--time-limit", type=duration(), default=None, metavar="T",
                         help="enumeration time limit for --method exact, seconds or with a "
-                             "unit (default 600 s; the certified gap is reported when hit)")
-    parser.add_argument("--workers", type=integer(1, 256), default=None,
-                        help="processes for --method exact (default: the cores, at most 2)")
+                             f"unit (default {TIME_LIMIT:g} s; the certified gap is reported "
+                             "when hit); refused with another method")
+    parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None,
+                        help="processes for --method exact with a range objective (default: "
+                             "the cores, at most 2); refused where unused")
     parser.add_argument("--observer-plan", metavar="PLAN.json", default=None,
                         help="schedule along the planned track saved by `tmaplan plan P "
                              "--json PLAN.json` (default: the problem's scripted observer)")
@@ -106,7 +131,84 @@ def read_observer_plan(path: str | Path, scenario: Scenario) -> ObserverTrack:
         raise err(f"a track on the problem's grid (t0 = {grid.t0:g} s, dt = {grid.dt:g} s, "
                   f"at most {grid.n_steps} steps)",
                   f"t0 = {t[0]:g} s, {n - 1} steps of {np.diff(t).mean():g} s")
+    _check_start(track, scenario, err)
     return track
+
+
+#: Tolerances of a saved plan's initial own-ship state against the scenario's: position
+#: [m], course [rad] (0.06°), speed [m/s] (the plan starts exactly there, to round-off).
+START_TOLERANCE = {"position": 1.0, "course": 1e-3, "speed": 1e-3}
+
+
+def _check_start(track: ObserverTrack, scenario: Scenario, err: Any) -> None:
+    """A plan's track must start from the scenario's own-ship state (``observer.position``,
+    its initial course and speed): a plan of another scenario of the same name and grid
+    starts elsewhere."""
+    obs = scenario.observer
+    p0 = np.asarray(obs.position, float)
+    course0, speed0 = (float(v) for v in course_speed(initial_velocity(obs)))
+    tol = START_TOLERANCE
+    d = float(np.hypot(*(track.position[0] - p0)))
+    if d > tol["position"]:
+        raise err(f"a plan starting at the problem's observer.position ({p0[0]:g}, {p0[1]:g}) "
+                  f"m (within {tol['position']:g} m)", f"observer.position[0] = "
+                  f"({track.position[0][0]:g}, {track.position[0][1]:g}) m in the plan")
+    dc = abs((float(track.heading[0]) - course0 + np.pi) % (2 * np.pi) - np.pi)
+    if dc > tol["course"]:
+        raise err(f"a plan starting on the problem's initial observer course "
+                  f"{np.degrees(course0):.4g}° (within {np.degrees(tol['course']):.2g}°)",
+                  f"observer.heading[0] = {np.degrees(float(track.heading[0])):.4g}° in "
+                  "the plan")
+    if abs(float(track.speed[0]) - speed0) > tol["speed"]:
+        raise err(f"a plan starting at the problem's initial observer speed {speed0:.6g} m/s "
+                  f"(within {tol['speed']:g} m/s)",
+                  f"observer.speed[0] = {float(track.speed[0]):.6g} m/s in the plan")
+
+
+def check_options(args: argparse.Namespace, scenario: Scenario) -> None:
+    """Refuse ``--time-limit`` / ``--workers`` where the method and objective do not read
+    them (:data:`_METHOD_OPTIONS`)."""
+    for flag, (name, where, applies) in _METHOD_OPTIONS.items():
+        value = getattr(args, name, None)
+        if value is not None and not applies(args.method, args.objective):
+            from tmaplan.cli._args import seconds_text
+
+            shown = seconds_text(value) if flag == "--time-limit" else value
+            raise ArgumentError(flag, f"{where}; it is not used by --method {args.method} "
+                                f"--objective {args.objective}", shown, source=scenario.name)
+
+
+def check_spacing(args: argparse.Namespace, scenario: Scenario,
+                  track: ObserverTrack | None) -> None:
+    """The ping budget must fit in the candidate steps of the track (``--observer-plan``'s, or
+    the scenario's grid) with the minimum spacing, before any work: the error names
+    ``--min-spacing`` or ``planning.ping_min_spacing`` (a spacing that lets too few pings
+    fit), else ``--budget`` / ``planning.ping_budget`` (too few steps outside
+    ``planning.ping_forbidden``)."""
+    from tmaplan.cli._args import seconds_text
+    from tmaplan.planning import max_pings, ping_candidates
+
+    pl = scenario.planning
+    budget = args.budget if args.budget is not None else (pl.ping_budget if pl else 0)
+    if budget == 0:
+        return
+    times = track.times if track is not None else np.asarray(scenario.time.times, float)
+    cand, gap, spacing = ping_candidates(scenario, times, min_spacing=args.min_spacing)
+    fit = max_pings(cand, gap)
+    if budget <= fit:
+        return
+    budget_name = "--budget" if args.budget is not None else "planning.ping_budget"
+    if fit < min(budget, cand.size):  # the spacing is what leaves too few
+        field = "--min-spacing" if args.min_spacing is not None else \
+            "planning.ping_min_spacing"
+        error_type = ArgumentError if field.startswith("-") else ScenarioError
+        raise error_type(field, f"a spacing at which the {budget} pings of {budget_name} fit "
+                         f"in the {len(times) - 1} steps (at most {fit} fit with this one; or "
+                         f"a smaller {budget_name})", seconds_text(spacing),
+                         source=scenario.name)
+    error_type = ArgumentError if args.budget is not None else ScenarioError
+    raise error_type(budget_name, f"at most the {cand.size} candidate ping steps (steps "
+                     "outside planning.ping_forbidden)", budget, source=scenario.name)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -122,7 +224,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         obs = observer_track(scenario.observer, scenario.time)
     res = schedule_pings(scenario, budget=budget, method=args.method,
                          objective=args.objective, observer=obs, belief=belief,
-                         min_spacing=args.min_spacing, time_limit=args.time_limit,
+                         min_spacing=args.min_spacing,
+                         time_limit=TIME_LIMIT if args.time_limit is None else args.time_limit,
                          workers=args.workers)
     payload: dict[str, Any] = {
         "problem": scenario.name, "budget": budget, "objective_name": res.objective_name,

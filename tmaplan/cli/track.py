@@ -39,10 +39,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``tmaplan track``."""
     add_problem_argument(parser)
     parser.add_argument("--estimator", choices=ESTIMATORS, default="pf",
-                        help="pf (prior), pf-bearings (brehard2004 init), mle, range-only")
+                        help="pf (prior; default), pf-bearings (brehard2004 init), mle, range-only")
     parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=None,
                         help="particles (pf, pf-bearings; default 10000)")
-    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=20, help="Monte Carlo runs")
+    parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=20,
+                        help="Monte Carlo runs (default 20)")
     add_seed_argument(parser, help="root SeedSequence seed (default 0)")
     parser.add_argument("--bound", choices=("truth", "prior"), default="truth",
                         help="filters: PCRB along the runs' truths (B2, default) or "
@@ -60,8 +61,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(default 0: bearings, and pings if any, only; as `tmaplan crlb`)")
     parser.add_argument("--turn-direction", default="auto",
                         choices=("auto", "either", "clockwise", "anticlockwise"),
-                        help="mle, constant-turn source: sense of turn searched (auto: the "
-                             "problem's [estimation] section, else either)")
+                        help="mle, constant-turn source: sense of turn searched (default auto: "
+                             "the problem's [estimation] section, else either)")
     add_figure_arguments(parser)
 
 

@@ -536,7 +536,8 @@ def _alternatives(data: TMAData, x: np.ndarray, cov: np.ndarray, others: list, c
     t_end = np.array([max(data.b_times.max(initial=-np.inf), data.r_times.max(initial=-np.inf),
                           data.f_times.max(initial=-np.inf))])
     S, C = state_track(data, x, cov if np.isfinite(cov).all() else None, t_end)
-    sd = np.sqrt(np.trace(C[0, :2, :2])) if C is not None else 0.0
+    # a covariance of a nearly singular information can have a negative trace by round-off
+    sd = float(np.sqrt(max(np.trace(C[0, :2, :2]), 0.0))) if C is not None else 0.0
     found: list[tuple[np.ndarray, float]] = []
     for r in sorted(others, key=lambda r: r[1]):
         if not (np.isfinite(r[1]) and r[1] - cost < margin):

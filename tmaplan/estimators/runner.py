@@ -162,7 +162,10 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     if p.velocity_distribution == "speed-course" and p.speed_distribution == "normal" \
             and p.speed_mean is None:
         s = float(range_of(v)) + p.speed_std * rng.standard_normal()
-        changes["speed_mean"] = float(max(s, p.speed_min))
+        s_hi = p.speed_max if p.speed_max is not None else np.inf
+        # within [speed_min, speed_max] as the range mean: a draw far outside would leave
+        # the truncated normal no mass (refused by models.prior.check_truncated_normal)
+        changes["speed_mean"] = float(np.clip(s, p.speed_min, s_hi))
     # every mean is given now: the truth opt-in goes (a prior refuses it then)
     return scenario.replace(prior=dataclasses.replace(p, **changes, centred_on_truth=False))
 

@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tmaplan.bounds.batch_fim import fisher_information, tma_data, true_parameters
+from tmaplan.bounds.batch_fim import tma_data, true_parameters
+from tmaplan.bounds.crlb import information_covariance
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.estimators.applicability import check_applicable
@@ -59,7 +60,7 @@ def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.
     data = tma_data(scenario, sim.measurements, sim.observer, model=model,
                     frequencies=config.frequencies)
     p = true_parameters(scenario, data.track, data.n_lines)
-    C = np.linalg.inv(fisher_information(data, p))
+    C = information_covariance(data, p)  # ObservabilityError when singular, as `crlb` says
     S, Cs = state_track(data, p, C, scenario.times)
     assert Cs is not None
     rel = S[:, :2] - sim.observer.position
@@ -180,6 +181,9 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     ScenarioError
         An estimator / bound that cannot give a number on this scenario
         (:func:`tmaplan.estimators.applicability.check_applicable`).
+    ObservabilityError
+        The MLE's bound (the batch CRLB at the truth) is singular: the scenario's track is
+        not observable (before any run is computed).
     """
     if not is_integer(runs, 1):
         raise ArgumentError("runs", "an integer >= 1", runs)
@@ -193,6 +197,10 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
                         **{k: v for k, v in run_kwargs.items() if k in ("q", "r_min", "r_max")})
     check_applicable(est, scenario, bound=bound)
     t0 = _time.perf_counter()
+    # the batch CRLB depends on the scenario only: before the runs, so that an unobservable
+    # scenario is refused at once (ObservabilityError, as `tmaplan crlb` refuses it)
+    crlb_bounds = (_crlb_bounds(scenario, getattr(est, "config", MLEConfig()))
+                   if bound and est.bound == "crlb" else None)
     K = scenario.n_steps
     err_pos = np.full((runs, K + 1), np.nan)
     err_rng = np.full((runs, K + 1), np.nan)
@@ -222,9 +230,8 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     kind = "none"
     if bound:
         brng = np.random.default_rng(children[runs])
-        if est.bound == "crlb":
-            cfg = getattr(est, "config", MLEConfig())
-            (b, br), kind = _crlb_bounds(scenario, cfg), "crlb"
+        if crlb_bounds is not None:
+            (b, br), kind = crlb_bounds, "crlb"
         elif bound == "prior":
             b, kind = _pcrb_position(scenario, brng, bound_samples), "prior"
             br = np.full(K + 1, np.nan)

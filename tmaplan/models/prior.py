@@ -8,10 +8,12 @@ N(true bearing, σ_θ²) has the same distribution over runs.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import stats
+from scipy.special import log_ndtr
 
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
@@ -20,8 +22,13 @@ from tmaplan.models.target import circle_state, initial_velocity
 if TYPE_CHECKING:
     from tmaplan.scenario import Prior, Scenario
 
-__all__ = ["prior_relative_moments", "relative_prior_covariance", "relative_prior_samples",
-           "sample_prior", "true_initial_state", "zero_prior_stds"]
+__all__ = ["MIN_TRUNCATED_MASS", "check_truncated_normal", "prior_relative_moments",
+           "relative_prior_covariance", "relative_prior_samples", "sample_prior",
+           "true_initial_state", "truncated_normal_log_mass", "zero_prior_stds"]
+
+#: least probability mass that a normal range or speed prior must keep within its truncation
+#: [min, max]: with less, every draw sits at the nearer bound (a degenerate prior)
+MIN_TRUNCATED_MASS = 1e-6
 
 
 def true_initial_state(scenario: Scenario) -> np.ndarray:
@@ -32,16 +39,52 @@ def true_initial_state(scenario: Scenario) -> np.ndarray:
     return np.concatenate([np.asarray(t.position, float), initial_velocity(t)])
 
 
+def truncated_normal_log_mass(mean: float, std: float, lo: float, hi: float) -> float:
+    """Natural log of the probability mass of N(mean, std²) within [lo, hi] (``hi`` may be
+    inf; ``std`` > 0), accurate far in either tail (``scipy.special.log_ndtr``): -inf only
+    when the mass underflows even as a logarithm."""
+    a, b = (lo - mean) / std, (hi - mean) / std
+    if a > 0:  # both bounds in the upper tail: the mirror image lies in the accurate lower one
+        a, b = -b, -a
+    la, lb = float(log_ndtr(a)), float(log_ndtr(b))
+    return lb + math.log1p(-math.exp(la - lb)) if la < lb else -math.inf
+
+
+def check_truncated_normal(name: str, mean: float, std: float, lo: float, hi: float,
+                           unit: str, source: str | None, *, truth: bool = False) -> None:
+    """Refuse a normal ``name`` prior ("range" or "speed", ``std`` > 0) whose truncation to
+    [lo, hi] keeps less than :data:`MIN_TRUNCATED_MASS` of N(mean, std²) (every draw would
+    sit at the nearer bound), naming ``prior.<name>_mean``, the interval and the mass;
+    ``truth``: the mean is the target's true value (``centred_on_truth``)."""
+    if not std > 0:
+        return
+    log_mass = truncated_normal_log_mass(mean, std, lo, hi)
+    if log_mass >= math.log(MIN_TRUNCATED_MASS):
+        return
+    mass = math.exp(log_mass)
+    kept = f"{mass:.3g}" if mass > 0 else f"10^{log_mass / math.log(10):.4g}"
+    raise ScenarioError(
+        f"prior.{name}_mean", f"a value leaving at least {MIN_TRUNCATED_MASS:g} of "
+        f"N({name}_mean, {name}_std²) within [{name}_min, {name}_max] = [{lo:g}, {hi:g}] "
+        f"{unit}: with {name}_std = {std:g} {unit} it keeps {kept} of its mass (every draw "
+        "would sit at the nearer bound)" + (f"; the key is left out, so the mean is the "
+                                            f"target's true initial {name}" if truth else ""),
+        mean, source=source)
+
+
 def _truncnorm(mean: float, std: float, lo: float, hi: float, n: int,
-               rng: np.random.Generator, field: str, source: str) -> np.ndarray:
+               rng: np.random.Generator, name: str, unit: str, source: str,
+               truth: bool) -> np.ndarray:
     """``n`` draws of N(mean, std²) truncated to [lo, hi]; a point mass for ``std = 0``,
-    which must lie in [lo, hi] (``field`` names the mean, ``source`` the scenario in the
-    error)."""
+    which must lie in [lo, hi], else a negligible mass within (:func:`check_truncated_normal`)
+    is refused (``name`` "range" or "speed" names the mean, ``source`` the scenario in the
+    error; ``truth``: the mean is the target's true value)."""
     if std == 0.0:
         if not lo <= mean <= hi:
-            raise ScenarioError(field, f"a value within [{lo}, {hi}] (the std is 0: every "
-                                "sample is the mean)", mean, source=source)
+            raise ScenarioError(f"prior.{name}_mean", f"a value within [{lo}, {hi}] (the std "
+                                "is 0: every sample is the mean)", mean, source=source)
         return np.full(n, float(mean))
+    check_truncated_normal(name, mean, std, lo, hi, unit, source, truth=truth)
     a, b = (lo - mean) / std, (hi - mean) / std
     return stats.truncnorm.rvs(a, b, loc=mean, scale=std, size=n, random_state=rng)
 
@@ -85,7 +128,7 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
     if p.range_distribution == "normal":
         r_mean = p.range_mean if p.range_mean is not None else true_range
         rng_ = _truncnorm(r_mean, float(p.range_std or 0.0), p.range_min, hi, n, rng,
-                          "prior.range_mean", scenario.name)
+                          "range", "m", scenario.name, p.range_mean is None)
     elif p.range_distribution == "uniform":
         rng_ = rng.uniform(p.range_min, hi, n)
     else:
@@ -103,7 +146,7 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
         else:
             s_mean = p.speed_mean if p.speed_mean is not None else true_speed
             speed = _truncnorm(s_mean, p.speed_std, p.speed_min, s_hi, n, rng,
-                               "prior.speed_mean", scenario.name)
+                               "speed", "m/s", scenario.name, p.speed_mean is None)
         if p.course_mode == "uniform":
             course = rng.uniform(-np.pi, np.pi, n)
         else:
@@ -118,7 +161,7 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
     return np.hstack([pos, vel])
 
 
-def zero_prior_stds(prior: Prior) -> tuple[str, ...]:
+def zero_prior_stds(prior: Prior, *, point_masses: bool = True) -> tuple[str, ...]:
     """The std fields of ``prior`` that :func:`sample_prior` uses and that are zero.
 
     Each makes the prior degenerate (no density in that component): the prior information
@@ -127,6 +170,11 @@ def zero_prior_stds(prior: Prior) -> tuple[str, ...]:
     Parameters
     ----------
     prior : Prior
+    point_masses : bool
+        Include the zeros a scenario may keep (False: the scenario's load check, which
+        refuses the others): ``range_std`` / ``speed_std`` of a normal range or speed (a
+        point mass at the mean) and ``course_std`` with ``course_mode = "reciprocal-bearing"``
+        (the course follows the bearing's spread). The closed-form bound refuses them too.
 
     Returns
     -------
@@ -140,15 +188,16 @@ def zero_prior_stds(prior: Prior) -> tuple[str, ...]:
     out = []
     if p.bearing_std == 0:
         out.append("prior.bearing_std")
-    if p.range_distribution == "normal" and not p.range_std:
+    if point_masses and p.range_distribution == "normal" and not p.range_std:
         out.append("prior.range_std")
     if p.velocity_distribution == "normal":
         if p.velocity_std == 0:
             out.append("prior.velocity_std")
     else:
-        if p.speed_distribution == "normal" and p.speed_std == 0:
+        if point_masses and p.speed_distribution == "normal" and p.speed_std == 0:
             out.append("prior.speed_std")
-        if p.course_mode != "uniform" and p.course_std == 0:
+        kept = ("uniform",) if point_masses else ("uniform", "reciprocal-bearing")
+        if p.course_mode not in kept and p.course_std == 0:
             out.append("prior.course_std")
     return tuple(out)
 

@@ -36,6 +36,7 @@ from tmaplan.planning.objectives import (
 from tmaplan.planning.pings import (
     PingEvaluator,
     PingSchedule,
+    max_pings,
     ping_candidates,
     schedule_pings,
     uniform_ping_steps,
@@ -60,6 +61,7 @@ __all__ = [
     "evaluate_baselines",
     "logdet",
     "make_objective",
+    "max_pings",
     "ping_candidates",
     "plan_heading",
     "plan_joint",

@@ -37,9 +37,9 @@ __all__ = [
     "_exact",
     "_greedy",
     "_local_swaps",
-    "_max_pings",
     "_round",
     "_spacing_ok",
+    "max_pings",
     "ping_candidates",
     "uniform_ping_steps",
 ]
@@ -134,7 +134,9 @@ def _spacing_ok(steps: Sequence[int], gap: int) -> bool:
     return all(b - a >= gap for a, b in itertools.pairwise(s))
 
 
-def _max_pings(cand: np.ndarray, gap: int) -> int:
+def max_pings(cand: np.ndarray, gap: int) -> int:
+    """Most pings that fit in the candidate steps ``cand`` (sorted) at least ``gap`` steps
+    apart (earliest first: optimal for interval packing)."""
     n, last = 0, -10**9
     for c in cand:  # earliest-first is optimal for interval packing
         if c - last >= gap:

@@ -58,8 +58,14 @@ from tmaplan.planning.objectives import (
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["HeadingPlan", "HeadingPlanner", "arc_displacement_casadi", "check_planning_horizon",
-           "plan_heading", "safe_sinc"]
+__all__ = ["BUILT_IN_STARTS", "HeadingPlan", "HeadingPlanner", "arc_displacement_casadi",
+           "check_planning_horizon", "plan_heading", "safe_sinc"]
+
+#: Built-in initial guesses of a cold solve per transcription: ``n_starts`` takes at most
+#: this many (:meth:`HeadingPlanner._guesses`: the direct transcription's straight, two
+#: turn-reverse, two zig-zag and two turn-early patterns; the bang-bang one's equal and
+#: front-loaded arcs to both sides).
+BUILT_IN_STARTS = {"direct": 7, "bang-bang": 4}
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
 
@@ -99,7 +105,8 @@ class HeadingPlanner:
         [s]; default ``planning.control_interval`` or dt. Rounded to whole dt steps.
     transcription : {"direct", "bang-bang"}
     n_starts : int
-        Initial guesses tried on a cold solve (best successful one is kept).
+        Initial guesses tried on a cold solve (best successful one is kept); at most
+        :data:`BUILT_IN_STARTS` of the transcription are used.
     solver_options : dict, optional
         Extra IPOPT options (``{"max_iter": 500}``, ``{"hessian_approximation": "exact"}``).
     turn_rate_max, keep_out_range : float, optional

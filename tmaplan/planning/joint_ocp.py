@@ -74,7 +74,7 @@ import numpy as np
 from tmaplan.errors import PlanningError, is_integer
 from tmaplan.geometry import course_speed
 from tmaplan.models.target import initial_velocity
-from tmaplan.planning._ping_search import _max_pings, _round, _spacing_ok, ping_candidates
+from tmaplan.planning._ping_search import _round, _spacing_ok, max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import _PAIRS
@@ -397,8 +397,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     allowed, gap, spacing = ping_candidates(scenario, times, forbidden=forbidden,
                                             min_spacing=min_spacing)
     cand = allowed[(allowed - allowed[:1].sum()) % stride == 0]
-    if K > cand.size or K > _max_pings(cand, gap):
-        raise PlanningError(f"budget: expected at most {min(cand.size, _max_pings(cand, gap))} "
+    if K > cand.size or K > max_pings(cand, gap):
+        raise PlanningError(f"budget: expected at most {min(cand.size, max_pings(cand, gap))} "
                             f"pings on the {cand.size} candidate steps of ping_stride {stride} "
                             f"(min_spacing {spacing:g} s), received {K}")
 

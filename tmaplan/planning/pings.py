@@ -41,9 +41,9 @@ from tmaplan.planning._ping_search import (
     _exact,
     _greedy,
     _local_swaps,
-    _max_pings,
     _round,
     _spacing_ok,
+    max_pings,
     ping_candidates,
     uniform_ping_steps,
 )
@@ -291,9 +291,9 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     if budget > cand.size:
         raise PlanningError(f"budget K = {budget} pings is larger than the {cand.size} "
                             f"candidate ping steps in the horizon ({ev.K} steps)")
-    if budget > _max_pings(cand, gap):
+    if budget > max_pings(cand, gap):
         raise PlanningError(f"budget K = {budget} pings cannot be met with min_spacing "
-                            f"{spacing:g} s: at most {_max_pings(cand, gap)} fit")
+                            f"{spacing:g} s: at most {max_pings(cand, gap)} fit")
     no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
     uni = uniform_ping_steps(ev.times, budget, candidates=cand, gap=gap)
     uniform = float(ev.value(uni))

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from tmaplan.caching import LRUCache
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["MANOEUVRES", "PINGS", "Combined", "best_single_turn", "best_zigzag",
-           "parse_policy"]
+           "check_policy", "parse_policy"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -160,6 +160,47 @@ PINGS: dict[str, Callable[[], Policy]] = {
 }
 
 
+def check_policy(spec: str, scenario: Scenario) -> tuple[str, str | None]:
+    """The manoeuvre and ping names of a CLI policy name ``manoeuvre[+ping]``, checked against
+    the scenario before anything is computed: the one check behind :func:`parse_policy` and
+    ``tmaplan compare``'s up-front check of ``--policies``.
+
+    Raises
+    ------
+    PlanningError
+        For an unknown name (the message lists the valid ones).
+    ArgumentError
+        ``policy``: a ping policy (any but ``no-ping``) on a problem that cannot ping in the
+        closed loop: without an active range sensor (:func:`tmaplan.simulate.ping_sensors`),
+        or with no pings to spend (``planning.ping_budget`` 0 or no ``[planning]`` table:
+        the CLI's ping policies spend the scenario's budget). The same refusal for every
+        ping policy: a uniform or adaptive policy would silently never ping.
+    """
+    from tmaplan.simulate import ping_sensors
+
+    if not isinstance(spec, str):  # (None.strip() was an AttributeError)
+        raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
+    parts = spec.strip().split("+")
+    if len(parts) > 2 or parts[0] not in MANOEUVRES or (len(parts) == 2
+                                                        and parts[1] not in PINGS):
+        raise PlanningError(f"unknown policy {spec!r}: expected MANOEUVRE[+PING] with MANOEUVRE "
+                            f"in {sorted(MANOEUVRES)} and PING in {sorted(PINGS)}")
+    ping = parts[1] if len(parts) == 2 else None
+    if ping in (None, "no-ping"):
+        return parts[0], ping
+    if not ping_sensors(scenario):
+        raise ArgumentError("policy", "no ping policy (+PING): there is no range sensor to "
+                            "ping with (add a [[sensors]] kind = 'range' with active = true, "
+                            f"or fly {parts[0]} without +{ping})", spec, source=scenario.name)
+    pl = scenario.planning
+    if pl is None or pl.ping_budget == 0:
+        raise ArgumentError("policy", "no ping policy (+PING): the problem has no pings to "
+                            "spend (planning.ping_budget is "
+                            f"{'0' if pl is not None else 'not set: no [planning] table'}; "
+                            f"or fly {parts[0]} without +{ping})", spec, source=scenario.name)
+    return parts[0], ping
+
+
 def parse_policy(spec: str, scenario: Scenario) -> Combined:
     """Policy from a CLI name: ``manoeuvre[+ping]``, e.g. ``receding+scheduled``.
 
@@ -176,13 +217,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     ------
     PlanningError
         For an unknown name (the message lists the valid ones).
+    ArgumentError
+        A ping policy on a problem without a range sensor (:func:`check_policy`).
     """
-    if not isinstance(spec, str):  # (None.strip() was an AttributeError)
-        raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
-    parts = spec.strip().split("+")
-    if len(parts) > 2 or parts[0] not in MANOEUVRES or (len(parts) == 2
-                                                        and parts[1] not in PINGS):
-        raise PlanningError(f"unknown policy {spec!r}: expected MANOEUVRE[+PING] with MANOEUVRE "
-                            f"in {sorted(MANOEUVRES)} and PING in {sorted(PINGS)}")
-    ping = PINGS[parts[1]]() if len(parts) == 2 else NoPing()
-    return Combined(manoeuvre=MANOEUVRES[parts[0]](scenario), ping=ping)
+    manoeuvre, ping = check_policy(spec, scenario)
+    return Combined(manoeuvre=MANOEUVRES[manoeuvre](scenario),
+                    ping=PINGS[ping]() if ping is not None else NoPing())

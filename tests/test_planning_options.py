@@ -78,12 +78,13 @@ def test_receding_falls_back_to_the_previous_plan(default, monkeypatch):
         plans.append(real(self, *a, **kw))
         return plans[-1]
 
-    monkeypatch.setattr(HP, "solve", flaky)
     s = default.replace(time=dataclasses.replace(default.time, horizon=900.0))
+    # full IPOPT re-plans (the real-time iteration's own fallback is tested in test_rti.py),
+    # the plan from the prior that the first one starts from solved before the failures
+    pol = Combined(manoeuvre=Receding(replan_interval=300.0, solver="ipopt")).resolve(s)
+    monkeypatch.setattr(HP, "solve", flaky)
     rng = np.random.default_rng(0)
-    # full IPOPT re-plans (the real-time iteration's own fallback is tested in test_rti.py)
-    res = run_closed_loop(s, Combined(manoeuvre=Receding(replan_interval=300.0,
-                                                         solver="ipopt")),
+    res = run_closed_loop(s, pol,
                           draw_truth(s, rng), noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=500)
     _PLANNER_CACHE.clear()

@@ -225,7 +225,10 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
     assert pol.manoeuvre.solver == "real-time"
     assert pol.name == "receding-rti+uniform"
     default = parse_policy("receding", small[0]).manoeuvre
-    assert default == Receding() and (default.solver, default.full_above) == ("real-time", 0.01)
+    assert default == Receding() and default.solver == "ipopt"
+    realtime = parse_policy("receding-realtime", small[0]).manoeuvre
+    assert (realtime.solver, realtime.full_above, realtime.full_solves) == ("real-time", 0.01, ())
+    assert realtime.name == "receding-realtime"
     multi = parse_policy("receding-multistart", small[0]).manoeuvre
     assert (multi.solver, multi.name) == ("multi-start", "receding-multistart")
 
@@ -361,25 +364,58 @@ def test_multi_start_solver_is_the_measured_configuration(small):
     assert not np.array_equal(fast.turn_rate, runs[0].turn_rate)
 
 
+def test_default_solver_is_the_measured_full_solve_configuration(small):
+    """The default re-plan (``solver="ipopt"``) is, bit for bit, the configuration measured
+    in the README as ``receding-full``: ``Receding(solver="real-time",
+    full_solves=tuple(range(64)))``, an IPOPT solve at every re-plan at ``full_tol``,
+    warm-started from the previous plan, the first one from the plan from the prior."""
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    kw = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
+    pol = Receding(**kw).resolve(sc)
+    assert pol.solver == "ipopt" and pol.rti is None and pol.resolve(sc) is pol
+    assert np.allclose(pol.first_plan.turn_rate, small[3].turn_rate, atol=1e-6)
+    measured = Receding(**kw, solver="real-time", full_solves=tuple(range(64))).resolve(sc)
+    runs = [run_closed_loop(sc, p, target, noise_rng=np.random.default_rng(1),
+                            filter_rng=np.random.default_rng(2), n_particles=300)
+            for p in (pol, measured)]
+    assert np.array_equal(runs[0].turn_rate, runs[1].turn_rate)
+    assert [e["solver"] for e in runs[0].replans] == ["ipopt"] * 3
+    assert all(e["success"] for e in runs[0].replans)
+    # a cold first solve (no plan from the prior to start from) is another policy: the
+    # controller warm-starts the first re-plan from the plan it was resolved with
+    ctrl = pol.controller(sc)
+    assert ctrl.first is pol.first_plan
+
+
 def test_receding_says_whether_resolve_needs_the_offline_plan():
     from tmaplan.policies import Receding
+    from tmaplan.policies.receding import RECEDING_SOLVERS
 
-    assert Receding().needs_offline_plan and Receding(solver="multi-start").needs_offline_plan
-    assert not Receding(solver="ipopt").needs_offline_plan
-    assert not Receding(horizon=900.0).needs_offline_plan  # its own solve from the prior
+    for solver in RECEDING_SOLVERS:  # the first re-plan starts from it, whatever the solver
+        assert Receding(solver=solver).needs_offline_plan
+        assert not Receding(solver=solver, horizon=900.0).needs_offline_plan  # its own solve
     assert not Receding(solver="multi-start", first_plan=object()).needs_offline_plan
-    assert not Receding(rti=object()).needs_offline_plan
+    assert not Receding(first_plan=object()).needs_offline_plan
+    assert not Receding(solver="real-time", rti=object()).needs_offline_plan
+    assert Receding(rti=object()).needs_offline_plan  # the model serves the real-time only
 
 
 def test_receding_solver_is_checked(small):
     from tmaplan.policies import Receding
 
     for bad in ("fast", "", None, 1):
-        with pytest.raises(ArgumentError, match=r"receding.solver.*multi-start, real-time"):
+        with pytest.raises(ArgumentError, match=r"receding.solver.*ipopt, real-time, multi-st"):
             Receding(solver=bad, objective="mean-range-bound", horizon=900.0).resolve(small[0])
     # checked before resolve computes the real-time iteration's model
     with pytest.raises(ArgumentError, match=r"receding.qpsol.*daqp"):
-        Receding(qpsol="bogus", objective="mean-range-bound", horizon=900.0).resolve(small[0])
+        Receding(qpsol="bogus", objective="mean-range-bound", horizon=900.0,
+                 solver="real-time").resolve(small[0])
 
 
 def test_multi_start_without_a_previous_plan_starts_from_the_first_plan(small):

@@ -238,13 +238,13 @@ def test_default_objective_predicts_the_monte_carlo_time_to_accuracy():
 #: 100-run measurement (README, "does the plan pay?": default −4.3 [−6.2, −2.4] min,
 #: contact-astern −2.8 [−5.0, −0.6] min; contact-astern at 40 runs: −3.8 [−7.7, +0.1]).
 _RECEDING_RUNS = {"default": 20, "bow-closing": 20, "contact-astern": 50}
-#: Where receding does not beat planned (100 paired runs, receding − planned, minutes).
+#: Where 20–50 runs cannot show that receding beats planned (receding − planned, minutes).
 _RECEDING_NOT_SOONER = {
-    ("bow-closing", "receding"): "measured −0.6 [−1.3, +0.1] min at 100 runs (20 runs: "
-                                 "−1.6 [−3.9, +0.8]), −0.1 [−0.4, +0.3] min at 400 runs "
-                                 "of seed 5 and −0.04 [−0.13, +0.06] min at 6000 runs of "
-                                 "seed 8: no gain (receding-multistart: −0.95 on seed 10, "
-                                 "+0.74 on seed 12, −0.20 on seed 15; README)",
+    ("bow-closing", "receding"): "a gain too small for 20 runs: −0.1 [−2.9, +2.6] min on "
+                                 "these (seed 0); shown on 4000 runs fixed before the run, "
+                                 "−0.20 [−0.34, −0.06] min (seed 18: python "
+                                 "benchmarks/planning_pays.py --problems bow-closing --runs "
+                                 "4000 --seed 18 --baselines '' --no-tune --receding; README)",
 }
 
 

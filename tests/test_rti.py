@@ -429,3 +429,56 @@ def test_multi_start_without_a_previous_plan_starts_from_the_first_plan(small):
     assert ctrl.plan is None and ctrl.first is not None
     best = ctrl.multi_start(prior, heading0=None, position0=None)
     assert best.success and best.objective <= plan.objective + 1e-3 * abs(plan.objective)
+
+
+def test_real_time_only_fields_are_refused_with_another_solver(small):
+    """What only the real-time iteration uses is refused with the IPOPT or multi-start
+    re-plans, not silently ignored (``Receding(full_above=...)`` meant the real-time
+    iteration before the default changed)."""
+    from tmaplan.policies import Receding
+
+    sc = small[0]
+    kw = {"objective": "mean-range-bound", "horizon": 900.0}
+    for solver in ("ipopt", "multi-start"):
+        for field, value in (("full_above", 0.5), ("full_solves", (0,)), ("qpsol", "osqp"),
+                             ("rti_steps", 2)):
+            with pytest.raises(ArgumentError, match=rf"receding.{field}.*solver='real-time'"):
+                Receding(**kw, solver=solver, **{field: value}).resolve(sc)
+    # the defaults, given explicitly, and every field with the real-time iteration pass
+    Receding(**kw, full_above=0.01, qpsol="daqp").controller(sc)
+    Receding(**kw, solver="real-time", full_above=0.5, rti_steps=2).resolve(sc)
+
+
+def test_ipopt_re_plans_take_the_multi_start_where_asked(small):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Receding
+    from tmaplan.simulate import draw_truth
+
+    sc = small[0]
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
+    target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
+    pol = Receding(objective="mean-range-bound", horizon=900.0, replan_interval=300.0,
+                   multi_start=(1,)).resolve(sc)
+    res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
+                          filter_rng=np.random.default_rng(2), n_particles=300)
+    log = res.replans
+    assert len(log) == 3 and all(e["success"] for e in log)
+    assert ["start" in e for e in log] == [False, True, False]
+    assert log[1]["start"].startswith("multi-start: ")
+
+
+def test_campaign_key_tells_the_ipopt_receding_from_the_real_time_one(default):
+    """By name alone (``tmaplan compare``), runs stored while ``receding`` flew the real-time
+    iteration are not reused for its IPOPT re-plans."""
+    from tmaplan.evaluation.campaigns import CampaignSpec
+
+    keys = {}
+    for pols in (("planned", "receding"), ("planned", "receding+uniform"),
+                 ("planned", "receding-realtime"), ("planned", "receding-rti"),
+                 ("planned",)):
+        spec = CampaignSpec(scenario=default, policies=pols, runs=2, seed=0)
+        keys[pols] = (spec._meta().get("replan"), spec.key())
+    assert keys["planned", "receding"][0] == keys["planned", "receding+uniform"][0] == "ipopt"
+    assert keys["planned", "receding-realtime"][0] == keys["planned", "receding-rti"][0] == "rti"
+    assert keys["planned",][0] is None
+    assert len({k for _, k in keys.values()}) == len(keys)

@@ -3,9 +3,10 @@
 1. Plan a manoeuvre offline from the prior (heading OCP, :data:`CLOSED_LOOP_OBJECTIVE`)
    and compare it with the baselines (straight, best single turn, best zig-zag).
 2. Schedule the ping budget along the planned track (closed-form PCRB, ``relaxed``).
-3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding``, without
-   and with pings (scheduled and uniformly spaced), by paired Monte Carlo runs of the closed
-   loop (particle filter, re-planning).
+3. Compare ``straight``, ``single-turn``, ``zigzag``, ``planned`` and ``receding-realtime``
+   (the real-time iteration: the fast re-planning), without and with pings (scheduled and
+   uniformly spaced), by paired Monte Carlo runs of the closed loop (particle filter,
+   re-planning).
 4. Write the figures and a self-contained ``report.html`` to ``<out>/demo/``
    (:data:`REPORT_DIR`; ``tmaplan compare P`` writes to ``<out>/P_compare/``, so neither
    overwrites the other's report). The runs are stored in ``<out>/campaign-<key>/``, shared
@@ -108,7 +109,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
-    # `receding` policies reuse it instead of solving again
+    # `receding-realtime` policies reuse it instead of solving again
     plan = offline_plan(scenario, CLOSED_LOOP_OBJECTIVE, workers=args.workers, pool=pool)
     base = evaluate_baselines(scenario, planner.objective, evaluator=planner.evaluator(belief))
     plan_fig = plot_plan(plan, base, belief, rep / "plan.png",
@@ -119,7 +120,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                f", best single turn {best['single-turn'].objective:.4g}, best zig-zag "
                f"{best['zigzag'].objective:.4g}); {plan.status}, {plan.seconds:.1f} s")
 
-    if pool is not None:  # receding's Hessian model on a worker while this process schedules
+    if pool is not None:  # receding-realtime's Hessian model on a worker while we schedule
         prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
     budget = scenario.planning.ping_budget if scenario.planning else 0
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")

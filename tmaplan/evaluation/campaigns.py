@@ -119,7 +119,12 @@ class CampaignSpec:
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
                 "format": FORMAT, "tmaplan_version": __version__}
-        if any(p.startswith("receding") for p in self.policies):
+        manoeuvres = {p.split("+")[0] for p in self.policies}
+        if "receding" in manoeuvres:
+            # by name alone (`tmaplan compare`), runs stored while `receding` flew the
+            # real-time iteration (key "rti") are not reused for its IPOPT re-plans
+            meta["replan"] = "ipopt"
+        elif any(m.startswith("receding") for m in manoeuvres):
             # runs stored before re-plans became real-time iterations are not reused
             meta["replan"] = "rti"
         if self.filter_options is not None:

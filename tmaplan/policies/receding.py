@@ -58,7 +58,7 @@ class Receding:
       min against ``planned`` on 4000 runs fixed before the run (seed 18), where the
       real-time iteration had tied with it; no later on ``default``
       and ``contact-astern`` (−0.22 [−1.17, +0.74] and −0.85 [−1.86, +0.17] min, 200 runs,
-      seed 17), at about 0.4 s (``bow-closing``) to 1 s (``default``) per re-plan instead of
+      seed 17), at 0.2–0.4 s (``bow-closing``) to 1 s (``default``) per re-plan instead of
       0.08 s (README, "A full solve at every re-plan").
     * ``"real-time"``: one warm-started SQP step
       (:class:`tmaplan.planning.rti.RealTimeIteration`, milliseconds) from the previous plan,
@@ -102,7 +102,9 @@ class Receding:
         With ``solver="real-time"``: SQP steps per re-plan of the real-time iteration, >= 1.
     full_solves : tuple of int
         With ``solver="real-time"``: re-plans (0 = the first) always solved by a full IPOPT
-        solve warm-started from the previous plan (default none).
+        solve warm-started from the previous plan (default none). The fields that only the
+        real-time iteration uses (``qpsol``, ``rti_steps``, ``full_solves``, ``full_above``,
+        ``rti``) are refused with another solver, rather than ignored.
     full_above : float
         With ``solver="real-time"``: when a real-time iteration step lowers the objective by
         more than this fraction of its value at the shifted previous plan, the optimum has
@@ -126,8 +128,8 @@ class Receding:
         ``bow-closing`` (30 min, 400 paired runs, seed 6) it changed the mean time to
         accuracy by +0.6 s [−13.2, +14.4] against the real-time iteration (README).
     multi_start : tuple of int
-        With ``solver="real-time"``: re-plans (0 = the first) solved from the five starts of
-        ``"multi-start"`` instead (default none).
+        With ``solver="real-time"`` or ``"ipopt"``: re-plans (0 = the first) solved from the
+        five starts of ``"multi-start"`` instead (default none).
     rti : RTIModel, optional
         With ``solver="real-time"``: the offline plan and the Hessian model of the real-time
         iteration (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario
@@ -268,7 +270,8 @@ _FIRST_PLAN_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any
 
 
 def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Executor) -> None:
-    """Start computing the real-time iteration's model of ``Receding(objective=objective)``
+    """Start computing the real-time iteration's model of ``Receding(objective=objective,
+    solver="real-time")`` (``receding-realtime``)
     (the Hessian at the offline plan, about 5 s on ``default``) on a worker of ``pool``, so
     that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
     :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
@@ -332,6 +335,18 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
     HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
     if policy.solver == "real-time" and policy.qpsol not in QP_SOLVERS:
         raise ArgumentError("receding.qpsol", f"one of {', '.join(QP_SOLVERS)}", policy.qpsol)
+    if policy.solver != "real-time":  # what only the real-time iteration uses, not ignored
+        for field, default in _REAL_TIME_ONLY.items():
+            value = getattr(policy, field)
+            if value is not default and value != default:
+                raise ArgumentError(f"receding.{field}", f"{default!r} with solver="
+                                    f"{policy.solver!r} (it serves solver='real-time' only)",
+                                    value)
+
+
+#: The fields that only ``solver="real-time"`` uses, and their defaults.
+_REAL_TIME_ONLY: dict[str, Any] = {"qpsol": "daqp", "rti_steps": 1, "full_solves": (),
+                                   "full_above": 0.01, "rti": None}
 
 
 class _RecedingController:
@@ -385,8 +400,7 @@ class _RecedingController:
         full = {"heading0": belief.heading, "position0": belief.position,
                 "warm_start": self.plan or self.first, "tol": pol.full_tol}
         try:
-            if (pol.solver == "multi-start" and n > 0) or (self.rti is not None
-                                                           and n in pol.multi_start):
+            if (pol.solver == "multi-start" and n > 0) or n in pol.multi_start:
                 plan = self.multi_start(b, heading0=belief.heading,
                                         position0=belief.position)
                 entry["start"] = plan.message

@@ -51,7 +51,7 @@ templates_path = ["_templates"]
 
 # -- API reference ----------------------------------------------------------------------------
 autosummary_generate = True
-# importing ``python -m`` entry points would run them
+# ``python -m`` entry points run the CLI only as __main__; mocked as well, to be safe
 autodoc_mock_imports = ["tmaplan.cli.__main__"]
 autosummary_imported_members = False
 autosummary_ignore_module_all = True  # each module documents the public names it defines

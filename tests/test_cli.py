@@ -92,3 +92,16 @@ def test_demo_writes_report(tmp_path):
     assert set(d["policies"]) == set(DEMO_POLICIES) and d["problem"] == "default"
     assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
     assert d["schedule"]["objective"] <= d["schedule"]["uniform_objective"]
+
+
+@pytest.mark.parametrize("module", ["tmaplan.__main__", "tmaplan.cli.__main__"])
+def test_importing_the_entry_point_does_not_run_the_cli(module, monkeypatch, capsys):
+    """The API reference imports every module: ``python -m`` entry points run the CLI only
+    as ``__main__`` (the docs build printed "invalid choice: 'html'" before)."""
+    import importlib
+    import sys
+
+    monkeypatch.setattr(sys, "argv", ["sphinx-build", "-b", "html", "docs", "out"])
+    monkeypatch.delitem(sys.modules, module, raising=False)
+    importlib.import_module(module)  # SystemExit(2) if it ran the CLI
+    assert capsys.readouterr().err == ""

@@ -4,4 +4,5 @@ import sys
 
 from tmaplan.cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # importing it (the API reference) does not run the CLI
+    sys.exit(main())

@@ -336,17 +336,17 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
     if policy.solver == "real-time" and policy.qpsol not in QP_SOLVERS:
         raise ArgumentError("receding.qpsol", f"one of {', '.join(QP_SOLVERS)}", policy.qpsol)
     if policy.solver != "real-time":  # what only the real-time iteration uses, not ignored
-        for field, default in _REAL_TIME_ONLY.items():
-            value = getattr(policy, field)
+        defaults = {f.name: f.default for f in dataclasses.fields(Receding)}
+        for field in _REAL_TIME_ONLY:
+            value, default = getattr(policy, field), defaults[field]
             if value is not default and value != default:
                 raise ArgumentError(f"receding.{field}", f"{default!r} with solver="
                                     f"{policy.solver!r} (it serves solver='real-time' only)",
                                     value)
 
 
-#: The fields that only ``solver="real-time"`` uses, and their defaults.
-_REAL_TIME_ONLY: dict[str, Any] = {"qpsol": "daqp", "rti_steps": 1, "full_solves": (),
-                                   "full_above": 0.01, "rti": None}
+#: The fields that only ``solver="real-time"`` uses (refused off their defaults otherwise).
+_REAL_TIME_ONLY = ("qpsol", "rti_steps", "full_solves", "full_above", "rti")
 
 
 class _RecedingController:
@@ -404,17 +404,15 @@ class _RecedingController:
                 plan = self.multi_start(b, heading0=belief.heading,
                                         position0=belief.position)
                 entry["start"] = plan.message
-            elif pol.solver == "multi-start" or (self.rti is not None and n in pol.full_solves):
+            elif self.rti is None or n in pol.full_solves:  # "ipopt", or a full solve asked
                 plan = self.planner.solve(b, **full)
-            elif self.rti is not None:
+            else:
                 plan = self.rti.solve(b, previous=self.plan, heading0=belief.heading,
                                       position0=belief.position)
                 start = (plan.warm or {}).get("start_objective")
                 if start is not None and (start - plan.objective > pol.full_above
                                           * abs(start)):
                     plan = self.planner.solve(b, **full)
-            else:  # "ipopt"
-                plan = self.planner.solve(b, **full)
             entry.update(status=plan.status, success=True, solver=plan.solver)
             self.plan = plan
             self.playback = _TurnRatePlayback(plan, self.scenario)

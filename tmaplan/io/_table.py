@@ -105,7 +105,8 @@ def read_text(path: str | Path) -> str:
 
 
 def read_table(path: str | Path, *, required: Sequence[str],
-               optional: Sequence[str] = (), what: str = "") -> Table:
+               optional: Sequence[str] = (), one_of: Sequence[Sequence[str]] = (),
+               what: str = "") -> Table:
     """Read a comma-separated file with a header.
 
     Parameters
@@ -115,6 +116,10 @@ def read_table(path: str | Path, *, required: Sequence[str],
         Columns that must be present (a missing one is an error naming it).
     optional : sequence of str
         Columns that may be present; any other column is ignored with a :class:`DataWarning`.
+    one_of : sequence of sequences of str
+        Groups of columns of which one must be present in full (the first group with a
+        column in the header; a missing column of it is an error naming it); their columns
+        are optional otherwise.
     what : str
         What the file holds (e.g. ``"bearings"``), for the messages.
 
@@ -147,12 +152,17 @@ def read_table(path: str | Path, *, required: Sequence[str],
         if header.count(name) > 1:
             raise DataError(src, f"column '{name}' appears {header.count(name)} times in the "
                             "header", head_line, name)
-    for name in required:
+    if one_of:
+        group = next((g for g in one_of if any(c in header for c in g)), one_of[0])
+        expected = " or ".join(",".join([*required, *g]) for g in one_of)
+    else:
+        group, expected = (), ",".join(required)
+    for name in [*required, *group]:
         if name not in header:
-            raise DataError(src, f"missing column '{name}' (expected the columns "
-                            f"{', '.join(required)}; the header has {', '.join(header)})",
-                            head_line, name)
-    extra = [c for c in header if c not in required and c not in optional]
+            raise DataError(src, f"missing column '{name}' (expected the columns {expected};"
+                            f" the header has {','.join(header)})", head_line, name)
+    known = {*required, *optional, *(c for g in one_of for c in g)}
+    extra = [c for c in header if c not in known]
     if extra:
         warnings.warn(f"{src}: ignored column{'s' if len(extra) > 1 else ''} "
                       f"{', '.join(repr(c) for c in extra)} (read: "

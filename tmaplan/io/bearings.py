@@ -160,7 +160,7 @@ def read_bearings(path: str | Path, *, sigma_deg: float | None = None,
         check_not_backwards(c.times, c.lines, stamps.epoch, source=src, what=what)
         c = _duplicates(c, stamps.epoch, src, what)
         warn_gaps(c.times, c.lines, stamps.epoch, source=src,
-                  what=f"contact '{name}''s bearings" if what else "the bearings", gap=gap,
+                  what=f"the bearings of contact '{name}'" if what else "the bearings", gap=gap,
                   done="no bearing there")
         contacts.append(c)
     return BearingLog(source=src, epoch=stamps.epoch, contacts=tuple(contacts))

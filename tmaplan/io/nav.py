@@ -144,7 +144,7 @@ def check_latlon(lat: np.ndarray, lon: np.ndarray, lines: np.ndarray, *, source:
         if bad.any():
             i = int(np.argmax(bad))
             raise DataError(source, f"column '{name}': expected degrees in [{lo:g}, {hi:g}], "
-                            f"received {v[i]!r}", int(lines[i]), name, float(v[i]))
+                            f"received {float(v[i])!r}", int(lines[i]), name, float(v[i]))
     return np.where(lon > 180.0, lon - 360.0, lon)
 
 
@@ -169,14 +169,8 @@ def read_nav_csv(path: str | Path, *, gap: float | None = None) -> NavTrack:
     """
     src = str(path)
     t = read_table(path, required=("time",),
-                   optional=("lat_deg", "lon_deg", "east_m", "north_m"), what="own-ship fix")
+                   one_of=(("lat_deg", "lon_deg"), ("east_m", "north_m")), what="own-ship fix")
     geo = t.has("lat_deg") or t.has("lon_deg")
-    pair = ("lat_deg", "lon_deg") if geo else ("east_m", "north_m")
-    for name in pair:
-        if not t.has(name):
-            raise DataError(src, f"missing column '{name}' (expected the columns time,lat_deg,"
-                            f"lon_deg or time,east_m,north_m; the header has "
-                            f"{', '.join(t.header)})", t.header_line, name)
     if geo and (t.has("east_m") or t.has("north_m")):
         warn(f"{src}: both lat_deg/lon_deg and east_m/north_m columns: latitude/longitude read,"
              " east_m/north_m ignored")

@@ -133,9 +133,10 @@ def read_nmea(path: str | Path, *, gap: float | None = None,
     for why, lines in skipped.items():
         if lines:
             first = ", ".join(str(x) for x in lines[:5]) + (", ..." if len(lines) > 5 else "")
-            what = {"bad or missing checksum": "sentences with a bad or missing checksum",
-                    "unreadable": "unreadable lines", "no fix": "sentences without a valid fix"
-                    " (RMC status V, GGA quality 0 or no position)"}[why]
+            s = "s" if len(lines) > 1 else ""
+            what = {"bad or missing checksum": f"sentence{s} with a bad or missing checksum",
+                    "unreadable": f"unreadable line{s}", "no fix": f"sentence{s} without a "
+                    "valid fix (RMC status V, GGA quality 0 or no position)"}[why]
             warn(f"{src}: {len(lines)} {what} skipped (line{'s' if len(lines) > 1 else ''} "
                  f"{first})")
     if not recs:

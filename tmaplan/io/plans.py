@@ -174,21 +174,19 @@ def read_legs_csv(path: str | Path) -> tuple[tuple[Leg, ...], dt.datetime | None
     turns = [x.lower() for x in t.text("turn")]
     legs = []
     for i, turn in enumerate(turns):  # one row per leg
-        line = int(t.lines[i])
+        def fault(col: str, expected: str, row: int = i) -> DataError:
+            cell = t.text(col)[row]
+            return DataError(src, f"column '{col}': expected {expected}, received {cell!r}",
+                             int(t.lines[row]), col, cell)
         if turn not in ("straight", "starboard", "port"):
-            raise DataError(src, f"column 'turn': expected straight, starboard or port, "
-                            f"received {t.text('turn')[i]!r}", line, "turn", turn)
+            raise fault("turn", "straight, starboard or port")
         if rate[i] < 0 or (turn == "straight" and rate[i] != 0):
-            raise DataError(src, "column 'rate_deg_s': expected a rate >= 0 (0 on a straight "
-                            f"leg), received {rate[i]!r}", line, "rate_deg_s", rate[i])
+            raise fault("rate_deg_s", "a rate >= 0 (0 on a straight leg)")
         if dur[i] <= 0:
-            raise DataError(src, f"column 'duration_min': expected > 0, received {dur[i]!r}",
-                            line, "duration_min", dur[i])
-        if i and abs(start_min[i] - start_min[i - 1] - dur[i - 1]) > 1e-6 * max(
-                1.0, abs(start_min[i])):
-            raise DataError(src, f"column 'start_min': expected the previous leg's end "
-                            f"{start_min[i - 1] + dur[i - 1]!r}, received {start_min[i]!r}",
-                            line, "start_min", start_min[i])
+            raise fault("duration_min", "> 0")
+        end = start_min[i - 1] + dur[i - 1] if i else start_min[i]
+        if abs(start_min[i] - end) > 1e-6 * max(1.0, abs(end)):
+            raise fault("start_min", f"the previous leg's end {float(end)!r}")
         legs.append(Leg(start=float(start_min[i] * 60.0),
                         course=float(np.mod(np.deg2rad(course[i]), 2 * np.pi)),
                         turn=cast(Turn, turn),

@@ -133,8 +133,8 @@ def test_checksum_errors_are_skipped_and_counted(tmp_path):
     bad[20] = bad[20].split("*")[0]  # no checksum at all
     bad.insert(0, "$GPGSV,3,1,11,03,03,111,00,04,15,270,00,06,01,010,00,13,06,292,00*74")
     p = _write(tmp_path, "\n".join(bad) + "\n", "o.nmea")
-    nav, msg = one_warning(read_nmea, p, match="4 sentences with a bad or missing checksum "
-                                               "skipped (lines 6, 11, 18, 22)")
+    nav, _ = one_warning(read_nmea, p, match="4 sentences with a bad or missing checksum "
+                                             "skipped (lines 6, 11, 18, 22)")
     assert nav.times.size == 20  # every fix still there (its other sentence)
     # a line that is no sentence is counted on its own
     one_warning(read_nmea, _write(tmp_path, "garbage\n" + "\n".join(good), "x.nmea"),

@@ -76,7 +76,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--origin", type=_origin, default=None, metavar="LAT,LON",
         help="with --export: the own ship's start position in degrees (default "
              f"{DEFAULT_ORIGIN[0]:g},{DEFAULT_ORIGIN[1]:g}); the exported plane is the "
-             "scenario's shifted so that the own ship starts at its origin")
+             "scenario's shifted so that the own ship starts at its origin; a southern "
+             "latitude with '=': --origin=-33.5,151.5")
     parser.add_argument(
         "--start", type=_start, default=None, metavar="TIME",
         help=f"with --export: UTC time of the run's first step (default {DEFAULT_START})")

@@ -53,7 +53,8 @@ def parse_utc(text: str) -> dt.datetime | None:
     Returns
     -------
     datetime.datetime or None
-        In UTC; None when ``text`` is not ISO 8601 or carries no zone.
+        In UTC; None when ``text`` is not ISO 8601, carries no zone or is out of the years
+        1 to 9999 in UTC.
     """
     try:
         t = dt.datetime.fromisoformat(text.strip())
@@ -61,7 +62,10 @@ def parse_utc(text: str) -> dt.datetime | None:
         return None
     if t.tzinfo is None or t.utcoffset() is None:
         return None
-    return t.astimezone(UTC)
+    try:
+        return t.astimezone(UTC)
+    except OverflowError:  # a zone that moves it out of years 1-9999
+        return None
 
 
 def _seconds(text: str) -> float | None:

@@ -121,3 +121,20 @@ def test_mixed_kinds_of_time_are_an_error(tmp_path):
     msg = data_error(align, quiet(read_bearings, b), quiet(read_nav, tmp_path / "o.csv"))
     assert msg.startswith(f"{b}: times are ISO 8601 times but the navigation's") and \
         "are plain seconds: expected the same kind in both files" in msg
+
+
+def test_the_reading_benchmark_runs_on_a_short_recording(benchmark_script, monkeypatch,
+                                                         tmp_path, capsys):
+    import json
+    import sys
+
+    bench = benchmark_script("io_read")
+    out = tmp_path / "b.json"
+    monkeypatch.setattr(sys, "argv", ["io_read.py", "--hours", "0.02", "--contacts", "2",
+                                      "--repeat", "1", "--json", str(out)])
+    bench.main()
+    res = json.loads(out.read_text())
+    assert res["rows"] == 2 * 73 and res["fixes"] == 73
+    assert set(res["seconds"]) == {"read_bearings", "read_nav_nmea", "read_nav_gpx",
+                                   "read_nav_csv", "read_recording"}
+    assert "read_recording" in capsys.readouterr().out

@@ -23,6 +23,7 @@ standard's 82 characters.
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import re
 from pathlib import Path
 
@@ -55,6 +56,12 @@ def _time_of_day(text: str) -> float | None:
     return h * 3600.0 + mi * 60.0 + round(s * 1e6) / 1e6
 
 
+@functools.lru_cache(maxsize=256)
+def _date(text: str) -> dt.date:
+    """An RMC date ``ddmmyy`` (ValueError if malformed); cached: a log repeats its dates."""
+    return dt.datetime.strptime(text, "%d%m%y").date()
+
+
 def _fix(msg: pynmea2.NMEASentence) -> tuple[float, dt.date | None, float, float, float,
                                                   float] | str:
     """(time of day [s], date or None, lat [deg], lon [deg], course [rad], speed [m/s]) of an
@@ -74,7 +81,7 @@ def _fix(msg: pynmea2.NMEASentence) -> tuple[float, dt.date | None, float, float
         return "unreadable"
     try:
         lat, lon = float(msg.latitude), float(msg.longitude)
-        date = dt.datetime.strptime(data[8], "%d%m%y").date() if rmc and data[8] else None
+        date = _date(data[8]) if rmc and data[8] else None
         sog = float(data[6]) * KNOT if rmc and data[6] else np.nan
         cog = np.deg2rad(float(data[7])) if rmc and data[7] else np.nan
     except ValueError:

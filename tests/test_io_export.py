@@ -72,12 +72,13 @@ def test_origin_and_start_flags(tmp_path):
     (["--export", "E", "--origin", "north"], "--origin must be LAT,LON in degrees"),
     (["--export", "E", "--start", "2024-01-01T00:00:00"], "--start must be an ISO 8601 time "
                                                           "with a zone"),
+    (["--export", "/proc/tmaplan-export"], "--export: expected a directory where files can be "
+                                           "written"),
 ])
 def test_bad_export_flags_are_one_line(tmp_path, one_line_error, argv, expect):
     argv = [a.replace("E", str(tmp_path / "e")) if a == "E" else a for a in argv]
     line = one_line_error(["simulate", "default", "--no-figure", *argv])
-    assert expect in line.replace("field '--origin'", "--origin").replace(
-        "field '--start'", "--start"), line
+    assert expect in line.replace("field '--", "--").replace("': expected", ": expected"), line
 
 
 def test_a_run_without_bearings_is_not_exported(tmp_path, one_line_error):

@@ -18,15 +18,6 @@ from tmaplan.cli._args import (
 )
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
-from tmaplan.io import (
-    LocalFrame,
-    write_bearings,
-    write_gpx,
-    write_nmea,
-    write_ownship_csv,
-    write_truth,
-)
-from tmaplan.io.times import parse_utc
 from tmaplan.plotting import plot_geometry
 from tmaplan.scenario import load
 from tmaplan.simulate import Simulation, simulate
@@ -56,6 +47,8 @@ def _origin(text: str) -> tuple[float, float]:
 
 def _start(text: str) -> dt.datetime:
     """Type of ``--start``: an ISO 8601 time with a zone."""
+    from tmaplan.io.times import parse_utc  # pyproj and co. only when exporting
+
     t = parse_utc(text)
     if t is None:
         raise argparse.ArgumentTypeError(
@@ -115,6 +108,15 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     ArgumentError
         (``--export``) The run has no bearing, or the directory cannot be written.
     """
+    from tmaplan.io import (  # pyproj, pynmea2, gpxpy: only when exporting
+        LocalFrame,
+        write_bearings,
+        write_gpx,
+        write_nmea,
+        write_ownship_csv,
+        write_truth,
+    )
+
     scenario = sim.scenario
     bearings = [m for m in sim.measurements if m.kind == "bearing" and m.steps.size]
     if not bearings:
@@ -122,11 +124,6 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
                             "the bearing sensors' measurements)", "no bearing",
                             source=scenario.name)
     d = Path(directory)
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ArgumentError("--export", "a directory that exists or can be created",
-                            f"{str(d)!r} ({exc.strerror})", source=scenario.name) from None
     t0 = float(sim.times[0])
     t = sim.times - t0
     obs = sim.observer
@@ -138,20 +135,25 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     order = np.argsort(bt, kind="stable")
     values = np.concatenate([m.values for m in bearings])[order]
     sigma = np.concatenate([np.full(m.steps.size, float(m.sigma)) for m in bearings])[order]
-    files = {
-        "bearings": write_bearings(d / "bearings.csv", bt[order], values, sigma=sigma,
-                                   contact=EXPORT_CONTACT, start=start),
-        "ownship_csv": write_ownship_csv(d / "ownship.csv", t, lat, lon, start=start),
-        "ownship_nmea": write_nmea(d / "ownship.nmea", t, lat, lon, start=start,
-                                   course=obs.heading, speed=obs.speed),
-        "ownship_gpx": write_gpx(d / "ownship.gpx", t, lat, lon, start=start,
-                                 name=f"{scenario.name} own ship"),
-        "truth": write_truth(
-            d / "truth.json", times=t, start=start, frame=frame,
-            contacts={EXPORT_CONTACT: sim.target - np.r_[p0, 0.0, 0.0]}, ownship=local,
-            extra={"problem": scenario.name, "seed": seed,
-                   "scenario_offset": [float(p0[0]), float(p0[1])], "scenario_t0": t0}),
-    }
+    try:  # the writers make the directory
+        files = {
+            "bearings": write_bearings(d / "bearings.csv", bt[order], values, sigma=sigma,
+                                       contact=EXPORT_CONTACT, start=start),
+            "ownship_csv": write_ownship_csv(d / "ownship.csv", t, lat, lon, start=start),
+            "ownship_nmea": write_nmea(d / "ownship.nmea", t, lat, lon, start=start,
+                                       course=obs.heading, speed=obs.speed),
+            "ownship_gpx": write_gpx(d / "ownship.gpx", t, lat, lon, start=start,
+                                     name=f"{scenario.name} own ship"),
+            "truth": write_truth(
+                d / "truth.json", times=t, start=start, frame=frame,
+                contacts={EXPORT_CONTACT: sim.target - np.r_[p0, 0.0, 0.0]}, ownship=local,
+                extra={"problem": scenario.name, "seed": seed,
+                       "scenario_offset": [float(p0[0]), float(p0[1])], "scenario_t0": t0}),
+        }
+    except OSError as exc:
+        raise ArgumentError("--export", "a directory where files can be written",
+                            f"{str(d)!r} ({exc.strerror or exc})", source=scenario.name
+                            ) from None
     return {k: str(v) for k, v in files.items()}
 
 

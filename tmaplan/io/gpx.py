@@ -90,7 +90,7 @@ def read_gpx(path: str | Path, *, gap: float | None = None) -> NavTrack:
     secs = np.array([(t - epoch) // one for t in stamps], dtype=np.int64) / 1e6
     lat = np.array([p.latitude for *_, p in points], float)
     lon = check_latlon(lat, np.array([p.longitude for *_, p in points], float), lines,
-                       source=src)
+                       source=src, names=("attribute 'lat'", "attribute 'lon'"))
     nan = np.full(len(points), np.nan)
     nav = NavTrack(source=src, epoch=epoch, times=secs, lat=lat, lon=lon, course=nan,
                    speed=nan.copy(), lines=lines)

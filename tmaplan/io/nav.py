@@ -122,7 +122,8 @@ def finish_nav(nav: NavTrack, *, gap: float | None = None) -> NavTrack:
     return nav
 
 
-def check_latlon(lat: np.ndarray, lon: np.ndarray, lines: np.ndarray, *, source: str
+def check_latlon(lat: np.ndarray, lon: np.ndarray, lines: np.ndarray, *, source: str,
+                 names: tuple[str, str] = ("column 'lat_deg'", "column 'lon_deg'")
                  ) -> np.ndarray:
     """Check latitudes in [−90, 90] and longitudes in [−180, 360]; return the longitudes in
     [−180, 180].
@@ -133,18 +134,21 @@ def check_latlon(lat: np.ndarray, lon: np.ndarray, lines: np.ndarray, *, source:
         [deg].
     lines : ndarray of int, shape (m,)
     source : str
+    names : (str, str)
+        The two values as the file calls them (for the message).
 
     Raises
     ------
     DataError
         The first value out of its interval, naming the line, the column and the value.
     """
-    for name, v, lo, hi in (("lat_deg", lat, -90.0, 90.0), ("lon_deg", lon, -180.0, 360.0)):
+    for name, v, lo, hi in ((names[0], lat, -90.0, 90.0), (names[1], lon, -180.0, 360.0)):
         bad = (v < lo) | (v > hi)
         if bad.any():
             i = int(np.argmax(bad))
-            raise DataError(source, f"column '{name}': expected degrees in [{lo:g}, {hi:g}], "
-                            f"received {float(v[i])!r}", int(lines[i]), name, float(v[i]))
+            raise DataError(source, f"{name}: expected degrees in [{lo:g}, {hi:g}], "
+                            f"received {float(v[i])!r}", int(lines[i]) or None, name,
+                            float(v[i]))
     return np.where(lon > 180.0, lon - 360.0, lon)
 
 

@@ -155,7 +155,8 @@ def read_nmea(path: str | Path, *, gap: float | None = None,
     tod = np.array([r[2] for r in recs])
     secs = (days - days[0]) * _DAY + (tod - tod[0])
     lat = np.array([r[4] for r in recs])
-    lon = check_latlon(lat, np.array([r[5] for r in recs]), line, source=src)
+    lon = check_latlon(lat, np.array([r[5] for r in recs]), line, source=src,
+                       names=("latitude", "longitude"))
     course = np.array([r[6] for r in recs])
     speed = np.array([r[7] for r in recs])
     # an RMC and a GGA at one time are one fix: the RMC's

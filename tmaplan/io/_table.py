@@ -12,14 +12,13 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from tmaplan.errors import DataError
-from tmaplan.io.faults import DataWarning
+from tmaplan.io.faults import warn
 
 #: Separators a CSV file is sometimes written with instead of a comma, in the order tried.
 _OTHER_SEPARATORS = {";": "';'", "\t": "tab", "|": "'|'"}
@@ -115,7 +114,8 @@ def read_table(path: str | Path, *, required: Sequence[str],
     required : sequence of str
         Columns that must be present (a missing one is an error naming it).
     optional : sequence of str
-        Columns that may be present; any other column is ignored with a :class:`DataWarning`.
+        Columns that may be present; any other column is ignored with a
+        :class:`~tmaplan.io.faults.DataWarning`.
     one_of : sequence of sequences of str
         Groups of columns of which one must be present in full (the first group with a
         column in the header; a missing column of it is an error naming it); their columns
@@ -164,10 +164,9 @@ def read_table(path: str | Path, *, required: Sequence[str],
     known = {*required, *optional, *(c for g in one_of for c in g)}
     extra = [c for c in header if c not in known]
     if extra:
-        warnings.warn(f"{src}: ignored column{'s' if len(extra) > 1 else ''} "
-                      f"{', '.join(repr(c) for c in extra)} (read: "
-                      f"{', '.join(c for c in header if c not in extra)})",
-                      DataWarning, stacklevel=3)
+        warn(f"{src}: ignored column{'s' if len(extra) > 1 else ''} "
+             f"{', '.join(repr(c) for c in extra)} (read: "
+             f"{', '.join(c for c in header if c not in extra)})")
     rows: list[list[str]] = []
     lines: list[int] = []
     for row in reader:

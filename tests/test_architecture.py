@@ -115,3 +115,17 @@ def test_every_policy_name_is_built_in_combine_py() -> None:
         assert parse_policy(f"straight+{name}", scenario).ping.name == name
     for name in set(MANOEUVRES) - {"single-turn", "zigzag"}:  # those two search a grid
         assert isinstance(MANOEUVRES[name](scenario), ManoeuvrePolicy), name
+
+
+def test_tmaplan_io_sits_low_in_the_layering() -> None:
+    """The recorded-data package imports only errors, units and geometry of tmaplan (and
+    itself): the estimators, the planners and the verbs build on it, never the reverse."""
+    allowed = ("tmaplan.errors", "tmaplan.units", "tmaplan.geometry", "tmaplan.io")
+    found = []
+    for path in sorted((ROOT / "io").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([node.module] if isinstance(node, ast.ImportFrom) and node.module
+                     else [a.name for a in node.names] if isinstance(node, ast.Import) else [])
+            found += [f"{path.name}: {n}" for n in names
+                      if n.startswith("tmaplan") and not n.startswith(allowed)]
+    assert not found, found

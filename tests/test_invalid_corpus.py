@@ -5,6 +5,9 @@ loading it must raise ScenarioError whose one-line message names F and contains 
 CLI must exit non-zero with that line and no traceback. ``tests/data/invalid_cli/cases.toml``
 holds command lines that cannot work (an estimator without its measurements, a bound not
 defined for it, turning policies without a turn-rate limit): each is refused with one line.
+``tests/data/invalid_data/cases.toml`` holds recorded data files with a fault (bearings CSV,
+own-ship CSV, NMEA and GPX, leg tables): each raises a one-line ``DataError`` naming the file
+and line, or reads with one-line ``DataWarning`` s saying what was done.
 """
 
 from __future__ import annotations
@@ -74,3 +77,59 @@ def test_cli_corpus_covers_every_estimator():
     named = {c["argv"][c["argv"].index("--estimator") + 1] for c in CLI_CASES
              if "--estimator" in c["argv"]}
     assert named == {"mle", "pf", "pf-bearings", "range-only"}
+
+
+# ------------------------------------------------------------ recorded data (tmaplan.io)
+DATA_DIR = Path(__file__).parent / "data" / "invalid_data"
+DATA_CASES = tomllib.loads((DATA_DIR / "cases.toml").read_text(encoding="utf-8"))["case"]
+
+
+def _read_data(case: dict) -> object:
+    from tmaplan import io
+
+    path = DATA_DIR / case["file"]
+    if case["read"] == "recording":
+        return io.read_recording(path, DATA_DIR / case["nav"])
+    return {"bearings": io.read_bearings, "nav": io.read_nav,
+            "legs": io.read_legs_csv}[case["read"]](path)
+
+
+@pytest.mark.parametrize("case", DATA_CASES, ids=[c["file"] for c in DATA_CASES])
+def test_invalid_data_file(case):
+    import warnings
+
+    from tmaplan.errors import DataError
+    from tmaplan.io import DataWarning
+
+    path = str(DATA_DIR / case["file"])
+    if "error" in case:
+        with pytest.raises(DataError) as exc:
+            _read_data(case)
+        msg = str(exc.value)
+        assert "\n" not in msg and msg.startswith(path), msg
+        where = f"{path}:{case['line']}: " if "line" in case else f"{path}: "
+        assert msg.startswith(where), (where, msg)
+        for text in case["error"]:
+            assert text in msg, (text, msg)
+        return
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        _read_data(case)
+    msgs = [str(w.message) for w in rec if issubclass(w.category, DataWarning)]
+    assert all("\n" not in m and m.startswith(path) for m in msgs), msgs
+    if not case["warn"]:
+        assert not msgs, msgs
+    for text in case["warn"]:
+        assert any(text in m for m in msgs), (text, msgs)
+
+
+def test_data_corpus_covers_every_kind_of_fault():
+    errors = {c["file"] for c in DATA_CASES if "error" in c}
+    warned = {c["file"] for c in DATA_CASES if c.get("warn")}
+    assert len(errors) >= 20 and len(warned) >= 8
+    kinds = {c["file"].rsplit(".", 1)[1] for c in DATA_CASES}
+    assert kinds == {"csv", "nmea", "gpx"}
+    assert {c["read"] for c in DATA_CASES} == {"bearings", "nav", "legs", "recording"}
+    on_disk = {p.name for p in DATA_DIR.iterdir() if p.name != "cases.toml"}
+    named = {c["file"] for c in DATA_CASES} | {c["nav"] for c in DATA_CASES if "nav" in c}
+    assert on_disk == named, on_disk ^ named

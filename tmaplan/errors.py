@@ -14,6 +14,7 @@ from typing import Any
 
 __all__ = [
     "ArgumentError",
+    "DataError",
     "EstimationError",
     "ObservabilityError",
     "PlanningError",
@@ -87,6 +88,44 @@ class ScenarioError(ArgumentError):
 
 class UnitError(ScenarioError):
     """A quantity has an unknown unit or a unit of the wrong dimension."""
+
+
+class DataError(ArgumentError):
+    """A recorded data file (bearings, own-ship navigation, a plan's legs) is invalid.
+
+    The message is one line, ``FILE:LINE: what is wrong`` (``FILE: ...`` when no line applies),
+    naming the column or field, what was expected and the value found, e.g.
+    ``bearings.csv:5: column 'bearing_deg': expected a number, received 'abc'``.
+
+    Parameters
+    ----------
+    source
+        The file (its path as given).
+    message
+        What is wrong (one line).
+    line
+        The file's line number (1-based), if the fault is on one line.
+    field
+        The column or field at fault (``"file"`` when the fault is the whole file's).
+    received
+        The value found, if any.
+    """
+
+    def __init__(self, source: str, message: str, line: int | None = None,
+                 field: str = "file", received: Any = None) -> None:
+        self.field = field
+        self.expected = message
+        self.received = received
+        self.source = source
+        self.line = line
+        where = f"{source}:{line}" if line is not None else f"{source}"
+        Exception.__init__(self, f"{where}: {message}".replace("\n", " "))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # as ArgumentError.__reduce__ (the message is not the constructor's only argument)
+        return (type(self), (self.source, self.expected, self.line, self.field,
+                             None if self.received is None else str(self.received)),
+                dict(self.__dict__))
 
 
 class ObservabilityError(TmaplanError, ValueError):

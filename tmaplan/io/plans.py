@@ -1,0 +1,239 @@
+"""A plan as a navigator uses it: the leg table (CSV) and the track (GPX, CSV).
+
+A **leg** is a stretch of constant turn rate: straight, or turning to starboard (clockwise)
+or port at a constant rate. The leg table ``legs.csv`` has the columns
+
+``start_min,course_deg,turn,rate_deg_s,duration_min`` (and ``start_time``, ISO 8601 UTC, when
+the plan has an absolute start time):
+
+* ``start_min``: the leg's start [min] after the plan's start;
+* ``course_deg``: the course at the leg's start [deg], clockwise from North, in [0, 360);
+* ``turn``: ``straight``, ``starboard`` or ``port``;
+* ``rate_deg_s``: the turn rate's magnitude [deg/s] (0 on a straight leg);
+* ``duration_min``: [min]; each leg starts where the one before ends.
+
+The track is written as GPX (:func:`tmaplan.io.gpx.write_gpx`) and as the own-ship CSV
+``time,lat_deg,lon_deg`` (:func:`tmaplan.io.nav.write_ownship_csv`), which the navigation
+readers read back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as dt
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Literal, cast
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from tmaplan.errors import ArgumentError, DataError
+from tmaplan.io._table import read_table, write_csv
+from tmaplan.io.frame import LocalFrame
+from tmaplan.io.gpx import write_gpx
+from tmaplan.io.nav import write_ownship_csv
+from tmaplan.io.times import parse_utc, time_text
+
+__all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "read_legs_csv", "write_legs_csv",
+           "write_track"]
+
+#: Turn rates [rad/s] closer than this are one leg; smaller in magnitude, a straight leg.
+RATE_TOL = 1e-6
+Turn = Literal["straight", "starboard", "port"]
+_COLUMNS = ("start_min", "course_deg", "turn", "rate_deg_s", "duration_min")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Leg:
+    """One leg of a plan.
+
+    Attributes
+    ----------
+    start : float
+        [s] after the plan's start.
+    course : float
+        Course at the leg's start [rad], clockwise from North, in [0, 2π).
+    turn : {"straight", "starboard", "port"}
+    rate : float
+        Turn rate's magnitude [rad/s], >= 0 (0 on a straight leg).
+    duration : float
+        [s], > 0.
+    """
+
+    start: float
+    course: float
+    turn: Turn
+    rate: float
+    duration: float
+
+    @property
+    def signed_rate(self) -> float:
+        """Turn rate [rad/s], positive to starboard (clockwise), as ``observer.turn_rates``."""
+        return -self.rate if self.turn == "port" else self.rate
+
+
+def legs_from_track(times: ArrayLike, courses: ArrayLike, *,
+                    turn_rates: ArrayLike | None = None, tol: float = RATE_TOL
+                    ) -> tuple[Leg, ...]:
+    """The legs of a course program: maximal runs of intervals with one turn rate.
+
+    Parameters
+    ----------
+    times : array_like, shape (K + 1,)
+        [s], increasing.
+    courses : array_like, shape (K + 1,)
+        Course at each time [rad], clockwise from North.
+    turn_rates : array_like, shape (K,), optional
+        Turn rate over each interval [rad/s], positive to starboard; default the course
+        differences (unwrapped) over the intervals.
+    tol : float
+        Rates within ``tol`` [rad/s] of a run's first are the same leg; a run whose rate is
+        within ``tol`` of 0 is straight.
+
+    Returns
+    -------
+    tuple of Leg
+    """
+    t = np.asarray(times, float).ravel()
+    c = np.asarray(courses, float).ravel()
+    if t.size < 2 or c.shape != t.shape or np.any(np.diff(t) <= 0):
+        raise ArgumentError("times", "increasing times (at least 2), as many as the courses",
+                            f"{t.size} times, {c.size} courses")
+    u = (np.diff(np.unwrap(c)) / np.diff(t) if turn_rates is None
+         else np.asarray(turn_rates, float).ravel())
+    if u.shape != (t.size - 1,):
+        raise ArgumentError("turn_rates", f"one per interval ({t.size - 1})", u.size)
+    legs = []
+    i = 0
+    while i < u.size:  # one leg per run of equal rates
+        j = i + 1
+        while j < u.size and abs(u[j] - u[i]) <= tol:
+            j += 1
+        rate = float(np.mean(u[i:j]))
+        turn: Turn = (
+            "straight" if abs(rate) <= tol else "starboard" if rate > 0 else "port")
+        legs.append(Leg(start=float(t[i] - t[0]), course=float(np.mod(c[i], 2 * np.pi)),
+                        turn=turn, rate=0.0 if turn == "straight" else abs(rate),
+                        duration=float(t[j] - t[i])))
+        i = j
+    return tuple(legs)
+
+
+def write_legs_csv(path: str | Path, legs: Sequence[Leg], *,
+                   start: dt.datetime | None = None) -> Path:
+    """Write the leg table (module doc) that :func:`read_legs_csv` reads back exactly.
+
+    Parameters
+    ----------
+    path : str or Path
+    legs : sequence of Leg
+    start : datetime.datetime, optional
+        Aware time of the plan's start: adds the ``start_time`` column.
+
+    Returns
+    -------
+    Path
+    """
+    cols: list[list[str]] = [[repr(leg.start / 60.0) for leg in legs],
+            [repr(float(np.rad2deg(leg.course)) % 360.0) for leg in legs],
+            [leg.turn for leg in legs],
+            [repr(float(np.rad2deg(leg.rate))) for leg in legs],
+            [repr(leg.duration / 60.0) for leg in legs]]
+    header = list(_COLUMNS)
+    if start is not None:
+        cols.append([time_text(leg.start, start) for leg in legs])
+        header.append("start_time")
+    return write_csv(path, header, cols)
+
+
+def read_legs_csv(path: str | Path) -> tuple[tuple[Leg, ...], dt.datetime | None]:
+    """Read a leg table (module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    legs : tuple of Leg
+    start : datetime.datetime or None
+        UTC start of the plan (from the first ``start_time``), None without the column.
+
+    Raises
+    ------
+    DataError
+        The table's faults (as every CSV reader), a ``turn`` other than the three, a negative
+        rate or a straight leg with one, a duration not > 0, a leg not starting where the one
+        before ends.
+    """
+    src = str(path)
+    t = read_table(path, required=_COLUMNS, optional=("start_time",), what="leg")
+    start_min, course, rate, dur = (t.numbers(c) for c in ("start_min", "course_deg",
+                                                           "rate_deg_s", "duration_min"))
+    turns = [x.lower() for x in t.text("turn")]
+    legs = []
+    for i, turn in enumerate(turns):  # one row per leg
+        def fault(col: str, expected: str, row: int = i) -> DataError:
+            cell = t.text(col)[row]
+            return DataError(src, f"column '{col}': expected {expected}, received {cell!r}",
+                             int(t.lines[row]), col, cell)
+        if turn not in ("straight", "starboard", "port"):
+            raise fault("turn", "straight, starboard or port")
+        if rate[i] < 0 or (turn == "straight" and rate[i] != 0):
+            raise fault("rate_deg_s", "a rate >= 0 (0 on a straight leg)")
+        if dur[i] <= 0:
+            raise fault("duration_min", "> 0")
+        end = start_min[i - 1] + dur[i - 1] if i else start_min[i]
+        if abs(start_min[i] - end) > 1e-6 * max(1.0, abs(end)):
+            raise fault("start_min", f"the previous leg's end {float(end)!r}")
+        legs.append(Leg(start=float(start_min[i] * 60.0),
+                        course=float(np.mod(np.deg2rad(course[i]), 2 * np.pi)),
+                        turn=cast(Turn, turn),
+                        rate=float(np.deg2rad(rate[i])), duration=float(dur[i] * 60.0)))
+    start = None
+    if t.has("start_time"):
+        first = t.text("start_time")[0]
+        begin = parse_utc(first)
+        if begin is None:
+            raise DataError(src, "column 'start_time': expected an ISO 8601 time with a zone, "
+                            f"received {first!r}", int(t.lines[0]), "start_time", first)
+        start = begin - dt.timedelta(seconds=legs[0].start)
+    return tuple(legs), start
+
+
+def write_track(path: str | Path, times: ArrayLike, *, start: dt.datetime,
+                lat: ArrayLike | None = None, lon: ArrayLike | None = None,
+                east: ArrayLike | None = None, north: ArrayLike | None = None,
+                frame: LocalFrame | None = None, name: str | None = None) -> Path:
+    """Write a plan's (or any) track as GPX (``.gpx``) or own-ship CSV (any other suffix).
+
+    Parameters
+    ----------
+    path : str or Path
+        ``*.gpx``: GPX 1.1; otherwise CSV ``time,lat_deg,lon_deg``.
+    times : array_like, shape (m,)
+        [s] after ``start``.
+    start : datetime.datetime
+        Aware time of ``times == 0``.
+    lat, lon : array_like, shape (m,), optional
+        [deg]; or
+    east, north : array_like, shape (m,), optional
+        [m] in ``frame``.
+    frame : LocalFrame, optional
+        Needed with ``east``/``north``.
+    name : str, optional
+        The GPX track's name.
+
+    Returns
+    -------
+    Path
+    """
+    if lat is None or lon is None:
+        if east is None or north is None or frame is None:
+            raise ArgumentError("lat/lon", "lat and lon, or east, north and frame",
+                                "neither")
+        lat, lon = frame.to_latlon(east, north)
+    if Path(path).suffix.lower() == ".gpx":
+        return write_gpx(path, times, lat, lon, start=start, name=name)
+    return write_ownship_csv(path, times, lat, lon, start=start)

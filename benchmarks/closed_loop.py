@@ -6,7 +6,7 @@ particle filter's init, predict and update) and the rest (simulation, metrics), 
 * ``old``: a full IPOPT solve per re-plan, ``Receding(solver="ipopt")`` (when this benchmark
   was written the first solve was cold, from 4 starts; it now starts from the offline plan,
   and it is the default again: solved to convergence, the re-plans localise sooner on
-  ``bow-closing``, README);
+  ``bow-closing``, docs/results/receding-ipopt.md);
 * ``new``: the real-time iteration, one condensed SQP step per re-plan from the shifted
   previous plan (``Receding(solver="real-time")``, :mod:`tmaplan.planning.rti`), IPOPT only
   as the fallback.

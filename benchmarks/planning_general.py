@@ -10,7 +10,7 @@ so that the problems' runs are independent), and prints ``planned − X`` of the
 10 % range accuracy (censored at the horizon + dt) with paired 95 % intervals in minutes
 (negative: the plan localises sooner), then the family average of each difference with a t
 interval over the problems (the geometry as the random unit) and how many problems meet each
-criterion of issue 13. The README quotes its output.
+criterion of issue 13. docs/results/unseen-problems.md records its output.
 
 Run: python benchmarks/planning_general.py --seed S [--base default] [--problems 6]
      [--runs 60] [--tune-runs 8] [--particles 3000] [--workers 1] [--receding] [--out DIR]

@@ -8,7 +8,8 @@ the tuned turn, and print ``planned − X`` of the mean time to 10 % range accur
 the horizon + dt) with paired 95 % intervals, in minutes (negative: the plan localises
 sooner), the per-run standard deviation of the paired difference and the runs at which the
 interval would exclude zero if mean and SD stayed as measured
-(:func:`tmaplan.evaluation.metrics.runs_to_exclude_zero`). The README quotes its output.
+(:func:`tmaplan.evaluation.metrics.runs_to_exclude_zero`). docs/results/plan-pays.md records
+its output.
 
 Run: python benchmarks/planning_pays.py [--problems default,bow-closing,contact-astern]
      [--runs 100] [--seed 0] [--out DIR] [--tune-runs 16] [--particles 3000] [--workers 1]
@@ -47,7 +48,7 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0,
-                    help="evaluation seed (0 in the README tables; the tuning uses 1000)")
+                    help="evaluation seed (0 in docs/results/plan-pays.md; the tuning uses 1000)")
     ap.add_argument("--out", default=None,
                     help="campaign directory, one sub-directory per problem: runs are kept "
                          "and an interrupted campaign resumes")

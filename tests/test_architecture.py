@@ -80,7 +80,7 @@ def test_module_length(path: Path) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# The three extension points of README "Architecture": each is named in one place
+# The three extension points of docs/architecture.md: each is named in one place
 # --------------------------------------------------------------------------------------------
 
 

@@ -1,4 +1,4 @@
-"""The benchmark scripts whose output the README quotes: their statistics and options.
+"""The benchmark scripts whose output docs/results/ records: their statistics and options.
 
 The paired difference's censoring, the separation of tuning and evaluation seeds, and the
 options the scripts' docstrings document (they exist, the bracketed ones are optional, and a

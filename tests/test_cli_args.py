@@ -250,17 +250,18 @@ def test_binary_scenario_file_names_the_file(tmp_path, one_line_error):
     assert str(f) in line and "UTF-8 text file" in line
 
 
-def test_a_scenario_written_from_the_readme_plans_and_compares(tmp_path, capsys):
-
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+def test_a_scenario_written_from_the_docs_plans_and_compares(tmp_path, capsys):
+    # the example of docs/scenario-files.md, to which the README points
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "scenario-files.md").read_text(
+        encoding="utf-8")
     f = tmp_path / "my.toml"
-    f.write_text(readme.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
+    f.write_text(docs.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
     assert main(["plan", str(f), "--horizon", "20 min", "--no-figure",
                  "--json", "-"]) == 0
     out = capsys.readouterr()
     d = json.loads(out.out)
     assert d["problem"] == "my-case" and d["objective"] < d["baselines"]["straight"]
-    assert "warning" not in out.err  # the README's prior does not use the truth
+    assert "warning" not in out.err  # the example's prior does not use the truth
     # (the offline plan was just exercised by `plan`; a tactic keeps the compare cheap)
     assert main(["compare", str(f), "--policies", "straight,leg-turn-leg+scheduled", "--runs",
                  "2", "--particles", "300", "--out", str(tmp_path / "cmp"), "--json", "-"]) == 0

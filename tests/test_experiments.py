@@ -36,7 +36,7 @@ def test_time_to_accuracy():
     assert time_to_accuracy(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
     assert time_to_accuracy(t, np.array([0.05] * 6), 0.1) == 0.0
     assert time_to_accuracy(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
-    # the README's "first time after which the error *stays* below": a dip is not enough
+    # docs/findings.md's "first time after which the error *stays* below": a dip is not enough
     assert time_to_accuracy(t, np.array([0.5, 0.05, 0.05, 0.2, 0.5, 0.05]), 0.1) == 50.0
     assert time_to_accuracy(t, np.array([0.05, np.nan, 0.05, 0.05, 0.05, 0.05]), 0.1) == 20.0
 

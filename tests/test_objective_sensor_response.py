@@ -7,7 +7,7 @@ no prior, bearing-only information scales as 1/σ², so the bounds would grow te
 prior and the unobservable directions make the response smaller, but an objective that moves
 by less than 10 % does not see the sensor. The closed-form LPC range bounds (brehard2005,
 corrected) are known not to: their ln r information comes from the coordinate change and the
-prior whatever the bearings (README, "Findings"); they are strict xfails, so a change that
+prior whatever the bearings (docs/findings.md); they are strict xfails, so a change that
 makes them respond is noticed. The default objective (``expected-time-to-accuracy``) is not
 one of them (issue 13 item 3 replaced ``range-bound`` as the default).
 """

@@ -3,7 +3,7 @@ paired campaign of ``planned`` against the baselines (tmaplan.evaluation.plan_ch
 
 The fast tests exercise the code path at a tiny size and check the pieces against independent
 computations; the ``slow`` tests are the issue's "Done when" inequalities at ≥ 100 paired runs
-(``benchmarks/planning_pays.py`` prints the same table, quoted in the README).
+(``benchmarks/planning_pays.py`` prints the same table, recorded in docs/results/plan-pays.md).
 """
 
 from __future__ import annotations
@@ -199,7 +199,7 @@ def _case(problem, baseline, failing):
 
 
 #: Measured (benchmarks/planning_pays.py, _RUNS runs): where planned does not win, and by how
-#: much (planned − X, minutes, paired 95 % interval). README, "does the plan pay?".
+#: much (planned − X, minutes, paired 95 % interval). docs/results/plan-pays.md.
 _NOT_SOONER: dict[tuple[str, str], str] = {}
 _PROBLEMS = ("default", "bow-closing", "contact-astern")
 
@@ -244,7 +244,8 @@ _RECEDING_NOT_SOONER = {
                                  "these (seed 0); shown on 4000 runs fixed before the run, "
                                  "−0.20 [−0.34, −0.06] min (seed 18: python "
                                  "benchmarks/planning_pays.py --problems bow-closing --runs "
-                                 "4000 --seed 18 --baselines '' --no-tune --receding; README)",
+                                 "4000 --seed 18 --baselines '' --no-tune --receding; "
+                                 "docs/results/receding-ipopt.md)",
 }
 
 

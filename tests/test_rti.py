@@ -331,9 +331,9 @@ def test_a_step_that_leaves_the_keep_out_violated_is_not_a_success(small):
 
 
 def test_multi_start_solver_is_the_measured_configuration(small):
-    """``solver="multi-start"`` is, bit for bit, the configuration measured in the README: the
-    first re-plan a full solve warm-started from the plan from the prior, every later one a
-    five-start IPOPT solve, the best kept."""
+    """``solver="multi-start"`` is, bit for bit, the configuration measured in
+    docs/results/value-of-information.md: the first re-plan a full solve warm-started from the
+    plan from the prior, every later one a five-start IPOPT solve, the best kept."""
     from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.policies import Receding
     from tmaplan.simulate import draw_truth
@@ -366,7 +366,7 @@ def test_multi_start_solver_is_the_measured_configuration(small):
 
 def test_default_solver_is_the_measured_full_solve_configuration(small):
     """The default re-plan (``solver="ipopt"``) is, bit for bit, the configuration measured
-    in the README as ``receding-full``: ``Receding(solver="real-time",
+    in docs/results/receding-ipopt.md as ``receding-full``: ``Receding(solver="real-time",
     full_solves=tuple(range(64)))``, an IPOPT solve at every re-plan at ``full_tol``,
     warm-started from the previous plan, the first one from the plan from the prior."""
     from tmaplan.evaluation.closed_loop import run_closed_loop

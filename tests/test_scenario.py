@@ -245,17 +245,18 @@ def test_builtin_priors_say_what_they_take_from_the_truth(name):
             from_dict(d)
 
 
-def _readme_scenario_text() -> str:
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    block = text.split("```toml\n", 1)[1].split("```", 1)[0]
+def _docs_scenario_text() -> str:
+    """The example of docs/scenario-files.md (the README points there)."""
+    path = Path(__file__).resolve().parents[1] / "docs" / "scenario-files.md"
+    block = path.read_text(encoding="utf-8").split("```toml\n", 1)[1].split("```", 1)[0]
     assert "[prior]" in block and 'name = "my-case"' in block
     return block
 
 
-def test_readme_prior_is_complete_and_does_not_use_the_truth():
+def test_docs_prior_is_complete_and_does_not_use_the_truth():
     from tmaplan.models.prior import prior_relative_moments
 
-    s = loads(_readme_scenario_text(), source="README")
+    s = loads(_docs_scenario_text(), source="docs/scenario-files.md")
     assert s.prior is not None and s.prior.truth_fields == () and not s.prior.centred_on_truth
     _, cov = prior_relative_moments(s, n=20_000)
     vel_std = np.sqrt(np.diag(cov)[2:])
@@ -264,12 +265,12 @@ def test_readme_prior_is_complete_and_does_not_use_the_truth():
     assert np.all(np.linalg.eigvalsh(cov) > 0)
 
 
-def test_readme_prior_without_velocity_names_the_keys_to_add():
-    text = _readme_scenario_text()
+def test_docs_prior_without_velocity_names_the_keys_to_add():
+    text = _docs_scenario_text()
     for key in ("velocity_distribution", "speed_distribution", "speed_max", "course_mode"):
         text = "\n".join(x for x in text.splitlines() if not x.startswith(key))
     with pytest.raises(ScenarioError) as exc:
-        loads(text, source="README")
+        loads(text, source="docs/scenario-files.md")
     msg = str(exc.value)
     assert "prior.velocity_std" in msg
     for key in ("velocity_mean", "velocity_std", "speed-course", "speed_max", "course_mode"):

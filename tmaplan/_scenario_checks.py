@@ -4,7 +4,7 @@ Every rule raises :class:`tmaplan.errors.ScenarioError` naming the field, the ex
 the received value. :func:`check` is called by :func:`tmaplan.scenario.from_dict` and
 ``Scenario.replace``; :func:`check_bare_numbers` by ``from_dict`` on the raw file data.
 
-Plausibility limits (documented in the README's scenario section):
+Plausibility limits (documented in docs/scenario-files.md):
 
 * Speeds, in any unit: at most :data:`MAX_SPEED` = 150 m/s (≈ 292 kn) for the target (its
   unmodelled manoeuvres of ``[faults]`` too), the observer and the prior (speeds, velocity

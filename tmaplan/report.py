@@ -35,7 +35,7 @@ def efficiency(result: CampaignResult) -> dict[str, dict[str, float]]:
     ``["bound_range"]``, :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`,
     ristic2004, ch. 6): the quantity an RMSE over the same runs is compared with. (The
     prior-averaged PCRB is far more optimistic while the geometry is weakly observable; the
-    closed-form LPC bound more so in range, README "Findings".) A ratio of 1 is an efficient
+    closed-form LPC bound more so in range, docs/findings.md.) A ratio of 1 is an efficient
     filter. With truths drawn from the prior the run average of truth-conditioned bounds is
     not a strict lower bound (the Bayesian one is the prior-averaged PCRB, smaller): a filter
     can go below it while the geometry is weakly observable (``tmaplan compare default

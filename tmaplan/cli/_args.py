@@ -467,7 +467,8 @@ def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
     if scenario.prior is None:
         raise _scenario_error("prior", "a [prior] table: every policy is flown against the "
                               "particle filter, which starts from the prior (and --truth prior "
-                              "draws the truths from it); add one (see the README's example)",
+                              "draws the truths from it); add one (see the example of "
+                              "docs/scenario-files.md)",
                               None, scenario)
     check_truth_source(scenario, getattr(args, "truth", "prior") == "prior")
     turning = [p.strip() for p in args.policies.split(",")

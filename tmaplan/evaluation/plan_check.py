@@ -1,6 +1,6 @@
 """Does the plan pay? Paired Monte Carlo of the offline plan against what an operator flies.
 
-The checks of the README section "Which objective plans, and does the plan pay?":
+The checks of "does the plan pay?" (docs/findings.md, docs/results/plan-pays.md):
 
 * :func:`tune_single_turn`: the single course change chosen *by Monte Carlo* — a grid of
   single turns (times × course changes to both sides) flown in closed loop on seeds of their

@@ -15,7 +15,7 @@ planning problems* from a base problem and checks the same criteria on each:
   ``planned − X`` (:func:`tmaplan.experiments.planned_differences`);
 * :func:`criteria`: which of the issue's inequalities those differences meet.
 
-``benchmarks/planning_general.py`` prints the table the README quotes.
+``benchmarks/planning_general.py`` prints the table docs/results/unseen-problems.md records.
 """
 
 from __future__ import annotations

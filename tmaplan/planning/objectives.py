@@ -91,7 +91,7 @@ PingObjectiveName = Literal["mean-range-bound", "terminal-range-bound", "mean-po
 PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
 #: Default heading objective (``tmaplan plan``, ``planning.objective``, the closed-loop
 #: ``planned``/``receding`` policies): the one whose ranking of manoeuvres agrees best with the
-#: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, README).
+#: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, docs/findings.md).
 DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
 
 
@@ -283,7 +283,7 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
     ``time-to-accuracy`` (τ = accuracy/2, 16 draws, no penalty) it counts a draw localised
     at the accuracy the Monte Carlo metric uses. 128 draws, because the
     optimiser exploits a small fixed sample: on ``contact-astern`` the plan optimised on 48
-    draws predicts 19.6 min on them and 21.3 min on 400 fresh draws (README).
+    draws predicts 19.6 min on them and 21.3 min on 400 fresh draws (docs/results/plan-pays.md).
     """
     if not 0 < accuracy < 1:
         raise ArgumentError("accuracy", "in (0, 1)", accuracy)

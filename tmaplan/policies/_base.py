@@ -25,7 +25,7 @@ log = logging.getLogger("tmaplan.policies")
 #: of the best single turn / zig-zag: the default objective of ``tmaplan plan``
 #: (:data:`tmaplan.planning.objectives.DEFAULT_OBJECTIVE`, the expected time to 10 % range
 #: accuracy over prior draws), which ranks manoeuvres as the filter's Monte Carlo time to
-#: accuracy does (``tmaplan rank-costs``, README).
+#: accuracy does (``tmaplan rank-costs``, docs/findings.md).
 CLOSED_LOOP_OBJECTIVE = "expected-time-to-accuracy"
 
 

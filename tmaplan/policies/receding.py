@@ -51,21 +51,22 @@ class Receding:
     * ``"ipopt"`` (default): one IPOPT solve at every re-plan (at ``full_tol``), warm-started
       from the previous plan, the first one from the offline plan from the prior (bit for bit
       the former ``Receding(solver="real-time", full_solves=tuple(range(64)))``, the
-      ``receding-full`` of the README). It replaced the real-time iteration as the default
-      because, solved to convergence, the re-plans localise sooner on ``bow-closing``:
+      ``receding-full`` of docs/results/receding-ipopt.md). It replaced the real-time
+      iteration as the default because, solved to convergence, the re-plans localise sooner
+      on ``bow-closing``:
       −0.26 [−0.40, −0.11] min against the real-time iteration on 3000 paired runs (seed 17;
       81.4 % of the runs localised by the horizon against 76.5 %), and −0.20 [−0.34, −0.06]
       min against ``planned`` on 4000 runs fixed before the run (seed 18), where the
       real-time iteration had tied with it; no later on ``default``
       and ``contact-astern`` (−0.22 [−1.17, +0.74] and −0.85 [−1.86, +0.17] min, 200 runs,
       seed 17), at 0.2–0.4 s (``bow-closing``) to 1 s (``default``) per re-plan instead of
-      0.08 s (README, "A full solve at every re-plan").
+      0.08 s (docs/results/receding-ipopt.md).
     * ``"real-time"``: one warm-started SQP step
       (:class:`tmaplan.planning.rti.RealTimeIteration`, milliseconds) from the previous plan,
       the first one from the offline plan from the prior, with a full IPOPT solve as the
       fallback (``full_above``, ``full_solves``, ``multi_start``); CLI name
-      ``receding-realtime`` (the default before; the README's ``receding`` numbers up to the
-      seed-17 campaign were flown with it), ``receding-rti`` without the ``full_above``
+      ``receding-realtime`` (the default before; the ``receding`` numbers of docs/results/ up
+      to the seed-17 campaign were flown with it), ``receding-rti`` without the ``full_above``
       fallback.
     * ``"multi-start"``: the first re-plan by IPOPT warm-started from the offline plan from
       the prior; every later one by IPOPT from five starts — the previous plan shifted to the
@@ -77,8 +78,8 @@ class Receding:
       ``planned``, −0.95 [−1.59, −0.30] min on runs 100–399 of seed 10 (five-start re-plans
       up to the sixth), +0.74 [+0.07, +1.40] min on 300 runs of seed 12 and −0.20 [−0.76,
       +0.37] min on 300 runs of seed 15; pooled −0.15 [−0.51, +0.20] min, although it
-      localised 5–10 percentage points more runs by the horizon on each (README, "What is
-      left for the re-plans").
+      localised 5–10 percentage points more runs by the horizon on each (docs/results/
+      value-of-information.md).
 
     Attributes
     ----------
@@ -126,7 +127,8 @@ class Receding:
         a re-plan at time t optimises the time the mission has left instead of a full
         horizon that runs past the end, where the metrics stop counting. Off by default: on
         ``bow-closing`` (30 min, 400 paired runs, seed 6) it changed the mean time to
-        accuracy by +0.6 s [−13.2, +14.4] against the real-time iteration (README).
+        accuracy by +0.6 s [−13.2, +14.4] against the real-time iteration
+        (docs/results/receding-realtime.md).
     multi_start : tuple of int
         With ``solver="real-time"`` or ``"ipopt"``: re-plans (0 = the first) solved from the
         five starts of ``"multi-start"`` instead (default none).

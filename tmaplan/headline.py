@@ -228,11 +228,13 @@ class StoredResult:
                           stats=stats, differences=tuple(diffs))
 
     def label(self) -> str:
-        """``"stored result of 2000 and 300 paired runs (commands below)"``: what it is."""
+        """What it is: ``"Stored result of 2000 and 300 paired runs on 'default' (seed 38;
+        commands below)"``."""
         runs = sorted({c.runs for c in self.campaigns}, reverse=True)
-        counts = " and ".join(str(n) for n in runs)
-        return (f"stored result of {counts} paired runs on '{self.problem}' (seeds "
-                f"{', '.join(sorted({str(c.seed) for c in self.campaigns}))}; "
+        seeds = sorted({c.seed for c in self.campaigns})
+        return (f"Stored result of {' and '.join(str(n) for n in runs)} paired runs on "
+                f"'{self.problem}' (seed{'s' if len(seeds) > 1 else ''} "
+                f"{', '.join(str(x) for x in seeds)}; "
                 f"{'commands' if len(self.campaigns) > 1 else 'command'} below)")
 
 
@@ -397,7 +399,7 @@ def stored_lines(stored: StoredResult) -> list[str]:
     """Console lines of the stored result: its label, the commands that reproduce it, the
     per-policy statistics and the key differences with their verdicts."""
     merged = stored.merged()
-    lines = [stored.label()[0].upper() + stored.label()[1:] + ":"]
+    lines = [stored.label() + ":"]
     lines += [f"  $ {cmd}   ({what})" for cmd, what in _commands(stored)]
     lines += stats_lines(merged, per_policy_runs=True)
     return lines + key_lines(merged)
@@ -417,7 +419,7 @@ def stored_html(stored: StoredResult) -> str:
     merged = stored.merged()
     cmds = "".join(f"<li><code>{html.escape(c)}</code> ({html.escape(w)})</li>"
                    for c, w in _commands(stored))
-    return (f"<h2>{html.escape(stored.label()[0].upper() + stored.label()[1:])}</h2>"
+    return (f"<h2>{html.escape(stored.label())}</h2>"
             f"<p>Campaigns of the demo's policies sized and seeded before they were run; "
             f"{_CENSORED}. Reproduce with:</p><ul>{cmds}</ul>"
             + _stats_html(merged, per_policy_runs=True)
@@ -429,8 +431,8 @@ def live_html(comparison: Comparison, stored: StoredResult | None) -> str:
     the stored result."""
     return (f"<h2>This run: illustrative ({comparison.runs} paired runs, seed "
             f"{comparison.seed})</h2><p>The key differences of this report's runs ({_CENSORED})."
-            " At this size most intervals hold zero: those differences are not decided here; "
-            "the stored result above decides them with more runs.</p>"
+            " A difference whose interval holds zero is not decided at this size; the stored "
+            "result above has more runs.</p>"
             + key_table_html(comparison, stored=stored))
 
 

@@ -208,3 +208,17 @@ def test_a_pair_the_stored_result_lacks_is_shown_on_its_own():
     assert "stored" not in alone["verdict"]
     assert "stored 2000 runs" in js["planned", "straight", "time_to_accuracy"]["verdict"]
     assert key_lines(dataclasses.replace(live, differences=())) == []
+
+
+@pytest.mark.parametrize(("lo", "hi", "decided"), [(-90.0, -30.0, True), (-90.0, 30.0, False)])
+def test_the_report_summary_ranks_the_lowest_mean_only_when_decided(lo, hi, decided):
+    from types import SimpleNamespace
+
+    from tmaplan.report_tables import differences_html
+
+    d = _pd(a="planned", b="single-turn", mean=-30.0, lo=lo, hi=hi, n=40)
+    text = differences_html(SimpleNamespace(policies=("planned", "single-turn"),
+                                            differences=(d,)))
+    assert ("lowest mean with <strong>planned</strong>" in text) == decided
+    assert ("lowest mean not decided at 40 runs" in text) == (not decided)
+    assert ("no: not decided at 40 runs" in text) == (not decided)

@@ -70,7 +70,7 @@ def test_debug_shows_traceback(tmp_path):
     assert proc.returncode != 0 and "Traceback" in proc.stderr
 
 
-def test_demo_writes_report(tmp_path):
+def test_demo_writes_report(tmp_path, capsys):
     # a compare in the same --out first: both wrote <out>/report.html (and rmse.png, ...),
     # so the demo overwrote the compare's report; each now has its own directory
     cj = tmp_path / "compare.json"
@@ -92,6 +92,20 @@ def test_demo_writes_report(tmp_path):
     assert set(d["policies"]) == set(DEMO_POLICIES) and d["problem"] == "default"
     assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
     assert d["schedule"]["objective"] <= d["schedule"]["uniform_objective"]
+    # issue 38: the stored decisive result first, labelled with its commands; this run
+    # labelled illustrative; every key difference with its interval, undecided ones so named
+    from tmaplan.headline import load_stored
+
+    out = capsys.readouterr().out
+    stored = load_stored()
+    assert "Stored result of" in out and "median" not in out
+    assert all(c.command in out and c.command in text for c in stored.campaigns)
+    assert out.index("Stored result of") < out.index("This run (illustrative: 2 paired runs")
+    assert "This run: illustrative (2 paired runs" in text
+    assert d["stored"]["campaigns"] and d["key_differences"]
+    for k in d["key_differences"]:
+        assert k["n"] == 2 and np.isfinite([k["ci_low"], k["ci_high"]]).all()
+        assert k["decided"] or "not decided at 2 runs" in k["verdict"]
 
 
 @pytest.mark.parametrize("module", ["tmaplan.__main__", "tmaplan.cli.__main__"])

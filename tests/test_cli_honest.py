@@ -232,7 +232,7 @@ def test_help_states_every_default():
     helps = {(v, a.option_strings[0]): a.help for v, p in parsers.items()
              for a in p._actions if a.option_strings}
     assert "(default 20)" in helps["track", "--runs"]
-    assert "default closed-form" in helps["bound", "--method"]
+    assert "default monte-carlo" in helps["bound", "--method"]
     assert "default relaxed" in helps["schedule", "--method"]
     assert "default mean-range-bound" in helps["schedule", "--objective"]
     assert "default straight,single-turn,zigzag" in helps["compare", "--policies"]

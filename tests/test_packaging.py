@@ -94,7 +94,9 @@ def test_wheel_install_outside_the_checkout(tmp_path):
     assert wheel.name.startswith(f"tmaplan-{tmaplan.__version__}-")
     with zipfile.ZipFile(wheel) as zf:
         shipped = sorted(Path(n).stem for n in zf.namelist() if n.startswith("tmaplan/problems/"))
+        data = [n for n in zf.namelist() if n.startswith("tmaplan/data/")]
     assert shipped == PROBLEM_NAMES
+    assert data == ["tmaplan/data/demo_stored.json"]  # the demo's stored result (issue 38)
 
     shutil.rmtree(src)  # nothing of the checkout is left to be found by accident
     venv, env = _venv(tmp_path)
@@ -114,6 +116,9 @@ def test_wheel_install_outside_the_checkout(tmp_path):
     assert plan["times"][-1] == pytest.approx(600.0)
     assert plan["solver"]["status"] and plan["objective"] is not None
     assert not (work / "out").exists() or not any((work / "out").iterdir())
+    stored = _run([str(venv / "bin" / "python"), "-c", "from tmaplan.headline import "
+                   "load_stored; print(load_stored().campaigns[0].command)"], cwd=work, env=env)
+    assert stored.startswith("tmaplan compare default --policies ")
 
 
 def test_editable_install_outside_the_checkout(tmp_path):

@@ -77,7 +77,7 @@ def _mean(x: float, unit: float, u: str) -> str:
 def _verdict(d: PairedDifference) -> str:
     if not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
         return "undefined"
-    return "yes" if d.excludes_zero else "no"
+    return "yes" if d.excludes_zero else f"no: not decided at {d.n} runs"
 
 
 def results_table(result: CampaignResult, eff: dict[str, dict[str, float]]) -> str:
@@ -143,20 +143,29 @@ def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metr
         ci = (f"[{lo / unit:+.3g}, {hi / unit:+.3g}] {u}"
               if math.isfinite(lo) and math.isfinite(hi) else "interval undefined")
         sig = ("" if not (math.isfinite(lo) and math.isfinite(hi)) else
-               ", significant" if d.excludes_zero else ", not significant")
+               ", decided" if d.excludes_zero else f", not decided at {d.n} runs")
         items.append(f"{html.escape(other)} {_mean(sign * d.mean, unit, u)} ({ci}{sig})")
     n_sig = sum(_pair(diffs, best, o)[0].excludes_zero for o in order[1:])
     n_runs = min(d.n for d in diffs)
     verdict = (f"better than {n_sig} of the {len(order) - 1} other policies at 95 %"
                if n_runs >= 2 else "no confidence interval with a single run")
-    head = (f"<li><strong>{label}</strong>: lowest mean with <strong>{html.escape(best)}"
-            f"</strong>, {verdict}. ")
+    head = f"<li><strong>{label}</strong>: {_lowest(diffs, best, order[1], n_runs)}, {verdict}. "
     shown = items[:1] + ([items[-1]] if len(items) > 1 else [])
     names = ["runner-up", "last"][:len(shown)]
     rest = "; ".join(f"{n}: {html.escape(best)} − {i}" for n, i in zip(names, shown))
     missing = [html.escape(p) for p in policies if p not in rel]
     left = f" Mean undefined for {', '.join(missing)}." if missing else ""
     return head + rest + "." + left + "</li>"
+
+
+def _lowest(diffs: list[PairedDifference], best: str, runner_up: str, n_runs: int) -> str:
+    """Who has the lowest mean, said as a ranking only when the paired interval against the
+    runner-up excludes zero ("not decided at N runs" otherwise, issue 38)."""
+    name = f"<strong>{html.escape(best)}</strong>"
+    if n_runs >= 2 and _pair(diffs, best, runner_up)[0].excludes_zero:
+        return f"lowest mean with {name}"
+    return (f"lowest mean not decided at {n_runs} runs ({name} and "
+            f"{html.escape(runner_up)} within the interval)")
 
 
 def differences_html(result: CampaignResult) -> str:
@@ -179,7 +188,7 @@ def differences_html(result: CampaignResult) -> str:
             "get there.</p>"
             f"<details><summary>All {len(diffs)} paired differences (95 % confidence "
             "intervals)</summary><table><tr><th>pair</th><th>metric</th><th>mean</th>"
-            "<th>95 % CI</th><th>excludes 0</th></tr>" + "".join(rows) +
+            "<th>95 % CI</th><th>decided (excludes 0)</th></tr>" + "".join(rows) +
             "</table></details>")
 
 

@@ -7,7 +7,13 @@
    (the real-time iteration: the fast re-planning), without and with pings (scheduled and
    uniformly spaced), by paired Monte Carlo runs of the closed loop (particle filter,
    re-planning).
-4. Write the figures and a self-contained ``report.html`` to ``<out>/demo/``
+4. Print, and put first in the report, the **stored result**: campaigns of the same policies
+   sized to decide the differences that matter (:mod:`tmaplan.headline`, package data written
+   by ``benchmarks/demo_stored.py``), then this run's results, labelled illustrative: every
+   key difference with its paired 95 % interval, "not decided at N runs" where the interval
+   holds zero (40 runs cannot decide ``planned`` against the best single turn: about a
+   thousand can).
+5. Write the figures and a self-contained ``report.html`` to ``<out>/demo/``
    (:data:`REPORT_DIR`; ``tmaplan compare P`` writes to ``<out>/P_compare/``, so neither
    overwrites the other's report). The runs are stored in ``<out>/campaign-<key>/``, shared
    with ``compare`` and reloaded by a second demo.
@@ -22,8 +28,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from tmaplan.cli._args import (
     MAX_PARTICLES,
     MAX_RUNS,
@@ -34,6 +38,17 @@ from tmaplan.cli._args import (
 )
 from tmaplan.errors import PlanningError
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.headline import (
+    Comparison,
+    StoredResult,
+    key_json,
+    live_html,
+    live_lines,
+    load_stored,
+    stored_html,
+    stored_lines,
+    stored_payload,
+)
 from tmaplan.parallel import process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
@@ -68,8 +83,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_figure_arguments(parser, report=True)
     add_seed_argument(parser, help="root seed (default 0)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=40,
-                        help="Monte Carlo runs per policy (default 40 paired runs, enough "
-                             "for the demo's conclusions; use `tmaplan compare` for 200)")
+                        help="Monte Carlo runs per policy (default 40 paired runs: "
+                             "illustrative, most differences are not decided at that size; "
+                             "the demo prints first the stored result of 2000 and 300 runs "
+                             "that decides them)")
     parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
                         help="particle-filter size (default 3000)")
     parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2,
@@ -137,22 +154,22 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                         seed=args.seed, n_particles=args.particles)
     result = run_campaign(spec, out_dir=out, workers=args.workers, pool=pool,
                           progress=args.json != "-" and sys.stderr.isatty())
-    extra = _extra_html(plan, best, sched)
     cmd = (f"tmaplan demo --runs {args.runs} --particles {args.particles} --seed {args.seed} "
            f"--workers {args.workers} --out {args.out}")
+    stored = load_stored()
+    live = Comparison.from_campaign(result, command=cmd)
+    extra = stored_html(stored) + live_html(live, stored) + _extra_html(plan, best, sched)
     report = write_report(result, rep, command=cmd, title="tmaplan demo: problem 'default'",
                           extra_html=extra,
                           figures={"planned manoeuvre": rep / "plan.png",
                                    "ping schedule": rep / "schedule.png"})
-    for name in result.policies:
-        s = result.summary[name]
-        tta = s["time_to_accuracy"]
-        _say(args, f"      {name:<20} median time to 10 % range accuracy "
-                   f"{'never' if not np.isfinite(tta) else f'{tta / 60:5.1f} min'}, final "
-                   f"range RMSE {s['final_range_rmse']:6.0f} m")
+    for line in _headline(stored, live):
+        _say(args, line)
     seconds = time.perf_counter() - t0
     _say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
+    payload["stored"] = stored_payload(stored)
+    payload["key_differences"] = key_json(live, stored=stored)
     for name, e in efficiency(result).items():
         payload["policies"][name]["efficiency"] = e
     payload.update(report=str(report), seconds=seconds,
@@ -163,6 +180,12 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                              "uniform_objective": sched.uniform_objective,
                              "no_ping_objective": sched.no_ping_objective})
     return payload
+
+
+def _headline(stored: StoredResult, live: Comparison) -> list[str]:
+    """The console's results: the stored decisive campaigns first, then this run, labelled
+    illustrative; every difference with its paired 95 % interval (:mod:`tmaplan.headline`)."""
+    return ["", *stored_lines(stored), "", *live_lines(live, stored), ""]
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

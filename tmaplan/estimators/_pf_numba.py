@@ -279,10 +279,10 @@ def _gather_kernel(A: np.ndarray, idx: np.ndarray, L: np.ndarray, key: np.ndarra
                 r0, r1, r2, r3 = _philox(_U(lo + j), _U(0), s0, s1, k0, k1)
                 z0, z1 = _normals(r0, r1)
                 z2, z3 = _normals(r2, r3)
-                o0[j] = o0[j] + l00 * z0
-                o1[j] = o1[j] + (l10 * z0 + l11 * z1)
-                o2[j] = o2[j] + ((l20 * z0 + l21 * z1) + l22 * z2)
-                o3[j] = o3[j] + (((l30 * z0 + l31 * z1) + l32 * z2) + l33 * z3)
+                o0[j] = o0[j] + l00 * z0  # the numpy kernel's order (row by row)
+                o1[j] = (o1[j] + l10 * z0) + l11 * z1
+                o2[j] = ((o2[j] + l20 * z0) + l21 * z1) + l22 * z2
+                o3[j] = (((o3[j] + l30 * z0) + l31 * z1) + l32 * z2) + l33 * z3
 
 
 @_kernel(fastmath={"reassoc"})

@@ -125,7 +125,7 @@ def test_log_weights_match_the_numpy_likelihoods(clutter: float) -> None:
     st = pf.from_particles(X, log_weights=np.random.default_rng(2).normal(size=n))
     cfg = pf.config
     ms = _measurements()
-    lw, mx, fm, fv, ll = nb.log_weights(st, ms, cfg, move=True)
+    lw, mx, fm, fv, ll, parts = nb.log_weights(st, ms, cfg, move=True)
     ref = sum(_measurement_ll(X, m, clutter) for m in ms[:4])
     cf, fm_ref, fv_ref = _frequency_update(X, ms[4], None, None)
     ref = ref + cf
@@ -133,12 +133,17 @@ def test_log_weights_match_the_numpy_likelihoods(clutter: float) -> None:
     np.testing.assert_allclose(ll, ref, rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(lw, ref + st.log_weights, rtol=1e-12, atol=1e-9)
     assert mx == lw.max() and np.array_equal(fm, fm_ref) and np.array_equal(fv, fv_ref)
-    # normalised weights and ESS as the numpy kernel computes them
-    w, ess = nb.normalise(lw.copy(), mx)
+    # normalised weights, log-weights and ESS as the numpy kernel computes them (from this
+    # pass, or recomputed)
     w_ref = np.exp(lw - mx)
     w_ref /= w_ref.sum()
-    np.testing.assert_allclose(w, w_ref, rtol=1e-12, atol=1e-15 * w_ref.max())
-    np.testing.assert_allclose(ess, 1.0 / np.dot(w_ref, w_ref), rtol=1e-12)
+    lw_ref = lw - (mx + np.log(np.exp(lw - mx).sum()))
+    for p in (parts, None):
+        lw_n = lw.copy()
+        w, ess = nb.normalise(lw_n, p)
+        np.testing.assert_allclose(w, w_ref, rtol=1e-12, atol=1e-15 * w_ref.max())
+        np.testing.assert_allclose(lw_n, lw_ref, rtol=1e-12, atol=1e-10)
+        np.testing.assert_allclose(ess, 1.0 / np.dot(w_ref, w_ref), rtol=1e-12)
     # a particle at zero range: the residual of atan2(0, 0) = 0, as numpy's
     X[7, :2] = 0.0
     st = pf.from_particles(X)
@@ -267,3 +272,26 @@ def test_missing_numba_is_reported_plainly() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120).stdout
     assert "needs numba" in out and "kernel='numpy'" in out
+
+
+def test_non_finite_weights_are_zeroed_as_in_the_numpy_kernel() -> None:
+    # a whole block of zero prior weight (log w = −inf) and a particle whose likelihood is
+    # NaN (a frequency line at zero range): both get weight zero, the rest as numpy's
+    n = nb.BLOCK * 3 + 11
+    X = _cloud(n, 6)
+    X[nb.BLOCK + 5, :2] = 0.0
+    lw = np.zeros(n)
+    lw[:nb.BLOCK] = -np.inf
+    meas = [Measurement(kind="bearing", value=2.0, sigma=0.1),
+            Measurement(kind="frequency", value=[300.0], sigma=0.5)]
+    out = {}
+    for kernel in ("numpy", "numba"):
+        pf = ParticleFilter(PFConfig(n_particles=n, dt=1.0, q=1e-4, ess_threshold=0.0,
+                                     kernel=kernel))  # type: ignore[arg-type]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[kernel] = pf.update(pf.from_particles(X, log_weights=lw), meas,
+                                    np.random.default_rng(0))
+    a, b = out["numpy"], out["numba"]
+    assert b.weights[nb.BLOCK + 5] == 0.0 and not b.weights[:nb.BLOCK].any()
+    np.testing.assert_allclose(b.weights, a.weights, rtol=1e-11, atol=1e-300)
+    np.testing.assert_allclose(b.ess, a.ess, rtol=1e-12)

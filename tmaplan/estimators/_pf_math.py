@@ -71,6 +71,9 @@ _HALF_PI, _PI = 0.5 * math.pi, math.pi
 # --------------------------------------------------------------------------------------------
 # Elementary functions (scalar, inlined, branch-free: they vectorise inside the block loops)
 # --------------------------------------------------------------------------------------------
+# Not cached (``cache=True``) on purpose: a cached function is linked into its callers as
+# object code, which LLVM cannot inline, so the kernels' loops would no longer vectorise. They
+# are compiled into each kernel (whose cache holds them).
 
 
 def _bits_typer(typingctx: Any, x: Any) -> Any:
@@ -99,7 +102,7 @@ _bits: Any = intrinsic(_bits_typer)
 _from_bits: Any = intrinsic(_from_bits_typer)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _philox(c0: Any, c1: Any, c2: Any, c3: Any, k0: Any, k1: Any) -> tuple[Any, Any, Any, Any]:
     """Philox4x32-10 of counter (c0, c1, c2, c3) under key (k0, k1): 4 words < 2³² (uint64)."""
     for _ in range(10):
@@ -112,7 +115,7 @@ def _philox(c0: Any, c1: Any, c2: Any, c3: Any, k0: Any, k1: Any) -> tuple[Any, 
     return c0, c1, c2, c3
 
 
-@njit(cache=True)
+@njit
 def _log(x: float) -> float:
     """ln x for a normal float64 x > 0 (fdlibm's e_log.c, < 1 ulp), branch-free."""
     b = _bits(x)
@@ -131,7 +134,7 @@ def _log(x: float) -> float:
     return dk * _LN2_HI - ((hfsq - (s * (hfsq + r) + dk * _LN2_LO)) - f)
 
 
-@njit(cache=True)
+@njit
 def _sincos_turn(k: Any) -> tuple[float, float]:
     """(sin φ, cos φ) of φ = 2π k/2³² for an integer 0 ≤ k < 2³²: exact reduction to the
     nearest quarter turn, fdlibm's kernels on [−π/4, π/4] (< 1 ulp)."""
@@ -152,7 +155,7 @@ def _sincos_turn(k: Any) -> tuple[float, float]:
     return sq, cq
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _normals(a: Any, b: Any) -> tuple[float, float]:
     """Two independent standard normals from two 32-bit words (Box–Muller)."""
     rho = math.sqrt(-2.0 * _log((float(a) + 0.5) * _TWO_M32))
@@ -160,7 +163,7 @@ def _normals(a: Any, b: Any) -> tuple[float, float]:
     return rho * c, rho * s
 
 
-@njit(cache=True)
+@njit
 def _atan01(t: float) -> float:
     """atan t for 0 ≤ t ≤ 1 (Cephes atan.c, ≈ 1 ulp), branch-free."""
     big = t > 0.66
@@ -172,7 +175,7 @@ def _atan01(t: float) -> float:
     return (0.25 * _PI + y) + 0.5 * _MOREBITS if big else y
 
 
-@njit(cache=True)
+@njit
 def _abs_atan2(s: float, c: float) -> float:
     """|atan2(s, c)| ∈ [0, π] (0 for s = c = 0)."""
     a = abs(s)
@@ -184,7 +187,7 @@ def _abs_atan2(s: float, c: float) -> float:
     return _PI - phi if c < 0.0 else phi
 
 
-@njit(cache=True)
+@njit
 def _exp(x: float) -> float:
     """e^x for x ≤ 0 (−inf allowed; fdlibm's e_exp.c, < 1 ulp; 0 below −708)."""
     xc = max(x, -709.0)

@@ -102,7 +102,7 @@ def _n_blocks(n: int) -> int:
 # the block (``x = A[0, lo:lo + m]``, index j from 0): the form that LLVM vectorises.
 
 
-@njit(cache=True)
+@njit
 def _lane_sums(v: np.ndarray) -> tuple[float, float]:
     """(Σv, Σv²) of a 1-D array in 8 interleaved partial sums, added in a fixed order."""
     m = v.shape[0]
@@ -147,10 +147,11 @@ def _predict_kernel(A: np.ndarray, out: np.ndarray, dt: float, l11: float, l21: 
 
 @_kernel()
 def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.ndarray,
-                   extra: np.ndarray, out: np.ndarray, bmax: np.ndarray,
-                   bbad: np.ndarray) -> None:
-    """``out = lw + Σ log-likelihoods`` (up to constants); per block the maximum of the
-    finite values and the number of NaN or +inf ones.
+                   extra: np.ndarray, out: np.ndarray, w: np.ndarray,
+                   part: np.ndarray) -> None:
+    """``out = lw + Σ log-likelihoods`` (up to constants) and, per block b, its maximum m_b
+    over the finite values, the number of NaN or +inf values, and (when there is none and
+    m_b is finite) ``w = exp(out − m_b)`` with Σw and Σw²: ``part[b]`` = (m_b, #bad, Σw, Σw²).
 
     ``bear`` rows (sin z, cos z, 1/(√2 σ), |wrap z|, clutter floor or −inf): Gaussian in the
     wrapped residual ``|d| = |atan2(sin(z − β), cos(z − β))|``, optionally mixed with clutter;
@@ -189,43 +190,38 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
             for j in range(m):
                 d = (z - math.sqrt(x[j] * x[j] + y[j] * y[j])) * g
                 o[j] = o[j] - d * d
-        mx = np.full(8, -np.inf)
+        lanes = np.full(8, -np.inf)
         bad = 0
         for j in range(m):
             v = o[j]
             bad += 0 if v < np.inf else 1
-            mx[j % 8] = v if v > mx[j % 8] else mx[j % 8]
-        bmax[blk] = mx.max()
-        bbad[blk] = bad
+            lanes[j % 8] = v if v > lanes[j % 8] else lanes[j % 8]
+        mx = lanes.max()
+        part[blk, 0] = mx
+        part[blk, 1] = bad
+        wb = w[lo:lo + m]
+        if bad == 0 and mx > -np.inf:
+            for j in range(m):
+                wb[j] = _exp(o[j] - mx)
+            part[blk, 2], part[blk, 3] = _lane_sums(wb)
+        else:
+            for j in range(m):
+                wb[j] = 0.0
+            part[blk, 2], part[blk, 3] = 0.0, 0.0
 
 
 @_kernel()
-def _exp_kernel(lw: np.ndarray, mx: float, w: np.ndarray, s1: np.ndarray,
-                s2: np.ndarray) -> None:
-    """``w = exp(lw − mx)`` and per-block Σw, Σw²."""
+def _scale_kernel(lw: np.ndarray, w: np.ndarray, shift: float, scale: np.ndarray) -> None:
+    """``lw −= shift``, ``w *= scale[b]`` in block b (normalisation)."""
     n = lw.shape[0]
     nb = (n + BLOCK - 1) // BLOCK
     for blk in prange(nb):
         lo = blk * BLOCK
         m = min(BLOCK, n - lo)
-        p, o = lw[lo:lo + m], w[lo:lo + m]
-        for j in range(m):
-            o[j] = _exp(p[j] - mx)
-        s1[blk], s2[blk] = _lane_sums(o)
-
-
-@_kernel()
-def _scale_kernel(lw: np.ndarray, w: np.ndarray, shift: float, scale: float) -> None:
-    """``lw −= shift``, ``w *= scale`` (normalisation)."""
-    n = lw.shape[0]
-    nb = (n + BLOCK - 1) // BLOCK
-    for blk in prange(nb):
-        lo = blk * BLOCK
-        m = min(BLOCK, n - lo)
-        p, o = lw[lo:lo + m], w[lo:lo + m]
+        p, o, f = lw[lo:lo + m], w[lo:lo + m], scale[blk]
         for j in range(m):
             p[j] = p[j] - shift
-            o[j] = o[j] * scale
+            o[j] = o[j] * f
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
@@ -240,21 +236,30 @@ def _cumsum_kernel(w: np.ndarray, c: np.ndarray) -> None:
 @_kernel()
 def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
     """Systematic resampling indices from the CDF ``c`` of normalised weights and one uniform
-    u: the arithmetic of :func:`tmaplan.estimators._pf_kernels._systematic` (point j goes to
-    the first i with ``⌈(N / c_{N−1}) c_i − u⌉ > j``), so the same indices bit for bit.
-    Particle i fills the output positions ``[c'_{i−1}, c'_i)``: disjoint ranges per block."""
+    u: the arithmetic of :func:`tmaplan.estimators._pf_kernels._systematic`, so the same
+    indices bit for bit. With ``c'_i = max(⌈(N / c_{N−1}) c_i − u⌉, 0)`` (``c'_{N−1} = N``),
+    non-decreasing, output position j takes ``#{i : c'_i ≤ j}``. Block b owns the positions
+    ``[c'_{lo−1}, c'_{hi−1})``; each of its particles marks ``t = c'_i`` with i + 1 (the last
+    one wins), and a running maximum over the marks gives the count: no branch per particle.
+    """
     n = c.shape[0]
     nb = (n + BLOCK - 1) // BLOCK
     scale = n / c[n - 1]
     for blk in prange(nb):
         lo = blk * BLOCK
         hi = min(lo + BLOCK, n)
-        start = 0 if lo == 0 else max(math.ceil(c[lo - 1] * scale - u), 0)
-        for i in range(lo, hi):
-            stop = n if i == n - 1 else max(math.ceil(c[i] * scale - u), 0)
-            for pos in range(start, min(stop, n)):
-                idx[pos] = i
-            start = max(start, stop)
+        p0 = 0 if lo == 0 else max(math.ceil(c[lo - 1] * scale - u), 0)
+        p1 = n if hi == n else max(math.ceil(c[hi - 1] * scale - u), 0)
+        if p1 > p0:
+            mark = np.zeros(p1 - p0 + 1, dtype=np.intp)  # the last slot takes c'_i ≥ p1
+            for i in range(lo, hi):
+                ci = n if i == n - 1 else max(math.ceil(c[i] * scale - u), 0)
+                mark[min(ci, p1) - p0] = i + 1
+            run = lo
+            out = idx[p0:p1]
+            for t in range(p1 - p0):
+                run = max(run, mark[t])
+                out[t] = run
 
 
 @_kernel()
@@ -359,7 +364,7 @@ def normals(key: np.ndarray, n: int) -> np.ndarray:
 
 
 def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
-                ) -> tuple[np.ndarray, float, Any, Any, np.ndarray | None]:
+                ) -> tuple[np.ndarray, float, Any, Any, np.ndarray | None, Any]:
     """The unnormalised updated log-weights ``log w + Σ log p(z | x)`` of ``state`` (a
     :class:`~tmaplan.estimators.particle_filter.PFState`), as the numpy kernel computes them.
 
@@ -375,6 +380,8 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
         Updated by the frequency lines.
     ll : ndarray, shape (N,), or None
         Σ log p(z | x) alone (when ``move``).
+    parts : tuple
+        What :func:`normalise` needs of this pass (when mx is finite).
     """
     X = state.particles
     A = _rows(X)
@@ -399,39 +406,47 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
             extra = c if extra is None else extra + c
     B = np.array(bear, dtype=float).reshape(-1, 5)
     R = np.array(ranges, dtype=float).reshape(-1, 2)
-    lw, mx = _weigh(A, state.log_weights, B, R, extra)
+    lw, parts = _weigh(A, state.log_weights, B, R, extra)
     ll = _weigh(A, np.zeros(A.shape[1]), B, R, extra)[0] if move else None
-    return lw, mx, fm, fv, ll
+    mx = math.nan if parts[1][:, 1].any() else float(parts[1][:, 0].max())
+    return lw, mx, fm, fv, ll, parts
 
 
 def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
-           extra: np.ndarray | None) -> tuple[np.ndarray, float]:
-    """``lw`` plus the log-likelihoods, and its maximum (NaN if some value is NaN or +inf)."""
-    n = A.shape[1]
-    nb = _n_blocks(n)
-    out = np.empty(n)
-    bmax = np.empty(nb)
-    bbad = np.empty(nb, dtype=np.int64)
+           extra: np.ndarray | None) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """``lw`` plus the log-likelihoods, and the parts (w, per-block table) of
+    :func:`_loglik_kernel`."""
+    n = lw.shape[0]
+    out, w = np.empty(n), np.empty(n)
+    part = np.zeros((_n_blocks(n), 4))
     ex = np.empty(0) if extra is None else np.ascontiguousarray(extra, dtype=float)
     with _LOCK:
-        _loglik_kernel(n, A, np.ascontiguousarray(lw, dtype=float), bear, ranges, ex, out,
-                       bmax, bbad)
-    return out, (math.nan if bbad.any() else float(bmax.max()))
+        _loglik_kernel(n, A, np.ascontiguousarray(lw, dtype=float), bear, ranges, ex, out, w,
+                       part)
+    return out, (w, part)
 
 
-def normalise(lw: np.ndarray, mx: float) -> tuple[np.ndarray, float]:
-    """Normalise log-weights ``lw`` (max ``mx``, finite) in place: the weights and the ESS
-    ``(Σw)²/Σw²``."""
-    n = lw.shape[0]
-    nb = _n_blocks(n)
-    w = np.empty(n)
-    s1 = np.empty(nb)
-    s2 = np.empty(nb)
+_NO_ROWS = (np.zeros((0, 5)), np.zeros((0, 2)))
+
+
+def normalise(lw: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, float]:
+    """Normalise log-weights ``lw`` (finite maximum; NaN, +inf excluded) in place: the
+    weights and the ESS ``(Σw)²/Σw²``; ``parts`` from :func:`log_weights` if at hand.
+
+    With the block maxima m_b and M = max m_b, block b's weights ``exp(lw − m_b)`` are scaled
+    by ``e^(m_b − M)/Σw``, and ``lw`` shifted by ``M + log Σw``.
+    """
+    if parts is None:
+        _, parts = _weigh(np.zeros((2, lw.shape[0])), lw, *_NO_ROWS, None)
+    w, part = parts
+    mb, s1, s2 = part[:, 0], part[:, 2], part[:, 3]
+    M = float(mb.max())
+    f = np.exp(mb - M)  # 0 for a block of −inf only
+    tot = float(np.add.reduce(s1 * f))  # pairwise over blocks: a fixed order for a given N
+    ssq = float(np.add.reduce(s2 * (f * f)))
     with _LOCK:
-        _exp_kernel(n, lw, mx, w, s1, s2)
-        tot = float(np.add.reduce(s1))  # pairwise over blocks: a fixed order for a given N
-        ssq = float(np.add.reduce(s2))
-        _scale_kernel(n, lw, w, mx + math.log(tot), 1.0 / tot)
+        _scale_kernel(lw.shape[0], lw, w, M + math.log(tot), f / tot)
     return w, tot * tot / ssq
 
 

@@ -415,9 +415,11 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             and config.move_steps > 0 and all(m.kind != "frequency" for m in measurements))
     ll: np.ndarray | None = None
     ll_keep: np.ndarray | None = None
+    parts: Any = None
     fm, fv = state.freq_mean, state.freq_var
     if fast:  # the same log-weights, one compiled pass for bearings and ranges
-        lw, mx, fm, fv, ll_keep = _fast().log_weights(state, measurements, config, move)
+        lw, mx, fm, fv, ll_keep, parts = _fast().log_weights(state, measurements, config,
+                                                             move)
     else:
         for m in measurements:  # validated by update (_check_measurement)
             if m.kind in ("bearing", "range"):
@@ -441,9 +443,9 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             lw = np.zeros_like(lw)
         else:
             lw = np.where(finite, lw, -np.inf)
-        mx = lw.max()
+        mx, parts = lw.max(), None
     if fast:
-        w, ess = _fast().normalise(lw, float(mx))
+        w, ess = _fast().normalise(lw, parts)
     else:  # Normalise with one exp (max-shifted, in place), no logsumexp overhead.
         w = np.subtract(lw, mx)
         np.exp(w, out=w)

@@ -71,9 +71,10 @@ _HALF_PI, _PI = 0.5 * math.pi, math.pi
 # --------------------------------------------------------------------------------------------
 # Elementary functions (scalar, inlined, branch-free: they vectorise inside the block loops)
 # --------------------------------------------------------------------------------------------
-# Not cached (``cache=True``) on purpose: a cached function is linked into its callers as
-# object code, which LLVM cannot inline, so the kernels' loops would no longer vectorise. They
-# are compiled into each kernel (whose cache holds them).
+# Inlined by numba (``inline="always"``), not cached: a function compiled on its own (cached,
+# or called from Python first) is linked into its callers as a finished library that LLVM may
+# not inline, and the kernels' loops would then not vectorise (4× slower), depending on what
+# was compiled first. Inlined, each kernel holds its own copy (and caches it).
 
 
 def _bits_typer(typingctx: Any, x: Any) -> Any:
@@ -115,7 +116,7 @@ def _philox(c0: Any, c1: Any, c2: Any, c3: Any, k0: Any, k1: Any) -> tuple[Any, 
     return c0, c1, c2, c3
 
 
-@njit
+@njit(inline="always")
 def _log(x: float) -> float:
     """ln x for a normal float64 x > 0 (fdlibm's e_log.c, < 1 ulp), branch-free."""
     b = _bits(x)
@@ -134,7 +135,7 @@ def _log(x: float) -> float:
     return dk * _LN2_HI - ((hfsq - (s * (hfsq + r) + dk * _LN2_LO)) - f)
 
 
-@njit
+@njit(inline="always")
 def _sincos_turn(k: Any) -> tuple[float, float]:
     """(sin φ, cos φ) of φ = 2π k/2³² for an integer 0 ≤ k < 2³²: exact reduction to the
     nearest quarter turn, fdlibm's kernels on [−π/4, π/4] (< 1 ulp)."""
@@ -163,7 +164,7 @@ def _normals(a: Any, b: Any) -> tuple[float, float]:
     return rho * c, rho * s
 
 
-@njit
+@njit(inline="always")
 def _atan01(t: float) -> float:
     """atan t for 0 ≤ t ≤ 1 (Cephes atan.c, ≈ 1 ulp), branch-free."""
     big = t > 0.66
@@ -175,7 +176,7 @@ def _atan01(t: float) -> float:
     return (0.25 * _PI + y) + 0.5 * _MOREBITS if big else y
 
 
-@njit
+@njit(inline="always")
 def _abs_atan2(s: float, c: float) -> float:
     """|atan2(s, c)| ∈ [0, π] (0 for s = c = 0)."""
     a = abs(s)
@@ -187,7 +188,7 @@ def _abs_atan2(s: float, c: float) -> float:
     return _PI - phi if c < 0.0 else phi
 
 
-@njit
+@njit(inline="always")
 def _exp(x: float) -> float:
     """e^x for x ≤ 0 (−inf allowed; fdlibm's e_exp.c, < 1 ulp; 0 below −708)."""
     xc = max(x, -709.0)

@@ -102,7 +102,7 @@ def _n_blocks(n: int) -> int:
 # the block (``x = A[0, lo:lo + m]``, index j from 0): the form that LLVM vectorises.
 
 
-@njit
+@njit(inline="always")
 def _lane_sums(v: np.ndarray) -> tuple[float, float]:
     """(Σv, Σv²) of a 1-D array in 8 interleaved partial sums, added in a fixed order."""
     m = v.shape[0]

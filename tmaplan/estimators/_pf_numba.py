@@ -24,13 +24,19 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   ``atan``, ``exp``) from fdlibm / Cephes polynomials, accurate to a few ulp (tested against
   numpy), so that the loops vectorise without a vector math library: the same code, hence the
   same bits, whatever the SIMD width.
-* ``fastmath=False`` (IEEE, no reassociation or contraction), ``error_model="numpy"`` (no
-  division check in the loops), ``cache=True`` (compiled once per machine, then loaded).
+* ``fastmath=False`` (IEEE, no reassociation or contraction; the moments kernel alone
+  reassociates its sums), ``error_model="numpy"`` (no division check in the loops),
+  ``cache=True`` (compiled once per machine, then loaded).
+* **Threads.** From :data:`PARALLEL_MIN` particles on, the parallel build runs on numba's
+  threads (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); below, the serial build. OpenMP
+  threads wait passively between kernels (``OMP_WAIT_POLICY=PASSIVE`` unless set): spinning
+  threads take the cores from the one with work when other processes load the machine.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import threading
 import types
 from collections.abc import Sequence
@@ -336,6 +342,8 @@ def _moments_kernel(A: np.ndarray, w: np.ndarray, part: np.ndarray) -> None:
 # Python entry points
 # --------------------------------------------------------------------------------------------
 
+# Before numba starts its OpenMP threads (at the first parallel kernel); the user's choice wins.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 _LOCK = threading.Lock()  # one launch at a time (numba's workqueue layer needs it)
 
 

@@ -13,17 +13,17 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   ``numba.set_num_threads`` (and between the parallel and the serial build).
 * **Counter-based random numbers.** The noise of particle i is Philox4x32-10 (Salmon et al.
   2011, "Parallel random numbers: as easy as 1, 2, 3"; Random123's known-answer vectors are
-  tested) at counter ``(i, j, s0, s1)`` under key ``(k0, k1)``, where (k0, k1, s0, s1) are four
+  tested) at counter ``(i, 0, s0, s1)`` under key ``(k0, k1)``, where (k0, k1, s0, s1) are four
   32-bit words drawn from the injected ``numpy.random.Generator`` once per kernel call. So the
   draws are a function of that Generator alone (deterministic, any thread count), at no
   serial cost: drawing 4 normals per particle with the Generator itself costs more than the
   whole fused step (``benchmarks/particle_filter.py`` reports it). The normals are Box–Muller
-  on the 32-bit words in float64 (``u = (k + ½)/2³²`` so ``ln u`` is finite: tails truncated
-  at |z| ≤ 6.7, probability 2.5·10⁻¹¹ per draw).
+  on the 32-bit words in float64 (``u = (k + ½)/2³²``, so ``ln u`` is finite: the radius is
+  at most 6.76, the Gaussian mass beyond, ``2⁻³³ ≈ 1.2·10⁻¹⁰`` per pair, is not drawn).
 * **Branch-free float64 elementary functions** (``log``, ``sin``/``cos`` of a turn fraction,
   ``atan``, ``exp``) from fdlibm / Cephes polynomials, accurate to a few ulp (tested against
   numpy), so that the loops vectorise without a vector math library: the same code, hence the
-  same bits, whatever the SIMD width.
+  same bits, whatever the SIMD width (the moments' sums excepted, below).
 * ``fastmath=False`` (IEEE, no reassociation or contraction; the moments kernel alone
   reassociates its sums), ``error_model="numpy"`` (no division check in the loops),
   ``cache=True`` (compiled once per machine, then loaded).

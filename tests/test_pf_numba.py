@@ -26,10 +26,16 @@ U = np.uint64
 
 
 class _Same:
-    """A stand-in Generator that returns given numbers: normals (4, N), a uniform, a key."""
+    """A stand-in Generator that returns given numbers: normals (4, N), a uniform, a Philox
+    key (four 32-bit words, as two raw 64-bit draws of its bit generator)."""
 
     def __init__(self, Z: np.ndarray, u: float, key: np.ndarray) -> None:
         self.Z, self.u, self.key = Z, u, key
+        self.bit_generator = self
+
+    def random_raw(self, size: int) -> np.ndarray:
+        k = self.key.astype(np.uint64)
+        return np.array([k[0] | (k[1] << U(32)), k[2] | (k[3] << U(32))], dtype=np.uint64)
 
     def standard_normal(self, size: Any = None, out: np.ndarray | None = None) -> np.ndarray:
         if out is not None:
@@ -40,8 +46,6 @@ class _Same:
     def random(self) -> float:
         return self.u
 
-    def integers(self, *args: Any, **kwargs: Any) -> np.ndarray:
-        return self.key.copy()
 
 
 def _cloud(n: int, seed: int = 0) -> np.ndarray:

@@ -51,6 +51,8 @@ from tmaplan.estimators._pf_kernels import (
     _rows,
 )
 from tmaplan.estimators._pf_math import (
+    _MASK32,
+    _SH32,
     _U,
     _abs_atan2,
     _exp,
@@ -348,8 +350,11 @@ _LOCK = threading.Lock()  # one launch at a time (numba's workqueue layer needs 
 
 
 def _key(rng: np.random.Generator) -> np.ndarray:
-    """Four 32-bit words (key k0, k1; counter words s0, s1) from the injected Generator."""
-    return rng.integers(0, 2**32, size=4, dtype=np.uint64)
+    """Four 32-bit words (key k0, k1; counter words s0, s1): two raw 64-bit draws of the
+    injected Generator's bit generator (a tenth of the cost of ``integers``)."""
+    r = np.asarray(rng.bit_generator.random_raw(2), dtype=np.uint64)
+    return np.array([r[0] & _MASK32, r[0] >> _SH32, r[1] & _MASK32, r[1] >> _SH32],
+                    dtype=np.uint64)
 
 
 def predict_rows(A: np.ndarray, dt: float, chol: tuple[float, float, float], dv: np.ndarray,
@@ -448,14 +453,30 @@ def normalise(lw: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
     if parts is None:
         _, parts = _weigh(np.zeros((2, lw.shape[0])), lw, *_NO_ROWS, None)
     w, part = parts
-    mb, s1, s2 = part[:, 0], part[:, 2], part[:, 3]
-    M = float(mb.max())
-    f = np.exp(mb - M)  # 0 for a block of −inf only
-    tot = float(np.add.reduce(s1 * f))  # pairwise over blocks: a fixed order for a given N
-    ssq = float(np.add.reduce(s2 * (f * f)))
+    shift, f, ess = _weights_finish(part)
     with _LOCK:
-        _scale_kernel(lw.shape[0], lw, w, M + math.log(tot), f / tot)
-    return w, tot * tot / ssq
+        _scale_kernel(lw.shape[0], lw, w, shift, f)
+    return w, ess
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _weights_finish(part: np.ndarray) -> tuple[float, np.ndarray, float]:
+    """From the per-block (m_b, #bad, Σw, Σw²) of :func:`_loglik_kernel`: the log-weight shift
+    ``M + log Σw``, the block factors ``e^(m_b − M)/Σw`` and the ESS (sums in block order)."""
+    nb = part.shape[0]
+    M = -np.inf
+    for b in range(nb):
+        M = max(M, part[b, 0])
+    f = np.empty(nb)
+    tot = 0.0
+    ssq = 0.0
+    for b in range(nb):
+        f[b] = math.exp(part[b, 0] - M)  # 0 for a block of −inf only
+        tot += part[b, 2] * f[b]
+        ssq += part[b, 3] * (f[b] * f[b])
+    for b in range(nb):
+        f[b] = f[b] / tot
+    return M + math.log(tot), f, tot * tot / ssq
 
 
 def systematic(w: np.ndarray, u: float) -> np.ndarray:
@@ -490,10 +511,22 @@ def moments(A: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     part = np.empty((_n_blocks(A.shape[1]), 15))
     with _LOCK:
         _moments_kernel(A.shape[1], A, w, part)
-    s = np.add.reduce(part, axis=0)
-    sw = s[0]
-    m = s[1:5] / sw
-    S = np.zeros((4, 4))
-    S[np.triu_indices(4)] = s[5:] / sw
-    S = S + np.triu(S, 1).T
-    return A[:, 0] + m, S - np.outer(m, m)
+    return _moments_finish(part, A[:, 0].copy())
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _moments_finish(part: np.ndarray, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and covariance from the per-block sums of :func:`_moments_kernel` (block order)."""
+    s = np.zeros(15)
+    for b in range(part.shape[0]):
+        for q in range(15):
+            s[q] += part[b, q]
+    m = s[1:5] / s[0]
+    C = np.empty((4, 4))
+    k = 5
+    for r in range(4):
+        for t in range(r, 4):
+            C[r, t] = s[k] / s[0] - m[r] * m[t]
+            C[t, r] = C[r, t]
+            k += 1
+    return x0 + m, C

@@ -110,23 +110,39 @@ def _n_blocks(n: int) -> int:
 # the block (``x = A[0, lo:lo + m]``, index j from 0): the form that LLVM vectorises.
 
 
+@njit(fastmath={"reassoc"}, error_model="numpy", nogil=True)
+def _block_sums(v: np.ndarray) -> tuple[float, float]:
+    """(Σv, Σv²) of one block, reassociated so that LLVM vectorises them: the order is then
+    fixed by the compiled code and the block's length, not by the threads."""
+    a = 0.0
+    b = 0.0
+    for j in range(v.shape[0]):
+        a += v[j]
+        b += v[j] * v[j]
+    return a, b
+
+
 @njit(inline="always")
-def _lane_sums(v: np.ndarray) -> tuple[float, float]:
-    """(Σv, Σv²) of a 1-D array in 8 interleaved partial sums, added in a fixed order."""
-    m = v.shape[0]
+def _max_bad(o: np.ndarray) -> tuple[float, int]:
+    """(maximum, number of NaN or +inf values) of one block; the maximum in 8 interleaved
+    lanes, a NaN never selected (−inf for a block of NaN or −inf only)."""
+    m = o.shape[0]
     m8 = m - m % 8
-    a = np.zeros(8)
-    b = np.zeros(8)
+    l0 = l1 = l2 = l3 = l4 = l5 = l6 = l7 = -np.inf
     for j in range(0, m8, 8):
-        for k in range(8):
-            a[k] += v[j + k]
-            b[k] += v[j + k] * v[j + k]
-    s1 = ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
-    s2 = ((b[0] + b[1]) + (b[2] + b[3])) + ((b[4] + b[5]) + (b[6] + b[7]))
+        v0, v1, v2, v3 = o[j], o[j + 1], o[j + 2], o[j + 3]
+        v4, v5, v6, v7 = o[j + 4], o[j + 5], o[j + 6], o[j + 7]
+        l0, l1 = (v0 if v0 > l0 else l0), (v1 if v1 > l1 else l1)
+        l2, l3 = (v2 if v2 > l2 else l2), (v3 if v3 > l3 else l3)
+        l4, l5 = (v4 if v4 > l4 else l4), (v5 if v5 > l5 else l5)
+        l6, l7 = (v6 if v6 > l6 else l6), (v7 if v7 > l7 else l7)
+    mx = max(max(max(l0, l1), max(l2, l3)), max(max(l4, l5), max(l6, l7)))
     for j in range(m8, m):
-        s1 += v[j]
-        s2 += v[j] * v[j]
-    return s1, s2
+        mx = o[j] if o[j] > mx else mx
+    bad = 0
+    for j in range(m):
+        bad += 0 if o[j] < np.inf else 1
+    return mx, bad
 
 
 @_kernel()
@@ -198,20 +214,14 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
             for j in range(m):
                 d = (z - math.sqrt(x[j] * x[j] + y[j] * y[j])) * g
                 o[j] = o[j] - d * d
-        lanes = np.full(8, -np.inf)
-        bad = 0
-        for j in range(m):
-            v = o[j]
-            bad += 0 if v < np.inf else 1
-            lanes[j % 8] = v if v > lanes[j % 8] else lanes[j % 8]
-        mx = lanes.max()
+        mx, bad = _max_bad(o)
         part[blk, 0] = mx
         part[blk, 1] = bad
         wb = w[lo:lo + m]
         if bad == 0 and mx > -np.inf:
             for j in range(m):
                 wb[j] = _exp(o[j] - mx)
-            part[blk, 2], part[blk, 3] = _lane_sums(wb)
+            part[blk, 2], part[blk, 3] = _block_sums(wb)
         else:
             for j in range(m):
                 wb[j] = 0.0

@@ -176,6 +176,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", default=",".join(map(str, SIZES)))
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args(argv)
+    if args.runs < 2:
+        ap.error(f"--runs: at least 2 (for the Monte Carlo errors), received {args.runs}")
     sizes = [int(s) for s in args.sizes.split(",")]
     sc = load_problem("ristic-bot-moderate")
     K = sc.n_steps

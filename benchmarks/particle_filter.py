@@ -14,9 +14,10 @@ run (so the ratios compare like with like on a shared machine):
   numba against numpy and against Stone Soup (the filters see the same runs, so the paired
   test is the sharp one): "equal within MC error" means |z| < 2.
 
-Also printed: the load average before and after (other processes share the cores), numba's
-thread count, and what the random numbers cost per particle-step at each N: the numba
-kernel's Philox4x32-10 normals against drawing the 4 normals with the numpy Generator.
+BLAS runs on one thread (as in the campaigns); each N starts with one untimed run of each
+kernel. Also printed: the load average before and after (other processes share the cores),
+numba's thread count, and what the random numbers cost per particle-step at each N: the
+numba kernel's Philox4x32-10 normals against drawing the 4 normals with the numpy Generator.
 
 Stone Soup's state order is [x, vx, y, vy] and its bearing model measures atan2(Δy, Δx)
 (counter-clockwise from +x), so the measured bearings are converted with
@@ -169,6 +170,15 @@ def _load() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from threadpoolctl import threadpool_limits
+
+    # BLAS on one thread, as in the campaigns: OpenBLAS's threads spin after each call of the
+    # numpy kernel and would take the cores from numba's (and the numpy kernel is no faster)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
     import numba
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -186,16 +196,19 @@ def main(argv: list[str] | None = None) -> int:
         print("Stone Soup not installed: tmaplan only (pip install stonesoup==1.9.1)")
     seeds = np.random.SeedSequence(args.seed).spawn(args.runs)
     sims = [simulate(sc, np.random.default_rng(s)) for s in seeds]
+    _warm(sc, sims[0])  # first: numba's threads start after tmaplan set OMP_WAIT_POLICY
     print(f"ristic-bot-moderate: {K} steps, {args.runs} runs per N; bootstrap PF, systematic "
           f"resampling at ESS < N/2; numba {numba.__version__}, {numba.get_num_threads()} "
-          f"threads ({numba.threading_layer() if _warm(sc, sims[0]) else '-'} layer); "
-          f"load average {_load()}")
+          f"threads ({numba.threading_layer()} layer); load average {_load()}")
     print(f"{'N':>7} | {'numba steps/s':>13} {'numpy':>9} {'Stone Soup':>10} "
           f"{'nb/np':>6} {'nb/SS':>6} | {'final RMSE numba [m]':>20} {'numpy [m]':>14} "
           f"{'Stone Soup [m]':>14} {'z nb-np':>7} {'z nb-SS':>7}")
     for n in sizes:
         t = {"numba": 0.0, "numpy": 0.0, "ss": 0.0}
         e: dict[str, list[float]] = {"numba": [], "numpy": [], "ss": []}
+        for kernel in ("numba", "numpy"):  # untimed: the first large arrays of this size
+            run_tmaplan(sc, sims[0], relative_prior_samples(sc, n, np.random.default_rng(0)),
+                        np.random.default_rng(0), kernel)
         for i, sim in enumerate(sims):
             X0 = relative_prior_samples(sc, n, np.random.default_rng([args.seed, i, n]))
             for kernel in ("numba", "numpy"):
@@ -228,7 +241,7 @@ def main(argv: list[str] | None = None) -> int:
 _WARM: dict[str, float] = {}
 
 
-def _warm(sc: Any, sim: Any) -> bool:
+def _warm(sc: Any, sim: Any) -> None:
     """Compile (or load from numba's cache) the numba kernels, serial and parallel builds,
     outside the timed loops; prints the time it took."""
     from tmaplan.estimators import _pf_numba
@@ -239,7 +252,6 @@ def _warm(sc: Any, sim: Any) -> bool:
         run_tmaplan(sc, sim, X0, np.random.default_rng(0), "numba")
     _WARM["seconds"] = time.perf_counter() - t0
     print(f"numba kernels compiled or loaded from the cache in {_WARM['seconds']:.1f} s")
-    return True
 
 
 if __name__ == "__main__":

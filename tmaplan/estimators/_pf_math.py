@@ -7,10 +7,12 @@ same bits, whatever the SIMD width):
 
 * :func:`_philox`: Philox4x32-10 (Salmon, Moraes, Dror & Shaw 2011, "Parallel random numbers:
   as easy as 1, 2, 3"), checked against Random123's known-answer vectors in the tests;
-* :func:`_normals`: Box–Muller on two 32-bit words;
-* :func:`_log`, :func:`_sincos_turn`, :func:`_atan01` / :func:`_abs_atan2`, :func:`_exp`:
-  fdlibm's (e_log.c, k_sin.c, k_cos.c, e_exp.c) and Cephes' (atan.c) polynomials, accurate to
-  about 1 ulp (tested against numpy).
+* :func:`_normals`: Box–Muller on two 32-bit words, in float32 (:func:`_log32`,
+  :func:`_sincos_turn32`: Cephes' logf.c, sinf.c, cosf.c);
+* :func:`_log`, :func:`_atan01` / :func:`_abs_atan2`, :func:`_exp`: fdlibm's (e_log.c,
+  e_exp.c) and Cephes' (atan.c) float64 polynomials.
+
+All accurate to about 1 ulp of their type (tested against numpy).
 """
 
 from __future__ import annotations
@@ -44,11 +46,17 @@ _LN2_HI, _LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10
 _LG1, _LG2, _LG3 = 6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239149e-01
 _LG4, _LG5 = 2.222219843214978396e-01, 1.818357216161805012e-01
 _LG6, _LG7 = 1.531383769920937332e-01, 1.479819860511658591e-01
-# fdlibm k_sin.c, k_cos.c (|x| ≤ π/4)
-_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
-_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
-_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
-_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
+# Cephes logf.c, sinf.c, cosf.c (float32; sin and cos on |x| ≤ π/4)
+_F = np.float32
+_LF0, _LF1, _LF2 = _F(7.0376836292e-2), _F(-1.1514610310e-1), _F(1.1676998740e-1)
+_LF3, _LF4, _LF5 = _F(-1.2420140846e-1), _F(1.4249322787e-1), _F(-1.6668057665e-1)
+_LF6, _LF7, _LF8 = _F(2.0000714765e-1), _F(-2.4999993993e-1), _F(3.3333331174e-1)
+_LFQ1, _LFQ2 = _F(-2.12194440e-4), _F(0.693359375)
+_SF0, _SF1, _SF2 = _F(-1.9515295891e-4), _F(8.3321608736e-3), _F(-1.6666654611e-1)
+_CF0, _CF1, _CF2 = _F(2.443315711809948e-5), _F(-1.388731625493765e-3), _F(4.166664568298827e-2)
+_SQRTH_F, _ONE_F, _HALF_F, _M2_F = _F(0.70710678118654752), _F(1.0), _F(0.5), _F(-2.0)
+_TURN_F = _F(2.0 * math.pi / 2.0**32)  # radians per unit of a 32-bit turn fraction
+_TWO_M25_F = _F(2.0**-25)
 # Cephes atan.c (|x| ≤ 0.66)
 _AP0, _AP1 = -8.750608600031904122785e-01, -1.615753718733365076637e01
 _AP2, _AP3 = -7.500855792314704667340e01, -1.228866684490136173410e02
@@ -63,8 +71,6 @@ _EP1, _EP2 = 1.66666666666666019037e-01, -2.77777777770155933842e-03
 _EP3, _EP4 = 6.61375632143793436117e-05, -1.65339022054652515390e-06
 _EP5 = 4.13813679705723846039e-08
 
-_TURN = 2.0 * math.pi / 2.0**32  # radians per unit of a 32-bit turn fraction
-_TWO_M32 = 2.0**-32
 _HALF_PI, _PI = 0.5 * math.pi, math.pi
 
 
@@ -99,8 +105,32 @@ def _from_bits_typer(typingctx: Any, x: Any) -> Any:
     return types.float64(types.int64), codegen
 
 
+def _bits32_typer(typingctx: Any, x: Any) -> Any:
+    """The IEEE bits of a float32, as an int32 (an LLVM bitcast)."""
+    if not isinstance(x, types.Float):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        return builder.bitcast(args[0], ir.IntType(32))
+
+    return types.int32(types.float32), codegen
+
+
+def _from_bits32_typer(typingctx: Any, x: Any) -> Any:
+    """The float32 of given IEEE bits (an int32; an LLVM bitcast)."""
+    if not isinstance(x, types.Integer):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        return builder.bitcast(args[0], ir.FloatType())
+
+    return types.float32(types.int32), codegen
+
+
 _bits: Any = intrinsic(_bits_typer)
 _from_bits: Any = intrinsic(_from_bits_typer)
+_bits32: Any = intrinsic(_bits32_typer)
+_from_bits32: Any = intrinsic(_from_bits32_typer)
 
 
 @njit(inline="always")
@@ -136,17 +166,31 @@ def _log(x: float) -> float:
 
 
 @njit(inline="always")
-def _sincos_turn(k: Any) -> tuple[float, float]:
-    """(sin φ, cos φ) of φ = 2π k/2³² for an integer 0 ≤ k < 2³²: exact reduction to the
-    nearest quarter turn, fdlibm's kernels on [−π/4, π/4] (< 1 ulp)."""
+def _log32(x: Any) -> Any:
+    """ln x for a normal float32 x > 0 (Cephes' logf.c, ≈ 1 ulp of float32), branch-free."""
+    b = _bits32(x)
+    e = (b >> 23) - 126  # x = m 2^e, m ∈ [½, 1)
+    m = _from_bits32(np.int32((b & 0x007FFFFF) | 0x3F000000))
+    small = m < _SQRTH_F
+    e = e - 1 if small else e
+    f = (m + m - _ONE_F) if small else (m - _ONE_F)
+    z = f * f
+    y = ((((((((_LF0 * f + _LF1) * f + _LF2) * f + _LF3) * f + _LF4) * f + _LF5) * f + _LF6)
+          * f + _LF7) * f + _LF8) * f * z
+    fe = _F(e)
+    y = (y + _LFQ1 * fe) - _HALF_F * z
+    return (f + y) + _LFQ2 * fe
+
+
+@njit(inline="always")
+def _sincos_turn32(k: Any) -> tuple[Any, Any]:
+    """float32 (sin φ, cos φ) of φ = 2π k/2³² for an integer 0 ≤ k < 2³²: exact reduction to
+    the nearest quarter turn, Cephes' sinf/cosf polynomials on [−π/4, π/4] (≈ 1 ulp)."""
     qb = (k + _U(0x20000000)) >> _U(30)  # nearest quarter turn, 0..4
-    x = float(np.int64(k) - np.int64(qb << _U(30))) * _TURN
+    x = _F(np.int64(k) - np.int64(qb << _U(30))) * _TURN_F
     z = x * x
-    s = x + (z * x) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
-    hz = 0.5 * z
-    w = 1.0 - hz
-    c = w + (((1.0 - w) - hz) + z * (z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (
-        _C5 + z * _C6)))))))
+    s = ((_SF0 * z + _SF1) * z + _SF2) * z * x + x
+    c = (((_CF0 * z + _CF1) * z + _CF2) * z * z - _HALF_F * z) + _ONE_F
     q = qb & _U(3)
     odd = (q & _U(1)) != _U(0)
     sq = c if odd else s
@@ -158,10 +202,13 @@ def _sincos_turn(k: Any) -> tuple[float, float]:
 
 @njit(inline="always")
 def _normals(a: Any, b: Any) -> tuple[float, float]:
-    """Two independent standard normals from two 32-bit words (Box–Muller)."""
-    rho = math.sqrt(-2.0 * _log((float(a) + 0.5) * _TWO_M32))
-    s, c = _sincos_turn(b)
-    return rho * c, rho * s
+    """Two independent standard normals from two 32-bit words: Box–Muller in float32 (as the
+    numpy kernel's default noise), ``u = (2⌊a/2⁸⌋ + 1)/2²⁵`` so that ``ln u`` is finite: the
+    radius is at most 5.89, the Gaussian mass beyond (2⁻²⁵ ≈ 3·10⁻⁸ per pair) not drawn."""
+    u = _F(np.int64(((a >> _U(8)) << _U(1)) | _U(1))) * _TWO_M25_F
+    rho = np.sqrt(_M2_F * _log32(u))
+    s, c = _sincos_turn32(b)
+    return float(rho * c), float(rho * s)
 
 
 @njit(inline="always")

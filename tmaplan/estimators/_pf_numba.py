@@ -18,14 +18,16 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   draws are a function of that Generator alone (deterministic, any thread count), at no
   serial cost: drawing 4 normals per particle with the Generator itself costs more than the
   whole fused step (``benchmarks/particle_filter.py`` reports it). The normals are Box–Muller
-  on the 32-bit words in float64 (``u = (k + ½)/2³²``, so ``ln u`` is finite: the radius is
-  at most 6.76, the Gaussian mass beyond, ``2⁻³³ ≈ 1.2·10⁻¹⁰`` per pair, is not drawn).
-* **Branch-free float64 elementary functions** (``log``, ``sin``/``cos`` of a turn fraction,
-  ``atan``, ``exp``) from fdlibm / Cephes polynomials, accurate to a few ulp (tested against
-  numpy), so that the loops vectorise without a vector math library: the same code, hence the
-  same bits, whatever the SIMD width (the moments' sums excepted, below).
-* ``fastmath=False`` (IEEE, no reassociation or contraction; the moments kernel alone
-  reassociates its sums), ``error_model="numpy"`` (no division check in the loops),
+  on the 32-bit words, computed in float32 like the numpy kernel's default noise (radius at
+  most 5.89: the Gaussian mass beyond, 3·10⁻⁸ per pair, is not drawn); the particles stay
+  float64.
+* **Branch-free elementary functions** (float64 ``log``, ``atan``, ``exp``; float32 ``log``
+  and ``sin``/``cos`` of a turn fraction) from fdlibm / Cephes polynomials, accurate to about
+  1 ulp (tested against numpy), so that the loops vectorise without a vector math library:
+  the same code, hence the same bits, whatever the SIMD width (the moments' sums excepted,
+  below).
+* ``fastmath=False`` (IEEE, no reassociation or contraction; the block sums alone are
+  reassociated), ``error_model="numpy"`` (no division check in the loops),
   ``cache=True`` (compiled once per machine, then loaded).
 * **Threads.** From :data:`PARALLEL_MIN` particles on, the parallel build runs on numba's
   threads (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); below, the serial build. OpenMP

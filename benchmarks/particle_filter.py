@@ -1,15 +1,23 @@
-"""Particle-filter throughput and accuracy: tmaplan vs Stone Soup 1.9.1 on ristic-bot-moderate.
+"""Particle-filter throughput and accuracy: tmaplan's numba and numpy kernels vs Stone Soup 1.9.1.
 
-Both filters are bootstrap particle filters with systematic resampling when ESS < N/2, run on
-the same measurements (R seeded simulations), from the same prior particles, with the same
-particle counts N = 10³, 10⁴, 10⁵. Prints, per N:
+On ristic-bot-moderate, three bootstrap particle filters with systematic resampling when
+ESS < N/2 run on the same measurements (R seeded simulations), from the same prior particles,
+with N = 10³, 10⁴, 10⁵ particles: tmaplan with ``PFConfig(kernel="numba")`` (the default),
+tmaplan with ``kernel="numpy"`` (the reference kernel) and Stone Soup. Prints, per N, in one
+run (so the ratios compare like with like on a shared machine):
 
-* particle-steps per second of each (total filtering time over the R runs; the prior draw and
-  the simulation are outside the timed loop) and their ratio, measured in the same process;
-* the final-step position RMSE over the R runs with its Monte Carlo standard error
-  (delta method, ``se = sd(e²) / (2·RMSE·√R)``), and the paired difference of the mean
-  squared errors with its standard error (the two filters see the same runs, so the paired
+* particle-steps per second of each (total filtering time over the R runs; the prior draw, the
+  simulation and the numba compilation (or cache load, timed and printed first) are outside
+  the timed loop) and the ratios numba/numpy and numba/Stone Soup;
+* the final-step position RMSE over the R runs with its Monte Carlo standard error (delta
+  method, ``se = sd(e²) / (2·RMSE·√R)``), and the paired z of the mean squared errors of
+  numba against numpy and against Stone Soup (the filters see the same runs, so the paired
   test is the sharp one): "equal within MC error" means |z| < 2.
+
+BLAS runs on one thread (as in the campaigns); each N starts with one untimed run of each
+kernel. Also printed: the load average before and after (other processes share the cores),
+numba's thread count, and what the random numbers cost per particle-step at each N: the
+numba kernel's Philox4x32-10 normals against drawing the 4 normals with the numpy Generator.
 
 Stone Soup's state order is [x, vx, y, vy] and its bearing model measures atan2(Δy, Δx)
 (counter-clockwise from +x), so the measured bearings are converted with
@@ -36,10 +44,11 @@ from tmaplan.simulate import simulate
 SIZES = (1_000, 10_000, 100_000)
 
 
-def run_tmaplan(sc: Any, sim: Any, X0: np.ndarray, rng: np.random.Generator
-                ) -> tuple[float, float]:
+def run_tmaplan(sc: Any, sim: Any, X0: np.ndarray, rng: np.random.Generator,
+                kernel: str = "numba") -> tuple[float, float]:
     """Filtering wall time [s] and final position error [m] of one run."""
-    cfg = PFConfig(n_particles=X0.shape[0], dt=sc.time.dt, q=sc.target.q, variant="bootstrap")
+    cfg = PFConfig(n_particles=X0.shape[0], dt=sc.time.dt, q=sc.target.q, variant="bootstrap",
+                   kernel=kernel)  # type: ignore[arg-type]
     pf = ParticleFilter(cfg)
     batches = measurement_batches(sc, sim.measurements, sim.observer)
     dv = sim.observer.velocity_increments
@@ -129,12 +138,56 @@ def rmse_with_se(e: np.ndarray) -> tuple[float, float]:
     return rmse, se
 
 
+def paired_z(a: list[float], b: list[float]) -> float:
+    """z of the paired mean difference of squared errors (a² − b²)."""
+    d = np.asarray(a) ** 2 - np.asarray(b) ** 2
+    return float(d.mean() / (d.std(ddof=1) / np.sqrt(d.size))) if d.size > 1 else np.nan
+
+
+def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
+    """ns per particle-step of 4 normals: Philox in the kernel, the Generator (float64 and
+    float32 ziggurat into a preallocated buffer)."""
+    from tmaplan.estimators import _pf_numba
+
+    rng = np.random.default_rng(0)
+    key = np.arange(4, dtype=np.uint64)
+    buf64, buf32 = np.empty(4 * n), np.empty(4 * n, dtype=np.float32)
+    out = []
+    for f in (lambda: _pf_numba.normals(key, n), lambda: rng.standard_normal(out=buf64),
+              lambda: rng.standard_normal(out=buf32, dtype=np.float32)):
+        f()
+        t0 = time.perf_counter()
+        for _ in range(repeat):
+            f()
+        out.append((time.perf_counter() - t0) / repeat / n * 1e9)
+    return out[0], out[1], out[2]
+
+
+def _load() -> str:
+    import os
+
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
 def main(argv: list[str] | None = None) -> int:
+    from threadpoolctl import threadpool_limits
+
+    # BLAS on one thread, as in the campaigns: OpenBLAS's threads spin after each call of the
+    # numpy kernel and would take the cores from numba's (and the numpy kernel is no faster)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
+    import numba
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=20, help="Monte Carlo runs per N (default 20)")
     ap.add_argument("--sizes", default=",".join(map(str, SIZES)))
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args(argv)
+    if args.runs < 2:
+        ap.error(f"--runs: at least 2 (for the Monte Carlo errors), received {args.runs}")
     sizes = [int(s) for s in args.sizes.split(",")]
     sc = load_problem("ristic-bot-moderate")
     K = sc.n_steps
@@ -143,37 +196,62 @@ def main(argv: list[str] | None = None) -> int:
         print("Stone Soup not installed: tmaplan only (pip install stonesoup==1.9.1)")
     seeds = np.random.SeedSequence(args.seed).spawn(args.runs)
     sims = [simulate(sc, np.random.default_rng(s)) for s in seeds]
+    _warm(sc, sims[0])  # first: numba's threads start after tmaplan set OMP_WAIT_POLICY
     print(f"ristic-bot-moderate: {K} steps, {args.runs} runs per N; bootstrap PF, systematic "
-          "resampling at ESS < N/2")
-    print(f"{'N':>7} | {'tmaplan steps/s':>15} {'Stone Soup':>11} {'ratio':>6} | "
-          f"{'final RMSE tmaplan [m]':>22} {'Stone Soup [m]':>15} {'paired z':>8}")
+          f"resampling at ESS < N/2; numba {numba.__version__}, {numba.get_num_threads()} "
+          f"threads ({numba.threading_layer()} layer); load average {_load()}")
+    print(f"{'N':>7} | {'numba steps/s':>13} {'numpy':>9} {'Stone Soup':>10} "
+          f"{'nb/np':>6} {'nb/SS':>6} | {'final RMSE numba [m]':>20} {'numpy [m]':>14} "
+          f"{'Stone Soup [m]':>14} {'z nb-np':>7} {'z nb-SS':>7}")
     for n in sizes:
-        t_tm = t_ss = 0.0
-        e_tm, e_ss = [], []
+        t = {"numba": 0.0, "numpy": 0.0, "ss": 0.0}
+        e: dict[str, list[float]] = {"numba": [], "numpy": [], "ss": []}
+        for kernel in ("numba", "numpy"):  # untimed: the first large arrays of this size
+            run_tmaplan(sc, sims[0], relative_prior_samples(sc, n, np.random.default_rng(0)),
+                        np.random.default_rng(0), kernel)
         for i, sim in enumerate(sims):
             X0 = relative_prior_samples(sc, n, np.random.default_rng([args.seed, i, n]))
-            dt, e = run_tmaplan(sc, sim, X0, np.random.default_rng([args.seed, i, n, 1]))
-            t_tm += dt
-            e_tm.append(e)
+            for kernel in ("numba", "numpy"):
+                dt, err = run_tmaplan(sc, sim, X0, np.random.default_rng([args.seed, i, n, 1]),
+                                      kernel)
+                t[kernel] += dt
+                e[kernel].append(err)
             if ss is not None:
                 # Stone Soup draws from numpy's global RNG: seed it per run.
                 np.random.seed(args.seed * 1000 + i)  # noqa: NPY002
-                dt, e = run_stonesoup(ss, sc, sim, X0)
-                t_ss += dt
-                e_ss.append(e)
-        rate_tm = n * K * args.runs / t_tm
-        r_tm, se_tm = rmse_with_se(np.array(e_tm))
-        if ss is None:
-            print(f"{n:>7} | {rate_tm:>15.3g} {'-':>11} {'-':>6} | "
-                  f"{r_tm:>12.1f} ± {se_tm:<7.1f} {'-':>15} {'-':>8}")
-            continue
-        rate_ss = n * K * args.runs / t_ss
-        r_ss, se_ss = rmse_with_se(np.array(e_ss))
-        d = np.array(e_tm) ** 2 - np.array(e_ss) ** 2
-        z = float(d.mean() / (d.std(ddof=1) / np.sqrt(d.size))) if d.size > 1 else np.nan
-        print(f"{n:>7} | {rate_tm:>15.3g} {rate_ss:>11.3g} {rate_tm / rate_ss:>6.1f} | "
-              f"{r_tm:>12.1f} ± {se_tm:<7.1f} {r_ss:>7.1f} ± {se_ss:<5.1f} {z:>8.2f}")
+                dt, err = run_stonesoup(ss, sc, sim, X0)
+                t["ss"] += dt
+                e["ss"].append(err)
+        rate = {k: n * K * args.runs / v if v > 0 else np.nan for k, v in t.items()}
+        r = {k: rmse_with_se(np.array(v)) if v else (np.nan, np.nan) for k, v in e.items()}
+        z_np = paired_z(e["numba"], e["numpy"])
+        z_ss = paired_z(e["numba"], e["ss"]) if e["ss"] else np.nan
+        print(f"{n:>7} | {rate['numba']:>13.3g} {rate['numpy']:>9.3g} {rate['ss']:>10.3g} "
+              f"{rate['numba'] / rate['numpy']:>6.1f} {rate['numba'] / rate['ss']:>6.1f} | "
+              f"{r['numba'][0]:>11.1f} ± {r['numba'][1]:<6.1f} {r['numpy'][0]:>7.1f} ± "
+              f"{r['numpy'][1]:<4.1f} {r['ss'][0]:>7.1f} ± {r['ss'][1]:<4.1f} {z_np:>7.2f} "
+              f"{z_ss:>7.2f}")
+    print("noise, ns per particle-step (4 normals): " + "; ".join(
+        "N={}: Philox {:.2f}, Generator float64 {:.2f}, float32 {:.2f}".format(n, *noise_costs(n))
+        for n in sizes))
+    print(f"load average after: {_load()}")
     return 0
+
+
+_WARM: dict[str, float] = {}
+
+
+def _warm(sc: Any, sim: Any) -> None:
+    """Compile (or load from numba's cache) the numba kernels, serial and parallel builds,
+    outside the timed loops; prints the time it took."""
+    from tmaplan.estimators import _pf_numba
+
+    t0 = time.perf_counter()
+    for n in (1000, _pf_numba.PARALLEL_MIN):
+        X0 = relative_prior_samples(sc, n, np.random.default_rng(0))
+        run_tmaplan(sc, sim, X0, np.random.default_rng(0), "numba")
+    _WARM["seconds"] = time.perf_counter() - t0
+    print(f"numba kernels compiled or loaded from the cache in {_WARM['seconds']:.1f} s")
 
 
 if __name__ == "__main__":

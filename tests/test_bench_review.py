@@ -17,7 +17,8 @@ import pytest
 from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
-SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop")
+SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
+           "particle_filter")
 
 
 class _Parsed(Exception):
@@ -154,7 +155,7 @@ def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_s
 @pytest.mark.parametrize("script, argv", [
     ("planning_pays", ["--runs", "1"]), ("planning_general", ["--seed", "9", "--runs", "1"]),
     ("planning_general", ["--seed", "9", "--problems", "1"]),
-    ("value_of_information", ["--runs", "1"])])
+    ("value_of_information", ["--runs", "1"]), ("particle_filter", ["--runs", "1"])])
 def test_benchmarks_refuse_too_few_runs_before_work(benchmark_script, monkeypatch, capsys,
                                                     script, argv):
     # one run (or one problem) gave NaN standard deviations and intervals after the work

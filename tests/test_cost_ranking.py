@@ -260,8 +260,10 @@ def test_rank_costs_end_to_end_resumes_and_ranks_an_oracle_first(scenario, tmp_p
     assert second.campaign.computed_runs == () and second.campaign.loaded_runs == (0, 1)
     np.testing.assert_array_equal(second.time_to_accuracy, first.time_to_accuracy)
     assert len(set(first.time_to_accuracy)) == 4        # no ties: the oracle's order is strict
-    assert second.costs[0].name == "oracle"
-    assert second.costs[0].spearman == pytest.approx(1.0, abs=1e-12)
+    # first with ρ = 1, tied with any cost that happens to order the 4 candidates as well
+    # (1 chance in 24 each; ties keep the costs' order, the oracle comes last)
+    top = [c.name for c in second.costs if c.spearman == pytest.approx(1.0, abs=1e-12)]
+    assert "oracle" in top and [c.name for c in second.costs[:len(top)]] == top
 
 
 @pytest.mark.parametrize(("args", "message"), [

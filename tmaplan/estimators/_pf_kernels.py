@@ -8,6 +8,7 @@ particles.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -17,7 +18,7 @@ from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.models.sensors import bearing_loglik
 
 if TYPE_CHECKING:
-    from tmaplan.estimators.particle_filter import Measurement
+    from tmaplan.estimators.particle_filter import Measurement, PFConfig
 
 __all__ = ["systematic_resample"]
 
@@ -207,8 +208,12 @@ def _clutter(ll: np.ndarray, sigma: float, eps: float, period: float = _TWO_PI) 
     (:func:`_bearing_ll`): ``log((1 − ε) N(d; 0, σ²) + ε/period)`` up to the constant
     ``log((1 − ε)/(√(2π) σ))``; ``period`` 2π, or π for a bearing known modulo π (clutter
     uniform on the half circle its density lives on)."""
-    floor = np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * period))
-    return np.logaddexp(ll, floor)
+    return np.logaddexp(ll, _clutter_floor(sigma, eps, period))
+
+
+def _clutter_floor(sigma: float, eps: float, period: float) -> float:
+    """The clutter term ``log(ε √(2π) σ / ((1 − ε) period))`` of :func:`_clutter`."""
+    return float(np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * period)))
 
 
 def _measurement_ll(X: np.ndarray, m: Measurement, clutter: float = 0.0) -> np.ndarray:
@@ -277,3 +282,58 @@ def _frequency_update(X: np.ndarray, m: Measurement, fm: np.ndarray | None,
     return ll, fm_out, fv_out
 
 
+def _loglik(A: np.ndarray, measurements: Sequence[Measurement], clutter: float = 0.0
+            ) -> np.ndarray:
+    """Σ log p(z | x) over bearing and range measurements, (4, N) cloud → (N,): the
+    likelihood of the filter's update (the same clutter mixture), up to a constant."""
+    ll = np.zeros(A.shape[1])
+    for m in measurements:
+        ll += _measurement_ll(A.T, m, clutter)
+    return ll
+
+
+def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.ndarray,
+             measurements: Sequence[Measurement], rng: np.random.Generator,
+             config: PFConfig) -> np.ndarray:
+    """Random-walk Metropolis–Hastings sweeps on x_k with target ``f(x_k | x_{k−1}) g(z | x_k)``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (4, N)
+        Resampled cloud (modified in place and returned).
+    parent : ndarray, shape (4, N)
+        Each particle's ancestor at k − 1.
+    dv : ndarray, shape (2,) or None
+        Observer increment of the prediction [m/s].
+    ll : ndarray, shape (N,)
+        log g(z | x) of the resampled particles.
+    """
+    l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
+    dt = float(config.dt)
+    d = np.zeros(2) if dv is None else np.asarray(dv, float)
+    mu = np.empty_like(parent)  # F x_{k−1} − H Δv
+    mu[:2] = parent[:2] + dt * parent[2:] - (dt * d)[:, None]
+    mu[2:] = parent[2:] - d[:, None]
+
+    def logf(X: np.ndarray) -> np.ndarray:
+        # −½ (x − μ)' Q⁻¹ (x − μ) with the per-axis 2×2 Cholesky factor of Q.
+        y1 = (X[:2] - mu[:2]) / l11
+        y2 = (X[2:] - mu[2:] - l21 * y1) / l22
+        return -0.5 * (np.sum(y1 * y1, axis=0) + np.sum(y2 * y2, axis=0))
+
+    lp = ll + logf(A)
+    s = float(config.move_scale)
+    Z = np.empty_like(A)
+    for _ in range(int(config.move_steps)):
+        if config.noise == "float32":
+            _normals_f32(rng, Z)
+        else:
+            rng.standard_normal(out=Z)
+        prop = A.copy()
+        prop[:2] += (s * l11) * Z[:2]
+        prop[2:] += s * (l21 * Z[:2] + l22 * Z[2:])
+        lp_prop = _loglik(prop, measurements, config.bearing_clutter) + logf(prop)
+        acc = np.log(rng.random(A.shape[1])) < lp_prop - lp
+        A[:, acc] = prop[:, acc]
+        lp[acc] = lp_prop[acc]
+    return A

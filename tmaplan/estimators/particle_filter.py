@@ -50,7 +50,7 @@ import dataclasses
 import functools
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 from scipy.special import logsumexp
@@ -63,6 +63,7 @@ from tmaplan.estimators._pf_kernels import (
     _frequency_update,
     _gated,
     _measurement_ll,
+    _mh_move,
     _normals_f32,
     _rows,
     _safe_cholesky,
@@ -77,6 +78,7 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = [
+    "DEFAULT_KERNEL",
     "DegeneracyWarning",
     "Measurement",
     "PFConfig",
@@ -93,6 +95,10 @@ _KERNELS = (_normals_f32, _systematic)
 
 class DegeneracyWarning(RuntimeWarning):
     """The particle weights collapsed; the filter recovered by roughening."""
+
+
+#: The particle filter's default kernel (:attr:`PFConfig.kernel`); part of a campaign's key.
+DEFAULT_KERNEL: Literal["numba", "numpy"] = "numpy"
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -112,7 +118,8 @@ class PFConfig:
         Musso–Oudjane–Le Gland bandwidth ``h = bandwidth_scale·(4/(N(d+2)))^{1/(d+4)}`` times
         the Cholesky factor of the weighted covariance.
     ess_threshold : float
-        Resample when ESS < ess_threshold·N (systematic resampling).
+        Resample when ESS < ess_threshold·N (systematic resampling); 1: at every update
+        (ESS = N up to rounding for uniform weights, which must not decide it).
         "resample-move" (Gilks & Berzuini 2001): after each resampling, ``move_steps``
         Metropolis–Hastings moves of every particle targeting ``p(x_k | x_{k−1}, z_k)`` with
         its own ancestor ``x_{k−1}`` (random-walk proposal ``move_scale·chol(Q)·z``), which
@@ -130,6 +137,15 @@ class PFConfig:
         Resample-move: MH sweeps after each resampling.
     move_scale : float
         Resample-move: random-walk step in units of the process-noise Cholesky factor.
+    kernel : {"numba", "numpy"}
+        Default :data:`DEFAULT_KERNEL`. "numba": the compiled kernels of
+        :mod:`tmaplan.estimators._pf_numba`
+        (multi-threaded over fixed blocks of particles, bit-identical for any thread count;
+        process and jitter noise from Philox4x32-10 keyed by the injected Generator, Box–Muller
+        in float64). "numpy" (the default for now: stored campaigns and the demo's stored result
+        were flown with it): the batched numpy kernels, kept as the reference they are tested
+        against (same model, same resampling; other random numbers, so the same results in
+        distribution, not bit for bit). ``noise`` applies to "numpy" only.
     noise : {"float32", "float64"}
         Generator of the process-noise normals of :func:`predict`. "float64": numpy's
         ziggurat ``standard_normal``. "float32" (default, ≈ 3.5× faster, the largest single
@@ -154,6 +170,7 @@ class PFConfig:
     degeneracy_ess: float = 2.0
     roughening: float = 0.2
     noise: Literal["float32", "float64"] = "float32"
+    kernel: Literal["numba", "numpy"] = DEFAULT_KERNEL
     move_steps: int = 2
     move_scale: float = 0.5
     bearing_clutter: float = 0.0
@@ -179,6 +196,8 @@ class PFConfig:
             raise ArgumentError("ess_threshold", "in [0, 1]", self.ess_threshold)
         if self.noise not in ("float32", "float64"):
             raise ArgumentError("noise", "'float32' or 'float64'", self.noise)
+        if self.kernel not in ("numba", "numpy"):
+            raise ArgumentError("kernel", "'numba' or 'numpy'", self.kernel)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -206,6 +225,8 @@ class PFState:
         The cloud before the last one-step :func:`predict` (resample-move only uses it).
     parent_dv : ndarray, shape (2,), optional
         The observer increment of that prediction [m/s].
+    kernel : {"numpy", "numba"}
+        The kernel that computes :attr:`mean` and :attr:`cov` (:attr:`PFConfig.kernel`).
     """
 
     step: int
@@ -218,6 +239,7 @@ class PFState:
     degenerate: bool = False
     parent: np.ndarray | None = dataclasses.field(default=None, repr=False)
     parent_dv: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    kernel: Literal["numpy", "numba"] = dataclasses.field(default="numpy", repr=False)
 
     # weights and mean are computed once per state (a closed-loop step reads them four
     # times) and returned read-only, so that no caller can change the state's cached value
@@ -230,14 +252,23 @@ class PFState:
     @functools.cached_property
     def mean(self) -> np.ndarray:
         """Posterior mean of X, shape (4,) (read-only)."""
+        if self.kernel == "numba":
+            return _read_only(self._moments[0])
         return _read_only(self.weights @ self.particles)
 
     @property
     def cov(self) -> np.ndarray:
         """Posterior covariance of X, shape (4, 4)."""
+        if self.kernel == "numba":
+            return self._moments[1].copy()
         w = self.weights
         d = self.particles - self.mean
         return (d * w[:, None]).T @ d
+
+    @functools.cached_property
+    def _moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance in one pass of the numba kernel."""
+        return _fast().moments(_rows(self.particles), self.weights)
 
     @property
     def n(self) -> int:
@@ -248,6 +279,19 @@ class PFState:
 def _read_only(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
+
+
+def _fast() -> Any:
+    """The numba kernels (imported on first use: numba loads in about a second)."""
+    from tmaplan.estimators import _pf_numba
+
+    return _pf_numba
+
+
+def _with_weights(state: PFState, w: np.ndarray) -> PFState:
+    """``state`` with its :attr:`PFState.weights` already known (``exp(log_weights)``)."""
+    state.__dict__["weights"] = _read_only(w)
+    return state
 
 
 # --------------------------------------------------------------------------------------------
@@ -285,34 +329,39 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
         raise ArgumentError("dv", "a finite observer velocity increment of shape (2,) [m/s]",
                             dv)
     d = d.reshape(2)
-    An = np.empty_like(A)
-    pos, vel = An[:2], An[2:]
-    np.multiply(A[2:], dt, out=pos)
-    pos += A[:2]
-    if config.q > 0:
-        # NCV noise per axis from the 2×2 Cholesky factor of Q (block structure):
-        # w_pos = l11 z1, w_vel = l21 z1 + l22 z2, rows of Z = [z1x, z1y, z2x, z2y].
-        Z = np.empty((4, A.shape[1]))
-        if config.noise == "float32":
-            _normals_f32(rng, Z)
-        else:
-            rng.standard_normal(out=Z)
-        np.multiply(Z[:2], l21, out=vel)
-        Z[2:] *= l22
-        vel += Z[2:]
-        vel += A[2:]
-        Z[:2] *= l11
-        pos += Z[:2]
+    if config.kernel == "numba" and config.q > 0:
+        # the arithmetic below in one compiled pass, with Philox normals
+        An = _fast().predict_rows(A, dt, (l11, l21, l22), d, rng)
     else:
-        vel[...] = A[2:]
-    if d[0] != 0.0 or d[1] != 0.0:
-        pos -= (dt * d)[:, None]
-        vel -= d[:, None]
+        An = np.empty_like(A)
+        pos, vel = An[:2], An[2:]
+        np.multiply(A[2:], dt, out=pos)
+        pos += A[:2]
+        if config.q > 0:
+            # NCV noise per axis from the 2×2 Cholesky factor of Q (block structure):
+            # w_pos = l11 z1, w_vel = l21 z1 + l22 z2, rows of Z = [z1x, z1y, z2x, z2y].
+            Z = np.empty((4, A.shape[1]))
+            if config.noise == "float32":
+                _normals_f32(rng, Z)
+            else:
+                rng.standard_normal(out=Z)
+            np.multiply(Z[:2], l21, out=vel)
+            Z[2:] *= l22
+            vel += Z[2:]
+            vel += A[2:]
+            Z[:2] *= l11
+            pos += Z[:2]
+        else:
+            vel[...] = A[2:]
+        if d[0] != 0.0 or d[1] != 0.0:
+            pos -= (dt * d)[:, None]
+            vel -= d[:, None]
     move = config.variant == "resample-move"
-    return PFState(step=state.step + 1, particles=An.T, log_weights=state.log_weights,
-                   freq_mean=state.freq_mean, freq_var=state.freq_var, ess=state.ess,
-                   parent=state.particles if move else None,
-                   parent_dv=d.copy() if move else None)
+    new = PFState(step=state.step + 1, particles=An.T, log_weights=state.log_weights,
+                  freq_mean=state.freq_mean, freq_var=state.freq_var, ess=state.ess,
+                  parent=state.particles if move else None,
+                  parent_dv=d.copy() if move else None, kernel=config.kernel)
+    return _with_weights(new, state.weights) if "weights" in state.__dict__ else new
 
 
 def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.Generator,
@@ -367,26 +416,33 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
     """Bayes update by all ``measurements`` at once (the body of :func:`update`)."""
     if not measurements:
         return dataclasses.replace(state, resampled=False, degenerate=False)
+    fast = config.kernel == "numba"
     X = state.particles
     move = (config.variant == "resample-move" and state.parent is not None and config.q > 0
             and config.move_steps > 0 and all(m.kind != "frequency" for m in measurements))
     ll: np.ndarray | None = None
+    ll_keep: np.ndarray | None = None
+    parts: Any = None
     fm, fv = state.freq_mean, state.freq_var
-    for m in measurements:  # validated by update (_check_measurement)
-        if m.kind in ("bearing", "range"):
-            c = _measurement_ll(X, m, config.bearing_clutter)
-        elif m.kind == "frequency":
-            c, fm, fv = _frequency_update(X, m, fm, fv)
-        else:
-            raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'",
-                                m.kind)
-        ll = np.asarray(c, dtype=float) if ll is None else ll + c
-    assert ll is not None
-    ll_keep = ll.copy() if move else None
-    lw = ll
-    lw += state.log_weights
+    if fast:  # the same log-weights, one compiled pass for bearings and ranges
+        lw, mx, fm, fv, ll_keep, parts = _fast().log_weights(state, measurements, config,
+                                                             move)
+    else:
+        for m in measurements:  # validated by update (_check_measurement)
+            if m.kind in ("bearing", "range"):
+                c = _measurement_ll(X, m, config.bearing_clutter)
+            elif m.kind == "frequency":
+                c, fm, fv = _frequency_update(X, m, fm, fv)
+            else:
+                raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'",
+                                    m.kind)
+            ll = np.asarray(c, dtype=float) if ll is None else ll + c
+        assert ll is not None
+        ll_keep = ll.copy() if move else None
+        lw = ll
+        lw += state.log_weights
+        mx = lw.max()
     degenerate = False
-    mx = lw.max()
     if not np.isfinite(mx):  # NaN somewhere or all −inf / +inf
         finite = np.isfinite(lw)
         if not finite.any():
@@ -394,14 +450,16 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             lw = np.zeros_like(lw)
         else:
             lw = np.where(finite, lw, -np.inf)
-        mx = lw.max()
-    # Normalise with one exp (max-shifted, in place), no logsumexp overhead.
-    w = np.subtract(lw, mx)
-    np.exp(w, out=w)
-    tot = w.sum()
-    w *= 1.0 / tot
-    lw -= mx + np.log(tot)
-    ess = float(1.0 / np.dot(w, w))
+        mx, parts = lw.max(), None
+    if fast:
+        w, ess = _fast().normalise(lw, parts)
+    else:  # Normalise with one exp (max-shifted, in place), no logsumexp overhead.
+        w = np.subtract(lw, mx)
+        np.exp(w, out=w)
+        tot = w.sum()
+        w *= 1.0 / tot
+        lw -= mx + np.log(tot)
+        ess = float(1.0 / np.dot(w, w))
     if ess < config.degeneracy_ess:
         degenerate = True
     resampled = False
@@ -421,25 +479,27 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             fm, fv = fm[idx], fv[idx]
         lw = np.full(n, -np.log(n))
         resampled = True
-    elif ess < config.ess_threshold * n:
-        idx = _systematic(w, rng)
+    elif ess < config.ess_threshold * n or config.ess_threshold >= 1.0:
         A = _rows(X)
+        idx = _fast().systematic(w, rng.random()) if fast else _systematic(w, rng)
         if config.variant == "regularised":
-            C = _weighted_cov(A, w)
             d = A.shape[0]
             h = config.bandwidth_scale * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4))
-            Lc = h * _safe_cholesky(C)
-            A = np.take(A, idx, axis=1)
-            # A += Lc Z row by row (Lc lower triangular; no thin BLAS product).
-            Z = rng.standard_normal(A.shape)
-            tmp = np.empty(n)
-            for i in range(d):
-                for j in range(i + 1):
-                    if Lc[i, j] != 0.0:
-                        np.multiply(Z[j], Lc[i, j], out=tmp)
-                        A[i] += tmp
+            if fast:  # gather and jitter in one pass (Philox normals)
+                A = _fast().gather(A, idx, h * _safe_cholesky(_fast().moments(A, w)[1]), rng)
+            else:
+                Lc = h * _safe_cholesky(_weighted_cov(A, w))
+                A = np.take(A, idx, axis=1)
+                # A += Lc Z row by row (Lc lower triangular; no thin BLAS product).
+                Z = rng.standard_normal(A.shape)
+                tmp = np.empty(n)
+                for i in range(d):
+                    for j in range(i + 1):
+                        if Lc[i, j] != 0.0:
+                            np.multiply(Z[j], Lc[i, j], out=tmp)
+                            A[i] += tmp
         else:
-            A = np.take(A, idx, axis=1)
+            A = _fast().gather(A, idx, None, None) if fast else np.take(A, idx, axis=1)
             if move and ll_keep is not None and state.parent is not None:
                 A = _mh_move(A, np.take(_rows(state.parent), idx, axis=1), state.parent_dv,
                              ll_keep[idx], measurements, rng, config)
@@ -448,65 +508,11 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             fm, fv = fm[idx], fv[idx]
         lw = np.full(n, -np.log(n))
         resampled = True
-    return PFState(step=state.step, particles=X, log_weights=lw, freq_mean=fm, freq_var=fv,
-                   ess=ess, resampled=resampled, degenerate=degenerate)
-
-
-def _loglik(A: np.ndarray, measurements: Sequence[Measurement], clutter: float = 0.0
-            ) -> np.ndarray:
-    """Σ log p(z | x) over bearing and range measurements, (4, N) cloud → (N,): the
-    likelihood of :func:`_assimilate` (the same clutter mixture), up to a constant."""
-    ll = np.zeros(A.shape[1])
-    for m in measurements:
-        ll += _measurement_ll(A.T, m, clutter)
-    return ll
-
-
-def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.ndarray,
-             measurements: Sequence[Measurement], rng: np.random.Generator,
-             config: PFConfig) -> np.ndarray:
-    """Random-walk Metropolis–Hastings sweeps on x_k with target ``f(x_k | x_{k−1}) g(z | x_k)``.
-
-    Parameters
-    ----------
-    A : ndarray, shape (4, N)
-        Resampled cloud (modified in place and returned).
-    parent : ndarray, shape (4, N)
-        Each particle's ancestor at k − 1.
-    dv : ndarray, shape (2,) or None
-        Observer increment of the prediction [m/s].
-    ll : ndarray, shape (N,)
-        log g(z | x) of the resampled particles.
-    """
-    l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
-    dt = float(config.dt)
-    d = np.zeros(2) if dv is None else np.asarray(dv, float)
-    mu = np.empty_like(parent)  # F x_{k−1} − H Δv
-    mu[:2] = parent[:2] + dt * parent[2:] - (dt * d)[:, None]
-    mu[2:] = parent[2:] - d[:, None]
-
-    def logf(X: np.ndarray) -> np.ndarray:
-        # −½ (x − μ)' Q⁻¹ (x − μ) with the per-axis 2×2 Cholesky factor of Q.
-        y1 = (X[:2] - mu[:2]) / l11
-        y2 = (X[2:] - mu[2:] - l21 * y1) / l22
-        return -0.5 * (np.sum(y1 * y1, axis=0) + np.sum(y2 * y2, axis=0))
-
-    lp = ll + logf(A)
-    s = float(config.move_scale)
-    Z = np.empty_like(A)
-    for _ in range(int(config.move_steps)):
-        if config.noise == "float32":
-            _normals_f32(rng, Z)
-        else:
-            rng.standard_normal(out=Z)
-        prop = A.copy()
-        prop[:2] += (s * l11) * Z[:2]
-        prop[2:] += s * (l21 * Z[:2] + l22 * Z[2:])
-        lp_prop = _loglik(prop, measurements, config.bearing_clutter) + logf(prop)
-        acc = np.log(rng.random(A.shape[1])) < lp_prop - lp
-        A[:, acc] = prop[:, acc]
-        lp[acc] = lp_prop[acc]
-    return A
+    new = PFState(step=state.step, particles=X, log_weights=lw, freq_mean=fm, freq_var=fv,
+                  ess=ess, resampled=resampled, degenerate=degenerate, kernel=config.kernel)
+    if fast:
+        return _with_weights(new, np.full(n, 1.0 / n) if resampled else w)
+    return new
 
 
 # --------------------------------------------------------------------------------------------
@@ -555,7 +561,8 @@ class ParticleFilter:
                 raise ArgumentError("log_weights", f"shape ({n},), no NaN or +inf, not all "
                                     "-inf", lw.shape if lw.shape != (n,) else lw)
             lw = lw - logsumexp(lw)
-        return PFState(step=step, particles=X, log_weights=lw, ess=_ess(lw))
+        return PFState(step=step, particles=X, log_weights=lw, ess=_ess(lw),
+                       kernel=self.config.kernel)
 
     def from_prior(self, scenario: Scenario, rng: np.random.Generator, *,
                    observer_state0: np.ndarray | None = None) -> PFState:

@@ -31,6 +31,7 @@ import numpy as np
 from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.metrics import (
     PairedDifference,
@@ -118,7 +119,7 @@ class CampaignSpec:
         meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
-                "format": FORMAT, "tmaplan_version": __version__}
+                "format": FORMAT, "tmaplan_version": __version__, "pf_kernel": DEFAULT_KERNEL}
         manoeuvres = {p.split("+")[0] for p in self.policies}
         if "receding" in manoeuvres:
             # by name alone (`tmaplan compare`), runs stored while `receding` flew the

@@ -93,6 +93,7 @@ def test_simulate_is_finite(d, seed):
 
 @SETTINGS
 @given(scenario_dicts())
+@pytest.mark.solver_sensitive
 def test_closed_form_bound_is_finite_or_refused(d):
     from tmaplan.bounds.closed_form import closed_form_pcrb
 

@@ -34,6 +34,7 @@ def _straight(sc, prior):
     return p.solve(prior, raise_on_failure=False)
 
 
+@pytest.mark.solver_sensitive
 def test_step_at_the_optimum_stays_there(small):
     _, prior, _, plan, model = small
     out = RealTimeIteration(small[2], model).solve(prior, previous=plan)
@@ -42,6 +43,7 @@ def test_step_at_the_optimum_stays_there(small):
     assert np.allclose(out.turn_rate, plan.turn_rate, atol=1e-4 * small[2].u_max)
 
 
+@pytest.mark.solver_sensitive
 def test_steps_approach_the_ipopt_solution(small):
     sc, prior, planner, plan, model = small
     rti = RealTimeIteration(planner, model)
@@ -69,6 +71,7 @@ def test_rejected_step_falls_back_to_ipopt(small):
 
 
 @pytest.mark.parametrize("qpsol", QP_SOLVERS)
+@pytest.mark.solver_sensitive
 def test_every_qp_solver_gives_the_same_step(small, qpsol):
     sc, prior, planner, _, model = small
     start = _straight(sc, prior)
@@ -159,6 +162,7 @@ def test_receding_controller_uses_the_real_time_iteration(small):
     assert np.array_equal(res.turn_rate, again.turn_rate)
 
 
+@pytest.mark.solver_sensitive
 def test_receding_full_solve_when_the_optimum_moves_far(small, monkeypatch):
     from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.policies import Receding
@@ -233,6 +237,7 @@ def test_receding_full_solves_are_checked(small):
                 .resolve(sc).controller(sc)
 
 
+@pytest.mark.solver_sensitive
 def test_planner_tolerance_per_solve(small):
     """``tol`` loosens one solve (its own IPOPT instance): a warm re-solve stops no later and
     lands on the same optimum to within the looser tolerance; bad values are rejected."""
@@ -265,6 +270,7 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
     assert (multi.solver, multi.name) == ("multi-start", "receding-multistart")
 
 
+@pytest.mark.solver_sensitive
 def test_receding_multi_start_finds_the_other_side(small):
     """From the mirror image of the optimum a warm-started solve may stay on the wrong side;
     the multi-start re-plan also starts from the mirror of the previous plan, so it gets back
@@ -480,6 +486,7 @@ def test_real_time_only_fields_are_refused_with_another_solver(small):
     Receding(**kw, solver="real-time", full_above=0.5, rti_steps=2).resolve(sc)
 
 
+@pytest.mark.solver_sensitive
 def test_ipopt_re_plans_take_the_multi_start_where_asked(small):
     from tmaplan.evaluation.closed_loop import run_closed_loop
     from tmaplan.policies import Receding

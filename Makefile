@@ -23,8 +23,8 @@ test: $(STAMP) lint typecheck
 
 # The tests marked solver_sensitive (their outcome depends on a numerical path) again under two
 # other sets of numerical kernels: an older CPU's (numpy at its SIMD baseline, OpenBLAS on Sandy
-# Bridge kernels, one BLAS thread) and one without AVX-512 (OpenBLAS on Haswell kernels, two
-# threads); tests/kernels.py prints each setting and the kernels it loaded.
+# Bridge kernels, one BLAS thread, glibc's libm without FMA) and one without AVX-512 (OpenBLAS on
+# Haswell kernels, two threads); tests/kernels.py prints each setting and what it loaded.
 test-kernels: $(STAMP)
 	$(BIN)/python tests/kernels.py -n auto
 

@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: test test-slow demo docs lint typecheck bench clean
+.PHONY: test test-kernels test-slow demo docs lint typecheck bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -20,6 +20,13 @@ typecheck: $(STAMP)
 
 test: $(STAMP) lint typecheck
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" -n auto  # one worker per core (pytest-xdist)
+
+# The tests marked solver_sensitive (their outcome depends on a numerical path) again under two
+# other sets of numerical kernels: an older CPU's (numpy at its SIMD baseline, OpenBLAS on Sandy
+# Bridge kernels, one BLAS thread, glibc's libm without FMA) and one without AVX-512 (OpenBLAS on
+# Haswell kernels, two threads); tests/kernels.py prints each setting and what it loaded.
+test-kernels: $(STAMP)
+	$(BIN)/python tests/kernels.py -n auto
 
 test-slow: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m slow

@@ -97,6 +97,7 @@ def test_moment_dterms_match_sample_averages():
 
 
 # ------------------------------------------------------------ numeric vs casadi vs batched
+@pytest.mark.solver_sensitive
 def test_numpy_batched_and_casadi_agree_with_derivatives():
     sc = _short("brehard2005-s2", 2400.0)  # includes the 1500 s manoeuvre
     model = _quiet(closed_form_model, sc, prior_samples=20_000)
@@ -211,6 +212,7 @@ def _rotate(sc, phi):
                                      velocity=rot(sc.observer.velocity)))
 
 
+@pytest.mark.solver_sensitive
 def test_rotation_and_translation_invariance(monkeypatch):
     import tmaplan.bounds.inputs as setup
 
@@ -355,6 +357,7 @@ def _schedules(K, rng):
 
 @pytest.mark.skipif(not __import__("tmaplan.bounds._jit", fromlist=["x"]).jit_enabled(),
                     reason="no C compiler: the compiled path is not available")
+@pytest.mark.solver_sensitive
 def test_compiled_paths_equal_reference_paths():
     # issue 4 speed work: the compiled step functions (casadi codegen + gcc) and the C schedule
     # kernel (emitted from the SX graph of the same generic step) must reproduce the casadi-VM

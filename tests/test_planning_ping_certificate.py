@@ -34,6 +34,7 @@ def _brute(ev, cand, budget, gap):
 
 @pytest.mark.parametrize("objective", ["mean-range-bound", "terminal-range-bound",
                                        "mean-position-bound"])
+@pytest.mark.solver_sensitive
 def test_relaxation_below_exhaustive_optimum_and_tight(short, short_prior, objective):
     ev = _evaluator(short, short_prior, objective)
     cand = np.arange(1, ev.K + 1)
@@ -66,6 +67,7 @@ def test_relaxation_bound_with_coarse_candidates(default, prior):
     assert r.status.startswith("certified") and r.lower_bound <= best
 
 
+@pytest.mark.solver_sensitive
 def test_certificate_removes_the_solvers_duality_gap(short, short_prior, monkeypatch):
     # the solver's value is primal (above the relaxed optimum by up to its stopping gap):
     # even when the evaluator agrees with it exactly, the bound lies below it by that gap

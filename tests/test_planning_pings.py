@@ -21,6 +21,7 @@ def evaluator(default, prior):
                          "mean-range-bound")
 
 
+@pytest.mark.solver_sensitive
 def test_evaluator_matches_closed_form_model(default, evaluator):
     # independent evaluation path: tmaplan.bounds.closed_form (scenario prior, np.cov J0)
     from tmaplan.bounds.closed_form import closed_form_model
@@ -207,6 +208,7 @@ def _first_step(sc, first_step):
 
 
 @pytest.mark.parametrize("first_step", [0, 1])
+@pytest.mark.solver_sensitive
 def test_planning_from_the_prior_counts_the_bearing_at_t0(default, first_step):
     """A plan from the prior (Belief.from_prior, which holds no measurement) counts a bearing
     taken at t0 (first_step = 0, e.g. clavard2013-*): the scheduler's, the ping evaluator's

@@ -9,6 +9,7 @@ that naming is the file format only, never an in-memory interface.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -203,7 +204,8 @@ class RunRecord:
                 np.savez(fh, **arrays)
             os.replace(tmp, path)
         except BaseException:  # a full disk, an interrupt: no stray .tmp file in the cache
-            os.remove(tmp)
+            with contextlib.suppress(FileNotFoundError):  # (an interrupt after the rename)
+                os.remove(tmp)
             raise
 
     @classmethod

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import hashlib
 import json
+import linecache
 import os
 import re
 import shlex
@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tmaplan.evaluation.records import RunRecord, run_file_digest, without_timings
 from tmaplan.interrupts import Interrupted, signals_interrupt, solver_call
 
 pytestmark = [
@@ -105,17 +106,28 @@ def test_signals_interrupt_handles_sigterm_as_ctrl_c_and_restores(capsys):
     assert capsys.readouterr().err == "kept\nCasADi - other\n"
 
 
+def _solving(frame) -> bool:
+    """Whether ``frame`` is casadi's Python wrapper called from the solver call of a
+    ``with solver_call():`` block (not another casadi call: building a solver, evaluating a
+    function)."""
+    if frame is None or not frame.f_code.co_filename.endswith("casadi.py"):
+        return False
+    while frame is not None and frame.f_code.co_filename.endswith("casadi.py"):
+        frame = frame.f_back
+    return frame is not None and "solver_call()" in linecache.getline(
+        frame.f_code.co_filename, frame.f_lineno - 1)
+
+
 def _signal_in_solver(sig: int, dwell: float = 0.25) -> threading.Thread:
     """A thread that sends ``sig`` to this process once its main thread has been inside one
-    casadi call (C code: its innermost Python frame unchanged) for ``dwell`` seconds."""
+    solver call (C code: its innermost Python frame unchanged) for ``dwell`` seconds."""
     main = threading.main_thread().ident
 
     def watch() -> None:
         seen, since = None, time.perf_counter()
         for _ in range(6000):
             frame = sys._current_frames().get(main)
-            here = None if frame is None or not frame.f_code.co_filename.endswith(
-                "casadi.py") else (id(frame), frame.f_lasti)
+            here = (id(frame), frame.f_lasti) if _solving(frame) else None
             if here is None or here != seen:
                 seen, since = here, time.perf_counter()
             elif time.perf_counter() - since >= dwell:
@@ -173,10 +185,9 @@ def test_interrupted_receding_replan_raises_and_logs_no_failure(default, prior):
     assert ctrl.log == [] and ctrl.plan is None  # no failed re-plan, no plan kept
 
 
-@pytest.mark.parametrize("solver", ["SCS", "CLARABEL"])
-def test_interrupted_cvxpy_solve_raises(solver):
+def test_interrupted_scs_solve_raises():
     """SCS catches SIGINT with its own handler and reports a failed solve (cvxpy: a
-    SolverError, which the ping relaxation falls back on); Clarabel raises."""
+    SolverError, which the ping relaxation falls back on): solve_interruptibly raises."""
     import cvxpy as cp
 
     from tmaplan.planning.ping_relaxation import solve_interruptibly
@@ -187,26 +198,23 @@ def test_interrupted_cvxpy_solve_raises(solver):
     x = cp.Variable(n)
     problem = cp.Problem(cp.Minimize(cp.sum_squares(A @ x - b) + cp.norm1(x)),
                          [cp.norm(x, 2) <= 1, x >= -0.5])
-    opts = {"max_iters": 10**7, "eps_abs": 1e-14, "eps_rel": 1e-14} if solver == "SCS" else {
-        "max_iter": 10**6, "tol_gap_abs": 1e-300, "tol_gap_rel": 1e-300, "tol_feas": 1e-300}
-    problem.get_problem_data(solver)  # compiled before the clock starts
+    opts = {"max_iters": 10**7, "eps_abs": 1e-14, "eps_rel": 1e-14}  # (unattainable: seconds)
+    problem.get_problem_data("SCS")  # compiled before the clock starts
     timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
     with pytest.raises(KeyboardInterrupt) as ei:
         try:
             timer.start()
-            solve_interruptibly(problem, solver, opts)
+            solve_interruptibly(problem, "SCS", opts)
         finally:
             timer.join()
-    # raised in the solve, not after it (SCS: by solve_interruptibly, from SCS's status)
+    # raised in the solve, from SCS's status, not after it
     assert "solve_interruptibly" in [f.name for f in traceback.extract_tb(ei.tb)]
 
 
 def test_interrupted_pool_stops_at_once_and_returns_no_result():
     from tmaplan.parallel import process_pool
 
-    with process_pool(2) as pool:
-        # the workers ignore SIGINT (the main process stops them), from their start
-        assert pool.submit(signal.getsignal, signal.SIGINT).result() == signal.SIG_IGN
+    with process_pool(2) as pool:  # (its workers' SIGINT: tests/test_parallel.py)
         futures = [pool.submit(time.sleep, 60) for _ in range(4)]
         time.sleep(0.5)
         t0 = time.perf_counter()
@@ -234,27 +242,13 @@ def _run_files(out: Path, pattern: str = "*") -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(out.glob(f"campaign-*/runs/{pattern}"))}
 
 
-def _contents(out: Path) -> dict[str, dict[str, tuple[str, tuple[int, ...], str]]]:
-    """Every stored run's arrays (dtype, shape, sha256 of the bytes) but the wall-clock
-    ``*/replan_seconds``."""
-    out_ = {}
-    for p in sorted(out.glob("campaign-*/runs/run_*.npz")):
-        with np.load(p) as z:
-            out_[p.name] = {k: (z[k].dtype.str, z[k].shape,
-                                hashlib.sha256(np.ascontiguousarray(z[k]).tobytes()).hexdigest())
-                            for k in z.files if not k.endswith("/replan_seconds")}
-    return out_
+def _contents(out: Path) -> dict[str, dict[str, str]]:
+    """Every stored run's arrays but the wall-clock ``*/replan_seconds``."""
+    return {p.name: run_file_digest(p) for p in sorted(out.glob("campaign-*/runs/run_*.npz"))}
 
 
 def _untimed(payload: dict) -> str:
-    """A campaign's JSON without its wall-clock fields (``*seconds*``) and without what says
-    how it was obtained (runs computed or loaded, paths)."""
-    def drop(x):
-        if isinstance(x, dict):
-            return {k: drop(v) for k, v in x.items() if "seconds" not in k and k not in (
-                "computed_runs", "loaded_runs", "report", "directory")}
-        return [drop(v) for v in x] if isinstance(x, list) else x
-    return json.dumps(drop(payload), sort_keys=True)
+    return json.dumps(without_timings(payload), sort_keys=True)
 
 
 @pytest.fixture(scope="module")
@@ -279,6 +273,24 @@ def reference(tiny_file, tmp_path_factory):
     t0 = time.perf_counter()
     result = run_campaign(_spec(scenario), out_dir=out)
     return result, out, time.perf_counter() - t0
+
+
+def test_run_digest_leaves_out_the_wall_clock_only(reference, tmp_path):
+    path = next(reference[1].glob("campaign-*/runs/run_00000.npz"))
+    rec = RunRecord.load(path, POLICIES)
+    pol = rec.policies["receding"]
+    assert pol.replan_seconds.size > 0
+    slower = {**rec.policies, "receding": dataclasses.replace(
+        pol, replan_seconds=pol.replan_seconds + 1.0)}
+    dataclasses.replace(rec, policies=slower).save(tmp_path / "slower.npz")
+    assert run_file_digest(tmp_path / "slower.npz") == run_file_digest(path)
+    moved = {**rec.policies, "receding": dataclasses.replace(
+        pol, observer=np.nextafter(pol.observer, np.inf))}
+    dataclasses.replace(rec, policies=moved).save(tmp_path / "moved.npz")
+    assert run_file_digest(tmp_path / "moved.npz") != run_file_digest(path)
+    payload = {"policies": {"a": {"replan_seconds": 1.0, "rmse": [1.0]}}, "seconds": 3.0,
+               "computed_runs": 2, "loaded_runs": 1}
+    assert without_timings(payload) == {"policies": {"a": {"rmse": [1.0]}}}
 
 
 def _interrupt_after(delay: float, fn):

@@ -34,12 +34,15 @@ from tmaplan.errors import ArgumentError
 from tmaplan.interrupts import ignoring_sigint
 
 __all__ = ["SharedPayload", "WorkerPool", "call_with_payload", "close_pool", "closing_pool",
-           "process_pool"]
+           "process_pool", "worker_signals"]
 
 
-def _ignore_sigint() -> None:
-    """A worker's initializer: SIGINT is the main process's to handle."""
+def worker_signals() -> None:
+    """A worker process's initializer: SIGINT ignored (the main process handles it and stops
+    its workers), SIGTERM back to its default action (a worker forked from a process with
+    the command line's handlers would otherwise raise, and print, instead of ending)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 class WorkerPool(ProcessPoolExecutor):
@@ -126,7 +129,7 @@ def process_pool(workers: int) -> WorkerPool:
         raise ArgumentError("workers", "an integer >= 1", workers)
     with ignoring_sigint():  # the workers are born ignoring it (a Ctrl-C while they import)
         pool = WorkerPool(max_workers=workers, mp_context=get_context("spawn"),
-                          initializer=_ignore_sigint)
+                          initializer=worker_signals)
         for _ in range(workers):  # one task per worker: the pool spawns them all now
             pool.submit(_warm_up)
     return pool

@@ -17,6 +17,7 @@ import dataclasses
 import json
 import linecache
 import os
+import pickle
 import re
 import shlex
 import signal
@@ -97,6 +98,9 @@ def test_signals_interrupt_handles_sigterm_as_ctrl_c_and_restores(capsys):
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)
     assert ei.value.signum == signal.SIGTERM and ei.value.exit_status == 143
+    again = pickle.loads(pickle.dumps(Interrupted(signal.SIGTERM, "2 of 3 runs kept", True)))
+    assert (again.signum, again.detail, again.resumable) == (signal.SIGTERM, "2 of 3 runs kept",
+                                                             True)
     assert signal.getsignal(signal.SIGTERM) is before
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     with signals_interrupt():  # casadi's warning about the interrupt, written in pieces

@@ -4,17 +4,20 @@ casadi's IPOPT, bonmin, ``sqpmethod`` and ``qrqp`` poll for Ctrl-C between itera
 run Python's SIGINT handler, catch the :class:`KeyboardInterrupt` it raises, print
 ``WARNING("KeyboardInterruptException")`` and return a failed solve (IPOPT's status
 ``NonIpopt_Exception_Thrown``, bonmin's ``USER_INTERRUPT``; ``sqpmethod`` raises a
-``RuntimeError``). A caller that falls back on a failed solve (a re-plan keeps the previous
-plan, a multi-start drops the start) would then quietly compute something else and finish
-with exit status 0 (issue 38). Every solver call of tmaplan therefore runs inside
-:func:`solver_call`, which raises :class:`Interrupted` when a signal arrived during the call,
-whatever the solver returned; the fallbacks catch :class:`~tmaplan.errors.PlanningError` (or
-``Exception``), never a :class:`KeyboardInterrupt`, so the interrupt reaches the caller.
+``RuntimeError``); SCS (through cvxpy) catches SIGINT with a handler of its own and reports a
+failed solve. A caller that falls back on a failed solve (a re-plan keeps the previous plan, a
+multi-start drops the start) would then quietly compute something else and finish with exit
+status 0 (issue 38). Every solver call of tmaplan therefore runs inside :func:`solver_call`,
+which raises :class:`Interrupted` when a signal arrived during the call, whatever the solver
+returned (SCS: :func:`tmaplan.planning.ping_relaxation.solve_interruptibly` reads its status);
+the fallbacks catch :class:`~tmaplan.errors.PlanningError` (or ``Exception``), never a
+:class:`KeyboardInterrupt`, so the interrupt reaches the caller.
 
 The ``tmaplan`` command handles SIGTERM as it does Ctrl-C (:func:`signals_interrupt`): both
 raise :class:`Interrupted`, stop the verb at once (inside a solve too), keep what is
 complete (a campaign's finished runs) and exit with 128 + the signal number (130, 143).
-Worker processes ignore SIGINT (:func:`ignoring_sigint`): the main process stops them.
+Worker processes ignore SIGINT, from their start (:func:`ignoring_sigint`,
+:func:`tmaplan.parallel.worker_signals`): the main process stops them.
 """
 
 from __future__ import annotations
@@ -47,13 +50,16 @@ class Interrupted(KeyboardInterrupt):
         Whether the same call (command) resumes from what was kept.
     """
 
-    def __init__(self, signum: int = signal.SIGINT, detail: str | None = None, *,
+    def __init__(self, signum: int = signal.SIGINT, detail: str | None = None,
                  resumable: bool = False) -> None:
         self.signum = int(signum)
         self.detail = detail
         self.resumable = resumable
         super().__init__(f"interrupted by {self.signal_name}"
                          + (f"; {detail}" if detail else ""))
+
+    def __reduce__(self) -> tuple[Any, ...]:  # (pickled as built, not from its message)
+        return type(self), (self.signum, self.detail, self.resumable)
 
     @property
     def signal_name(self) -> str:
@@ -77,12 +83,6 @@ def _handler(signum: int, frame: FrameType | None) -> None:
     _Received.count += 1
     _Received.last = signum
     raise Interrupted(signum)
-
-
-def received() -> int:
-    """How many signals :func:`solver_call` or :func:`signals_interrupt` handled so far in
-    this process (compare two counts to tell whether one arrived in between)."""
-    return _Received.count
 
 
 def _in_main_thread() -> bool:

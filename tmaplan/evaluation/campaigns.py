@@ -540,8 +540,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
             (directory / "runs" / f"run_{i:05d}.npz").exists() for i in results)
         raise Interrupted(getattr(exc, "signum", signal.SIGINT),
                           f"{kept} of {spec.runs} runs kept in {directory}" if directory
-                          else "no runs kept (no out_dir)",
-                          resumable=directory is not None) from exc
+                          else "no runs kept (no out_dir)", directory is not None) from exc
     finally:
         close_pool(own_pool, interrupted=False)
     done = sorted(results)

@@ -21,9 +21,11 @@ into a failed one, or in Python code, and where), the runs stored; then the verd
 
 ``--backend processes`` runs the campaign on ``--workers`` worker processes: the interrupt
 reaches the main process, which stops the workers (their runs in progress are lost, never
-stored); as each attempt starts its own pool, the time a pool takes to start is added to
-each delay (and T is then the uninterrupted campaign's wall time on the workers, which must
-also be the serial one's). ``--backend both``: serial, then processes.
+stored). Each attempt starts its pool (:func:`tmaplan.parallel.process_pool`) and waits for
+its workers to have imported before the clock starts, so that the delays fall among the
+runs, not in the workers' start (T is then the uninterrupted campaign's wall time on started
+workers; that campaign must also be the serial one). ``--backend both``: serial, then
+processes.
 
 Run: python benchmarks/interrupts.py [--problem bow-closing] [--runs 20] [--points 20]
      [--backend both] [--workers 2] [--particles 3000] [--seed 4] [--rng 38]
@@ -98,17 +100,27 @@ def _landed(exc: BaseException) -> str:
     return f"python ({Path(frames[-1].filename).stem}.{frames[-1].name})"
 
 
-def _attempt(spec: CampaignSpec, out: Path, delay: float, sig: int, **kw: Any
+def _started_pool(workers: int) -> Any:
+    """``process_pool(workers)`` once its workers have imported (None for one worker)."""
+    if workers <= 1:
+        return contextlib.nullcontext()
+    pool = process_pool(workers)
+    list(pool.map(abs, range(workers)))
+    return pool
+
+
+def _attempt(spec: CampaignSpec, out: Path, delay: float, sig: int, workers: int = 1
              ) -> tuple[Any, BaseException | None, bool]:
     """run_campaign interrupted by ``sig`` after ``delay`` s: (result or None, the
     campaign's Interrupted or None, whether the signal was sent)."""
     it = _Interrupter(delay, sig)
     ctx = signals_interrupt() if sig == signal.SIGTERM else contextlib.nullcontext()
     try:
-        with ctx:
+        with ctx, _started_pool(workers) as pool:  # (stopped at once by an interrupt)
             it.timer.start()
             try:
-                return run_campaign(spec, out_dir=out, **kw), None, it.sent
+                return run_campaign(spec, out_dir=out, workers=workers, pool=pool), None, \
+                    it.sent
             finally:
                 it.disarm()
                 time.sleep(0.05)  # a signal sent meanwhile is handled here, in the block
@@ -118,15 +130,14 @@ def _attempt(spec: CampaignSpec, out: Path, delay: float, sig: int, **kw: Any
 
 
 def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, seconds: float,
-          start: float, points: int, rng: np.random.Generator, out: Path, **kw: Any
-          ) -> bool:
-    """Interrupt the campaign ``points`` times (delays: ``start`` + the gaps of ``points``
-    uniform draws over ``seconds``), resume it, compare with ``ref``; True if identical."""
+          points: int, rng: np.random.Generator, out: Path, workers: int = 1) -> bool:
+    """Interrupt the campaign ``points`` times (delays: the gaps of ``points`` uniform draws
+    over ``seconds``), resume it, compare with ``ref``; True if identical."""
     gaps = np.diff(np.concatenate([[0.0], np.sort(rng.uniform(0.0, seconds, points))]))
     ok, sent, kept = True, 0, _files(out)
     for k, gap in enumerate(gaps):
         sig = signal.SIGINT if k % 2 == 0 else signal.SIGTERM
-        res, exc, was_sent = _attempt(spec, out, start + gap, sig, **kw)
+        res, exc, was_sent = _attempt(spec, out, gap, sig, workers)
         sent += was_sent
         files, digests = _files(out), _digests(out)
         checks = {
@@ -138,7 +149,7 @@ def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, sec
         ok &= all(checks.values())
         where = _landed(exc) if exc is not None else ("finished" if res is not None else
                                                        "after the campaign ended")
-        print(f"  {k + 1:2d} {signal.Signals(sig).name:7s} after {start + gap:6.2f} s: "
+        print(f"  {k + 1:2d} {signal.Signals(sig).name:7s} after {gap:6.2f} s: "
               f"{where:48s} stored {len(digests):2d}/{spec.runs}"
               + ("" if all(checks.values()) else
                  f"  FAILED: {[c for c, v in checks.items() if not v]}"), flush=True)
@@ -148,7 +159,8 @@ def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, sec
                 p.unlink()
             kept = {}
     before = {int(n[4:9]) for n in kept}
-    final = run_campaign(spec, out_dir=out, **kw)
+    with _started_pool(workers) as pool:
+        final = run_campaign(spec, out_dir=out, workers=workers, pool=pool)
     exact = (final.loaded_runs == tuple(sorted(before)) and final.computed_runs
              == tuple(i for i in range(spec.runs) if i not in before))
     same_runs = _digests(out) == ref
@@ -157,14 +169,6 @@ def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, sec
           f"computed exactly the {len(final.computed_runs)} others: {exact}; stored runs "
           f"identical: {same_runs}; JSON identical (but timings): {same_json}", flush=True)
     return ok and exact and same_runs and same_json
-
-
-def _pool_start(workers: int) -> float:
-    """Seconds a pool of ``workers`` takes to start (its workers imported)."""
-    t0 = time.perf_counter()
-    with process_pool(workers) as pool:
-        list(pool.map(abs, range(workers)))
-    return time.perf_counter() - t0
 
 
 def main() -> None:
@@ -203,22 +207,21 @@ def main() -> None:
         verdicts = {}
         if args.backend in ("serial", "both"):
             print(f"serial: {args.points} interrupts", flush=True)
-            verdicts["serial"] = sweep(spec, ref, ref_json, seconds, 0.0, args.points, rng,
+            verdicts["serial"] = sweep(spec, ref, ref_json, seconds, args.points, rng,
                                        root / "serial")
         if args.backend in ("processes", "both"):
-            t0 = time.perf_counter()
-            procs = run_campaign(spec, out_dir=root / "processes-reference",
-                                 workers=args.workers)
-            p_seconds = time.perf_counter() - t0
-            start = _pool_start(args.workers)
+            with _started_pool(args.workers) as pool:
+                t0 = time.perf_counter()
+                procs = run_campaign(spec, out_dir=root / "processes-reference",
+                                     workers=args.workers, pool=pool)
+                p_seconds = time.perf_counter() - t0
             same = (_digests(root / "processes-reference") == ref and json.dumps(
                 without_timings(procs.to_json()), sort_keys=True) == ref_json)
-            print(f"processes ({args.workers} workers): uninterrupted {p_seconds:.1f} s "
-                  f"(identical to serial: {same}), pool start {start:.1f} s; "
-                  f"{args.points} interrupts", flush=True)
-            verdicts["processes"] = same and sweep(
-                spec, ref, ref_json, max(p_seconds - start, 1.0), start, args.points, rng,
-                root / "processes", workers=args.workers)
+            print(f"processes ({args.workers} workers): uninterrupted {p_seconds:.1f} s once "
+                  f"the workers started (identical to serial: {same}); {args.points} "
+                  "interrupts", flush=True)
+            verdicts["processes"] = same and sweep(spec, ref, ref_json, p_seconds, args.points,
+                                                   rng, root / "processes", args.workers)
     print("verdict: " + ", ".join(f"{b} {'identical' if v else 'DIFFERENT'}"
                                   for b, v in verdicts.items()))
     if not all(verdicts.values()):

@@ -3,21 +3,23 @@ moments, and resumed after each, is the uninterrupted campaign.
 
 The uninterrupted campaign is computed first, in its own directory (the policies resolved
 before: the wall time T of its runs alone). The same campaign is then started in another
-directory again and again, each attempt interrupted after a delay drawn by a seeded
-generator, until ``--points`` interrupts have been sent; a last resume completes it. The
-delays are the gaps between ``--points`` uniform draws over T, so that the attempts, each
-resumed from the runs kept, sweep the campaign from its first run to its last (an attempt
-whose gap is shorter than a run keeps nothing, and that run is interrupted again, at another
-point). Even interrupts are a SIGINT under Python's default handler (a script, a notebook),
-odd ones a SIGTERM under the command line's handlers
+directory again and again, each attempt interrupted after a delay, until ``--points``
+interrupts have been sent; a last resume completes it. The interrupt points are ``--points``
+uniform draws over T (a seeded generator), sorted: point k is meant to land at time u_k of
+the campaign, so attempt k is interrupted after u_k minus the time the runs already kept
+took (T/runs each; a point that this progress has passed lands within the next run, at a
+uniform draw over T/runs), and the attempts, each resumed from the runs kept, sweep the
+campaign from its first run to its last. Even interrupts are a SIGINT under Python's default
+handler (a script, a notebook), odd ones a SIGTERM under the command line's handlers
 (:func:`tmaplan.interrupts.signals_interrupt`). After each: no temporary file is left, every
-run stored before is untouched, every stored run is the uninterrupted campaign's (every array
-but the wall-clock ``replan_seconds``: :func:`tmaplan.evaluation.records.run_file_digest`),
-and the interrupt says how many runs were kept; the last resume loads the runs kept and
-computes exactly the others, and the campaign's JSON is the uninterrupted one's but its
-timings (:func:`tmaplan.evaluation.records.without_timings`). Printed per interrupt: the
-delay, where it landed (serial: inside a solver call, i.e. a solve that casadi or SCS turned
-into a failed one, or in Python code, and where), the runs stored; then the verdict.
+run stored before is untouched, every stored run is the uninterrupted campaign's (every
+array but the wall-clock ``replan_seconds``:
+:func:`tmaplan.evaluation.records.run_file_digest`), and the interrupt says how many runs
+were kept; the last resume loads the runs kept and computes exactly the others, and the
+campaign's JSON is the uninterrupted one's but its timings
+(:func:`tmaplan.evaluation.records.without_timings`). Printed per interrupt: the delay,
+where it landed (serial: inside a solver call, i.e. a solve that casadi or SCS turned into a
+failed one, or in Python code, and where), the runs stored; then the verdict.
 
 ``--backend processes`` runs the campaign on ``--workers`` worker processes: the interrupt
 reaches the main process, which stops the workers (their runs in progress are lost, never
@@ -131,12 +133,15 @@ def _attempt(spec: CampaignSpec, out: Path, delay: float, sig: int, workers: int
 
 def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, seconds: float,
           points: int, rng: np.random.Generator, out: Path, workers: int = 1) -> bool:
-    """Interrupt the campaign ``points`` times (delays: the gaps of ``points`` uniform draws
-    over ``seconds``), resume it, compare with ``ref``; True if identical."""
-    gaps = np.diff(np.concatenate([[0.0], np.sort(rng.uniform(0.0, seconds, points))]))
+    """Interrupt the campaign at ``points`` moments (uniform draws over ``seconds``, the
+    uninterrupted campaign's wall time), resume it, compare with ``ref``; True if
+    identical."""
+    per_run = seconds / spec.runs
     ok, sent, kept = True, 0, _files(out)
-    for k, gap in enumerate(gaps):
+    for k, u in enumerate(np.sort(rng.uniform(0.0, seconds, points))):
         sig = signal.SIGINT if k % 2 == 0 else signal.SIGTERM
+        gap = u - per_run * len(kept)
+        gap = gap if gap > 0 else rng.uniform(0.0, per_run)
         res, exc, was_sent = _attempt(spec, out, gap, sig, workers)
         sent += was_sent
         files, digests = _files(out), _digests(out)
@@ -149,7 +154,7 @@ def sweep(spec: CampaignSpec, ref: dict[str, dict[str, str]], ref_json: str, sec
         ok &= all(checks.values())
         where = _landed(exc) if exc is not None else ("finished" if res is not None else
                                                        "after the campaign ended")
-        print(f"  {k + 1:2d} {signal.Signals(sig).name:7s} after {gap:6.2f} s: "
+        print(f"  {k + 1:2d} {signal.Signals(sig).name:7s} at {u:6.1f} s, after {gap:5.2f} s: "
               f"{where:48s} stored {len(digests):2d}/{spec.runs}"
               + ("" if all(checks.values()) else
                  f"  FAILED: {[c for c, v in checks.items() if not v]}"), flush=True)

@@ -20,6 +20,7 @@ import os
 import pickle
 import re
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
@@ -297,6 +298,29 @@ def test_run_digest_leaves_out_the_wall_clock_only(reference, tmp_path):
     assert without_timings(payload) == {"policies": {"a": {"rmse": [1.0]}}}
 
 
+def test_interrupted_while_loading_counts_the_runs_kept(reference, tiny_file, tmp_path,
+                                                       monkeypatch):
+    """An interrupt while the stored runs are loaded: the runs not loaded yet are kept too,
+    a torn file is not."""
+    import tmaplan.evaluation.campaigns as campaigns
+    from tmaplan.experiments import run_campaign
+    from tmaplan.scenario import load
+
+    src = next(reference[1].glob("campaign-*"))
+    shutil.copytree(src, tmp_path / src.name)
+    (tmp_path / src.name / "runs" / "run_00000.npz").write_bytes(b"torn")
+    real = RunRecord.load
+
+    def load_then_interrupt(path, policies):
+        if path.name == "run_00002.npz":
+            raise KeyboardInterrupt
+        return real(path, policies)
+
+    monkeypatch.setattr(campaigns.RunRecord, "load", load_then_interrupt)
+    with pytest.raises(Interrupted, match=r"^interrupted by SIGINT; 2 of 3 runs kept in "):
+        run_campaign(_spec(load(str(tiny_file))), out_dir=tmp_path)
+
+
 def _interrupt_after(delay: float, fn):
     """``fn()`` with SIGINT sent to this process after ``delay`` s: (result, None), or
     (None, the campaign's Interrupted); a signal that came after ``fn`` returned:
@@ -327,6 +351,7 @@ def test_campaign_interrupted_at_random_points_resumes_identically(reference, ti
     spec = _spec(load(str(tiny_file)))
     rng = np.random.default_rng(38)
     kept: dict[str, bytes] = {}
+    interrupted = 0
     for delay in rng.uniform(0.1, 1.2, size=4) * seconds / RUNS:
         res, exc = _interrupt_after(delay, lambda: run_campaign(spec, out_dir=tmp_path))
         stored = _run_files(tmp_path)
@@ -336,8 +361,10 @@ def test_campaign_interrupted_at_random_points_resumes_identically(reference, ti
         if res is not None:
             break
         if exc is not None:
+            interrupted += 1
             m = re.fullmatch(r"interrupted by SIGINT; (\d+) of 3 runs kept in (.+)", str(exc))
             assert m and int(m[1]) == len(stored), str(exc)
+    assert interrupted >= 1
     before = {int(n[4:9]) for n in kept}
     final = run_campaign(spec, out_dir=tmp_path)
     assert final.loaded_runs == tuple(sorted(before))

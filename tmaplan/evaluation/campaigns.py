@@ -402,9 +402,10 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
 
 
 def _load_stored(spec: CampaignSpec, policies: Mapping[str, Policy] | None, directory: Path,
-                 results: dict[int, RunRecord]) -> None:
+                 results: dict[int, RunRecord], rejected: set[int]) -> None:
     """Create the campaign's directory (its spec and scenario) and load its stored runs into
-    ``results`` (a torn or foreign run file is left out: that run is computed again)."""
+    ``results`` (a torn or foreign run file is left out, its index added to ``rejected``:
+    that run is computed again)."""
     (directory / "runs").mkdir(parents=True, exist_ok=True)
     (directory / "spec.json").write_text(json.dumps(spec._meta(policies), indent=1))
     (directory / "scenario.toml").write_text(dump(spec.scenario))
@@ -414,6 +415,8 @@ def _load_stored(spec: CampaignSpec, policies: Mapping[str, Policy] | None, dire
             d = RunRecord.load(p, tuple(spec.policies))
             if d is not None and d.run == i:
                 results[i] = d
+            else:
+                rejected.add(i)
 
 
 def _compute(backend: Backend, workers: int, scheduler: str | None, spec: CampaignSpec,
@@ -516,10 +519,11 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     directory = None if out_dir is None else Path(out_dir) / f"campaign-{spec.key(policies)}"
     results: dict[int, RunRecord] = {}
     computed: list[int] = []
+    rejected: set[int] = set()  # stored files that are not this campaign's runs
     own_pool = None
     try:
         if directory is not None:
-            _load_stored(spec, policies, directory, results)
+            _load_stored(spec, policies, directory, results, rejected)
         loaded = tuple(sorted(results))
         todo = [i for i in range(spec.runs) if i not in results]
         if max_new_runs is not None:
@@ -536,8 +540,9 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     except KeyboardInterrupt as exc:  # the workers stopped at once; what is stored is kept
         close_pool(own_pool, interrupted=True)
         own_pool = None
-        kept = 0 if directory is None else sum(
-            (directory / "runs" / f"run_{i:05d}.npz").exists() for i in results)
+        kept = 0 if directory is None else sum(  # (loaded, computed, or not yet loaded)
+            (directory / "runs" / f"run_{i:05d}.npz").exists() for i in range(spec.runs)
+            if i in results or i not in rejected)
         raise Interrupted(getattr(exc, "signum", signal.SIGINT),
                           f"{kept} of {spec.runs} runs kept in {directory}" if directory
                           else "no runs kept (no out_dir)", directory is not None) from exc

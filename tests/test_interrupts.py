@@ -34,7 +34,13 @@ import numpy as np
 import pytest
 
 from tmaplan.evaluation.records import RunRecord, run_file_digest, without_timings
-from tmaplan.interrupts import Interrupted, signals_interrupt, solver_call
+from tmaplan.interrupts import (
+    Interrupted,
+    checkpoint,
+    interruptible,
+    signals_interrupt,
+    solver_call,
+)
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::RuntimeWarning"),
@@ -109,6 +115,33 @@ def test_signals_interrupt_handles_sigterm_as_ctrl_c_and_restores(capsys):
                       '") [ipopt_nlp.cpp:95]\n', "kept\n", "CasADi - other\n"):
             sys.stderr.write(piece)
     assert capsys.readouterr().err == "kept\nCasADi - other\n"
+
+
+class _RaisesWhenCollected:
+    """An object whose ``__del__`` raises KeyboardInterrupt: what happens when the signal
+    handler runs inside a finaliser or a weakref callback of the garbage collector, where
+    Python prints the exception and drops it."""
+
+    def __del__(self):
+        raise KeyboardInterrupt
+
+
+def test_an_interrupt_python_ignored_is_raised_at_the_next_checkpoint(capsys):
+    from tmaplan.evaluation.closed_loop import run_closed_loop
+    from tmaplan.policies import Straight
+    from tmaplan.simulate import draw_truth
+
+    before = sys.unraisablehook  # (pytest's, which turns the exception into a warning)
+    sc = _tiny()
+    target = draw_truth(sc, np.random.default_rng(0), from_prior=True)
+    with interruptible():
+        _RaisesWhenCollected()
+        with pytest.raises(Interrupted, match="SIGINT"):  # the filter loop's first step
+            run_closed_loop(sc, Straight(), target, noise_rng=np.random.default_rng(1),
+                            filter_rng=np.random.default_rng(2), n_particles=50)
+        checkpoint()  # raised once
+    assert capsys.readouterr().err == ""  # kept, not printed
+    assert sys.unraisablehook is before
 
 
 def _solving(frame) -> bool:

@@ -30,7 +30,8 @@ from collections.abc import Iterator
 from types import FrameType
 from typing import Any, TextIO
 
-__all__ = ["Interrupted", "ignoring_sigint", "signals_interrupt", "solver_call"]
+__all__ = ["Interrupted", "checkpoint", "ignoring_sigint", "interruptible", "signals_interrupt",
+           "solver_call"]
 
 #: What :func:`signals_interrupt` turns into :class:`Interrupted`.
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -73,16 +74,65 @@ class Interrupted(KeyboardInterrupt):
 
 
 class _Received:
-    """Signals received by :func:`_handler` in this process (a count, never reset)."""
+    """Signals received by :func:`_handler` in this process (a count, never reset), and an
+    interrupt that Python ignored (:func:`interruptible`)."""
 
     count = 0
     last: int = signal.SIGINT
+    swallowed: int | None = None
+    hook: Any = None  # the unraisable hook :func:`interruptible` replaced
 
 
 def _handler(signum: int, frame: FrameType | None) -> None:
     _Received.count += 1
     _Received.last = signum
     raise Interrupted(signum)
+
+
+def _unraisable(args: Any) -> None:
+    """``sys.unraisablehook`` under :func:`interruptible`: a KeyboardInterrupt raised where
+    Python cannot raise it (a ``__del__``, a weakref or garbage-collector callback: the signal
+    handler ran there) is kept for :func:`checkpoint`, not printed."""
+    if isinstance(args.exc_value, KeyboardInterrupt):
+        _Received.swallowed = getattr(args.exc_value, "signum", signal.SIGINT)
+        return
+    _Received.hook(args)
+
+
+@contextlib.contextmanager
+def interruptible() -> Iterator[None]:
+    """Inside the block, an interrupt that Python itself would ignore is not lost.
+
+    Python runs a signal handler between two bytecodes, possibly inside a ``__del__`` or a
+    weakref callback of the garbage collector, where the :class:`KeyboardInterrupt` it raises
+    is printed ("Exception ignored in ...") and dropped: the computation would go on. Inside
+    the block it is kept instead, and :func:`checkpoint` raises it (the filter loop at every
+    step, every solver call, a campaign before it stores a run, the command line before it
+    ends). Nested blocks share the outermost one's.
+    """
+    if sys.unraisablehook is _unraisable:
+        yield
+        return
+    _Received.hook, _Received.swallowed = sys.unraisablehook, None
+    sys.unraisablehook = _unraisable
+    try:
+        yield
+    finally:
+        sys.unraisablehook = _Received.hook
+
+
+def checkpoint() -> None:
+    """Raise the interrupt that Python ignored (:func:`interruptible`), if any; else nothing
+    (a test of one attribute: cheap enough for every step of a loop).
+
+    Raises
+    ------
+    Interrupted
+        An interrupt was swallowed since the last checkpoint.
+    """
+    if _Received.swallowed is not None:
+        signum, _Received.swallowed = _Received.swallowed, None
+        raise Interrupted(signum)
 
 
 def _in_main_thread() -> bool:
@@ -120,6 +170,7 @@ def solver_call() -> Iterator[None]:
             signal.signal(signal.SIGINT, signal.default_int_handler)
     if _Received.count != before:  # the solver turned the interrupt into a failed solve
         raise Interrupted(_Received.last)
+    checkpoint()
 
 
 class _WithoutInterruptWarning:
@@ -168,7 +219,8 @@ def signals_interrupt() -> Iterator[None]:
 
     In the main thread, the handlers of :data:`SIGNALS` are replaced for the block's
     duration (and restored after); casadi's warning about the interrupt it caught is left
-    out of stderr (:class:`Interrupted` reports it). Elsewhere the block runs unchanged.
+    out of stderr (:class:`Interrupted` reports it); an interrupt that Python would ignore is
+    kept (:func:`interruptible`). Elsewhere the block runs unchanged.
     """
     if not _in_main_thread():
         yield
@@ -177,7 +229,8 @@ def signals_interrupt() -> Iterator[None]:
     stderr = sys.stderr
     sys.stderr = _WithoutInterruptWarning(stderr)
     try:
-        yield
+        with interruptible():
+            yield
     finally:
         filtered = sys.stderr
         sys.stderr = stderr

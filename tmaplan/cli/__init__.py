@@ -30,7 +30,7 @@ from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
 from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
-from tmaplan.interrupts import Interrupted, signals_interrupt
+from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
 from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
@@ -174,6 +174,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if not args.debug:  # one line, as errors are (--debug: Python's, with source)
                     warnings.showwarning = _one_line_warning(args.verb)
                 payload = modules[args.verb].run(args)
+            checkpoint()  # an interrupt that Python ignored on the way is still one
             require_finite(payload, getattr(modules[args.verb], "FINITE", ()),
                            source=problem)
             if isinstance(payload, dict) and problem is not None:

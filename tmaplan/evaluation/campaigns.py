@@ -46,7 +46,7 @@ from tmaplan.evaluation.records import (
     policy_fingerprint,
     scenario_hash,
 )
-from tmaplan.interrupts import Interrupted
+from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
@@ -435,6 +435,7 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     try:
         for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo,
                                      pool):
+            checkpoint()  # a run during which an interrupt was swallowed is not stored
             results[i] = data
             computed.append(i)
             if directory is not None:
@@ -521,33 +522,34 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     computed: list[int] = []
     rejected: set[int] = set()  # stored files that are not this campaign's runs
     own_pool = None
-    try:
-        if directory is not None:
-            _load_stored(spec, policies, directory, results, rejected)
-        loaded = tuple(sorted(results))
-        todo = [i for i in range(spec.runs) if i not in results]
-        if max_new_runs is not None:
-            todo = todo[:max_new_runs]
-        if backend == "processes" and pool is None and todo:
-            # started before the policies are resolved: the workers import meanwhile
-            pool = own_pool = process_pool(workers)
-        pols: Mapping[str, Policy] = policies if policies is not None else {}
-        if parsed is not None and todo:  # nothing to resolve when every run is stored
-            pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
-                            pool if backend == "processes" else None)
-        _compute(backend, workers, scheduler, spec, pols, todo, pool, progress, results,
-                 directory, computed)
-    except KeyboardInterrupt as exc:  # the workers stopped at once; what is stored is kept
-        close_pool(own_pool, interrupted=True)
-        own_pool = None
-        kept = 0 if directory is None else sum(  # (loaded, computed, or not yet loaded)
-            (directory / "runs" / f"run_{i:05d}.npz").exists() for i in range(spec.runs)
-            if i in results or i not in rejected)
-        raise Interrupted(getattr(exc, "signum", signal.SIGINT),
-                          f"{kept} of {spec.runs} runs kept in {directory}" if directory
-                          else "no runs kept (no out_dir)", directory is not None) from exc
-    finally:
-        close_pool(own_pool, interrupted=False)
+    with interruptible():  # (an interrupt that Python ignored, in a GC callback, is kept)
+        try:
+            if directory is not None:
+                _load_stored(spec, policies, directory, results, rejected)
+            loaded = tuple(sorted(results))
+            todo = [i for i in range(spec.runs) if i not in results]
+            if max_new_runs is not None:
+                todo = todo[:max_new_runs]
+            if backend == "processes" and pool is None and todo:
+                # started before the policies are resolved: the workers import meanwhile
+                pool = own_pool = process_pool(workers)
+            pols: Mapping[str, Policy] = policies if policies is not None else {}
+            if parsed is not None and todo:  # nothing to resolve when every run is stored
+                pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
+                                pool if backend == "processes" else None)
+            _compute(backend, workers, scheduler, spec, pols, todo, pool, progress, results,
+                     directory, computed)
+        except KeyboardInterrupt as exc:  # the workers stopped at once; what is stored is kept
+            close_pool(own_pool, interrupted=True)
+            own_pool = None
+            kept = 0 if directory is None else sum(  # (loaded, computed, or not yet loaded)
+                (directory / "runs" / f"run_{i:05d}.npz").exists() for i in range(spec.runs)
+                if i in results or i not in rejected)
+            raise Interrupted(getattr(exc, "signum", signal.SIGINT),
+                              f"{kept} of {spec.runs} runs kept in {directory}" if directory
+                              else "no runs kept (no out_dir)", directory is not None) from exc
+        finally:
+            close_pool(own_pool, interrupted=False)
     done = sorted(results)
     if len(done) < spec.runs:
         raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "

@@ -17,7 +17,8 @@ import pytest
 from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
-SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop")
+SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
+           "interrupts")
 
 
 class _Parsed(Exception):

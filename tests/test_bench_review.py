@@ -18,7 +18,7 @@ from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
 SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
-           "particle_filter")
+           "particle_filter", "interrupts")
 
 
 class _Parsed(Exception):

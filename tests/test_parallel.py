@@ -2,6 +2,7 @@
 
 import os
 import pickle
+import signal
 
 import pytest
 
@@ -37,6 +38,8 @@ def test_pool_workers_read_the_payload_once_each():
     with process_pool(2) as pool, SharedPayload({"a": 5}) as shared:
         out = list(pool.map(call_with_payload, [_payload_and_pid] * 8, [shared.path] * 8,
                             range(8)))
+        # the workers leave Ctrl-C to the main process, which stops them (issue 38)
+        assert set(pool.map(signal.getsignal, [signal.SIGINT] * 4)) == {signal.SIG_IGN}
     assert [o[0] for o in out] == list(range(5, 13))
     pids = {o[1] for o in out}
     assert 1 <= len(pids) <= 2 and os.getpid() not in pids

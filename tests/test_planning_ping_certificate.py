@@ -102,6 +102,7 @@ def test_failed_solve_is_not_a_certificate(short, short_prior, monkeypatch):
         raise RuntimeError("solver crashed")
 
     monkeypatch.setattr(rel.problem, "solve", broken)
+    monkeypatch.setattr(rel.problem, "get_problem_data", broken)  # SCS's way in
     r = rel.solve(2)
     assert r.status.startswith("fallback: all candidates pinged")
     assert "clarabel" in r.status and "scs" in r.status

@@ -12,21 +12,91 @@ schedules, Hessian models) are shipped to each worker once: :class:`SharedPayloa
 them to a temporary file, and :func:`call_with_payload` unpickles the file once per worker
 process and keeps it for the step's later tasks. Processes only: two casadi solvers on Python
 threads of one process corrupt each other's memory (docs/findings.md).
+
+Interrupts: the workers ignore SIGINT (a Ctrl-C on the terminal reaches every process of the
+group; they are even started ignoring it), and the main process, interrupted, stops them at
+once (:meth:`WorkerPool.stop`: their running tasks are lost, never returned as results).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
+import signal
 import tempfile
-from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, ProcessPoolExecutor
 from multiprocessing import get_context
 from typing import Any
 
 from tmaplan.errors import ArgumentError
+from tmaplan.interrupts import ignoring_sigint
 
-__all__ = ["SharedPayload", "call_with_payload", "process_pool"]
+__all__ = ["SharedPayload", "WorkerPool", "call_with_payload", "close_pool", "closing_pool",
+           "process_pool", "worker_signals"]
+
+
+def worker_signals() -> None:
+    """A worker process's initializer: SIGINT ignored (the main process handles it and stops
+    its workers), SIGTERM back to its default action (a worker forked from a process with
+    the command line's handlers would otherwise raise, and print, instead of ending)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+class WorkerPool(ProcessPoolExecutor):
+    """A :class:`~concurrent.futures.ProcessPoolExecutor` that an interrupt stops at once.
+
+    Used as a context manager, it waits for its tasks on a normal exit or an error, as a
+    ``ProcessPoolExecutor`` does, and stops its workers (:meth:`stop`) on a
+    :class:`KeyboardInterrupt`.
+    """
+
+    def stop(self) -> None:
+        """Stop now: pending tasks cancelled, the worker processes terminated (their running
+        tasks are lost: their futures end in ``BrokenProcessPool``, never in a result)."""
+        procs = list((getattr(self, "_processes", None) or {}).values())
+        manager = getattr(self, "_executor_manager_thread", None)
+        self.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+        for p in procs:
+            p.join()
+        if manager is not None:  # it notices the workers gone, fails their futures, ends
+            manager.join()
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> bool | None:
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            self.stop()
+            return None
+        return super().__exit__(exc_type, exc, tb)
+
+
+@contextlib.contextmanager
+def closing_pool(pool: Executor | None) -> Iterator[Executor | None]:
+    """Close ``pool`` when the block ends (:func:`close_pool`): at once if a
+    :class:`KeyboardInterrupt` ends it."""
+    interrupted = False
+    try:
+        yield pool
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
+    finally:
+        close_pool(pool, interrupted=interrupted)
+
+
+def close_pool(pool: Executor | None, *, interrupted: bool) -> None:
+    """Shut ``pool`` down: wait for its running tasks (pending ones cancelled), or after an
+    interrupt stop it at once (:meth:`WorkerPool.stop`). None: nothing to do."""
+    if pool is None:
+        return
+    if interrupted and isinstance(pool, WorkerPool):
+        pool.stop()
+    else:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _warm_up() -> None:
@@ -38,8 +108,11 @@ def _warm_up() -> None:
     import tmaplan.policies  # noqa: F401
 
 
-def process_pool(workers: int) -> ProcessPoolExecutor:
+def process_pool(workers: int) -> WorkerPool:
     """A pool of ``workers`` spawned processes, already importing tmaplan when returned.
+
+    The workers ignore SIGINT from their start; an interrupt of the main process stops them
+    (:meth:`WorkerPool.stop`, :func:`close_pool`).
 
     Parameters
     ----------
@@ -48,14 +121,17 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
 
     Returns
     -------
-    concurrent.futures.ProcessPoolExecutor
-        The caller shuts it down (``with process_pool(n) as pool: ...``).
+    WorkerPool
+        The caller shuts it down (``with process_pool(n) as pool: ...``, or
+        :func:`close_pool`).
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ArgumentError("workers", "an integer >= 1", workers)
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"))
-    for _ in range(workers):  # one task per worker: the pool spawns them all now
-        pool.submit(_warm_up)
+    with ignoring_sigint():  # the workers are born ignoring it (a Ctrl-C while they import)
+        pool = WorkerPool(max_workers=workers, mp_context=get_context("spawn"),
+                          initializer=worker_signals)
+        for _ in range(workers):  # one task per worker: the pool spawns them all now
+            pool.submit(_warm_up)
     return pool
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import shlex
 import sys
 import warnings
 from collections.abc import Sequence
@@ -29,6 +30,7 @@ from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
 from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
+from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
 from tmaplan.scenario import load, load_problem
 
 __all__ = ["VERBS", "main", "write_json"]
@@ -128,11 +130,23 @@ def _one_line_warning(verb: str) -> Any:
     return show
 
 
+def _interrupted(verb: str, exc: KeyboardInterrupt, argv: Sequence[str]) -> str:
+    """The one line of an interrupted verb: the signal, what was kept (a campaign's stored
+    runs) and, then, the command that resumes it (the same one)."""
+    if not isinstance(exc, Interrupted):
+        return f"tmaplan {verb}: interrupted by SIGINT"
+    text = f"tmaplan {verb}: {exc}"
+    if exc.resumable:
+        text += f"; to resume, run the same command: {shlex.join(['tmaplan', *argv])}"
+    return text.replace("\n", " ")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tmaplan`` command. Returns the exit status.
 
     0 on success, 1 on any error (one line on stderr), 2 without a verb (help), 130 when
-    interrupted.
+    interrupted by SIGINT or SIGTERM, with one line on stderr
+    (for a campaign: the runs kept and the command that resumes it).
     """
     parser, modules, parsers = _build_parser()
     try:
@@ -145,28 +159,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not args.verb:
         parser.print_help()
         return 2
+    problem = None
     try:
-        problem = None
-        # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
-        fixed = getattr(modules[args.verb], "PROBLEM", None)
-        if getattr(args, "problem", None) is not None or fixed is not None:
-            scenario = load(args.problem) if fixed is None else load_problem(fixed)
-            problem = scenario.name
-            preflight(args, scenario)
-        else:  # (preflight checks them with the problem)
-            check_outputs(args)
-        with warnings.catch_warnings():
-            if not args.debug:  # one line, as errors are (--debug: Python's, with the source)
-                warnings.showwarning = _one_line_warning(args.verb)
-            payload = modules[args.verb].run(args)
-        require_finite(payload, getattr(modules[args.verb], "FINITE", ()), source=problem)
-        if isinstance(payload, dict) and problem is not None:
-            payload.setdefault("problem", problem)
-        if args.json is not None and payload is not None:
-            write_json(payload, args.json)
-    except KeyboardInterrupt:
-        print("tmaplan: interrupted", file=sys.stderr)
-        return 130
+        with signals_interrupt():  # SIGTERM stops a verb as Ctrl-C does, inside a solve too
+            # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
+            fixed = getattr(modules[args.verb], "PROBLEM", None)
+            if getattr(args, "problem", None) is not None or fixed is not None:
+                scenario = load(args.problem) if fixed is None else load_problem(fixed)
+                problem = scenario.name
+                preflight(args, scenario)
+            else:  # (preflight checks them with the problem)
+                check_outputs(args)
+            with warnings.catch_warnings():
+                if not args.debug:  # one line, as errors are (--debug: Python's, with source)
+                    warnings.showwarning = _one_line_warning(args.verb)
+                payload = modules[args.verb].run(args)
+            checkpoint()  # an interrupt that Python ignored on the way is still one
+            require_finite(payload, getattr(modules[args.verb], "FINITE", ()),
+                           source=problem)
+            if isinstance(payload, dict) and problem is not None:
+                payload.setdefault("problem", problem)
+            if args.json is not None and payload is not None:
+                write_json(payload, args.json)
+    except KeyboardInterrupt as exc:
+        print(_interrupted(args.verb, exc, sys.argv[1:] if argv is None else argv),
+              file=sys.stderr)
+        return exc.exit_status if isinstance(exc, Interrupted) else 130
     except Exception as exc:
         if args.debug:
             raise

@@ -49,7 +49,7 @@ from tmaplan.headline import (
     stored_lines,
     stored_payload,
 )
-from tmaplan.parallel import process_pool
+from tmaplan.parallel import closing_pool, process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
@@ -110,11 +110,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     # one pool of workers for the whole demo, importing while the main process starts: the
     # offline plan's multi-start and the campaign run on it
     pool = process_pool(args.workers) if args.workers > 1 else None
-    try:
+    with closing_pool(pool):  # (stopped at once by an interrupt)
         return _run(args, out, pool, t0)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str, Any]:

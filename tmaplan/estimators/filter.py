@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeVar, runtime_chec
 
 import numpy as np
 
+from tmaplan.interrupts import checkpoint
+
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
     from tmaplan.simulate import Measurement
@@ -126,6 +128,7 @@ def drive(filt: Filter[Any], state: Any, n_steps: int, step: StepFn, rng: np.ran
     k0 = int(state.step)
     est[k0], cov[k0], diag[k0] = state.mean, state.cov, filt.diagnostic(state)
     for k in range(k0, n_steps):
+        checkpoint()  # an interrupt that Python ignored (tmaplan.interrupts) stops here
         dv, meas = step(k, state)
         state = filt.predict(state, dv, rng)
         state = filt.update(state, meas, rng)

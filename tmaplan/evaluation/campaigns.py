@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import signal
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Executor, as_completed
@@ -46,7 +47,8 @@ from tmaplan.evaluation.records import (
     policy_fingerprint,
     scenario_hash,
 )
-from tmaplan.parallel import SharedPayload, call_with_payload, process_pool
+from tmaplan.interrupts import Interrupted, checkpoint, interruptible
+from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
 from tmaplan.simulate import draw_truth
@@ -400,12 +402,30 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
         raise PlanningError(f"unknown backend {backend!r}: expected serial, processes or dask")
 
 
+def _load_stored(spec: CampaignSpec, policies: Mapping[str, Policy] | None, directory: Path,
+                 results: dict[int, RunRecord], rejected: set[int]) -> None:
+    """Create the campaign's directory (its spec and scenario) and load its stored runs into
+    ``results`` (a torn or foreign run file is left out, its index added to ``rejected``:
+    that run is computed again)."""
+    (directory / "runs").mkdir(parents=True, exist_ok=True)
+    (directory / "spec.json").write_text(json.dumps(spec._meta(policies), indent=1))
+    (directory / "scenario.toml").write_text(dump(spec.scenario))
+    for i in range(spec.runs):
+        p = directory / "runs" / f"run_{i:05d}.npz"
+        if p.exists():
+            d = RunRecord.load(p, tuple(spec.policies))
+            if d is not None and d.run == i:
+                results[i] = d
+            else:
+                rejected.add(i)
+
+
 def _compute(backend: Backend, workers: int, scheduler: str | None, spec: CampaignSpec,
              pols: Mapping[str, Policy], todo: list[int], pool: Executor | None,
-             progress: bool, results: dict[int, RunRecord], directory: Path | None
-             ) -> list[int]:
-    """Compute the runs ``todo`` into ``results`` (and ``directory``); the indices computed."""
-    computed = []
+             progress: bool, results: dict[int, RunRecord], directory: Path | None,
+             computed: list[int]) -> None:
+    """Compute the runs ``todo`` into ``results`` (each stored in ``directory`` as it
+    finishes, its index appended to ``computed``). An interrupted run is never stored."""
     bar = None
     if progress:
         from rich.progress import Progress
@@ -416,6 +436,7 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     try:
         for i, data in _iter_backend(backend, workers, scheduler, run_one, spec, pols, todo,
                                      pool):
+            checkpoint()  # a run during which an interrupt was swallowed is not stored
             results[i] = data
             computed.append(i)
             if directory is not None:
@@ -425,7 +446,6 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     finally:
         if bar is not None:
             bar.stop()
-    return computed
 
 
 def _check_arguments(spec: CampaignSpec, workers: int, backend: str | None,
@@ -498,37 +518,39 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     scenario = spec.scenario
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
     parsed = _parse(scenario, spec.policies) if policies is None else None
-    directory = None
+    directory = None if out_dir is None else Path(out_dir) / f"campaign-{spec.key(policies)}"
     results: dict[int, RunRecord] = {}
-    if out_dir is not None:
-        directory = Path(out_dir) / f"campaign-{spec.key(policies)}"
-        (directory / "runs").mkdir(parents=True, exist_ok=True)
-        (directory / "spec.json").write_text(json.dumps(spec._meta(policies), indent=1))
-        (directory / "scenario.toml").write_text(dump(scenario))
-        for i in range(spec.runs):
-            p = directory / "runs" / f"run_{i:05d}.npz"
-            if p.exists():
-                d = RunRecord.load(p, tuple(spec.policies))
-                if d is not None and d.run == i:
-                    results[i] = d
-    loaded = tuple(sorted(results))
-    todo = [i for i in range(spec.runs) if i not in results]
-    if max_new_runs is not None:
-        todo = todo[:max_new_runs]
+    computed: list[int] = []
+    rejected: set[int] = set()  # stored files that are not this campaign's runs
     own_pool = None
-    if backend == "processes" and pool is None and todo:
-        # started before the policies are resolved: the workers import meanwhile
-        pool = own_pool = process_pool(workers)
-    try:
-        pols: Mapping[str, Policy] = policies if policies is not None else {}
-        if parsed is not None and todo:  # nothing to resolve when every run is stored
-            pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
-                            pool if backend == "processes" else None)
-        computed = _compute(backend, workers, scheduler, spec, pols, todo, pool, progress,
-                            results, directory)
-    finally:
-        if own_pool is not None:
-            own_pool.shutdown(wait=True, cancel_futures=True)
+    with interruptible():  # (an interrupt that Python ignored, in a GC callback, is kept)
+        try:
+            if directory is not None:
+                _load_stored(spec, policies, directory, results, rejected)
+            loaded = tuple(sorted(results))
+            todo = [i for i in range(spec.runs) if i not in results]
+            if max_new_runs is not None:
+                todo = todo[:max_new_runs]
+            if backend == "processes" and pool is None and todo:
+                # started before the policies are resolved: the workers import meanwhile
+                pool = own_pool = process_pool(workers)
+            pols: Mapping[str, Policy] = policies if policies is not None else {}
+            if parsed is not None and todo:  # nothing to resolve when every run is stored
+                pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
+                                pool if backend == "processes" else None)
+            _compute(backend, workers, scheduler, spec, pols, todo, pool, progress, results,
+                     directory, computed)
+        except KeyboardInterrupt as exc:  # the workers stopped at once; what is stored is kept
+            close_pool(own_pool, interrupted=True)
+            own_pool = None
+            kept = 0 if directory is None else sum(  # (loaded, computed, or not yet loaded)
+                (directory / "runs" / f"run_{i:05d}.npz").exists() for i in range(spec.runs)
+                if i in results or i not in rejected)
+            raise Interrupted(getattr(exc, "signum", signal.SIGINT),
+                              f"{kept} of {spec.runs} runs kept in {directory}" if directory
+                              else "no runs kept (no out_dir)", directory is not None) from exc
+        finally:
+            close_pool(own_pool, interrupted=False)
     done = sorted(results)
     if len(done) < spec.runs:
         raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "

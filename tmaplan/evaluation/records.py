@@ -9,6 +9,7 @@ that naming is the file format only, never an in-memory interface.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -23,7 +24,8 @@ import numpy as np
 
 from tmaplan.evaluation.metrics import RunMetrics
 
-__all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "scenario_hash"]
+__all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "run_file_digest",
+           "scenario_hash", "without_timings"]
 
 #: Version of the run-file format (part of the campaign cache key).
 FORMAT = 3
@@ -203,7 +205,8 @@ class RunRecord:
                 np.savez(fh, **arrays)
             os.replace(tmp, path)
         except BaseException:  # a full disk, an interrupt: no stray .tmp file in the cache
-            os.remove(tmp)
+            with contextlib.suppress(FileNotFoundError):  # (an interrupt after the rename)
+                os.remove(tmp)
             raise
 
     @classmethod
@@ -214,3 +217,55 @@ class RunRecord:
                 return cls.from_arrays({k: z[k] for k in z.files}, policies)
         except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
             return None
+
+
+#: Per-policy arrays of a run file that are wall-clock timings.
+_WALL_CLOCK_ARRAYS = frozenset({"replan_seconds"})
+#: Payload keys that say how a campaign was obtained, not what it found.
+_PROVENANCE = frozenset({"computed_runs", "loaded_runs", "directory", "report"})
+
+
+def run_file_digest(path: str | Path) -> dict[str, str]:
+    """What a stored run file holds, apart from wall-clock timings: array name -> its dtype,
+    shape and the SHA-256 of its bytes, every array but the ``<policy>/replan_seconds``
+    (the zip container's own timestamps do not enter). Two computations of one run (serial or
+    on workers, interrupted and resumed or not) give the same digest.
+
+    Parameters
+    ----------
+    path : path
+        A run file (``<out>/campaign-<key>/runs/run_XXXXX.npz``).
+
+    Returns
+    -------
+    dict
+        Array name -> ``"<dtype> <shape> <sha256>"``.
+    """
+    with np.load(path) as z:
+        return {k: f"{z[k].dtype.str} {z[k].shape} "
+                   + hashlib.sha256(np.ascontiguousarray(z[k]).tobytes()).hexdigest()
+                for k in sorted(z.files) if k.rsplit("/", 1)[-1] not in _WALL_CLOCK_ARRAYS}
+
+
+def without_timings(payload: Any) -> Any:
+    """A campaign's JSON payload (:meth:`tmaplan.experiments.CampaignResult.to_json`, a
+    verb's ``--json``) without its wall-clock fields (every key with ``seconds`` in its name,
+    e.g. ``replan_seconds``) and without what tells how it was obtained
+    (``computed_runs``, ``loaded_runs``, ``directory``, ``report``): what an interrupted and
+    resumed campaign shares with an uninterrupted one.
+
+    Parameters
+    ----------
+    payload : dict, list or scalar
+
+    Returns
+    -------
+    object
+        The same structure, those keys left out at every level.
+    """
+    if isinstance(payload, Mapping):
+        return {k: without_timings(v) for k, v in payload.items()
+                if "seconds" not in k and k not in _PROVENANCE}
+    if isinstance(payload, list | tuple):
+        return [without_timings(v) for v in payload]
+    return payload

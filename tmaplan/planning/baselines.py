@@ -16,6 +16,7 @@ import numpy as np
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, finite_real
 from tmaplan.geometry import course_speed, wrap_angle
+from tmaplan.interrupts import solver_call
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning.objectives import Objective, ObjectiveEvaluator
@@ -344,7 +345,8 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
         kw: dict[str, Any] = {"x0": x0, "lbx": lbx, "ubx": ubx}
         if switch == "free":
             kw.update(lbg=0.0, ubg=0.0)
-        sol = solver(**kw)
+        with solver_call():  # an interrupt raises, never a failed start
+            sol = solver(**kw)
         results.append((float(sol["f"]), np.asarray(sol["x"]).reshape(-1),
                         str(solver.stats()["return_status"])))
     ok = [r for r in results if r[2] in ("Solve_Succeeded", "Solved_To_Acceptable_Level")]

@@ -36,6 +36,7 @@ from tmaplan.errors import (
     is_whole_count,
 )
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
+from tmaplan.interrupts import solver_call
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
@@ -460,7 +461,8 @@ class HeadingPlanner:
                                   "ubg": ubg}
             if duals is not None:
                 kw.update(lam_x0=duals["lam_x"], lam_g0=duals["lam_g"])
-            sol = solver(**kw)
+            with solver_call():  # an interrupt raises, never a failed solve (issue 38)
+                sol = solver(**kw)
             stats = solver.stats()
             status = str(stats.get("return_status", "unknown"))
             iters += int(stats.get("iter_count", 0))

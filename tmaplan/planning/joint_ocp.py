@@ -73,6 +73,7 @@ import numpy as np
 
 from tmaplan.errors import PlanningError, is_integer
 from tmaplan.geometry import course_speed
+from tmaplan.interrupts import solver_call
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning._ping_search import _round, _spacing_ok, max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
@@ -292,7 +293,7 @@ def _solve_nlp(solver: Any, x: np.ndarray, P: np.ndarray, mus: Sequence[float],
     μ = 0 solve's (successful or not: ``ok`` says)."""
     out: dict[str, Any] = {"iters": 0}
     for k, m in enumerate(mus):
-        with _quiet_stdout(quiet):
+        with _quiet_stdout(quiet), solver_call():  # an interrupt raises, never a failure
             sol = solver(x0=x, p=np.concatenate([P, [m]]), **bounds)
         try:
             stats = solver.stats()

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import PlanningError
+from tmaplan.parallel import worker_signals
 from tmaplan.planning.ping_relaxation import (
     information_matrices,
     objective_vectors,
@@ -388,7 +389,8 @@ def tree_search(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int,
     # interleave first pings so that both workers get early (expensive) subtrees
     chunks = [firsts[i::n_workers] for i in range(n_workers)]
     if n_workers > 1:
-        with mp.get_context("fork").Pool(n_workers) as pool:
+        # (an interrupt of this process ends the pool's workers: `with` terminates them)
+        with mp.get_context("fork").Pool(n_workers, initializer=worker_signals) as pool:
             outs = pool.map(_run, chunks)
     else:
         outs = [_run(firsts)]

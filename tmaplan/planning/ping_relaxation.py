@@ -54,12 +54,14 @@ of memory at 1000 — so forbidden steps enter through the candidate set instead
 from __future__ import annotations
 
 import dataclasses
+import signal
 import time
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from tmaplan.caching import LRUCache
+from tmaplan.interrupts import Interrupted, solver_call
 
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
@@ -310,7 +312,7 @@ class Relaxation:
                              ("SCS", {"eps_abs": 1e-7, "eps_rel": 1e-7,
                                       "max_iters": 200_000})):
             try:
-                self.problem.solve(solver=solver, **opts)
+                solve_interruptibly(self.problem, solver, opts)
             except Exception as exc:  # solver failure is reported, not used
                 notes.append(f"{solver.lower()}: {type(exc).__name__}")
                 continue
@@ -400,3 +402,43 @@ def relaxation_bound(ev: PingEvaluator, cand: np.ndarray, budget: int,
         return RelaxationResult(lower_bound=v, u=np.zeros(np.asarray(cand).size),
                                 value_at_u=v, status="exact (no pings)", seconds=0.0)
     return relaxation_for(ev, cand, gap).solve(float(budget))
+
+
+#: SCS's status when SIGINT stopped it (``SCS_SIGINT``; cvxpy reports it as a failed solve).
+_SCS_INTERRUPTED = -5
+
+
+def solve_interruptibly(problem: Any, solver: str, opts: dict[str, Any]) -> None:
+    """``problem.solve(solver=solver, **opts)`` (a cvxpy problem), where an interrupt raises
+    :class:`tmaplan.interrupts.Interrupted` instead of passing for a failed solve.
+
+    Clarabel raises Python's interrupt itself; SCS catches SIGINT with its own handler and
+    returns status ``SCS_SIGINT``, which cvxpy reports as an ordinary ``SolverError``, so SCS
+    is called through cvxpy's ``get_problem_data`` / ``solve_via_data`` / ``unpack_results``
+    (what ``solve`` does) with that status checked in between.
+
+    Parameters
+    ----------
+    problem : cvxpy.Problem
+    solver : str
+        cvxpy solver name (``"CLARABEL"``, ``"SCS"``, ...).
+    opts : dict
+        The solver's options.
+
+    Raises
+    ------
+    Interrupted
+        SIGINT (or SIGTERM under :func:`tmaplan.interrupts.signals_interrupt`) during the
+        solve.
+    cvxpy.error.SolverError
+        The solver failed.
+    """
+    with solver_call():
+        if solver != "SCS":
+            problem.solve(solver=solver, **opts)
+            return
+        data, chain, inverse = problem.get_problem_data(solver, solver_opts=dict(opts))
+        raw = chain.solve_via_data(problem, data, warm_start=True, solver_opts=dict(opts))
+        if raw.get("info", {}).get("status_val") == _SCS_INTERRUPTED:
+            raise Interrupted(signal.SIGINT)
+        problem.unpack_results(raw, chain, inverse)

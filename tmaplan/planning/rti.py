@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
+from tmaplan.interrupts import solver_call
 from tmaplan.planning.casadi_eval import NumpyFunction
 
 if TYPE_CHECKING:
@@ -380,7 +381,8 @@ class RealTimeIteration:
         if not np.isfinite(f0):
             return None, "objective not finite at the start", f0
         v0 = self._violation(g0, lbg, ubg)
-        sol = self._qp(**qp)
+        with solver_call():  # qrqp turns Ctrl-C into a failed QP: an interrupt raises
+            sol = self._qp(**qp)
         if not bool(self._qp.stats().get("success", False)):
             return None, f"QP: {self._qp.stats().get('return_status', 'failed')}", f0
         d = np.asarray(sol["x"]).reshape(-1)

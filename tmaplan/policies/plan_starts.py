@@ -147,19 +147,16 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
         planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
     if parallel:
-        from tmaplan.parallel import process_pool
+        from tmaplan.parallel import closing_pool, process_pool
 
         own = None
         if pool is None:
             pool = own = process_pool(min(int(workers), len(starts)))
-        try:
+        with closing_pool(own):  # (stopped at once by an interrupt)
             # the planner's inputs travel with each start (a few kB); each worker builds the
             # planner once per multi-start (the token; _solve_in_worker's cache)
             key = (uuid.uuid4().hex, scenario, objective, planner_kw)
             plans = list(pool.map(_solve_in_worker, [key] * len(starts), starts.values()))
-        finally:
-            if own is not None:
-                own.shutdown(wait=True, cancel_futures=True)
     else:
         belief = Belief.from_prior(scenario)
         plans = [_solve_start(planner, belief, u) for u in starts.values()]

@@ -134,10 +134,14 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
     Raises
     ------
+    ScenarioError
+        A keep-out range that the prior or the truth starts inside
+        (:func:`tmaplan.planning.feasibility.check_keep_out`).
     SolverError
         If IPOPT converged from none of the starts.
     """
     from tmaplan.planning.belief import Belief
+    from tmaplan.planning.feasibility import check_keep_out
 
     if not is_integer(workers, 1):
         raise ArgumentError("workers", "an integer >= 1", workers)
@@ -145,6 +149,13 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
         objective is None or isinstance(objective, str))
     if planner is None:
         planner = _build_planner(scenario, objective, planner_kw)
+    belief = Belief.from_prior(scenario)
+    # a keep-out range the prior starts inside fails every start (each start's PlanningError
+    # is taken as "did not converge"): refused here, naming the field
+    pl = scenario.planning
+    from_file = pl is not None and planner.keep_out == pl.keep_out_range
+    check_keep_out(scenario, belief=belief, keep_out=planner.keep_out,
+                   field="planning.keep_out_range" if from_file else "keep_out_range")
     starts = start_programs(scenario, planner, n_turns=n_turns)
     if parallel:
         from tmaplan.parallel import process_pool
@@ -161,7 +172,6 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
             if own is not None:
                 own.shutdown(wait=True, cancel_futures=True)
     else:
-        belief = Belief.from_prior(scenario)
         plans = [_solve_start(planner, belief, u) for u in starts.values()]
     found = [(name, plan) for name, plan in zip(starts, plans) if plan is not None]
     if not found:

@@ -4,8 +4,9 @@ Each computation runs in a fresh process on ``default`` stretched to K steps of 
 ``time.horizon`` and ``planning.horizon`` K·15 s, the control interval 1 min), and reports
 its peak resident memory above the process's resident memory after the imports and the load
 (``resource.getrusage``; Linux reports kB). The fit of these numbers is
-:data:`tmaplan.memory.MODELS` (bytes = fixed + per_step·K); the script prints the measured
-numbers next to the model's prediction, so a change that makes a computation hungrier shows
+:data:`tmaplan.memory.MODELS` (bytes = fixed + per_step·K + per_step2·K²); the script prints
+the measured numbers next to the model's prediction (``plan``: its planner and baselines
+added up, as ``tmaplan plan`` checks), so a change that makes a computation hungrier shows
 here.
 
 Computations
@@ -91,7 +92,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(_child(args.child[0], int(args.child[1]))))
         return
-    from tmaplan.memory import MODELS
+    from tmaplan.memory import estimate
 
     gib = 2.0**30
     for kind in args.only.split(","):
@@ -102,7 +103,9 @@ def main() -> None:
                 print(f"{kind:<10} K={k:>6}: failed: {proc.stderr.strip().splitlines()[-1:]}")
                 continue
             r = json.loads(proc.stdout.strip().splitlines()[-1])
-            model = MODELS[kind].bytes(k) if kind in MODELS else float("nan")
+            parts = {"heading-dt": [("heading", 1)],
+                     "plan": [("heading", 1), ("baselines", 1)]}.get(kind, [(kind, 1)])
+            model = estimate(k, parts)
             print(f"{kind:<10} K={k:>6}: peak {r['peak'] / gib:8.3f} GiB above "
                   f"{r['base'] / gib:.3f} GiB, model {model / gib:8.3f} GiB, "
                   f"{r['seconds']:7.1f} s", flush=True)

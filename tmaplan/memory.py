@@ -6,12 +6,13 @@ horizon of 30 days at 20 s (129 600 steps) exhausted the memory after a minute
 (``std::bad_alloc``); :func:`check_steps` refuses such a run before anything is built, in
 one line naming the field that sets K, with the number of steps that fit.
 
-Model: ``bytes ≈ fixed + per_step · K`` per computation (:data:`MODELS`), fitted to the
-peak resident memory above the loaded process measured by ``benchmarks/memory.py`` on
-``default`` stretched to K = 180 … 5760 steps of 15 s (Linux x86-64, casadi 3.6, IPOPT with
-MUMPS; within 10 % of the measurements). The heading OCP's per-step cost is measured with
-the control interval of 4 steps of ``default``; with one step per interval it is larger
-(``per_interval``: the NLP's variables and IPOPT's matrices grow with the intervals).
+Model: ``bytes ≈ fixed + per_step·K (+ per_step2·K²)`` per computation (:data:`MODELS`),
+fitted to the peak resident memory above the loaded process measured by
+``benchmarks/memory.py`` on ``default`` stretched to K = 180 … 5760 steps of 15 s (Linux
+x86-64, casadi 3.6, IPOPT with MUMPS; within 10 % of the measurements). The heading OCP
+takes 141 kB a step (its casadi graph, step by step), whatever its control interval: 18 GiB
+at 129 600 steps. A verb's estimate adds up the computations it holds at once (a slight
+overestimate: ``plan`` measured 1.3–1.6 times less than its planner and baselines added).
 
 Available memory: the kernel's estimate (``MemAvailable`` in /proc/meminfo), else the free
 physical pages (``os.sysconf``), capped by a cgroup (v2) memory limit; when none is known
@@ -36,7 +37,7 @@ GIB = 2.0**30
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class StepModel:
-    """Memory of one computation, linear in the steps.
+    """Memory of one computation: ``fixed + per_step·K + per_step2·K²`` bytes at K steps.
 
     Attributes
     ----------
@@ -46,31 +47,36 @@ class StepModel:
         Bytes at any number of steps.
     per_step : float
         Bytes per time step.
-    per_interval : float
-        Bytes per control interval (the heading OCP's variables), 0 for the others.
+    per_step2 : float
+        Bytes per squared time step (the ping scheduler's candidates × steps).
     """
 
     what: str
     fixed: float
     per_step: float
-    per_interval: float = 0.0
+    per_step2: float = 0.0
 
-    def bytes(self, n_steps: int, steps_per_interval: int = 4) -> float:
-        """Estimated peak memory [bytes] for ``n_steps`` steps, ``steps_per_interval`` steps
-        per control interval (the heading OCP's; default 4, as measured)."""
-        n = n_steps / max(int(steps_per_interval), 1)
-        return self.fixed + self.per_step * n_steps + self.per_interval * (n - n_steps / 4)
+    def bytes(self, n_steps: int) -> float:
+        """Estimated peak memory [bytes] for ``n_steps`` steps."""
+        k = float(n_steps)
+        return self.fixed + self.per_step * k + self.per_step2 * k * k
 
 
-#: The computations' models (module notes; ``benchmarks/memory.py`` prints them against new
-#: measurements). Keys: "heading" (HeadingPlanner built and solved), "baselines" (its
-#: objective on the baseline grids), "bound" (closed-form PCRB), "schedule" (ping scheduler).
+#: The computations' models (module notes), least-squares fits of ``benchmarks/memory.py``
+#: (which prints them against new measurements; largest relative error of the fit in
+#: brackets). Keys: "heading" (HeadingPlanner built and solved, 180–5760 steps [9 %]; the
+#: same within 1 % with one step per control interval), "baselines" (its objective on the
+#: baseline grids [6 %]), "bound" (closed-form PCRB [2 %]), "schedule" (4 pings, relaxed,
+#: 180–2880 steps [1 %]; quadratic: each candidate ping's information over the steps after
+#: it), "arrays" (the truth, measurements, tracks and figures of any verb: ``simulate``
+#: measured 1.2 kB a step, ``track`` 0.6 kB, at 10 000 and 40 000 steps).
 MODELS: dict[str, StepModel] = {
-    "heading": StepModel(what="the heading OCP", fixed=30e6, per_step=141e3,
-                         per_interval=0.0),
-    "baselines": StepModel(what="the baselines' objective", fixed=20e6, per_step=44e3),
-    "bound": StepModel(what="the closed-form bound", fixed=17e6, per_step=35e3),
-    "schedule": StepModel(what="the ping scheduler", fixed=0.0, per_step=740e3),
+    "heading": StepModel(what="the heading OCP", fixed=34.7e6, per_step=141.2e3),
+    "baselines": StepModel(what="the baselines' objective", fixed=20.3e6, per_step=43.9e3),
+    "bound": StepModel(what="the closed-form bound", fixed=17.5e6, per_step=34.5e3),
+    "schedule": StepModel(what="the ping scheduler", fixed=57.8e6, per_step=330e3,
+                          per_step2=460.0),
+    "arrays": StepModel(what="the per-step arrays", fixed=0.0, per_step=1.25e3),
 }
 
 
@@ -105,24 +111,28 @@ def available_bytes() -> float:
     return avail
 
 
-def estimate(n_steps: int, parts: Sequence[tuple[str, int]], steps_per_interval: int = 4
-             ) -> float:
-    """Estimated peak memory [bytes] of ``parts`` (``(model key, copies)``: a computation
-    held ``copies`` times at once, e.g. by as many worker processes) at ``n_steps`` steps."""
-    return sum(c * MODELS[k].bytes(n_steps, steps_per_interval) for k, c in parts)
+def estimate(n_steps: int, parts: Sequence[tuple[str, int]]) -> float:
+    """Estimated peak memory [bytes] of ``parts`` (``(key of MODELS, copies)``: a
+    computation held ``copies`` times at once, e.g. by as many worker processes) at
+    ``n_steps`` steps."""
+    return sum(c * MODELS[k].bytes(n_steps) for k, c in parts)
 
 
-def max_steps(parts: Sequence[tuple[str, int]], available: float,
-              steps_per_interval: int = 4) -> int:
-    """The most steps whose :func:`estimate` fits in ``available`` bytes (0 if none)."""
-    fixed = estimate(0, parts, steps_per_interval)
-    slope = estimate(1, parts, steps_per_interval) - fixed
-    return max(int((available - fixed) // slope), 0) if slope > 0 else 2**62
+def max_steps(parts: Sequence[tuple[str, int]], available: float) -> int:
+    """The most steps whose :func:`estimate` fits in ``available`` bytes (0 if none; the
+    estimate grows with the steps)."""
+    lo, hi = 0, 1
+    while estimate(hi, parts) <= available and hi < 2**62:
+        lo, hi = hi, 2 * hi
+    while hi - lo > 1:  # estimate(lo) fits (or lo = 0), estimate(hi) does not
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if estimate(mid, parts) <= available else (lo, mid)
+    return lo
 
 
 def check_steps(n_steps: int, parts: Sequence[tuple[str, int]], *, field: str, dt: float,
-                received: str, source: str | None = None, available: float | None = None,
-                steps_per_interval: int = 4) -> None:
+                received: str, source: str | None = None, available: float | None = None
+                ) -> None:
     """Refuse ``n_steps`` steps whose :func:`estimate` exceeds the available memory.
 
     Parameters
@@ -143,8 +153,6 @@ def check_steps(n_steps: int, parts: Sequence[tuple[str, int]], *, field: str, d
         The scenario's name.
     available : float, optional
         Bytes available (default :func:`available_bytes`).
-    steps_per_interval : int
-        Steps per control interval of the heading OCP.
 
     Raises
     ------
@@ -155,13 +163,12 @@ def check_steps(n_steps: int, parts: Sequence[tuple[str, int]], *, field: str, d
         steps'``.
     """
     avail = available_bytes() if available is None else float(available)
-    need = estimate(n_steps, parts, steps_per_interval)
+    need = estimate(n_steps, parts)
     if need <= avail:
         return
-    m = max_steps(parts, avail, steps_per_interval)
+    m = max_steps(parts, avail)
     detail = ", ".join(f"{MODELS[k].what}{f' ×{c}' if c > 1 else ''} "
-                       f"{c * MODELS[k].bytes(n_steps, steps_per_interval) / GIB:.3g} GiB"
-                       for k, c in parts)
+                       f"{c * MODELS[k].bytes(n_steps) / GIB:.3g} GiB" for k, c in parts)
     expected = (f"at most {m} steps of dt = {dt:g} s (horizon <= {seconds_text(m * dt)}) to "
                 f"fit in the {avail / GIB:.3g} GiB of memory available: {n_steps} steps "
                 f"need about {need / GIB:.3g} GiB ({detail})")

@@ -512,13 +512,14 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     ``--out`` where no file can be created.
     """
     check_outputs(args, scenario.name)
+    from tmaplan.cli._feasible import check_feasible, check_memory
+
+    check_memory(args, scenario)  # first: the verbs' checks below may allocate per step
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
              "rank-costs": lambda a, s: check_truth_source(s, True),
              "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)
-    from tmaplan.cli._feasible import check_feasible
-
     check_feasible(args, scenario, prior_verb=args.verb in _PRIOR_VERBS)
     _truth_note(args.verb, scenario)

@@ -146,7 +146,7 @@ def check_keep_out(scenario: Scenario, *, belief: Belief | None = None,
                           f"received {distance(R)}", source=scenario.name)
 
 
-def check_plan_memory(scenario: Scenario, n_steps: int, steps_per_interval: int, *,
+def check_plan_memory(scenario: Scenario, n_steps: int, *,
                       horizon: float | None = None, horizon_field: str = "horizon",
                       copies: int = 1,
                       extra: tuple[tuple[str, int], ...] = (),
@@ -160,8 +160,6 @@ def check_plan_memory(scenario: Scenario, n_steps: int, steps_per_interval: int,
     scenario : Scenario
     n_steps : int
         Steps of the plan (K).
-    steps_per_interval : int
-        Steps per control interval.
     horizon : float, optional
         [s] the horizon given as an argument, named ``horizon_field`` (``"--horizon"`` on
         the command line).
@@ -188,5 +186,4 @@ def check_plan_memory(scenario: Scenario, n_steps: int, steps_per_interval: int,
     else:
         field, value = "time.horizon", float(scenario.time.horizon)
     check_steps(n_steps, (("heading", copies), *extra), field=field, dt=scenario.time.dt,
-                received=seconds_text(value), source=scenario.name, available=available,
-                steps_per_interval=steps_per_interval)
+                received=seconds_text(value), source=scenario.name, available=available)

@@ -139,7 +139,7 @@ class HeadingPlanner:
                                 else control_interval, source=scenario.name)
         self.n = max(1, round(float(H) / (self.m * dt)))
         # refused before any graph is built (a 30-day horizon exhausted the memory)
-        check_plan_memory(scenario, self.n * self.m, self.m, horizon=horizon)
+        check_plan_memory(scenario, self.n * self.m, horizon=horizon)
         self.dt, self.Tc = dt, self.m * dt
         self.K = self.n * self.m
         umax = turn_rate_max if turn_rate_max is not None else obs.turn_rate_max

@@ -147,15 +147,14 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
         raise ArgumentError("workers", "an integer >= 1", workers)
     parallel = (workers > 1 or pool is not None) and planner is None and (
         objective is None or isinstance(objective, str))
-    if planner is None:
-        planner = _build_planner(scenario, objective, planner_kw)
     belief = Belief.from_prior(scenario)
     # a keep-out range the prior starts inside fails every start (each start's PlanningError
-    # is taken as "did not converge"): refused here, naming the field
-    pl = scenario.planning
-    from_file = pl is not None and planner.keep_out == pl.keep_out_range
-    check_keep_out(scenario, belief=belief, keep_out=planner.keep_out,
-                   field="planning.keep_out_range" if from_file else "keep_out_range")
+    # is taken as "did not converge"): refused before the planner is built, naming the field
+    given = planner.keep_out if planner is not None else planner_kw.get("keep_out_range")
+    check_keep_out(scenario, belief=belief, keep_out=given,
+                   field="planning.keep_out_range" if given is None else "keep_out_range")
+    if planner is None:
+        planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
     if parallel:
         from tmaplan.parallel import process_pool

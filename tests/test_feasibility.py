@@ -395,3 +395,15 @@ def test_default_fits_in_the_memory_of_a_small_machine():
             args = argparse.Namespace(verb=verb, horizon=None, control_interval=None,
                                       pings=0, plans="all", workers=1)
             check_memory(args, sc, available=2 * GIB)
+
+
+def test_the_bound_and_the_scheduler_check_their_memory_first(monkeypatch, no_solver):
+    from tmaplan.bounds.closed_form import closed_form_pcrb
+    from tmaplan.planning import schedule_pings
+
+    monkeypatch.setattr("tmaplan.memory.available_bytes", lambda: 1e6)  # 1 MB
+    sc = load_problem("default")
+    with pytest.raises(ScenarioError, match="the closed-form bound"):
+        closed_form_pcrb(sc)
+    with pytest.raises(ScenarioError, match="the ping scheduler"):
+        schedule_pings(sc, budget=2)

@@ -15,8 +15,8 @@ Turn rates
     standards for ship manoeuvrability: tactical diameter at most 5 lengths; merchant ships
     turn in 3–4), so 10 °/s is a 60 m craft turning on its tightest circle at 30 kn, or a
     circle of 18 m radius at 6 kn; no ship or submarine that carries a sonar turns so fast,
-    and a planner given such a limit plans turns on the spot that no ship flies (it
-    converged, after minutes, to a plan of pirouettes, or not at all). Warned above
+    and a planner given such a limit plans turns on the spot that no ship flies (after
+    minutes of solving; on ``default`` IPOPT also failed from every start). Warned above
     :data:`PLAUSIBLE_TURN_RATE` = 0.1 rad/s (5.7 °/s, the limit of a bare turn rate,
     :data:`tmaplan._scenario_checks.BARE_LIMITS`): a frigate's hard turn at 30 kn, not a
     ship's at a tracking speed. Rates of turn are often quoted per minute (a ship's

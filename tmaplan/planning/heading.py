@@ -101,6 +101,13 @@ class HeadingPlanner:
         :class:`ParamLayout`): a re-plan at time t then optimises the time the mission has
         left, not a full horizon beyond it. The terminal objectives (the value at the
         horizon's last step) do not read the step weights.
+
+    Raises
+    ------
+    ScenarioError or ArgumentError
+        Before any graph is built (:mod:`tmaplan.planning.feasibility`): a planning horizon
+        of no whole number of control intervals (an argument ``horizon`` shorter than one),
+        more steps than fit in the memory available.
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,

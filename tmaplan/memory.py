@@ -1,7 +1,8 @@
 """Memory of the large computations from the number of time steps, checked before building.
 
 The heading OCP, the baselines' objective, the closed-form bound and the ping scheduler build
-casadi graphs (and IPOPT its matrices) that grow linearly with the number of steps K. A
+casadi graphs (and IPOPT its matrices) that grow with the number of steps K (linearly; the
+ping scheduler's quadratically). A
 horizon of 30 days at 20 s (129 600 steps) exhausted the memory after a minute
 (``std::bad_alloc``); :func:`check_steps` refuses such a run before anything is built, in
 one line naming the field that sets K, with the number of steps that fit.
@@ -10,9 +11,10 @@ Model: ``bytes ≈ fixed + per_step·K (+ per_step2·K²)`` per computation (:da
 fitted to the peak resident memory above the loaded process measured by
 ``benchmarks/memory.py`` on ``default`` stretched to K = 180 … 5760 steps of 15 s (Linux
 x86-64, casadi 3.6, IPOPT with MUMPS; within 10 % of the measurements). The heading OCP
-takes 141 kB a step (its casadi graph, step by step), whatever its control interval: 18 GiB
-at 129 600 steps. A verb's estimate adds up the computations it holds at once (a slight
-overestimate: ``plan`` measured 1.3–1.6 times less than its planner and baselines added).
+takes 141 kB a step (its casadi graph, step by step), whatever its control interval: 17 GiB
+at 129 600 steps. A verb's estimate adds up the computations it holds at once (an
+overestimate: at 180 steps ``plan`` measured 1.6 times less than its planner and baselines
+added up).
 
 Available memory: the kernel's estimate (``MemAvailable`` in /proc/meminfo), else the free
 physical pages (``os.sysconf``), capped by a cgroup (v2) memory limit; when none is known
@@ -157,10 +159,10 @@ def check_steps(n_steps: int, parts: Sequence[tuple[str, int]], *, field: str, d
     Raises
     ------
     ScenarioError or ArgumentError
-        ``field 'time.horizon': expected at most 98304 steps of dt = 20 s (horizon <=
-        1.966e+06 s (22.8 d)) to fit in the 14.1 GiB available: 129600 steps need about
-        18.6 GiB (the heading OCP 17.5 GiB, ...), received '2.592e+06 s (30 d): 129600
-        steps'``.
+        ``field 'planning.horizon': expected at most 127469 steps of dt = 20 s (horizon <=
+        2.54938e+06 s (29.5 d)) to fit in the 22.2 GiB of memory available: 129600 steps
+        need about 22.5 GiB (the per-step arrays 0.151 GiB, the heading OCP 17.1 GiB, the
+        baselines' objective 5.32 GiB), received '2.592e+06 s (30 d): 129600 steps'``.
     """
     avail = available_bytes() if available is None else float(available)
     need = estimate(n_steps, parts)

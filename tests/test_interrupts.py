@@ -202,11 +202,12 @@ def test_interrupted_ipopt_solve_raises(default, prior, sig):
     ctx = signals_interrupt() if sig == signal.SIGTERM else contextlib.nullcontext()
     # (a KeyboardInterrupt that is no Interrupted fails the test, not the test session)
     with ctx, pytest.raises(KeyboardInterrupt) as ei, _signal_in_solver(sig):
-        t0 = time.perf_counter()
         planner.solve(prior)
+    # raised by the solver call the signal landed in (IPOPT checks between iterations), not
+    # after the multi-start ran to its end; how soon is measured by benchmarks/interrupts.py,
+    # not here (no timed tests)
     assert isinstance(ei.value, Interrupted) and ei.value.signum == sig
     assert _in_solver(ei.value)
-    assert time.perf_counter() - t0 < 5.0  # IPOPT checks between iterations (~0.1 s)
 
 
 def test_interrupted_receding_replan_raises_and_logs_no_failure(default, prior):

@@ -179,6 +179,9 @@ def check(s: Any, source: str | None) -> None:
             if abs(u) > o.turn_rate_max * (1 + 1e-12):
                 raise _err(f"observer.turn_rates[{i}]",
                            f"|u| <= observer.turn_rate_max = {o.turn_rate_max} rad/s", u, source)
+    from tmaplan._scenario_plausible import check as check_turn_rates
+
+    check_turn_rates(s, source)  # no ship turns faster than 10 °/s
     if any(leg.turn_rate is not None for leg in o.legs):
         from tmaplan.models.observer import observer_track
 

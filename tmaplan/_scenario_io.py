@@ -18,6 +18,7 @@ import tomli_w
 from pydantic import TypeAdapter, ValidationError
 
 from tmaplan._scenario_checks import check, check_bare_numbers, with_units
+from tmaplan._scenario_plausible import warn as warn_implausible
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import Scenario
 
@@ -100,6 +101,7 @@ def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario
     except ValidationError as exc:
         raise _convert_validation_error(exc, source) from None
     check(scenario, source)
+    warn_implausible(scenario, source)  # a course of 400°, a bearing σ of 90°, ...
     return scenario
 
 

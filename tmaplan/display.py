@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["angle", "distance", "minute_list", "minutes", "rate", "scenario_text",
-           "short_repr", "speed", "timespan"]
+           "seconds_text", "short_repr", "speed", "timespan"]
 
 
 def _num(x: float, digits: int = 4) -> str:
@@ -60,6 +60,18 @@ def timespan(t: float) -> str:
     if abs(t) < 60.0:
         return f"{t:.3g} s"
     return f"{t / 60.0:.2f}".rstrip("0").rstrip(".") + " min"
+
+
+def seconds_text(value: float) -> str:
+    """A duration for messages, in seconds as given and in hours or days when long:
+    ``'100000 s (27.8 h)'``, ``'2.592e+06 s (30 d)'`` (``value`` in s)."""
+    if value >= 2 * 86400:
+        return f"{value:g} s ({value / 86400:.3g} d)"
+    if value >= 7200:
+        return f"{value:g} s ({value / 3600:.3g} h)"
+    if value >= 120:
+        return f"{value:g} s ({value / 60:.3g} min)"
+    return f"{value:g} s"
 
 
 def speed(v: float) -> str:

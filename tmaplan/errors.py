@@ -19,6 +19,7 @@ __all__ = [
     "ObservabilityError",
     "PlanningError",
     "ScenarioError",
+    "ScenarioWarning",
     "SolverError",
     "TmaplanError",
     "UnitError",
@@ -26,6 +27,7 @@ __all__ = [
     "finite_real",
     "is_integer",
     "is_whole_count",
+    "warn_field",
     "whole_steps_text",
 ]
 
@@ -84,6 +86,24 @@ class ScenarioError(ArgumentError):
     The message names the field, the expected and the received value (see
     :class:`ArgumentError`, of which this is the scenario case).
     """
+
+
+class ScenarioWarning(UserWarning):
+    """Suspicious but legal input (a course of 400°, a contact outside its own prior, a
+    turn rate few ships reach): the computation goes on. The message is one line naming the
+    field, what is suspicious and the received value, as :class:`ScenarioError`'s; the
+    command line prints it as ``tmaplan VERB: warning: ScenarioWarning: ...``
+    (:func:`warn_field`)."""
+
+
+def warn_field(field: str, text: str, *, source: str | None = None, stacklevel: int = 2
+               ) -> None:
+    """Issue a :class:`ScenarioWarning` ``"<source>: field '<field>': <text>"``: the one form
+    of the warnings on a field's value (a refusal would be a :class:`ScenarioError`)."""
+    import warnings
+
+    where = f"{source}: " if source else ""
+    warnings.warn(f"{where}field '{field}': {text}", ScenarioWarning, stacklevel=stacklevel + 1)
 
 
 class UnitError(ScenarioError):

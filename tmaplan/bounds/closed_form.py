@@ -21,7 +21,9 @@ from scipy import special
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, StepInformation
 from tmaplan.bounds.inputs import PCRBInputs, prepare
 from tmaplan.bounds.pcrb import PCRBResult, SideAssumptionWarning
+from tmaplan.display import seconds_text
 from tmaplan.errors import ObservabilityError, ScenarioError, finite_real
+from tmaplan.memory import check_steps
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -137,6 +139,12 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
         Tolerance (finite, >= 0) on κ_k = (wrap period)·p_β(wrap); a
         :class:`SideAssumptionWarning` is issued where it is exceeded.
 
+    Raises
+    ------
+    ScenarioError
+        ``time.horizon`` with more steps than fit in the memory available
+        (:func:`tmaplan.memory.check_steps`), before anything is built.
+
     Returns
     -------
     PCRBResult
@@ -147,6 +155,8 @@ def closed_form_pcrb(scenario: Scenario, *, ping_steps: Sequence[int] | None = N
     t0 = time.perf_counter()
     tol = finite_real("side_tol", side_tol, "a finite number >= 0", lower=0.0,
                       source=scenario.name)
+    check_steps(scenario.n_steps, (("bound", 1),), field="time.horizon", dt=scenario.time.dt,
+                received=seconds_text(scenario.time.horizon), source=scenario.name)
     inp = _inputs(scenario, ping_steps=ping_steps, observer=observer,
                   prior_samples=prior_samples, rng=rng)
     engine = _engine(inp, float(scenario.target.q))

@@ -122,11 +122,18 @@ def _names_problem(text: str, problem: str) -> bool:
 
 
 def _one_line_warning(verb: str) -> Any:
-    """A :func:`warnings.showwarning` that prints ``tmaplan VERB: warning: Category: text``."""
+    """A :func:`warnings.showwarning` that prints ``tmaplan VERB: warning: Category: text``,
+    each distinct line once (the verb loads its scenario again after the preflight, whose
+    warnings would repeat)."""
+    shown: set[str] = set()
+
     def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
              file: Any = None, line: str | None = None) -> None:
         text = str(message).replace("\n", " ")
-        print(f"tmaplan {verb}: warning: {category.__name__}: {text}", file=sys.stderr)
+        out = f"tmaplan {verb}: warning: {category.__name__}: {text}"
+        if out not in shown:
+            shown.add(out)
+            print(out, file=sys.stderr)
     return show
 
 
@@ -161,7 +168,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     problem = None
     try:
-        with signals_interrupt():  # SIGTERM stops a verb as Ctrl-C does, inside a solve too
+        with signals_interrupt(), warnings.catch_warnings():  # SIGTERM stops a verb as
+            # Ctrl-C does, inside a solve too; warnings are one line, as errors are (--debug:
+            # Python's, with the source)
+            if not args.debug:
+                warnings.showwarning = _one_line_warning(args.verb)
             # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
             fixed = getattr(modules[args.verb], "PROBLEM", None)
             if getattr(args, "problem", None) is not None or fixed is not None:
@@ -170,10 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 preflight(args, scenario)
             else:  # (preflight checks them with the problem)
                 check_outputs(args)
-            with warnings.catch_warnings():
-                if not args.debug:  # one line, as errors are (--debug: Python's, with source)
-                    warnings.showwarning = _one_line_warning(args.verb)
-                payload = modules[args.verb].run(args)
+            payload = modules[args.verb].run(args)
             checkpoint()  # an interrupt that Python ignored on the way is still one
             require_finite(payload, getattr(modules[args.verb], "FINITE", ()),
                            source=problem)

@@ -38,6 +38,7 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 from tmaplan.cli._paths import _fail, check_json_path, check_out_dir, check_outputs
+from tmaplan.display import seconds_text
 from tmaplan.errors import (
     ArgumentError,
     PlanningError,
@@ -172,15 +173,6 @@ def open_fraction(text: str) -> float:
     if not 0.0 < value < 1.0:
         _fail("in (0, 1)", value)
     return value
-
-
-def seconds_text(value: float) -> str:
-    """A duration for messages: ``'100000 s (27.8 h)'``."""
-    if value >= 7200:
-        return f"{value:g} s ({value / 3600:.3g} h)"
-    if value >= 120:
-        return f"{value:g} s ({value / 60:.3g} min)"
-    return f"{value:g} s"
 
 
 def duration(*, allow_zero: bool = False,
@@ -521,10 +513,14 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     ``--out`` where no file can be created.
     """
     check_outputs(args, scenario.name)
+    from tmaplan.cli._feasible import check_feasible, check_memory
+
+    check_memory(args, scenario)  # first: the verbs' checks below may allocate per step
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
              "rank-costs": lambda a, s: check_truth_source(s, True),
              "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)
+    check_feasible(args, scenario, prior_verb=args.verb in _PRIOR_VERBS)
     _truth_note(args.verb, scenario)

@@ -31,9 +31,7 @@ from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.errors import (
     ArgumentError,
     PlanningError,
-    ScenarioError,
     SolverError,
-    is_whole_count,
 )
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.interrupts import solver_call
@@ -42,6 +40,7 @@ from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
+from tmaplan.planning.feasibility import check_plan_memory, check_planning_horizon
 from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
@@ -69,27 +68,6 @@ __all__ = ["BUILT_IN_STARTS", "HeadingPlan", "HeadingPlanner", "arc_displacement
 BUILT_IN_STARTS = {"direct": 7, "bang-bang": 4}
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
-
-
-def check_planning_horizon(scenario: Scenario) -> None:
-    """The scenario's planning horizon (``planning.horizon``, default ``time.horizon``) is a
-    whole number (>= 1) of control intervals (``planning.control_interval``, default dt), else
-    :class:`ScenarioError`: the planner would round it silently (a 60 min control interval in
-    a 45 min problem planned 60 min). Checked when a planner is built from the file's values,
-    not at load: only planning reads these fields."""
-    pl, g = scenario.planning, scenario.time
-    tc = pl.control_interval if pl is not None and pl.control_interval else g.dt
-    h = pl.horizon if pl is not None and pl.horizon else None
-    ratio = (h if h is not None else g.horizon) / tc
-    if is_whole_count(ratio):
-        return
-    if h is not None:
-        raise ScenarioError("planning.horizon", f"a whole number (>= 1) of control intervals "
-                            f"of {tc:g} s (planning.control_interval, default dt)", h,
-                            source=scenario.name)
-    raise ScenarioError("planning.control_interval", "a whole number of intervals in the "
-                        f"planning horizon (time.horizon = {g.horizon:g} s; or give "
-                        "planning.horizon)", tc, source=scenario.name)
 
 
 class HeadingPlanner:
@@ -124,6 +102,13 @@ class HeadingPlanner:
         :class:`ParamLayout`): a re-plan at time t then optimises the time the mission has
         left, not a full horizon beyond it. The terminal objectives (the value at the
         horizon's last step) do not read the step weights.
+
+    Raises
+    ------
+    ScenarioError or ArgumentError
+        Before any graph is built (:mod:`tmaplan.planning.feasibility`): a planning horizon
+        of no whole number of control intervals (an argument ``horizon`` shorter than one),
+        more steps than fit in the memory available.
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,
@@ -153,9 +138,16 @@ class HeadingPlanner:
         Tc = control_interval if control_interval is not None else (
             pl.control_interval if pl and pl.control_interval else dt)
         self.m = max(1, round(float(Tc) / dt))
-        self.n = max(1, round(float(H) / (self.m * dt)))
         if horizon is None and control_interval is None:
             check_planning_horizon(scenario)
+        elif float(H) < self.m * dt * (1 - 1e-9):  # nothing to plan: refused, not rounded up
+            field = "horizon" if horizon is not None else "control_interval"
+            raise ArgumentError(field, f"a horizon of at least one control interval ({H:g} s "
+                                f">= {self.m * dt:g} s)", horizon if horizon is not None
+                                else control_interval, source=scenario.name)
+        self.n = max(1, round(float(H) / (self.m * dt)))
+        # refused before any graph is built (a 30-day horizon exhausted the memory)
+        check_plan_memory(scenario, self.n * self.m, horizon=horizon)
         self.dt, self.Tc = dt, self.m * dt
         self.K = self.n * self.m
         umax = turn_rate_max if turn_rate_max is not None else obs.turn_rate_max

@@ -31,8 +31,9 @@ import numpy as np
 
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
 from tmaplan.bounds.inputs import check_ping_steps
-from tmaplan.display import short_repr
+from tmaplan.display import seconds_text, short_repr
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
+from tmaplan.memory import check_steps
 from tmaplan.models.observer import ObserverTrack, observer_track
 
 # The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
@@ -261,6 +262,9 @@ def schedule_pings(scenario: Scenario, *, budget: int,
         ``candidate_steps``, ``forbidden``, ``min_spacing`` invalid (:func:`ping_candidates`).
     PlanningError
         Budget larger than the candidate steps (or than the spacing allows), no range sensor.
+    ScenarioError
+        ``time.horizon`` with more steps than fit in the memory available
+        (:func:`tmaplan.memory.check_steps`), before anything is built.
     """
     from tmaplan.planning.ping_exact import tree_search
     from tmaplan.planning.ping_relaxation import relaxation_bound
@@ -284,6 +288,9 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                             f"{gap_reference!r}")
     obs = observer if observer is not None else observer_track(scenario.observer,
                                                                scenario.time)
+    check_steps(len(obs.times) - 1, (("schedule", 1),), field="time.horizon",
+                dt=scenario.time.dt, received=seconds_text(scenario.time.horizon),
+                source=scenario.name)  # before any graph is built
     bel = belief if belief is not None else Belief.from_prior(scenario)
     ev = PingEvaluator(scenario, obs, bel, objective)
     cand, gap, spacing = ping_candidates(scenario, ev.times, candidate_steps=candidate_steps,

@@ -134,15 +134,25 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
     Raises
     ------
+    ScenarioError
+        A keep-out range that the prior or the truth starts inside
+        (:func:`tmaplan.planning.feasibility.check_keep_out`).
     SolverError
         If IPOPT converged from none of the starts.
     """
     from tmaplan.planning.belief import Belief
+    from tmaplan.planning.feasibility import check_keep_out
 
     if not is_integer(workers, 1):
         raise ArgumentError("workers", "an integer >= 1", workers)
     parallel = (workers > 1 or pool is not None) and planner is None and (
         objective is None or isinstance(objective, str))
+    belief = Belief.from_prior(scenario)
+    # a keep-out range the prior starts inside fails every start (each start's PlanningError
+    # is taken as "did not converge"): refused before the planner is built, naming the field
+    given = planner.keep_out if planner is not None else planner_kw.get("keep_out_range")
+    check_keep_out(scenario, belief=belief, keep_out=given,
+                   field="planning.keep_out_range" if given is None else "keep_out_range")
     if planner is None:
         planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
@@ -158,7 +168,6 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
             key = (uuid.uuid4().hex, scenario, objective, planner_kw)
             plans = list(pool.map(_solve_in_worker, [key] * len(starts), starts.values()))
     else:
-        belief = Belief.from_prior(scenario)
         plans = [_solve_start(planner, belief, u) for u in starts.values()]
     found = [(name, plan) for name, plan in zip(starts, plans) if plan is not None]
     if not found:

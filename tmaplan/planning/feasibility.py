@@ -1,0 +1,189 @@
+"""Can the plan be solved? The planning inputs checked before a graph is built (issue 38).
+
+Each rule refuses in one line naming the field (:class:`tmaplan.errors.ScenarioError`), in
+milliseconds, what the solver used to find after minutes ("no start converged",
+``std::bad_alloc``). :class:`tmaplan.planning.HeadingPlanner` and the offline plan from the
+prior (:func:`tmaplan.policies.plan_starts.plan_candidates`) check them, and the command
+line before any verb that plans (:func:`tmaplan.cli._args.preflight`).
+
+Planning horizon (:func:`check_planning_horizon`)
+    ``planning.horizon`` (default ``time.horizon``) is a whole number (>= 1) of control
+    intervals (``planning.control_interval``, default dt): shorter than one interval there is
+    nothing to plan, and a fraction was rounded silently.
+Keep-out range (:func:`check_keep_out`)
+    The planner keeps the target *estimate* (the belief mean propagated at constant
+    velocity) outside ``planning.keep_out_range`` of the own ship, from t0 on. Refused when
+    the range at t0 of the prior's mean (the estimate the plan starts from), the prior's
+    median range (more than :data:`KEEP_OUT_REFUSED` = 50 % of its mass would start inside)
+    or the contact's true initial range is at most the keep-out range: the first leaves the
+    planner no feasible point (every start failed), the other two make the scenario
+    contradict itself (most contacts, or its own, begin inside the zone the plan must keep
+    out of). Warned when more than :data:`KEEP_OUT_WARNED` = 5 % of the prior's mass lies
+    inside (those contacts start inside it).
+Memory (:func:`check_plan_memory`)
+    The heading OCP's estimated memory at its number of steps
+    (:func:`tmaplan.memory.check_steps`) fits in the memory available.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from tmaplan.display import distance, seconds_text
+from tmaplan.errors import ScenarioError, is_whole_count, warn_field
+from tmaplan.geometry import range_of
+from tmaplan.memory import check_steps
+
+if TYPE_CHECKING:
+    from tmaplan.planning.belief import Belief
+    from tmaplan.scenario import Scenario
+
+__all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_memory",
+           "check_planning_horizon", "keep_out_share"]
+
+KEEP_OUT_REFUSED = 0.5
+"""Share of the prior's mass inside the keep-out range from which a plan is refused."""
+KEEP_OUT_WARNED = 0.05
+"""Share of the prior's mass inside the keep-out range from which a plan is warned."""
+
+
+def check_planning_horizon(scenario: Scenario) -> None:
+    """The scenario's planning horizon (``planning.horizon``, default ``time.horizon``) is a
+    whole number (>= 1) of control intervals (``planning.control_interval``, default dt), else
+    :class:`ScenarioError`: the planner would round it silently (a 60 min control interval in
+    a 45 min problem planned 60 min). Checked when a planner is built from the file's values,
+    not at load: only planning reads these fields."""
+    pl, g = scenario.planning, scenario.time
+    tc = pl.control_interval if pl is not None and pl.control_interval else g.dt
+    h = pl.horizon if pl is not None and pl.horizon else None
+    ratio = (h if h is not None else g.horizon) / tc
+    if is_whole_count(ratio):
+        return
+    short = ("; it is shorter than one interval: nothing to plan" if ratio < 1 - 1e-9
+             else "")
+    if h is not None:
+        raise ScenarioError("planning.horizon", f"a whole number (>= 1) of control intervals "
+                            f"of {tc:g} s (planning.control_interval, default dt){short}", h,
+                            source=scenario.name)
+    raise ScenarioError("planning.control_interval", "a whole number of intervals in the "
+                        f"planning horizon (time.horizon = {g.horizon:g} s; or give "
+                        f"planning.horizon){short}", tc, source=scenario.name)
+
+
+def keep_out_share(belief: Belief, keep_out: float) -> float:
+    """Share of ``belief``'s mass within ``keep_out`` [m] of the own ship (its relative
+    positions' range below it; the mean alone for a belief without samples: 0 or 1)."""
+    if belief.samples is None:
+        return float(belief.mean_range() < keep_out)
+    inside = range_of(belief.samples[:, :2]) < keep_out
+    w = belief.weights if belief.weights is not None else np.full(inside.size, 1 / inside.size)
+    return float(np.sum(w[inside]))
+
+
+def _median_range(belief: Belief) -> float:
+    if belief.samples is None:
+        return belief.mean_range()
+    r = range_of(belief.samples[:, :2])
+    order = np.argsort(r)
+    w = belief.weights if belief.weights is not None else np.full(r.size, 1 / r.size)
+    cum = np.cumsum(w[order])
+    return float(r[order][min(int(np.searchsorted(cum, 0.5)), r.size - 1)])
+
+
+def check_keep_out(scenario: Scenario, *, belief: Belief | None = None,
+                   keep_out: float | None = None, field: str = "planning.keep_out_range"
+                   ) -> None:
+    """Refuse (or warn) a keep-out range that the prior or the truth start inside (module
+    notes).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    belief : Belief, optional
+        The prior belief at t0 (default :meth:`Belief.from_prior`; nothing is checked for a
+        scenario without a prior).
+    keep_out : float, optional
+        [m]; default ``planning.keep_out_range`` (0: nothing to check).
+    field : str
+        The name of ``keep_out`` in the messages.
+
+    Raises
+    ------
+    ScenarioError
+        ``field 'planning.keep_out_range': expected less than 12 km, the contact's true
+        initial range (...), received '20 km: 75 % of the prior's mass lies inside'``.
+    """
+    from tmaplan.models.prior import true_initial_state
+    from tmaplan.planning.belief import Belief
+
+    pl = scenario.planning
+    R = float(keep_out if keep_out is not None else (pl.keep_out_range if pl else 0.0))
+    if R <= 0 or (belief is None and scenario.prior is None):
+        return
+    b = Belief.from_prior(scenario) if belief is None else belief
+    share = keep_out_share(b, R)
+    truth = true_initial_state(scenario)[:2] - np.asarray(scenario.observer.position, float)
+    limits = (  # (short name, the reason it bounds the keep-out range, range at t0 [m])
+        ("the contact's true initial range", "the contact's true initial range",
+         float(range_of(truth))),
+        ("the prior's mean", "the range of the prior's mean, the target estimate a plan "
+         "starts from", b.mean_range()),
+        ("the prior's median", f"the prior's median range (more than {KEEP_OUT_REFUSED:.0%} "
+         "of its mass would start inside)", _median_range(b)))
+    name, why, limit = min(limits, key=lambda x: x[2])
+    if R >= limit:
+        others = ", ".join(f"{n} at {distance(v)}" for n, _, v in limits if n != name)
+        raise ScenarioError(field, f"less than {distance(limit)}, {why} (a plan keeps the "
+                            f"estimate outside the keep-out range from t0; {others})",
+                            f"{distance(R)}: {share:.0%} of the prior's mass lies inside",
+                            source=scenario.name)
+    if share > KEEP_OUT_WARNED:
+        warn_field(field, f"{share:.0%} of the prior's mass lies within the keep-out range of "
+                          "the own ship at t0 (more than "
+                          f"{KEEP_OUT_WARNED:.0%}: the contacts drawn there start inside it), "
+                          f"received {distance(R)}", source=scenario.name)
+
+
+def check_plan_memory(scenario: Scenario, n_steps: int, *,
+                      horizon: float | None = None, horizon_field: str = "horizon",
+                      copies: int = 1,
+                      extra: tuple[tuple[str, int], ...] = (),
+                      available: float | None = None) -> None:
+    """Refuse a heading OCP of ``n_steps`` steps that would not fit in memory
+    (:func:`tmaplan.memory.check_steps`), naming what set the steps: ``horizon`` (an
+    argument, ``horizon_field``) if given, else ``planning.horizon`` or ``time.horizon``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    n_steps : int
+        Steps of the plan (K).
+    horizon : float, optional
+        [s] the horizon given as an argument, named ``horizon_field`` (``"--horizon"`` on
+        the command line).
+    horizon_field : str
+        The name of ``horizon`` in the message.
+    copies : int
+        Planners built at once (worker processes).
+    extra : tuple of (str, int)
+        Further computations held at the same time (``(key of tmaplan.memory.MODELS,
+        copies)``, e.g. the baselines' objective).
+    available : float, optional
+        Bytes available (default :func:`tmaplan.memory.available_bytes`).
+
+    Raises
+    ------
+    ScenarioError or ArgumentError
+        If the estimate exceeds the memory available.
+    """
+    pl = scenario.planning
+    if horizon is not None:
+        field, value = horizon_field, float(horizon)
+    elif pl is not None and pl.horizon:
+        field, value = "planning.horizon", float(pl.horizon)
+    else:
+        field, value = "time.horizon", float(scenario.time.horizon)
+    check_steps(n_steps, (("heading", copies), *extra), field=field, dt=scenario.time.dt,
+                received=seconds_text(value), source=scenario.name, available=available)

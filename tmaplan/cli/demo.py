@@ -33,6 +33,7 @@ from tmaplan.cli._args import (
     integer,
 )
 from tmaplan.errors import PlanningError
+from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.parallel import process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
@@ -150,6 +151,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
         _say(args, f"      {name:<20} median time to 10 % range accuracy "
                    f"{'never' if not np.isfinite(tta) else f'{tta / 60:5.1f} min'}, final "
                    f"range RMSE {s['final_range_rmse']:6.0f} m")
+    _say_replans(args, result)
     seconds = time.perf_counter() - t0
     _say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
@@ -163,6 +165,14 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                              "uniform_objective": sched.uniform_objective,
                              "no_ping_objective": sched.no_ping_objective})
     return payload
+
+
+def _say_replans(args: argparse.Namespace, result: Any) -> None:
+    """One line per re-planning policy: its re-plans, not converged, fell back
+    (:mod:`tmaplan.evaluation.replans`)."""
+    for name in result.policies:
+        if cell := replan_cell(result.summary[name]["replans"]):
+            _say(args, f"      {name:<20}{cell}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

@@ -25,8 +25,9 @@ from tmaplan.evaluation.metrics import RunMetrics
 
 __all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "scenario_hash"]
 
-#: Version of the run-file format (part of the campaign cache key).
-FORMAT = 3
+#: Version of the run-file format (part of the campaign cache key). 4: each re-plan's
+#: ``replan_converged`` and ``replan_fell_back`` instead of a count of failures.
+FORMAT = 4
 
 
 def scenario_hash(scenario: Any) -> str:
@@ -128,8 +129,9 @@ class PolicyRun:
         Steps at which the own ship pinged.
     replan_seconds : ndarray, shape (n_replans,)
         Wall time of each re-plan [s].
-    replan_failures : int
-        Re-plans that failed (the previous plan was kept).
+    replan_converged, replan_fell_back : ndarray of bool, shape (n_replans,)
+        Per re-plan: whether it ended with a converged plan, and whether it used a fallback
+        (:mod:`tmaplan.evaluation.replans`).
     recoveries : int
         Track recoveries by the filter's consistency monitor.
     """
@@ -140,7 +142,8 @@ class PolicyRun:
     estimate: np.ndarray
     ping_steps: np.ndarray
     replan_seconds: np.ndarray
-    replan_failures: int
+    replan_converged: np.ndarray
+    replan_fell_back: np.ndarray
     recoveries: int = 0
 
 

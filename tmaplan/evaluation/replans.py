@@ -120,7 +120,7 @@ def warn_not_converged(counts: Mapping[str, ReplanCounts]) -> None:
     if over:
         warnings.warn(f"re-plans not converged above {100 * NOT_CONVERGED_WARNING:g} %: "
                       f"{'; '.join(over)}; the own ship kept its previous plan there "
-                      "(docs/guide.md, 'Re-plans')", ReplanWarning, stacklevel=2)
+                      "(docs/cli.md, 'Re-plans')", ReplanWarning, stacklevel=2)
 
 
 def replan_cell(counts: ReplanCounts) -> str:

@@ -1,0 +1,219 @@
+"""Re-plans that converge or say so (issue 38): the receding controller's log, its fallback
+starts, the campaign's counts (``replans`` of ``tmaplan compare``) and the warning above 1 %."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import SolverError
+from tmaplan.evaluation.replans import (
+    NOT_CONVERGED_WARNING,
+    ReplanCounts,
+    ReplanWarning,
+    replan_flags,
+    warn_not_converged,
+)
+from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.policies import Receding, Straight
+from tmaplan.policies._base import BeliefView
+
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+_KW = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
+
+
+@pytest.fixture(scope="module")
+def small(default):
+    """`default` flown for 15 minutes (three re-plans), a 15-interval range-bound plan."""
+    sc = default.replace(time=dataclasses.replace(default.time, horizon=900.0))
+    prior = Belief.from_prior(sc)
+    planner = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0)
+    return sc, prior, planner, planner.solve(prior)
+
+
+class _WarmFails:
+    """A planner whose warm-started solves stop at the iteration limit (``always``: every
+    solve), the others solved by the real planner."""
+
+    def __init__(self, planner: HeadingPlanner, always: bool = False) -> None:
+        self.planner, self.always, self.calls = planner, always, []
+
+    def __getattr__(self, name):
+        return getattr(self.planner, name)
+
+    def solve(self, b, **kw):
+        self.calls.append("warm" if kw.get("warm_start") is not None else "start")
+        if self.always or kw.get("warm_start") is not None:
+            raise SolverError("ipopt", "Maximum_Iterations_Exceeded", "injected")
+        return self.planner.solve(b, **kw)
+
+
+def _view(prior, t=0.0):
+    n = 500
+    return BeliefView(step=int(t // 15), t=t, heading=0.0, position=np.zeros(2),
+                      particles=prior.samples[:n], weights=np.full(n, 1 / n), pings_used=0,
+                      alarms=0)
+
+
+def test_counts_add_up_and_old_logs_read_a_failure_as_a_fallback():
+    log = [{"success": True, "fell_back": False}, {"success": True, "fell_back": True},
+           {"success": False, "fell_back": True}, {"success": False}]  # the last: no key
+    ok, back = replan_flags(log)
+    assert ok.tolist() == [True, True, False, False]
+    assert back.tolist() == [False, True, True, True]
+    c = ReplanCounts.count([(ok, back), replan_flags([])])
+    assert c == ReplanCounts(total=4, converged=2, not_converged=2, fell_back=3)
+    assert c.to_json() == {"total": 4, "converged": 2, "not_converged": 2, "fell_back": 3}
+    assert c.not_converged_share == 0.5 and "2 not converged (50.0 %)" in c.text()
+    none = ReplanCounts.count([])
+    assert none == ReplanCounts() and none.not_converged_share == 0.0
+    # a re-plan not converged always fell back, even if a log says otherwise
+    assert ReplanCounts.count([(np.array([False]), np.array([False]))]).fell_back == 1
+
+
+def test_warning_only_above_one_percent():
+    at = ReplanCounts(total=100, converged=99, not_converged=1, fell_back=1)
+    over = ReplanCounts(total=99, converged=97, not_converged=2, fell_back=2)
+    assert at.not_converged_share == NOT_CONVERGED_WARNING
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ReplanWarning)
+        warn_not_converged({"a": at, "b": ReplanCounts()})
+    with pytest.warns(ReplanWarning, match=r"b 2 of 99 \(2\.0 %\)") as rec:
+        warn_not_converged({"a": at, "b": over})
+    assert len(rec) == 1 and "\n" not in str(rec[0].message) and "a 1" not in str(
+        rec[0].message)
+
+
+def test_a_re_plan_at_the_iteration_limit_is_reported_not_converged_and_fell_back(small):
+    """A real IPOPT failure (``max_iter`` 1) at every start: the re-plan is logged not
+    converged and fallen back, naming the status, and the own ship flies on (straight: no
+    plan before)."""
+    sc, prior, _, plan = small
+    ctrl = Receding(**_KW, first_plan=plan).controller(sc)
+    ctrl.planner = HeadingPlanner(sc, objective="mean-range-bound", horizon=900.0,
+                                  solver_options={"max_iter": 1})
+    act = ctrl.act(_view(prior), 0.0)
+    (entry,) = ctrl.log
+    assert not entry["success"] and entry["fell_back"]
+    assert "Maximum_Iterations_Exceeded" in entry["status"]
+    assert "fallback starts" in entry["status"]  # the fallback was tried, and said so
+    assert ctrl.plan is None and act.turn_rate == 0.0
+
+
+def test_a_re_plan_rescued_by_the_fallback_starts_converges_and_says_it_fell_back(small):
+    sc, prior, planner, plan = small
+    ctrl = Receding(**_KW, first_plan=plan).controller(sc)
+    ctrl.planner = flaky = _WarmFails(planner)
+    ctrl.act(_view(prior), 0.0)
+    (entry,) = ctrl.log
+    assert entry["success"] and entry["fell_back"] and entry["solver"] == "ipopt"
+    assert entry["start"].startswith("multi-start: ")
+    assert flaky.calls[0] == "warm" and set(flaky.calls[1:]) == {"start"}
+    # the plan flown is a converged solve, the best of the fallback starts
+    assert ctrl.plan.success and ctrl.plan.status in ("Solve_Succeeded",
+                                                      "Solved_To_Acceptable_Level")
+    # ... no worse than the straight start, one of them, solved on its own
+    b = Belief.from_particles(prior.samples[:500], np.full(500, 1 / 500), t=0.0,
+                              assimilated=True)
+    straight = planner.solve(b, starts=[np.zeros(planner.n)], tol=1e-4,
+                             raise_on_failure=False)
+    if straight.success:
+        assert ctrl.plan.objective <= straight.objective + 1e-9 * abs(straight.objective)
+    # without the fallback the same failure keeps the previous plan at once
+    ctrl = Receding(**_KW, first_plan=plan, fallback_starts=False).controller(sc)
+    ctrl.planner = flaky = _WarmFails(planner)
+    ctrl.act(_view(prior), 0.0)
+    assert not ctrl.log[0]["success"] and ctrl.log[0]["fell_back"] and flaky.calls == ["warm"]
+
+
+def test_a_converged_re_plan_did_not_fall_back(small):
+    sc, prior, planner, plan = small
+    ctrl = Receding(**_KW, first_plan=plan).controller(sc)
+    ctrl.planner = planner
+    ctrl.act(_view(prior), 0.0)
+    (entry,) = ctrl.log
+    assert entry["success"] and not entry["fell_back"] and "start" not in entry
+
+
+def _campaign(sc, plan, tmp_path, monkeypatch, always):
+    from tmaplan.evaluation.campaigns import CampaignSpec, run_campaign
+
+    real = HeadingPlanner.solve
+
+    def solve(self, b, **kw):
+        if always or kw.get("warm_start") is not None:
+            raise SolverError("ipopt", "Maximum_Iterations_Exceeded", "injected")
+        return real(self, b, **kw)
+
+    monkeypatch.setattr(HeadingPlanner, "solve", solve)
+    spec = CampaignSpec(scenario=sc, policies=("straight", "receding"), runs=1,
+                        n_particles=200)
+    pols = {"straight": Straight(), "receding": Receding(**_KW, first_plan=plan)}
+    return run_campaign(spec, policies=pols, out_dir=tmp_path)
+
+
+def test_campaign_counts_re_plans_not_converged_and_warns(small, tmp_path, monkeypatch):
+    sc, _, _, plan = small
+    with pytest.warns(ReplanWarning, match=r"receding 3 of 3 \(100\.0 %\)"):
+        res = _campaign(sc, plan, tmp_path, monkeypatch, always=True)
+    assert res.summary["receding"]["replans"] == ReplanCounts(
+        total=3, converged=0, not_converged=3, fell_back=3)
+    payload = res.to_json()["policies"]
+    assert payload["receding"]["replans"] == {"total": 3, "converged": 0,
+                                              "not_converged": 3, "fell_back": 3}
+    # a policy that never re-plans counts zeros, with the same keys
+    assert payload["straight"]["replans"] == {"total": 0, "converged": 0,
+                                              "not_converged": 0, "fell_back": 0}
+    # the run file keeps them: the stored run, reloaded, counts the same
+    with pytest.warns(ReplanWarning):
+        again = _campaign(sc, plan, tmp_path, monkeypatch, always=True)
+    assert again.loaded_runs == (0,) and again.computed_runs == ()
+    assert again.summary["receding"]["replans"] == res.summary["receding"]["replans"]
+
+
+def test_campaign_counts_re_plans_rescued_by_the_fallback(small, tmp_path, monkeypatch):
+    sc, _, _, plan = small
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ReplanWarning)  # all converged: no warning
+        res = _campaign(sc, plan, tmp_path, monkeypatch, always=False)
+    assert res.summary["receding"]["replans"] == ReplanCounts(
+        total=3, converged=3, not_converged=0, fell_back=3)
+
+
+def test_compare_prints_the_counts_and_the_warning(tmp_path, monkeypatch, capsys):
+    """``tmaplan compare``: the counts in the console table, the JSON and the report, and the
+    warning as one line on stderr (the campaign's records stand in for re-plans here; the
+    real ones are counted above)."""
+    import tmaplan.evaluation.campaigns as campaigns
+    from tmaplan.cli import main
+
+    real = campaigns.run_one
+
+    def run_one(spec, policies, run):
+        rec = real(spec, policies, run)
+        pr = dataclasses.replace(rec.policies["straight"], replan_seconds=np.ones(2),
+                                 replan_converged=np.array([True, False]),
+                                 replan_fell_back=np.array([False, True]))
+        return dataclasses.replace(rec, policies={"straight": pr})
+
+    monkeypatch.setattr(campaigns, "run_one", run_one)
+    js = tmp_path / "out.json"
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", ReplanWarning)  # (this module ignores RuntimeWarning)
+        assert main(["compare", "default", "--policies", "straight", "--runs", "1",
+                     "--particles", "100", "--out", str(tmp_path), "--json", str(js)]) == 0
+    out, err = capsys.readouterr()
+    assert err == ("tmaplan compare: warning: ReplanWarning: re-plans not converged above "
+                   "1 %: straight 1 of 2 (50.0 %); the own ship kept its previous plan there "
+                   "(docs/cli.md, 'Re-plans')\n"), err
+    assert "2 re-plans, 1 not converged (50.0 %), 1 fell back" in out
+    d = json.loads(js.read_text())
+    assert d["policies"]["straight"]["replans"] == {"total": 2, "converged": 1,
+                                                    "not_converged": 1, "fell_back": 1}
+    report = (tmp_path / "default_compare" / "report.html").read_text()
+    assert "Warning: re-plans not converged." in report and "2 / 1 (50.0 %) / 1" in report

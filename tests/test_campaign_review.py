@@ -32,7 +32,7 @@ def _record() -> RunRecord:
     pr = PolicyRun(metrics=m, observer=np.zeros((k, 2)), target=np.ones((k, 2)),
                    estimate=np.ones((k, 2)), ping_steps=np.zeros(0, int),
                    replan_seconds=np.zeros(0), replan_converged=np.zeros(0, bool),
-                   replan_fell_back=np.zeros(0, bool))
+                   replan_fell_back=np.zeros(0, bool), replan_infeasible=np.zeros(0, bool))
     return RunRecord(run=0, policies={"straight": pr})
 
 

@@ -62,18 +62,27 @@ def _view(prior, t=0.0):
 
 def test_counts_add_up_and_old_logs_read_a_failure_as_a_fallback():
     log = [{"success": True, "fell_back": False}, {"success": True, "fell_back": True},
-           {"success": False, "fell_back": True}, {"success": False}]  # the last: no key
-    ok, back = replan_flags(log)
-    assert ok.tolist() == [True, True, False, False]
-    assert back.tolist() == [False, True, True, True]
-    c = ReplanCounts.count([(ok, back), replan_flags([])])
-    assert c == ReplanCounts(total=4, converged=2, not_converged=2, fell_back=3)
-    assert c.to_json() == {"total": 4, "converged": 2, "not_converged": 2, "fell_back": 3}
-    assert c.not_converged_share == 0.5 and "2 not converged (50.0 %)" in c.text()
+           {"success": False, "fell_back": True, "infeasible": False},
+           {"success": False, "fell_back": True, "infeasible": True},
+           {"success": False}]  # the last: no keys (not converged, fell back)
+    ok, back, bad = replan_flags(log)
+    assert ok.tolist() == [True, True, False, False, False]
+    assert back.tolist() == [False, True, True, True, True]
+    assert bad.tolist() == [False, False, False, True, False]
+    c = ReplanCounts.count([(ok, back, bad), replan_flags([])])
+    assert c == ReplanCounts(total=5, converged=2, not_converged=2, fell_back=4)
+    assert c.infeasible == 1 and c.converged + c.not_converged + c.infeasible == c.total
+    assert c.to_json() == {"total": 5, "converged": 2, "not_converged": 2, "fell_back": 4}
+    assert c.not_converged_share == 0.4
+    assert c.text() == "5 re-plans, 2 not converged (40.0 %), 1 infeasible, 4 fell back"
     none = ReplanCounts.count([])
     assert none == ReplanCounts() and none.not_converged_share == 0.0
-    # a re-plan not converged always fell back, even if a log says otherwise
-    assert ReplanCounts.count([(np.array([False]), np.array([False]))]).fell_back == 1
+    assert none.text() == "no re-plans"
+    # a re-plan without a plan always fell back, and a converged one is never infeasible,
+    # whatever a log says
+    flags = (np.array([False, True]), np.array([False, False]), np.array([False, True]))
+    assert ReplanCounts.count([flags]) == ReplanCounts(total=2, converged=1,
+                                                       not_converged=1, fell_back=1)
 
 
 def test_warning_only_above_one_percent():
@@ -99,7 +108,7 @@ def test_a_re_plan_at_the_iteration_limit_is_reported_not_converged_and_fell_bac
                                   solver_options={"max_iter": 1})
     act = ctrl.act(_view(prior), 0.0)
     (entry,) = ctrl.log
-    assert not entry["success"] and entry["fell_back"]
+    assert not entry["success"] and entry["fell_back"] and not entry["infeasible"]
     assert "Maximum_Iterations_Exceeded" in entry["status"]
     assert "fallback starts" in entry["status"]  # the fallback was tried, and said so
     assert ctrl.plan is None and act.turn_rate == 0.0
@@ -129,6 +138,23 @@ def test_a_re_plan_rescued_by_the_fallback_starts_converges_and_says_it_fell_bac
     ctrl.planner = flaky = _WarmFails(planner)
     ctrl.act(_view(prior), 0.0)
     assert not ctrl.log[0]["success"] and ctrl.log[0]["fell_back"] and flaky.calls == ["warm"]
+
+
+def test_a_re_plan_inside_the_keep_out_range_is_infeasible_not_unconverged(small):
+    """The target estimate already inside the keep-out range: no plan can keep out; the
+    re-plan is logged infeasible (the planner declined), not as a solver failure."""
+    sc, prior, planner, plan = small
+    ctrl = Receding(**_KW, first_plan=plan).controller(sc)
+    ctrl.planner = planner
+    near = prior.samples[:500].copy()
+    near[:, :2] *= 0.5 * planner.keep_out / np.hypot(*prior.mean[:2])  # inside it
+    view = dataclasses.replace(_view(prior), particles=near)
+    ctrl.act(view, 0.0)
+    (entry,) = ctrl.log
+    assert not entry["success"] and entry["fell_back"] and entry["infeasible"]
+    assert "keep_out_range" in entry["status"]
+    counts = ReplanCounts.count([replan_flags(ctrl.log)])
+    assert (counts.not_converged, counts.infeasible) == (0, 1)
 
 
 def test_a_converged_re_plan_did_not_fall_back(small):
@@ -198,7 +224,8 @@ def test_compare_prints_the_counts_and_the_warning(tmp_path, monkeypatch, capsys
         rec = real(spec, policies, run)
         pr = dataclasses.replace(rec.policies["straight"], replan_seconds=np.ones(2),
                                  replan_converged=np.array([True, False]),
-                                 replan_fell_back=np.array([False, True]))
+                                 replan_fell_back=np.array([False, True]),
+                                 replan_infeasible=np.array([False, False]))
         return dataclasses.replace(rec, policies={"straight": pr})
 
     monkeypatch.setattr(campaigns, "run_one", run_one)

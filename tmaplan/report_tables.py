@@ -82,10 +82,13 @@ def _verdict(d: PairedDifference) -> str:
 
 
 def _replans(c: ReplanCounts | None) -> str:
-    """The results table's re-plan cell: total / not converged / fell back ("–": none)."""
+    """The results table's re-plan cell: total / not converged / fell back, and the
+    infeasible ones if any ("–": none)."""
     if c is None or not c.total:
         return "–"
-    return f"{c.total} / {c.not_converged} ({100 * c.not_converged_share:.1f} %) / {c.fell_back}"
+    bad = f" ({c.infeasible} infeasible)" if c.infeasible else ""
+    return (f"{c.total} / {c.not_converged} ({100 * c.not_converged_share:.1f} %) / "
+            f"{c.fell_back}{bad}")
 
 
 def replan_warning(result: CampaignResult) -> str:

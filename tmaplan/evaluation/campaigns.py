@@ -205,7 +205,7 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
                                   noise_rng=np.random.default_rng(s_noise),
                                   filter_rng=np.random.default_rng(s_filter),
                                   n_particles=spec.n_particles, options=spec.filter_options)
-            converged, fell_back = replan_flags(res.replans)
+            converged, fell_back, infeasible = replan_flags(res.replans)
             out[name] = PolicyRun(
                 metrics=run_metrics(res.times, res.truth, res.estimate,
                                     res.observer.mean_velocity, accuracy=spec.accuracy,
@@ -215,6 +215,7 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
                 ping_steps=res.ping_steps,
                 replan_seconds=np.array([e["seconds"] for e in res.replans]),
                 replan_converged=converged, replan_fell_back=fell_back,
+                replan_infeasible=infeasible,
                 recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
@@ -335,8 +336,9 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "final_rel_range_error": np.array([m.final_rel_range_error for m in ms]),
             "final_position_error_runs": np.array([m.final_position_error for m in ms]),
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
-            "replans": ReplanCounts.count((r.policies[name].replan_converged,
-                                           r.policies[name].replan_fell_back) for r in runs),
+            "replans": ReplanCounts.count((p.replan_converged, p.replan_fell_back,
+                                           p.replan_infeasible)
+                                          for p in (r.policies[name] for r in runs)),
             "recoveries": float(np.mean([r.policies[name].recoveries for r in runs])),
         }
     censor = censor_time(times)

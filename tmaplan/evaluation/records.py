@@ -26,7 +26,8 @@ from tmaplan.evaluation.metrics import RunMetrics
 __all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "scenario_hash"]
 
 #: Version of the run-file format (part of the campaign cache key). 4: each re-plan's
-#: ``replan_converged`` and ``replan_fell_back`` instead of a count of failures.
+#: ``replan_converged``, ``replan_fell_back`` and ``replan_infeasible`` instead of a count
+#: of failures.
 FORMAT = 4
 
 
@@ -129,8 +130,9 @@ class PolicyRun:
         Steps at which the own ship pinged.
     replan_seconds : ndarray, shape (n_replans,)
         Wall time of each re-plan [s].
-    replan_converged, replan_fell_back : ndarray of bool, shape (n_replans,)
-        Per re-plan: whether it ended with a converged plan, and whether it used a fallback
+    replan_converged, replan_fell_back, replan_infeasible : ndarray of bool, shape (n_replans,)
+        Per re-plan: whether it ended with a converged plan, whether it used a fallback, and
+        whether it ended without a plan as none satisfies the constraints
         (:mod:`tmaplan.evaluation.replans`).
     recoveries : int
         Track recoveries by the filter's consistency monitor.
@@ -144,6 +146,7 @@ class PolicyRun:
     replan_seconds: np.ndarray
     replan_converged: np.ndarray
     replan_fell_back: np.ndarray
+    replan_infeasible: np.ndarray
     recoveries: int = 0
 
 

@@ -12,8 +12,10 @@ import numpy as np
 from tmaplan.caching import LRUCache
 from tmaplan.errors import (
     ArgumentError,
+    InfeasibleError,
     PlanningError,
     ScenarioError,
+    SolverError,
     as_real,
     finite_real,
     is_integer,
@@ -46,9 +48,10 @@ class Receding:
     until the next re-plan. If its solve does not converge, the re-plan falls back to the
     multi-start's other starts (``fallback_starts``), and if none converges either, the
     previous plan is kept. The controller's ``log`` has one entry per re-plan (``t`` [s],
-    ``status``, ``success``: a converged plan; ``fell_back``: a fallback used; ``seconds``;
-    ``solver``; ``start``: the start of a multi-start or fallback plan), which a campaign
-    counts (:mod:`tmaplan.evaluation.replans`).
+    ``status``, ``success``: a converged plan; ``fell_back``: a fallback used;
+    ``infeasible``: no plan, as no plan satisfies the constraints; ``seconds``; ``solver``;
+    ``start``: the start of a multi-start or fallback plan), which a campaign counts
+    (:mod:`tmaplan.evaluation.replans`).
 
     How a re-plan is solved (``solver``):
 
@@ -430,7 +433,9 @@ class _RecedingController:
             self.plan = plan
             self.playback = _TurnRatePlayback(plan, self.scenario)
         except PlanningError as exc:  # keep flying the previous plan
-            entry.update(status=str(exc), success=False, fell_back=True)
+            # no plan satisfies the constraints (infeasible), or not converged (the others)
+            entry.update(status=str(exc), success=False, fell_back=True,
+                         infeasible=isinstance(exc, InfeasibleError))
             log.info("re-plan at t=%.0f s failed (%s); keeping the previous plan", t, exc)
         entry["seconds"] = time.perf_counter() - t0
         self.log.append(entry)
@@ -455,12 +460,14 @@ class _RecedingController:
     def _fall_back(self, b: Any, error: PlanningError, *, heading0: float,
                    position0: np.ndarray) -> Any:
         """The best converged solve from the multi-start's other starts (:meth:`multi_start`
-        without the warm start) after the first solve failed with ``error``; PlanningError
-        naming both failures if none converged."""
+        without the warm start) after the first solve failed with ``error``. If none
+        converged: an error naming both failures, an :class:`InfeasibleError` if the fallback
+        found the problem infeasible."""
         try:
             return self.multi_start(b, heading0=heading0, position0=position0, warm=False)
         except PlanningError as again:
-            raise PlanningError(f"{error}; then from the fallback starts: {again}") from error
+            cls = InfeasibleError if isinstance(again, InfeasibleError) else PlanningError
+            raise cls(f"{error}; then from the fallback starts: {again}") from error
 
     def multi_start(self, b: Any, *, heading0: float | None,
                     position0: np.ndarray | None, warm: bool = True) -> Any:
@@ -487,8 +494,11 @@ class _RecedingController:
 
         Raises
         ------
-        PlanningError
-            If no start converged.
+        SolverError
+            If no start converged (a start stopped at the iteration limit or failed).
+        InfeasibleError
+            If every start reported the problem infeasible, or it is (the estimate inside
+            the keep-out range).
         """
         prev = self.plan or self.first
         if prev is None and warm:
@@ -512,6 +522,11 @@ class _RecedingController:
             plans[name] = pl.solve(b, starts=[s], **kw)
         ok = {n: p for n, p in plans.items() if p.success and np.isfinite(p.objective)}
         if not ok:
-            raise PlanningError(f"multi-start re-plan at t={b.t:.0f} s: no start converged")
+            statuses = sorted({p.status for p in plans.values()})
+            what = f"multi-start re-plan at t={b.t:.0f} s from {len(plans)} start(s)"
+            if all("Infeasible" in st for st in statuses):
+                raise InfeasibleError(f"{what}: infeasible from every start (IPOPT: "
+                                      f"{', '.join(statuses)})")
+            raise SolverError("ipopt", ", ".join(statuses), f"{what}: no start converged")
         name = min(ok, key=lambda n: ok[n].objective)
         return dataclasses.replace(ok[name], message=f"multi-start: {name}")

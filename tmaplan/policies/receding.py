@@ -466,6 +466,8 @@ class _RecedingController:
         try:
             return self.multi_start(b, heading0=heading0, position0=position0, warm=False)
         except PlanningError as again:
+            if str(again) == str(error):  # refused before any solve (the same check)
+                raise
             cls = InfeasibleError if isinstance(again, InfeasibleError) else PlanningError
             raise cls(f"{error}; then from the fallback starts: {again}") from error
 

@@ -151,7 +151,8 @@ class Receding:
         alarm since the last step (:attr:`BeliefView.alarms`), not only every
         ``replan_interval``; a run without alarms is unchanged.
     fallback_starts : bool
-        When a re-plan's solve does not converge (or its problem is reported infeasible),
+        When a re-plan's solve does not converge (:class:`~tmaplan.errors.SolverError`) or
+        its problem is reported infeasible (:class:`~tmaplan.errors.InfeasibleError`),
         solve it again from the other starts of ``"multi-start"`` (the mirror image of the
         previous plan, straight, turn-early to both sides; IPOPT at ``full_tol``) and fly the
         best that converged; the previous plan is kept only if none did. Off: keep it at
@@ -422,7 +423,7 @@ class _RecedingController:
             else:
                 try:
                     plan, fell_back = self._solve(b, n, **kw)
-                except PlanningError as exc:
+                except (SolverError, InfeasibleError) as exc:  # (not a bad request)
                     if not pol.fallback_starts:
                         raise
                     # the first solve did not converge: the other starts of the multi-start

@@ -246,7 +246,6 @@ def test_compare_prints_the_counts_and_the_warning(tmp_path, monkeypatch, capsys
     assert "Warning: re-plans not converged." in report and "2 / 1 (50.0 %) / 1" in report
 
 
-@pytest.mark.slow
 def test_a_re_plan_that_stalled_converges_or_says_so():
     """A recorded hard re-plan: ``bow-closing``, run 50 of seed 0, the alarm re-plan at
     t = 1485 s, where the warm-started IPOPT solve crept along a plateau of the objective

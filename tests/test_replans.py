@@ -294,3 +294,24 @@ def test_a_re_plan_that_stalled_converges_or_says_so():
     else:  # reported: the previous plan kept, both failures named
         assert ctrl.plan is prev and not entry["infeasible"]
         assert "fallback starts" in entry["status"]
+
+
+def test_demo_says_the_re_plans_of_the_policies_that_re_plan(capsys):
+    """``tmaplan demo``'s console: one line per re-planning policy, none for the others,
+    nothing with ``--json -``."""
+    import argparse
+    import types
+
+    from tmaplan.cli.demo import _say_replans
+
+    counts = {"planned": ReplanCounts(),
+              "receding-realtime": ReplanCounts(total=360, converged=359, not_converged=1,
+                                                fell_back=3)}
+    result = types.SimpleNamespace(policies=tuple(counts),
+                                   summary={k: {"replans": c} for k, c in counts.items()})
+    _say_replans(argparse.Namespace(json=None), result)
+    out = capsys.readouterr().out.splitlines()
+    assert out == ["      receding-realtime    360 re-plans, 1 not converged (0.3 %), "
+                   "3 fell back"], out
+    _say_replans(argparse.Namespace(json="-"), result)
+    assert capsys.readouterr().out == ""

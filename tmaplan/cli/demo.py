@@ -33,7 +33,6 @@ from tmaplan.cli._args import (
     integer,
 )
 from tmaplan.errors import PlanningError
-from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.parallel import process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
@@ -171,8 +170,8 @@ def _say_replans(args: argparse.Namespace, result: Any) -> None:
     """One line per re-planning policy: its re-plans, not converged, fell back
     (:mod:`tmaplan.evaluation.replans`)."""
     for name in result.policies:
-        if cell := replan_cell(result.summary[name]["replans"]):
-            _say(args, f"      {name:<20}{cell}")
+        if (counts := result.summary[name]["replans"]).total:
+            _say(args, f"      {name:<20} {counts.text()}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

@@ -31,7 +31,8 @@ def _record() -> RunRecord:
                    final_position_error=1.0, final_range_error=1.0, final_rel_range_error=1.0)
     pr = PolicyRun(metrics=m, observer=np.zeros((k, 2)), target=np.ones((k, 2)),
                    estimate=np.ones((k, 2)), ping_steps=np.zeros(0, int),
-                   replan_seconds=np.zeros(0), replan_failures=0)
+                   replan_seconds=np.zeros(0), replan_converged=np.zeros(0, bool),
+                   replan_fell_back=np.zeros(0, bool), replan_infeasible=np.zeros(0, bool))
     return RunRecord(run=0, policies={"straight": pr})
 
 

@@ -16,6 +16,7 @@ __all__ = [
     "ArgumentError",
     "DataError",
     "EstimationError",
+    "InfeasibleError",
     "ObservabilityError",
     "PlanningError",
     "ScenarioError",
@@ -158,6 +159,12 @@ class EstimationError(TmaplanError, RuntimeError):
 
 class PlanningError(TmaplanError, RuntimeError):
     """A planning request is infeasible or its solver did not converge."""
+
+
+class InfeasibleError(PlanningError):
+    """A planning request that no plan satisfies: constraints that cannot hold (the target
+    estimate already inside the keep-out range), found before solving or reported infeasible
+    by the solver."""
 
 
 class SolverError(PlanningError):

@@ -11,7 +11,12 @@ import numpy as np
 
 from tmaplan.display import scenario_text
 from tmaplan.plotting import new_figure, save_figure
-from tmaplan.report_tables import differences_html, results_table, sample_warning
+from tmaplan.report_tables import (
+    differences_html,
+    replan_warning,
+    results_table,
+    sample_warning,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -227,6 +232,7 @@ every policy in a run (paired comparison). Localised = relative range error belo
 {sample_warning(spec.runs)}
 {extra_html}
 <h2>Results</h2>
+{replan_warning(result)}
 {results_table(result, eff)}
 <h2>Paired differences</h2>
 {differences_html(result)}

@@ -17,10 +17,11 @@ from tmaplan.display import angle, minutes, speed
 
 if TYPE_CHECKING:
     from tmaplan.evaluation.metrics import PairedDifference
+    from tmaplan.evaluation.replans import ReplanCounts
     from tmaplan.experiments import CampaignResult
 
-__all__ = ["FEW_RUNS", "baseline_parameters", "differences_html", "results_table",
-           "sample_warning"]
+__all__ = ["FEW_RUNS", "baseline_parameters", "differences_html", "replan_warning",
+           "results_table", "sample_warning"]
 
 FEW_RUNS = 10
 """Below this many paired runs the report warns that its intervals are wide (t intervals from
@@ -80,6 +81,35 @@ def _verdict(d: PairedDifference) -> str:
     return "yes" if d.excludes_zero else f"no: not decided at {d.n} runs"
 
 
+def _replans(c: ReplanCounts | None) -> str:
+    """The results table's re-plan cell: total / not converged / fell back, and the
+    infeasible ones if any ("–": none)."""
+    if c is None or not c.total:
+        return "–"
+    bad = f" ({c.infeasible} infeasible)" if c.infeasible else ""
+    return (f"{c.total} / {c.not_converged} ({100 * c.not_converged_share:.1f} %) / "
+            f"{c.fell_back}{bad}")
+
+
+def replan_warning(result: CampaignResult) -> str:
+    """HTML paragraph naming the policies with more than
+    :data:`~tmaplan.evaluation.replans.NOT_CONVERGED_WARNING` of their re-plans not
+    converged ("" if none), as the campaign's :class:`~tmaplan.evaluation.replans.
+    ReplanWarning`."""
+    from tmaplan.evaluation.replans import NOT_CONVERGED_WARNING
+
+    over = [(n, c) for n in result.policies if (c := result.summary[n].get("replans"))
+            is not None and c.not_converged_share > NOT_CONVERGED_WARNING]
+    if not over:
+        return ""
+    items = "; ".join(f"{html.escape(n)}: {c.not_converged} of {c.total} "
+                      f"({100 * c.not_converged_share:.1f} %)" for n, c in over)
+    return ("<p class='warning'><strong>Warning: re-plans not converged.</strong> "
+            f"More than {100 * NOT_CONVERGED_WARNING:g} % of the re-plans did not converge "
+            f"({items}); the own ship kept its previous plan there, so these results say "
+            "less about the policy's re-planning.</p>")
+
+
 def results_table(result: CampaignResult, eff: dict[str, dict[str, float]]) -> str:
     """The per-policy results table (HTML) in display units."""
     rows = []
@@ -94,14 +124,15 @@ def results_table(result: CampaignResult, eff: dict[str, dict[str, float]]) -> s
                  f"{_num(e['final_position'], '.2g')} / {_num(e['final_range'], '.2g')}",
                  _num(e["mean_range"], ".2g"), f"{s['divergence_rate']:.0%}",
                  f"{s['pings_used']:.1f}", f"{s['replan_seconds']:.2f}",
-                 f"{s.get('recoveries', 0.0):.2f}")
+                 _replans(s.get("replans")), f"{s.get('recoveries', 0.0):.2f}")
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     return ("<table><tr><th>policy</th><th>median time to accuracy</th><th>localised</th>"
             "<th>final range RMSE [km]</th><th>final position RMSE [km]</th>"
             "<th>final course RMSE [°]</th><th>final speed RMSE [kn]</th>"
             "<th>RMSE / PCRB final (position / range)</th>"
             "<th>range RMSE / PCRB, mean over time</th><th>diverged</th><th>pings</th>"
-            "<th>re-plan [s]</th><th>recoveries / run</th></tr>" + "".join(rows)
+            "<th>re-plan [s]</th><th>re-plans: total / not converged / fell back</th>"
+            "<th>recoveries / run</th></tr>" + "".join(rows)
             + "</table>")
 
 

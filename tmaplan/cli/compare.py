@@ -25,6 +25,7 @@ from tmaplan.cli._args import (
     open_fraction,
 )
 from tmaplan.cli._finite import require_finite
+from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.report import efficiency, write_report
@@ -96,7 +97,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(f"{name:<28} time to accuracy {tta_s}  localised "
                   f"{s['reached_fraction']:4.0%}  final range RMSE "
                   f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
-                  f"recoveries {s['recoveries']:.2f}")
+                  f"recoveries {s['recoveries']:.2f}{replan_cell(s['replans'])}")
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")
     return payload

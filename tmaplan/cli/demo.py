@@ -162,6 +162,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                                    "ping schedule": rep / "schedule.png"})
     for line in _headline(stored, live):
         _say(args, line)
+    _say_replans(args, result)
     seconds = time.perf_counter() - t0
     _say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
@@ -183,6 +184,14 @@ def _headline(stored: StoredResult, live: Comparison) -> list[str]:
     """The console's results: the stored decisive campaigns first, then this run, labelled
     illustrative; every difference with its paired 95 % interval (:mod:`tmaplan.headline`)."""
     return ["", *stored_lines(stored), "", *live_lines(live, stored), ""]
+
+
+def _say_replans(args: argparse.Namespace, result: Any) -> None:
+    """One line per re-planning policy: its re-plans, not converged, fell back
+    (:mod:`tmaplan.evaluation.replans`)."""
+    for name in result.policies:
+        if (counts := result.summary[name]["replans"]).total:
+            _say(args, f"      {name:<20} {counts.text()}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

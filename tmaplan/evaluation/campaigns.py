@@ -47,6 +47,7 @@ from tmaplan.evaluation.records import (
     policy_fingerprint,
     scenario_hash,
 )
+from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
 from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
@@ -207,6 +208,7 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
                                   noise_rng=np.random.default_rng(s_noise),
                                   filter_rng=np.random.default_rng(s_filter),
                                   n_particles=spec.n_particles, options=spec.filter_options)
+            converged, fell_back, infeasible = replan_flags(res.replans)
             out[name] = PolicyRun(
                 metrics=run_metrics(res.times, res.truth, res.estimate,
                                     res.observer.mean_velocity, accuracy=spec.accuracy,
@@ -215,7 +217,8 @@ def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> Run
                 estimate=res.estimate[:, :2] + res.observer.position,
                 ping_steps=res.ping_steps,
                 replan_seconds=np.array([e["seconds"] for e in res.replans]),
-                replan_failures=sum(not e["success"] for e in res.replans),
+                replan_converged=converged, replan_fell_back=fell_back,
+                replan_infeasible=infeasible,
                 recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
@@ -241,8 +244,9 @@ class CampaignResult:
         ``time_to_accuracy_runs (runs,)``, ``reached_fraction``, ``divergence_rate``,
         ``pings_used`` (mean), ``final_range_rmse`` [m], ``final_range_error_runs`` [m],
         ``final_position_error_runs`` [m] and ``final_rel_range_error`` (per run),
-        ``replan_seconds`` (mean per re-plan),
-        ``replan_failures``, ``recoveries`` (mean per run; consistency monitor).
+        ``replan_seconds`` (mean per re-plan), ``replans``
+        (:class:`tmaplan.evaluation.replans.ReplanCounts`, over all runs; zeros for a policy
+        that does not re-plan), ``recoveries`` (mean per run; consistency monitor).
     differences : tuple of PairedDifference
         All policy pairs, for ``time_to_accuracy`` (censored at horizon + dt) and
         ``final_range_error``.
@@ -287,6 +291,7 @@ class CampaignResult:
                 "pings_used": s["pings_used"],
                 "final_range_rmse": s["final_range_rmse"],
                 "replan_seconds": s["replan_seconds"],
+                "replans": s["replans"].to_json(),
                 "recoveries": s["recoveries"],
             }
         return {
@@ -334,7 +339,9 @@ def _aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndarray
             "final_rel_range_error": np.array([m.final_rel_range_error for m in ms]),
             "final_position_error_runs": np.array([m.final_position_error for m in ms]),
             "replan_seconds": float(rs.mean()) if rs.size else 0.0,
-            "replan_failures": int(sum(r.policies[name].replan_failures for r in runs)),
+            "replans": ReplanCounts.count((p.replan_converged, p.replan_fell_back,
+                                           p.replan_infeasible)
+                                          for p in (r.policies[name] for r in runs)),
             "recoveries": float(np.mean([r.policies[name].recoveries for r in runs])),
         }
     censor = censor_time(times)
@@ -512,6 +519,12 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     Returns
     -------
     CampaignResult
+
+    Warns
+    -----
+    ReplanWarning
+        When more than 1 % of a policy's re-plans did not converge
+        (:func:`tmaplan.evaluation.replans.warn_not_converged`).
     """
     t0 = time.perf_counter()
     _check_arguments(spec, workers, backend, max_new_runs, policies)
@@ -557,6 +570,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                             f"(re-run to resume{' from ' + str(directory) if directory else ''})")
     ordered = [results[i] for i in range(spec.runs)]
     summary, diffs = _aggregate(spec, ordered, scenario.times)
+    warn_not_converged({name: summary[name]["replans"] for name in spec.policies})
     examples = {name: ordered[0].policies[name] for name in spec.policies}
     return CampaignResult(spec=spec, times=scenario.times, policies=tuple(spec.policies),
                           summary=summary, differences=diffs, examples=examples,

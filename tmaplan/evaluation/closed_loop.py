@@ -54,7 +54,10 @@ class ClosedLoopRun:
     turn_rate : ndarray, shape (K,)
         Applied turn rate per step [rad/s].
     replans : tuple of dict
-        Re-planning log (time, status, seconds) of a receding controller.
+        Re-planning log of a receding controller, one entry per re-plan (``t`` [s],
+        ``status``, ``success``, ``fell_back``, ``infeasible``, ``seconds`` [s], ...:
+        :class:`tmaplan.policies.Receding`), counted by
+        :class:`tmaplan.evaluation.replans.ReplanCounts`.
     seconds : float
         Wall time of the run.
     recoveries : int

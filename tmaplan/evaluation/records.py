@@ -27,8 +27,10 @@ from tmaplan.evaluation.metrics import RunMetrics
 __all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "run_file_digest",
            "scenario_hash", "without_timings"]
 
-#: Version of the run-file format (part of the campaign cache key).
-FORMAT = 3
+#: Version of the run-file format (part of the campaign cache key). 4: each re-plan's
+#: ``replan_converged``, ``replan_fell_back`` and ``replan_infeasible`` instead of a count
+#: of failures.
+FORMAT = 4
 
 
 def scenario_hash(scenario: Any) -> str:
@@ -130,8 +132,10 @@ class PolicyRun:
         Steps at which the own ship pinged.
     replan_seconds : ndarray, shape (n_replans,)
         Wall time of each re-plan [s].
-    replan_failures : int
-        Re-plans that failed (the previous plan was kept).
+    replan_converged, replan_fell_back, replan_infeasible : ndarray of bool, shape (n_replans,)
+        Per re-plan: whether it ended with a converged plan, whether it used a fallback, and
+        whether it ended without a plan as none satisfies the constraints
+        (:mod:`tmaplan.evaluation.replans`).
     recoveries : int
         Track recoveries by the filter's consistency monitor.
     """
@@ -142,7 +146,9 @@ class PolicyRun:
     estimate: np.ndarray
     ping_steps: np.ndarray
     replan_seconds: np.ndarray
-    replan_failures: int
+    replan_converged: np.ndarray
+    replan_fell_back: np.ndarray
+    replan_infeasible: np.ndarray
     recoveries: int = 0
 
 

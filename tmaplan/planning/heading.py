@@ -30,6 +30,7 @@ import numpy as np
 from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.errors import (
     ArgumentError,
+    InfeasibleError,
     PlanningError,
     SolverError,
 )
@@ -415,8 +416,9 @@ class HeadingPlanner:
 
         Raises
         ------
-        PlanningError
-            Infeasible request (e.g. the estimate inside the keep-out range).
+        InfeasibleError
+            Infeasible request (e.g. the estimate inside the keep-out range), or IPOPT found
+            the problem infeasible (a :class:`PlanningError`).
         SolverError
             IPOPT did not converge from any start.
         """
@@ -476,7 +478,7 @@ class HeadingPlanner:
                        + (f", heading limits {self.heading_limits}" if self.heading_limits
                           else ""))
                 if raise_on_failure:
-                    raise PlanningError(msg)
+                    raise InfeasibleError(msg)
             elif raise_on_failure:
                 raise SolverError("ipopt", status, f"heading OCP ({self.transcription}) did "
                                   f"not converge from {len(guesses)} start(s)")
@@ -523,13 +525,13 @@ class HeadingPlanner:
             return
         r0 = belief.mean_range()
         if r0 < self.keep_out:
-            raise PlanningError(f"keep_out_range {self.keep_out:.0f} m: the target estimate is "
-                                f"already inside it (range {r0:.0f} m)")
+            raise InfeasibleError(f"keep_out_range {self.keep_out:.0f} m: the target estimate "
+                                  f"is already inside it (range {r0:.0f} m)")
         if self.u_max == 0.0 and not self.speed_choice:
             t = self.times
             rel = belief.mean[:2] + t[:, None] * belief.mean[2:]
             if np.min(np.hypot(rel[:, 0], rel[:, 1])) < self.keep_out:
-                raise PlanningError(
+                raise InfeasibleError(
                     f"infeasible: turn_rate_max = 0 (no turn possible) and the straight course "
                     f"comes within {np.min(np.hypot(rel[:, 0], rel[:, 1])):.0f} m of the target "
                     f"estimate, inside keep_out_range {self.keep_out:.0f} m")

@@ -12,8 +12,10 @@ import numpy as np
 from tmaplan.caching import LRUCache
 from tmaplan.errors import (
     ArgumentError,
+    InfeasibleError,
     PlanningError,
     ScenarioError,
+    SolverError,
     as_real,
     finite_real,
     is_integer,
@@ -43,8 +45,13 @@ class Receding:
 
     Every ``replan_interval`` [s] the heading OCP is re-solved from the current own-ship state
     over ``horizon`` [s] with the filter's particles as the belief; its first segment is flown
-    until the next re-plan. If a re-plan fails, the previous plan is kept (and the failure
-    logged in the controller's ``log``).
+    until the next re-plan. If its solve does not converge, the re-plan falls back to the
+    multi-start's other starts (``fallback_starts``), and if none converges either, the
+    previous plan is kept. The controller's ``log`` has one entry per re-plan (``t`` [s],
+    ``status``, ``success``: a converged plan; ``fell_back``: a fallback used;
+    ``infeasible``: no plan, as no plan satisfies the constraints; ``seconds``; ``solver``;
+    ``start``: the start of a multi-start or fallback plan), which a campaign counts
+    (:mod:`tmaplan.evaluation.replans`).
 
     How a re-plan is solved (``solver``):
 
@@ -145,6 +152,15 @@ class Receding:
         Re-plan at once from the (recovered) posterior when the consistency monitor raised an
         alarm since the last step (:attr:`BeliefView.alarms`), not only every
         ``replan_interval``; a run without alarms is unchanged.
+    fallback_starts : bool
+        When a re-plan's solve does not converge (:class:`~tmaplan.errors.SolverError`) or
+        its problem is reported infeasible (:class:`~tmaplan.errors.InfeasibleError`),
+        solve it again from the other starts of ``"multi-start"`` (the mirror image of the
+        previous plan, straight, turn-early to both sides; IPOPT at ``full_tol``) and fly the
+        best that converged; the previous plan is kept only if none did. Off: keep it at
+        once. A warm-started solve can stall on a plateau of the objective (every belief draw
+        far from localised along the previous plan; IPOPT's limited-memory Hessian then
+        takes tiny steps) where a turn-early start converges in a few dozen iterations.
     """
 
     replan_interval: float | None = None
@@ -162,6 +178,7 @@ class Receding:
     rti: Any = dataclasses.field(default=None, compare=False, repr=False)
     first_plan: Any = dataclasses.field(default=None, compare=False, repr=False)
     replan_on_alarm: bool = True
+    fallback_starts: bool = True
     name: str = "receding"
 
     def controller(self, scenario: Scenario) -> Controller:
@@ -399,33 +416,66 @@ class _RecedingController:
                                   max_samples=self.policy.max_particles, assimilated=True)
         entry: dict[str, Any] = {"t": t}
         pol, n = self.policy, len(self.log)
-        full = {"heading0": belief.heading, "position0": belief.position,
-                "warm_start": self.plan or self.first, "tol": pol.full_tol}
+        kw: dict[str, Any] = {"heading0": belief.heading, "position0": belief.position}
         try:
             if (pol.solver == "multi-start" and n > 0) or n in pol.multi_start:
-                plan = self.multi_start(b, heading0=belief.heading,
-                                        position0=belief.position)
+                plan = self.multi_start(b, **kw)
                 entry["start"] = plan.message
-            elif self.rti is None or n in pol.full_solves:  # "ipopt", or a full solve asked
-                plan = self.planner.solve(b, **full)
+                fell_back = False
             else:
-                plan = self.rti.solve(b, previous=self.plan, heading0=belief.heading,
-                                      position0=belief.position)
-                start = (plan.warm or {}).get("start_objective")
-                if start is not None and (start - plan.objective > pol.full_above
-                                          * abs(start)):
-                    plan = self.planner.solve(b, **full)
-            entry.update(status=plan.status, success=True, solver=plan.solver)
+                try:
+                    plan, fell_back = self._solve(b, n, **kw)
+                except (SolverError, InfeasibleError) as exc:  # (not a bad request)
+                    if not pol.fallback_starts:
+                        raise
+                    # the first solve did not converge: the other starts of the multi-start
+                    plan, fell_back = self._fall_back(b, exc, **kw), True
+                    entry["start"] = plan.message
+            entry.update(status=plan.status, success=True, solver=plan.solver,
+                         fell_back=fell_back)
             self.plan = plan
             self.playback = _TurnRatePlayback(plan, self.scenario)
         except PlanningError as exc:  # keep flying the previous plan
-            entry.update(status=str(exc), success=False)
+            # no plan satisfies the constraints (infeasible), or not converged (the others)
+            entry.update(status=str(exc), success=False, fell_back=True,
+                         infeasible=isinstance(exc, InfeasibleError))
             log.info("re-plan at t=%.0f s failed (%s); keeping the previous plan", t, exc)
         entry["seconds"] = time.perf_counter() - t0
         self.log.append(entry)
 
+    def _solve(self, b: Any, n: int, *, heading0: float,
+               position0: np.ndarray) -> tuple[Any, bool]:
+        """Re-plan ``n`` by the policy's solver: (the plan, whether the real-time iteration's
+        step was rejected and its IPOPT fallback gave the plan)."""
+        pol = self.policy
+        full = {"heading0": heading0, "position0": position0,
+                "warm_start": self.plan or self.first, "tol": pol.full_tol}
+        if self.rti is None or n in pol.full_solves:  # "ipopt", or a full solve asked
+            return self.planner.solve(b, **full), False
+        plan = self.rti.solve(b, previous=self.plan, heading0=heading0, position0=position0)
+        if plan.solver == "ipopt":  # the step was rejected (RealTimeIteration.solve)
+            return plan, True
+        start = (plan.warm or {}).get("start_objective")
+        if start is not None and start - plan.objective > pol.full_above * abs(start):
+            plan = self.planner.solve(b, **full)
+        return plan, False
+
+    def _fall_back(self, b: Any, error: PlanningError, *, heading0: float,
+                   position0: np.ndarray) -> Any:
+        """The best converged solve from the multi-start's other starts (:meth:`multi_start`
+        without the warm start) after the first solve failed with ``error``. If none
+        converged: an error naming both failures, an :class:`InfeasibleError` if the fallback
+        found the problem infeasible."""
+        try:
+            return self.multi_start(b, heading0=heading0, position0=position0, warm=False)
+        except PlanningError as again:
+            if str(again) == str(error):  # refused before any solve (the same check)
+                raise
+            cls = InfeasibleError if isinstance(again, InfeasibleError) else PlanningError
+            raise cls(f"{error}; then from the fallback starts: {again}") from error
+
     def multi_start(self, b: Any, *, heading0: float | None,
-                    position0: np.ndarray | None) -> Any:
+                    position0: np.ndarray | None, warm: bool = True) -> Any:
         """Full IPOPT re-plan from several starts, the best kept (its ``message`` names the
         start): the previous plan shifted to ``b.t`` (warm), its mirror image (the same
         manoeuvre to the other side), straight and the turn-early guesses to both sides.
@@ -438,6 +488,9 @@ class _RecedingController:
             Own-ship heading [rad] (None: the scenario's initial course).
         position0 : ndarray, shape (2,), optional
             Own-ship position [m].
+        warm : bool
+            Include the warm start; False (the fallback after it failed): the other starts,
+            the mirror image only if there is a previous plan.
 
         Returns
         -------
@@ -446,28 +499,39 @@ class _RecedingController:
 
         Raises
         ------
-        PlanningError
-            If no start converged.
+        SolverError
+            If no start converged (a start stopped at the iteration limit or failed).
+        InfeasibleError
+            If every start reported the problem infeasible, or it is (the estimate inside
+            the keep-out range).
         """
         prev = self.plan or self.first
-        if prev is None:
+        if prev is None and warm:
             raise PlanningError("multi-start re-plan: no previous plan to start from")
         pl = self.planner
         kw = {"heading0": heading0, "position0": position0,
               "tol": self.policy.full_tol, "raise_on_failure": False}
-        k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
-        u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
-        u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
-        u = np.resize(u, pl.n) if u.size != pl.n else u
         j = np.arange(pl.n)
-        starts = {"mirrored": -u, "straight": np.zeros(pl.n),
-                  "early-port": np.where(j < pl.n / 4, -1.0, 0.0),
+        starts = {"straight": np.zeros(pl.n), "early-port": np.where(j < pl.n / 4, -1.0, 0.0),
                   "early-starboard": np.where(j < pl.n / 4, 1.0, 0.0)}
-        plans = {"warm": pl.solve(b, warm_start=prev, **kw)}
+        plans = {}
+        if prev is not None:
+            k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
+            u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
+            u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
+            u = np.resize(u, pl.n) if u.size != pl.n else u
+            starts = {"mirrored": -u, **starts}
+            if warm:
+                plans["warm"] = pl.solve(b, warm_start=prev, **kw)
         for name, s in starts.items():
             plans[name] = pl.solve(b, starts=[s], **kw)
         ok = {n: p for n, p in plans.items() if p.success and np.isfinite(p.objective)}
         if not ok:
-            raise PlanningError(f"multi-start re-plan at t={b.t:.0f} s: no start converged")
+            statuses = sorted({p.status for p in plans.values()})
+            what = f"multi-start re-plan at t={b.t:.0f} s from {len(plans)} start(s)"
+            if all("Infeasible" in st for st in statuses):
+                raise InfeasibleError(f"{what}: infeasible from every start (IPOPT: "
+                                      f"{', '.join(statuses)})")
+            raise SolverError("ipopt", ", ".join(statuses), f"{what}: no start converged")
         name = min(ok, key=lambda n: ok[n].objective)
         return dataclasses.replace(ok[name], message=f"multi-start: {name}")

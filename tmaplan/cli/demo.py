@@ -191,7 +191,7 @@ def _say_replans(args: argparse.Namespace, result: Any) -> None:
     (:mod:`tmaplan.evaluation.replans`)."""
     for name in result.policies:
         if (counts := result.summary[name]["replans"]).total:
-            _say(args, f"      {name:<20} {counts.text()}")
+            _say(args, f"    {name:<28} {counts.text()}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

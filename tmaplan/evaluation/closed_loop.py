@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from tmaplan.errors import ArgumentError, finite_real
-from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
 from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, arc_displacement
 from tmaplan.models.target import initial_velocity

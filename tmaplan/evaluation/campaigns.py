@@ -1,7 +1,8 @@
 """Monte Carlo comparison of policies with common random numbers.
 
 A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
-its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter),
+its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter:
+:func:`tmaplan.evaluation.seeding.run_streams`),
 and every policy re-creates them from the same seeds, so differences between policies are
 paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
 run, so serial, process-pool and Dask backends with any worker count give bit-identical
@@ -48,6 +49,7 @@ from tmaplan.evaluation.records import (
     scenario_hash,
 )
 from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
+from tmaplan.evaluation.seeding import run_streams
 from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
@@ -189,24 +191,20 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
-def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
-    return np.random.SeedSequence(seed, spawn_key=(run,)).spawn(3)
-
-
 def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
     """Run every policy on Monte Carlo run ``run`` (same truth and noise for all)."""
     from threadpoolctl import threadpool_limits
 
     scenario = spec.scenario
-    s_truth, s_noise, s_filter = _run_seeds(spec.seed, run)
+    streams = run_streams(spec.seed, run)
     out: dict[str, PolicyRun] = {}
     with threadpool_limits(limits=1):
-        target = draw_truth(scenario, np.random.default_rng(s_truth),
+        target = draw_truth(scenario, np.random.default_rng(streams.truth),
                             from_prior=spec.truth == "prior")
         for name, pol in policies.items():
             res = run_closed_loop(scenario, pol, target,
-                                  noise_rng=np.random.default_rng(s_noise),
-                                  filter_rng=np.random.default_rng(s_filter),
+                                  noise_rng=np.random.default_rng(streams.noise),
+                                  filter_rng=np.random.default_rng(streams.filter),
                                   n_particles=spec.n_particles, options=spec.filter_options)
             converged, fell_back, infeasible = replan_flags(res.replans)
             out[name] = PolicyRun(

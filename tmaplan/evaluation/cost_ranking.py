@@ -41,6 +41,7 @@ from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import censor_time
+from tmaplan.evaluation.seeding import root_rng, run_seeds
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.policies import (
     CLOSED_LOOP_OBJECTIVE,
@@ -248,7 +249,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
         key = _track_key(tr)
         if key not in pcrb_cache:
             pcrb_cache[key] = monte_carlo_pcrb(
-                scenario, samples=int(samples), rng=np.random.default_rng(seed),
+                scenario, samples=int(samples), rng=root_rng(seed),
                 coords="cartesian", observer=tr).range_std
         return pcrb_cache[key]
 
@@ -256,7 +257,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
     costs["mean-pcrb-cartesian-range"] = lambda tr: float(np.mean(pcrb(tr)))
     n_draws = max(int(samples) // 10, 2)
     targets = np.stack([draw_truth(scenario, np.random.default_rng(s), from_prior=True)
-                        for s in np.random.SeedSequence(seed).spawn(n_draws)])
+                        for s in run_seeds(seed, n_draws)])
     ecrlb_cache: dict[bytes, np.ndarray] = {}
 
     def ecrlb(tr: ObserverTrack) -> np.ndarray:
@@ -432,7 +433,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
                 bs = stats.bootstrap((np.arange(R), ok), stat, paired=False,
                                      vectorized=False, n_resamples=int(n_resamples),
                                      confidence_level=level, method="percentile",
-                                     random_state=np.random.default_rng(seed))
+                                     random_state=root_rng(seed))
             a = 100.0 * (1.0 - level) / 2.0  # percentiles of the resamples where defined
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # all NaN: interval NaN

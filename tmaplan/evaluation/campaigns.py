@@ -234,7 +234,7 @@ class CampaignResult:
     summary : dict
         Per policy: ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m], the
         truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
-        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound the
+        ch. 6; :func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`), the bound the
         filter's RMSE can approach;
         ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
@@ -579,10 +579,10 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
 def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndarray]:
     """``bound_position`` and ``bound_range`` of a policy's runs: the truth-conditioned PCRB
     over their truths, tracks and pings
-    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    (:func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
+    from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
     from tmaplan.errors import ArgumentError
-    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
 
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),

@@ -12,7 +12,7 @@ contact sooner in closed loop. :func:`rank_costs` measures that:
    as soon as it is registered), the prior-averaged Cartesian PCRB
    (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`: the bound of the *averaged* information) and
    the expected CRLB (the average over prior draws of each draw's *own* bound,
-   :func:`tmaplan.estimators.truth_bound.truth_bounds`), each terminal and averaged over the
+   :func:`tmaplan.bounds.truth_bound.truth_bounds`), each terminal and averaged over the
    horizon;
 3. every candidate flown in closed loop with common random numbers, truths from the prior (the
    paired, resumable campaign of :func:`tmaplan.evaluation.campaigns.run_campaign`);
@@ -213,7 +213,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
       propagated draws), terminal / mean over the horizon [m];
     * ``expected-crlb-range`` / ``mean-expected-crlb-range``: the expected CRLB, the average
       over ``samples // 10`` prior draws of each draw's own (truth-conditioned) range bound,
-      ``sqrt(mean_draws uᵀ[J_k⁻¹]u)`` (:func:`tmaplan.estimators.truth_bound.truth_bounds`),
+      ``sqrt(mean_draws uᵀ[J_k⁻¹]u)`` (:func:`tmaplan.bounds.truth_bound.truth_bounds`),
       terminal / mean [m].
 
     The random draws come from ``seed`` and are the same for every track (common random
@@ -227,7 +227,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
         Name -> why it cannot be evaluated on ``scenario``.
     """
     from tmaplan.bounds.pcrb import monte_carlo_pcrb
-    from tmaplan.estimators.truth_bound import truth_bounds
+    from tmaplan.bounds.truth_bound import truth_bounds
     from tmaplan.planning.belief import Belief
     from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
     from tmaplan.simulate import draw_truth

@@ -34,13 +34,8 @@ from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
-from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import (
-    PairedDifference,
-    censor_time,
-    paired_difference,
-    run_metrics,
-)
+from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -49,12 +44,10 @@ from tmaplan.evaluation.records import (
     scenario_hash,
 )
 from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
-from tmaplan.evaluation.seeding import run_streams
 from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
-from tmaplan.simulate import draw_truth
 
 __all__ = [
     "CampaignResult",
@@ -192,32 +185,22 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
 
 
 def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
-    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all)."""
-    from threadpoolctl import threadpool_limits
-
-    scenario = spec.scenario
-    streams = run_streams(spec.seed, run)
+    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all:
+    :func:`tmaplan.evaluation.closed_loop.paired_run`)."""
     out: dict[str, PolicyRun] = {}
-    with threadpool_limits(limits=1):
-        target = draw_truth(scenario, np.random.default_rng(streams.truth),
-                            from_prior=spec.truth == "prior")
-        for name, pol in policies.items():
-            res = run_closed_loop(scenario, pol, target,
-                                  noise_rng=np.random.default_rng(streams.noise),
-                                  filter_rng=np.random.default_rng(streams.filter),
-                                  n_particles=spec.n_particles, options=spec.filter_options)
-            converged, fell_back, infeasible = replan_flags(res.replans)
-            out[name] = PolicyRun(
-                metrics=run_metrics(res.times, res.truth, res.estimate,
-                                    res.observer.mean_velocity, accuracy=spec.accuracy,
-                                    n_pings=len(res.ping_steps)),
-                observer=res.observer.position, target=res.target[:, :2],
-                estimate=res.estimate[:, :2] + res.observer.position,
-                ping_steps=res.ping_steps,
-                replan_seconds=np.array([e["seconds"] for e in res.replans]),
-                replan_converged=converged, replan_fell_back=fell_back,
-                replan_infeasible=infeasible,
-                recoveries=res.recoveries)
+    for name, res in paired_run(spec.scenario, policies, seed=spec.seed, run=run,
+                                n_particles=spec.n_particles, options=spec.filter_options,
+                                from_prior=spec.truth == "prior"):
+        converged, fell_back, infeasible = replan_flags(res.replans)
+        out[name] = PolicyRun(
+            metrics=res.metrics(spec.accuracy),
+            observer=res.observer.position, target=res.target[:, :2],
+            estimate=res.estimate[:, :2] + res.observer.position,
+            ping_steps=res.ping_steps,
+            replan_seconds=np.array([e["seconds"] for e in res.replans]),
+            replan_converged=converged, replan_fell_back=fell_back,
+            replan_infeasible=infeasible,
+            recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
 

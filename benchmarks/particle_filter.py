@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.estimators import ParticleFilter, PFConfig, measurement_batches
+from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.models.prior import relative_prior_samples
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
@@ -194,7 +195,7 @@ def _main(argv: list[str] | None) -> int:
     ss = _stonesoup()
     if ss is None:
         print("Stone Soup not installed: tmaplan only (pip install stonesoup==1.9.1)")
-    seeds = np.random.SeedSequence(args.seed).spawn(args.runs)
+    seeds = run_seeds(args.seed, args.runs)
     sims = [simulate(sc, np.random.default_rng(s)) for s in seeds]
     _warm(sc, sims[0])  # first: numba's threads start after tmaplan set OMP_WAIT_POLICY
     print(f"ristic-bot-moderate: {K} steps, {args.runs} runs per N; bootstrap PF, systematic "

@@ -141,7 +141,7 @@ def test_cli_track_mle_frequencies_and_turn_direction(tmp_path, capsys) -> None:
 def test_truth_bounds_range_is_the_line_of_sight_projection() -> None:
     # Independent check of the range bound: a single run, the position information recursion
     # re-done here with a plain loop, projected on the true line of sight.
-    from tmaplan.estimators.truth_bound import truth_bounds, truth_pcrb
+    from tmaplan.bounds.truth_bound import truth_bounds, truth_pcrb
     from tmaplan.models.prior import prior_relative_moments
     from tmaplan.models.target import ncv_matrices
     from tmaplan.simulate import simulate

@@ -38,7 +38,7 @@ def efficiency(result: CampaignResult) -> dict[str, dict[str, float]]:
 
     The bound is the truth-conditioned PCRB along every run's own truth, own-ship track and
     pings, covariance averaged over the runs (``summary[name]["bound_position"]`` /
-    ``["bound_range"]``, :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`,
+    ``["bound_range"]``, :func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`,
     ristic2004, ch. 6): the quantity an RMSE over the same runs is compared with. (The
     prior-averaged PCRB is far more optimistic while the geometry is weakly observable; the
     closed-form LPC bound more so in range, docs/findings.md.) A ratio of 1 is an efficient

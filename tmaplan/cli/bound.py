@@ -1,7 +1,7 @@
 """``tmaplan bound``: posterior CRB over time (Monte Carlo, or closed form in LPC).
 
 The default is the Monte Carlo Cartesian PCRB **conditioned on the problem's true track**
-(``--method monte-carlo --over truth``, :func:`tmaplan.estimators.truth_bound.
+(``--method monte-carlo --over truth``, :func:`tmaplan.bounds.truth_bound.
 truth_conditioned_pcrb`): the PCRB along realisations of the true target track with the
 prior's covariance as ``P_0``, the bound the Ristic benchmark prescribes (ristic2004, ch. 6)
 and the one a filter run on that truth can approach (``tmaplan track`` compares with it). It
@@ -186,7 +186,7 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
              pings: list[int] | None, over: str = "prior") -> Any:
     from tmaplan.bounds.closed_form import closed_form_pcrb
     from tmaplan.bounds.pcrb import monte_carlo_pcrb
-    from tmaplan.estimators.truth_bound import truth_conditioned_pcrb
+    from tmaplan.bounds.truth_bound import truth_conditioned_pcrb
 
     if method == "closed-form":
         if coords != "lpc":

@@ -1,7 +1,8 @@
 """Monte Carlo comparison of policies with common random numbers.
 
 A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
-its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter),
+its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter:
+:func:`tmaplan.evaluation.seeding.run_streams`),
 and every policy re-creates them from the same seeds, so differences between policies are
 paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
 run, so serial, process-pool and Dask backends with any worker count give bit-identical
@@ -32,14 +33,9 @@ import numpy as np
 from tmaplan.display import short_repr
 from tmaplan.errors import PlanningError
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
-from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.filter_options import FilterOptions
-from tmaplan.evaluation.metrics import (
-    PairedDifference,
-    censor_time,
-    paired_difference,
-    run_metrics,
-)
+from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -52,7 +48,6 @@ from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Policy, parse_policy
 from tmaplan.scenario import Scenario, dump
-from tmaplan.simulate import draw_truth
 from tmaplan.version import __version__
 
 __all__ = [
@@ -188,37 +183,23 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
-def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
-    return np.random.SeedSequence(seed, spawn_key=(run,)).spawn(3)
-
-
 def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
-    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all)."""
-    from threadpoolctl import threadpool_limits
-
-    scenario = spec.scenario
-    s_truth, s_noise, s_filter = _run_seeds(spec.seed, run)
+    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all:
+    :func:`tmaplan.evaluation.closed_loop.paired_run`)."""
     out: dict[str, PolicyRun] = {}
-    with threadpool_limits(limits=1):
-        target = draw_truth(scenario, np.random.default_rng(s_truth),
-                            from_prior=spec.truth == "prior")
-        for name, pol in policies.items():
-            res = run_closed_loop(scenario, pol, target,
-                                  noise_rng=np.random.default_rng(s_noise),
-                                  filter_rng=np.random.default_rng(s_filter),
-                                  n_particles=spec.n_particles, options=spec.filter_options)
-            converged, fell_back, infeasible = replan_flags(res.replans)
-            out[name] = PolicyRun(
-                metrics=run_metrics(res.times, res.truth, res.estimate,
-                                    res.observer.mean_velocity, accuracy=spec.accuracy,
-                                    n_pings=len(res.ping_steps)),
-                observer=res.observer.position, target=res.target[:, :2],
-                estimate=res.estimate[:, :2] + res.observer.position,
-                ping_steps=res.ping_steps,
-                replan_seconds=np.array([e["seconds"] for e in res.replans]),
-                replan_converged=converged, replan_fell_back=fell_back,
-                replan_infeasible=infeasible,
-                recoveries=res.recoveries)
+    for name, res in paired_run(spec.scenario, policies, seed=spec.seed, run=run,
+                                n_particles=spec.n_particles, options=spec.filter_options,
+                                from_prior=spec.truth == "prior"):
+        converged, fell_back, infeasible = replan_flags(res.replans)
+        out[name] = PolicyRun(
+            metrics=res.metrics(spec.accuracy),
+            observer=res.observer.position, target=res.target[:, :2],
+            estimate=res.estimate[:, :2] + res.observer.position,
+            ping_steps=res.ping_steps,
+            replan_seconds=np.array([e["seconds"] for e in res.replans]),
+            replan_converged=converged, replan_fell_back=fell_back,
+            replan_infeasible=infeasible,
+            recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
 
@@ -235,7 +216,7 @@ class CampaignResult:
     summary : dict
         Per policy: ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m], the
         truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
-        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound the
+        ch. 6; :func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`), the bound the
         filter's RMSE can approach;
         ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
@@ -580,10 +561,10 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
 def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndarray]:
     """``bound_position`` and ``bound_range`` of a policy's runs: the truth-conditioned PCRB
     over their truths, tracks and pings
-    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    (:func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
+    from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
     from tmaplan.errors import ArgumentError
-    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
 
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),

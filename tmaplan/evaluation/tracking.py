@@ -1,10 +1,11 @@
 """Monte Carlo evaluation of an estimator against its bound (the `track` verb).
 
 ``monte_carlo(scenario, estimator, runs=..., seed=...)`` repeats :func:`tmaplan.estimators.run`
-over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares
+over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run,
+:func:`tmaplan.evaluation.seeding.run_seeds`) and compares
 the RMSE with the estimator's bound (:attr:`tmaplan.estimators.runner.Estimator.bound`): for the
 filters the PCRB along the runs' true trajectories, averaged over the runs
-(:func:`tmaplan.estimators.truth_bound.truth_pcrb`, ristic2004, ch. 6; option
+(:func:`tmaplan.bounds.truth_bound.truth_pcrb`, ristic2004, ch. 6; option
 ``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb``, see
 :func:`_pcrb_position`), the CRLB of the batch estimate for the MLE (:func:`_crlb_bounds`).
 """
@@ -21,6 +22,7 @@ import numpy as np
 
 from tmaplan.bounds.batch_fim import tma_data, true_parameters
 from tmaplan.bounds.crlb import information_covariance
+from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.estimators.applicability import check_applicable
@@ -28,7 +30,7 @@ from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
-from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.geometry import range_of
 from tmaplan.simulate import simulate
 
@@ -208,7 +210,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     statuses = []
     ambiguous = 0
     truths = np.zeros((runs, K + 1, 4))
-    children = np.random.SeedSequence(seed).spawn(runs + 1)
+    children = run_seeds(seed, runs + 1)  # the last one: the bound's draws
     for i in range(runs):
         rng = np.random.default_rng(children[i])
         sim = simulate(scenario, rng)

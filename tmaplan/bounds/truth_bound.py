@@ -5,6 +5,9 @@ linear-Gaussian NCV dynamics of the relative state (docs/conventions.md)::
 
     J_{k+1} = (Q + F J_k⁻¹ F')⁻¹ + H̃(X_{k+1})' R⁻¹ H̃(X_{k+1}),    J_0 = P_0⁻¹ + H̃(X_0)'R⁻¹H̃(X_0)
 
+(the prediction step is :func:`tmaplan.bounds.pcrb.predicted_information`, shared with the
+prior-averaged Cartesian PCRB).
+
 :func:`truth_pcrb` (the runner's default, ristic2004, ch. 6) evaluates H̃ along the
 *true* relative trajectory of each Monte Carlo run, with ``P_0`` the covariance of the prior
 centred on the truth (``r̄ = r``). This is the bound ristic2004 (ch. 6) plot. Over the runs we
@@ -30,7 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.bounds.inputs import information_rates, prepare
-from tmaplan.bounds.pcrb import PCRBResult, conditional_information
+from tmaplan.bounds.pcrb import PCRBResult, conditional_information, predicted_information
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import range_of
 from tmaplan.models.prior import prior_relative_moments
@@ -94,13 +97,9 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
     J = np.broadcast_to(np.linalg.inv(P0), (R, 4, 4)).copy()
     cov = np.zeros((K + 1, 4, 4))
     rvar = np.zeros(K + 1)
-    Fi = np.linalg.inv(F)
     for k in range(K + 1):  # recursion over time, batched over runs
         if k > 0:
-            if scenario.target.q > 0:
-                J = np.linalg.inv(Q + F @ np.linalg.solve(J, np.broadcast_to(F.T, J.shape)))
-            else:
-                J = Fi.T @ J @ Fi
+            J = predicted_information(F, Q, information=J)
         J += conditional_information(X[:, k], info_b[k], 0.0)
         if np.any(w_r[:, k]):
             J += w_r[:, k, None, None] * conditional_information(X[:, k], 0.0, 1.0)

@@ -47,6 +47,7 @@ VERBS: dict[str, str] = {
     "compare": "compare",
     "rank-costs": "rank_costs",
     "demo": "demo",
+    "advise": "advise",
 }
 
 

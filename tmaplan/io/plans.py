@@ -110,7 +110,7 @@ def legs_from_track(times: ArrayLike, courses: ArrayLike, *,
         j = i + 1
         while j < u.size and abs(u[j] - u[i]) <= tol:
             j += 1
-        rate = float(np.mean(u[i:j]))
+        rate = float(np.median(u[i:j]))  # within the run's range: never above a limit
         turn: Turn = (
             "straight" if abs(rate) <= tol else "starboard" if rate > 0 else "port")
         legs.append(Leg(start=float(t[i] - t[0]), course=float(np.mod(c[i], 2 * np.pi)),

@@ -103,7 +103,7 @@ def test_solutions_cover_the_truth(tmp_path):
         truth = read_truth(d / "truth.json")
         c = rec.contacts[0]
         sol = solve_contact(contact_problem(rec, c, Platform()), rng=contact_rng(seed, 0, 1),
-                            frame=rec.frame, times=c.times, velocity=c.ownship.velocity)
+                            frame=rec.frame)
         assert sol.observable and sol.mle.status == "ok" and sol.pf.status == "ok"
         x = truth.contacts["contact"][-1]
         own = rec.nav.east[-1], rec.nav.north[-1]
@@ -138,8 +138,7 @@ def test_ekelund_range_is_a_cross_check(tmp_path):
     d, sim = _export(tmp_path, 2)
     rec = read_recording(d / "bearings.csv", d / "ownship.csv")
     c = rec.contacts[0]
-    sol = solve_contact(contact_problem(rec, c, Platform()), rng=contact_rng(0, 0, 1),
-                        times=c.times, velocity=c.ownship.velocity)
+    sol = solve_contact(contact_problem(rec, c, Platform()), rng=contact_rng(0, 0, 1))
     ek = sol.ekelund
     assert ek is not None and TURN < ek.time < TURN + 200
     k = int(np.argmin(np.abs(sim.times - ek.time)))
@@ -203,3 +202,24 @@ def test_platform_file(tmp_path):
     p.write_text('range_min = "50 km"\n')
     with pytest.raises(DataError, match=r"key 'range_max': expected > range_min"):
         read_platform(p)
+
+
+def test_combined_bearings_keep_the_likelihood():
+    from tmaplan.advice.problem import combine_bearings
+
+    rng = np.random.default_rng(0)
+    steps = np.repeat(np.arange(5), 4)
+    z = 3.1 + 0.02 * rng.standard_normal(steps.size)  # across ±π
+    z = (z + np.pi) % (2 * np.pi) - np.pi
+    sig = np.full(steps.size, 0.02)
+    k, zb, sb = combine_bearings(steps, z, sig)
+    assert k.tolist() == list(range(5)) and sb == pytest.approx(0.01)
+
+    def cost(h, zz, ss, kk):
+        r = (zz - h[kk] + np.pi) % (2 * np.pi) - np.pi
+        return float(np.sum((r / ss) ** 2))
+
+    h1, h2 = np.full(5, 3.1), np.full(5, -3.12)
+    # the same likelihood up to a constant: equal differences between two hypotheses
+    assert cost(h1, z, sig, steps) - cost(h2, z, sig, steps) == pytest.approx(
+        cost(h1, zb, sb, k) - cost(h2, zb, sb, k), rel=1e-9)

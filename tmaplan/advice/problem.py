@@ -2,10 +2,13 @@
 recording does not hold) and :func:`contact_problem` (a scenario, measurement sets and the own
 ship's track on a time grid, the inputs of :func:`tmaplan.estimators.run`).
 
-**Grid.** ``dt`` is the median interval between the contact's distinct bearing times; step 0
-is one ``dt`` before the first bearing when the navigation covers it (as ``simulate --export``
-writes: bearings from step 1), else the first bearing. Each bearing is taken at its nearest
-step (a warning says by how much when a bearing is more than a tenth of ``dt`` off the grid);
+**Grid.** ``dt`` is the median interval between the contact's distinct bearing times, or its
+smallest multiple of at least ``Platform.step_min`` (10 s); step 0 is one ``dt`` before the
+first bearing when the navigation covers it (as ``simulate --export`` writes: bearings from
+step 1), else the first bearing. Each bearing is taken at its nearest step (a warning says by
+how much when a bearing is more than a tenth of its own interval off the grid), and the
+bearings of one step and one σ are one, their circular mean with σ/√m
+(:func:`combine_bearings`: the same likelihood; a 2-hour log at 1 s is 720 steps);
 the own ship's position at each step is interpolated from the fixes
 (:func:`tmaplan.io.ownship_at`) and its mean velocity over a step is the displacement over it
 divided by ``dt`` (:attr:`tmaplan.models.observer.ObserverTrack.mean_velocity`).
@@ -26,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.errors import DataError, UnitError
-from tmaplan.geometry import course_speed
+from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.io.faults import warn
 from tmaplan.io.recording import Contact, Recording, ownship_at
 from tmaplan.models.observer import ObserverTrack
@@ -43,8 +46,8 @@ from tmaplan.scenario import (
 from tmaplan.simulate import MeasurementSet
 from tmaplan.units import to_si
 
-__all__ = ["PLATFORM_KEYS", "ContactProblem", "Platform", "bearings_problem", "contact_problem",
-           "grid_track", "read_platform"]
+__all__ = ["PLATFORM_KEYS", "ContactProblem", "Platform", "bearings_problem", "combine_bearings",
+           "contact_problem", "grid_track", "read_platform"]
 
 KNOT = 1852.0 / 3600.0
 
@@ -178,6 +181,10 @@ class ContactProblem:
         The own ship on the grid.
     offset : float
         Largest distance of a bearing's time from its step's time [s].
+    times, bearing, sigma : ndarray, shape (n,)
+        The bearings as recorded [s, rad, rad] (before :func:`combine_bearings`).
+    velocity : ndarray, shape (n, 2)
+        The own ship's velocity at ``times`` [m/s] (:func:`tmaplan.io.ownship_at`).
     """
 
     name: str
@@ -185,6 +192,10 @@ class ContactProblem:
     measurements: tuple[MeasurementSet, ...]
     observer: ObserverTrack
     offset: float
+    times: np.ndarray
+    bearing: np.ndarray
+    sigma: np.ndarray
+    velocity: np.ndarray
 
 
 def grid_track(times: np.ndarray, east: np.ndarray, north: np.ndarray,
@@ -211,6 +222,41 @@ def grid_track(times: np.ndarray, east: np.ndarray, north: np.ndarray,
     return ObserverTrack(times=grid, position=st.position, velocity=st.velocity,
                          mean_velocity=mean, heading=np.asarray(heading),
                          speed=np.asarray(speed))
+
+
+def combine_bearings(steps: np.ndarray, bearing: np.ndarray, sigma: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bearings of one step and one σ as one: their mean with σ/√m.
+
+    For m bearings ``z_i`` of one standard deviation σ, all modelled by the bearing ``h`` of
+    one step, ``Σ (z_i − h)² = m (z̄ − h)² + Σ (z_i − z̄)²``: the likelihood of ``h`` is that
+    of the mean with σ/√m. The mean is taken on the circle's branch of the group's first
+    bearing (deviations from it wrapped to (−π, π]), so the identity is exact while the
+    bearings and ``h`` lie within π/2 of one another. The estimators then see one
+    measurement per step and σ.
+
+    Parameters
+    ----------
+    steps : ndarray of int, shape (n,)
+    bearing, sigma : ndarray, shape (n,)
+        [rad].
+
+    Returns
+    -------
+    steps, bearing, sigma : ndarray, shape (m,)
+        Sorted by step; ``bearing`` in (−π, π].
+    """
+    keys = np.column_stack([steps, sigma])
+    uniq, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    if uniq.shape[0] == steps.size:
+        return steps, bearing, sigma
+    inv = inv.ravel()
+    ref = np.empty(uniq.shape[0])
+    ref[inv[::-1]] = bearing[::-1]  # each group's first bearing
+    dev = np.mod(bearing - ref[inv] + np.pi, 2 * np.pi) - np.pi
+    mean = ref + np.bincount(inv, weights=dev) / count
+    return (uniq[:, 0].astype(int), np.asarray(wrap_angle(mean)),
+            uniq[:, 1] / np.sqrt(count))
 
 
 def contact_problem(recording: Recording, contact: Contact, platform: Platform,
@@ -285,14 +331,15 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
     # the last grid time may pass the last fix by round-off of t0 + K·dt
     grid = np.minimum(grid, nav_times[-1])
     obs = grid_track(nav_times, east, north, grid)
-    sigmas = np.unique(sigma)
+    ks, zs, ss = combine_bearings(steps, bearing, sigma)
+    sigmas = np.unique(ss)
     sensors = tuple(BearingSensor(sigma=float(s), steps=tuple(int(k) for k in np.unique(
-        steps[sigma == s]))) for s in sigmas)
-    meas = tuple(MeasurementSet(sensor=i, kind="bearing", steps=steps[sel],
-                                times=grid[steps[sel]], values=bearing[sel],
+        ks[ss == s]))) for s in sigmas)
+    meas = tuple(MeasurementSet(sensor=i, kind="bearing", steps=ks[sel],
+                                times=grid[ks[sel]], values=zs[sel],
                                 truth=np.full(int(sel.sum()), np.nan), relative=None,
                                 sigma=np.asarray(float(s)))
-                 for i, s in enumerate(sigmas) for sel in [sigma == s])
+                 for i, s in enumerate(sigmas) for sel in [ss == s])
     b0 = float(bearing[0])
     r_mid = 0.5 * (platform.range_min + platform.range_max)
     p0 = obs.position[0]
@@ -317,4 +364,5 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
         planning=Planning(keep_out_range=platform.keep_out_range,
                           ping_min_spacing=platform.ping_min_spacing))
     return ContactProblem(name=name, scenario=scenario, measurements=meas,
-                          observer=obs, offset=offset)
+                          observer=obs, offset=offset, times=tb, bearing=bearing, sigma=sigma,
+                          velocity=ownship_at(nav_times, east, north, tb).velocity)

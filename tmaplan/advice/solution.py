@@ -234,7 +234,6 @@ def _run(name: str, problem: ContactProblem, rng: np.random.Generator | None,
 
 def solve_contact(problem: ContactProblem, *, rng: np.random.Generator,
                   frame: LocalFrame | None = None, particles: int = 10_000,
-                  times: np.ndarray | None = None, velocity: np.ndarray | None = None,
                   ) -> ContactSolution:
     """Solve one contact (module doc).
 
@@ -247,11 +246,6 @@ def solve_contact(problem: ContactProblem, *, rng: np.random.Generator,
         Gives latitude/longitude.
     particles : int
         Of the particle filter.
-    times : ndarray, shape (n,), optional
-        The bearings' own times [s] for Ekelund's range and the manoeuvre test (default the
-        grid times of the measurements).
-    velocity : ndarray, shape (n, 2), optional
-        The own ship's velocity at ``times`` [m/s] (default the grid's mean velocity).
 
     Returns
     -------
@@ -266,12 +260,10 @@ def solve_contact(problem: ContactProblem, *, rng: np.random.Generator,
     order = np.argsort(steps, kind="stable")
     steps = steps[order]
     z = np.concatenate([m.values for m in problem.measurements])[order]
-    sig = np.concatenate([np.full(m.steps.size, float(m.sigma))
-                          for m in problem.measurements])[order]
-    t = obs.times[steps] if times is None else np.asarray(times, float)
-    vel = obs.mean_velocity[steps] if velocity is None else np.asarray(velocity, float)
-    manoeuvred = bool(manoeuvres(t, vel).any())
-    ek = ekelund_range(t, z, sig, vel) if manoeuvred else None
+    # the manoeuvre test and Ekelund's range on the bearings as recorded
+    manoeuvred = bool(manoeuvres(problem.times, problem.velocity).any())
+    ek = ekelund_range(problem.times, problem.bearing, problem.sigma,
+                       problem.velocity) if manoeuvred else None
     if mle_tr is not None:
         rel = mle_tr.estimates[steps]
         residuals = np.asarray(wrap_angle(z - np.arctan2(rel[:, 0], rel[:, 1])))

@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="own-ship navigation: CSV (time,lat_deg,lon_deg), NMEA 0183 or GPX")
     parser.add_argument("--budget", type=integer(0, 50), default=0, metavar="K",
                         help="active pings to schedule over the horizon (default 0)")
-    parser.add_argument("--horizon", type=duration(), default=HORIZON, metavar="T",
+    parser.add_argument("--horizon", type=duration(), default=None, metavar="T",
                         help="advice horizon, seconds or with a unit (default 20 min; whole "
                              "minutes)")
     parser.add_argument("--platform", default=None, metavar="FILE",
@@ -166,7 +166,7 @@ def _contact_json(sol: Any) -> dict[str, Any]:
 
 
 def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
-    from tmaplan.io.plans import write_legs_csv  # noqa: F401 (the table's columns)
+    from tmaplan.io.plans import legs_table
 
     names = {"pf": "particle filter", "mle": "batch ML (CRLB)"}
     for sol in solutions:
@@ -186,21 +186,12 @@ def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
         if adv is None:
             continue
         print(f"advice for {adv.name}: {adv.note}")
-        print(legs_text(adv.legs))
+        print(legs_table(adv.legs))
         if adv.pings is not None:
             p = adv.pings
             times = ", ".join(rec.time_text(float(t)) for t in p.times)
             print(f"  pings: {times or 'none'} (lower bound {p.lower_bound:.1f} m, gap "
                   f"{p.gap:.2%}, {p.status})")
-
-
-def legs_text(legs: Sequence[Any]) -> str:
-    """The leg table as text: start [min], course [°], turn and rate [°/s], duration [min]."""
-    rows = ["  start min  course °  turn        rate °/s  duration min"]
-    for leg in legs:
-        rows.append(f"  {leg.start / 60:9.1f}  {math.degrees(leg.course) % 360:8.1f}  "
-                    f"{leg.turn:<10}  {math.degrees(leg.rate):8.3f}  {leg.duration / 60:12.1f}")
-    return "\n".join(rows)
 
 
 def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
@@ -235,7 +226,9 @@ def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
 
 
 def _exports(out: Path, rec: Any, advice: Sequence[Any]) -> dict[str, dict[str, str]]:
-    from tmaplan.io.plans import write_legs_csv, write_track
+    import datetime as dt
+
+    from tmaplan.io.plans import write_plan
 
     files: dict[str, dict[str, str]] = {}
     for adv in advice:
@@ -243,16 +236,10 @@ def _exports(out: Path, rec: Any, advice: Sequence[Any]) -> dict[str, dict[str, 
             continue
         stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in adv.name)
         t0 = float(adv.track.times[0])
-        start = None if rec.start is None else rec.start + __import__("datetime").timedelta(
-            seconds=t0)
-        f = {"legs": str(write_legs_csv(out / f"{stem}_legs.csv", adv.legs, start=start))}
-        if start is not None and rec.frame is not None:
-            for suffix in ("gpx", "csv"):
-                f[f"track_{suffix}"] = str(write_track(
-                    out / f"{stem}_track.{suffix}", adv.track.times - t0, start=start,
-                    east=adv.track.position[:, 0], north=adv.track.position[:, 1],
-                    frame=rec.frame, name=f"advice for {adv.name}"))
-        files[adv.name] = f
+        start = None if rec.start is None else rec.start + dt.timedelta(seconds=t0)
+        files[adv.name] = write_plan(out, stem, adv.legs, adv.track.times - t0,
+                                     adv.track.position[:, 0], adv.track.position[:, 1],
+                                     start=start, frame=rec.frame)
     return files
 
 
@@ -277,13 +264,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         for i, c in enumerate(rec.contacts):
             cp = contact_problem(rec, c, platform)
             solutions.append(solve_contact(cp, rng=contact_rng(args.seed, i, n),
-                                           frame=rec.frame, particles=platform.particles,
-                                           times=c.times, velocity=c.ownship.velocity))
+                                           frame=rec.frame, particles=platform.particles))
     texts = []
     for w in caught:
         texts.append(str(w.message))
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    advice = [None if args.no_advice else advise_contact(s, platform, horizon=args.horizon,
+    horizon = HORIZON if args.horizon is None else args.horizon
+    advice = [None if args.no_advice else advise_contact(s, platform, horizon=horizon,
                                                          budget=args.budget)
               for s in solutions]
     quiet = args.json == "-"

@@ -88,7 +88,8 @@ def test_solutions_cover_the_truth(tmp_path):
 
     The reported solution is the particle filter's posterior: the batch CRLB assumes a
     constant-velocity contact, and the contact's process noise puts its current course
-    outside the CRLB's interval in 7 of these 10 runs (issue 41's finding).
+    outside the CRLB's interval in 6 of these 10 runs (7 miss one of the three; issue 41's
+    finding).
 
     A run misses when any of the three is outside: under nominal coverage a miss has
     probability at most 0.15 (union bound), so more than ``limit`` misses in ``n`` runs has

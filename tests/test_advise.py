@@ -224,3 +224,29 @@ def test_combined_bearings_keep_the_likelihood():
     # the same likelihood up to a constant: equal differences between two hypotheses
     assert cost(h1, z, sig, steps) - cost(h2, z, sig, steps) == pytest.approx(
         cost(h1, zb, sb, k) - cost(h2, zb, sb, k), rel=1e-9)
+
+
+def test_a_contact_with_too_few_bearings_is_left_out(tmp_path, capsys):
+    data = Path(__file__).parent / "data" / "invalid_cli"
+    lines = (data / "advise_bearings.csv").read_text().splitlines()
+    extra = [x.rsplit(",", 1)[0] + ",B" for x in lines[1:4]]
+    (tmp_path / "b.csv").write_text("\n".join([*lines, *extra]) + "\n")
+    assert main(["advise", str(tmp_path / "b.csv"), "--ownship",
+                 str(data / "advise_ownship.csv"), "--no-advice", "--no-figure",
+                 "--json", str(tmp_path / "a.json")]) == 0
+    got = json.loads((tmp_path / "a.json").read_text())
+    assert set(got["contacts"]) == {"A"}
+    err = capsys.readouterr().err
+    assert "fewer than 5 bearings at different times left out: 'B' (3)" in err
+    assert any("'B' (3)" in w for w in got["warnings"])
+
+
+def test_a_prior_that_excludes_the_solution_is_told(tmp_path, capsys):
+    d, _ = _export(tmp_path, 3)
+    assert main(["advise", str(d / "bearings.csv"), "--ownship", str(d / "ownship.csv"),
+                 "--range-min", "30 km", "--no-advice", "--no-figure",
+                 "--json", str(tmp_path / "a.json")]) == 0
+    got = json.loads((tmp_path / "a.json").read_text())["contacts"]["contact"]
+    assert "outside the prior's 30-40 km" in got["cross_check"]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "warning: SolutionWarning" in err[0]

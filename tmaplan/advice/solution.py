@@ -24,6 +24,7 @@ speed are ±1.96 standard deviations.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from typing import Any
 
 import numpy as np
@@ -36,8 +37,8 @@ from tmaplan.estimators.runner import Track, run
 from tmaplan.geometry import wrap_angle
 from tmaplan.io.frame import LocalFrame
 
-__all__ = ["CHI2_95", "Z_95", "ContactSolution", "Estimate", "contact_rng", "estimate_at",
-           "solve_contact"]
+__all__ = ["CHI2_95", "Z_95", "ContactSolution", "Estimate", "SolutionWarning", "contact_rng",
+           "cross_check", "estimate_at", "solve_contact"]
 
 #: χ² quantile of 2 degrees of freedom at 95 % (the position ellipse).
 CHI2_95 = 5.991464547107979
@@ -187,6 +188,8 @@ class ContactSolution:
         Bearing residuals of the ML solution at the bearings, wrapped [rad].
     residual_times : ndarray, shape (n,)
         [s].
+    cross_check : str
+        Empty, or why the two solutions should not be trusted (:func:`cross_check`).
     """
 
     __repr__ = short_repr
@@ -203,6 +206,49 @@ class ContactSolution:
     ekelund: EkelundRange | None
     residuals: np.ndarray
     residual_times: np.ndarray
+    cross_check: str = ""
+
+
+class SolutionWarning(UserWarning):
+    """A contact's solutions disagree, or the batch solution lies outside the prior."""
+
+
+def cross_check(problem: ContactProblem, mle: Estimate, pf: Estimate) -> str:
+    """Why a contact's two solutions should not be trusted, or "".
+
+    The batch ML solution outside the prior's range interval or above its maximum speed (the
+    filter cannot follow it there: the prior is wrong), or the two ranges more than 3
+    standard deviations of their difference apart.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+    mle, pf : Estimate
+
+    Returns
+    -------
+    str
+        One line.
+    """
+    if mle.status != "ok" or pf.status not in ("ok", "recovered") \
+            or not np.isfinite([mle.range, pf.range]).all():
+        return ""
+    p = problem.scenario.prior
+    assert p is not None
+    hi = p.range_max if p.range_max is not None else np.inf
+    if not p.range_min <= mle.range <= hi:
+        return (f"the batch solution's range {mle.range / 1e3:.2f} km lies outside the prior's "
+                f"{p.range_min / 1e3:g}-{hi / 1e3:g} km: the particle filter cannot follow it; "
+                "widen --range-min/--range-max")
+    if p.speed_max is not None and mle.speed > p.speed_max:
+        return (f"the batch solution's speed {mle.speed:.1f} m/s is above the prior's "
+                f"maximum {p.speed_max:.1f} m/s; raise --speed-max")
+    spread = float(np.hypot(mle.std["range"], pf.std["range"]))
+    if abs(mle.range - pf.range) > 3.0 * spread:
+        return (f"the particle filter's range {pf.range / 1e3:.2f} km and the batch "
+                f"solution's {mle.range / 1e3:.2f} km differ by more than 3 standard "
+                "deviations: check the prior (--range-min, --range-max, --speed-max)")
+    return ""
 
 
 def contact_rng(seed: int, index: int, count: int) -> np.random.Generator:
@@ -282,7 +328,11 @@ def solve_contact(problem: ContactProblem, *, rng: np.random.Generator,
         observable = bool(np.isfinite(rsd))
         verdict = (f"observable: range {mle_est.range / 1e3:.2f} km ± {Z_95 * rsd:.0%} (95 %)"
                    if observable else "unobservable: the range's bound is not finite")
+    check = cross_check(problem, mle_est, pf_est) if observable else ""
+    if check:
+        warnings.warn(f"contact '{problem.name}': {check}", SolutionWarning, stacklevel=2)
     return ContactSolution(name=problem.name, problem=problem, mle=mle_est, pf=pf_est,
                            mle_track=mle_tr, pf_track=pf_tr, manoeuvred=manoeuvred,
                            observable=observable, verdict=verdict, ekelund=ek,
+                           cross_check=check,
                            residuals=residuals, residual_times=obs.times[steps])

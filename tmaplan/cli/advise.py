@@ -158,6 +158,7 @@ def _contact_json(sol: Any) -> dict[str, Any]:
                 "ekelund_range": None if ek is None else ek.range,
                 "ekelund": None if ek is None else {"time": ek.time, "range": ek.range,
                                                     "std": ek.std, "rates": list(ek.rates)},
+                "cross_check": sol.cross_check or None,
                 "mle": sol.mle.to_json(), "pf": sol.pf.to_json(),
                 "bearings": int(sol.residuals.size),
                 "residual_rms": float(np.sqrt(np.nanmean(sol.residuals ** 2)))
@@ -243,6 +244,31 @@ def _exports(out: Path, rec: Any, advice: Sequence[Any]) -> dict[str, dict[str, 
     return files
 
 
+#: Fewest bearings at different times of a contact that is solved (4 unknowns).
+MIN_BEARINGS = 5
+
+
+def _enough_bearings(rec: Any) -> Any:
+    """The recording without its contacts of fewer than :data:`MIN_BEARINGS` bearing times
+    (left out, warned); none left: an error."""
+    from tmaplan.errors import DataError
+    from tmaplan.io.faults import warn
+
+    few = {c.name: int(np.unique(c.times).size) for c in rec.contacts
+           if np.unique(c.times).size < MIN_BEARINGS}
+    if not few:
+        return rec
+    text = ", ".join(f"'{k}' ({v})" for k, v in few.items())
+    if len(few) == len(rec.contacts):
+        raise DataError(rec.bearings_source, f"expected a contact with at least {MIN_BEARINGS} "
+                        f"bearings at different times (4 unknowns), received {text}",
+                        field="contact")
+    warn(f"{rec.bearings_source}: contact{'s' if len(few) > 1 else ''} with fewer than "
+         f"{MIN_BEARINGS} bearings at different times left out: {text}")
+    return dataclasses.replace(rec, contacts=tuple(c for c in rec.contacts
+                                                   if c.name not in few))
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Read, solve, advise; return the docs/cli.md ``advise`` fields."""
     from tmaplan.advice.problem import contact_problem
@@ -258,7 +284,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     platform = _platform(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        rec = read_recording(args.bearings, args.ownship, sigma_deg=args.sigma_deg)
+        rec = _enough_bearings(read_recording(args.bearings, args.ownship,
+                                              sigma_deg=args.sigma_deg))
         n = len(rec.contacts)
         solutions = []
         for i, c in enumerate(rec.contacts):

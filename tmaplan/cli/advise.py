@@ -173,6 +173,10 @@ def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
     for sol in solutions:
         print(f"contact {sol.name}: {sol.verdict}")
         for e in (sol.pf, sol.mle):
+            if e.estimator == "mle" and not sol.manoeuvred:
+                print(f"  {names['mle']}: no range without an own-ship manoeuvre (its "
+                      "numbers are in the JSON)")
+                continue
             print(f"  {names[e.estimator]} at {rec.time_text(e.time)}: range "
                   f"{e.range / 1e3:.2f} ± {e.std['range'] / 1e3:.2f} km, bearing "
                   f"{math.degrees(e.bearing):.1f}°, course {math.degrees(e.course):.0f} ± "

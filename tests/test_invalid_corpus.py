@@ -8,8 +8,9 @@ with that line and no traceback. ``tests/data/invalid_cli/cases.toml``
 holds command lines that cannot work (an estimator without its measurements, a bound not
 defined for it, turning policies without a turn-rate limit): each is refused with one line.
 ``tests/data/invalid_data/cases.toml`` holds recorded data files with a fault (bearings CSV,
-own-ship CSV, NMEA and GPX, leg tables): each raises a one-line ``DataError`` naming the file
-and line, or reads with one-line ``DataWarning`` s saying what was done.
+own-ship CSV, NMEA and GPX, leg tables, ``advise --platform`` files): each raises a one-line
+``DataError`` naming the file and line, or reads with one-line ``DataWarning`` s saying what
+was done.
 """
 
 from __future__ import annotations
@@ -107,6 +108,10 @@ def _read_data(case: dict) -> object:
     path = DATA_DIR / case["file"]
     if case["read"] == "recording":
         return io.read_recording(path, DATA_DIR / case["nav"])
+    if case["read"] == "platform":
+        from tmaplan.advice import read_platform
+
+        return read_platform(path)
     return {"bearings": io.read_bearings, "nav": io.read_nav,
             "legs": io.read_legs_csv}[case["read"]](path)
 
@@ -145,8 +150,9 @@ def test_data_corpus_covers_every_kind_of_fault():
     warned = {c["file"] for c in DATA_CASES if c.get("warn")}
     assert len(errors) >= 20 and len(warned) >= 8
     kinds = {c["file"].rsplit(".", 1)[1] for c in DATA_CASES}
-    assert kinds == {"csv", "nmea", "gpx"}
-    assert {c["read"] for c in DATA_CASES} == {"bearings", "nav", "legs", "recording"}
+    assert kinds == {"csv", "nmea", "gpx", "toml"}
+    assert {c["read"] for c in DATA_CASES} == {"bearings", "nav", "legs", "platform",
+                                               "recording"}
     on_disk = {p.name for p in DATA_DIR.iterdir() if p.name != "cases.toml"}
     named = {c["file"] for c in DATA_CASES} | {c["nav"] for c in DATA_CASES if "nav" in c}
     assert on_disk == named, on_disk ^ named

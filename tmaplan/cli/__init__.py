@@ -48,6 +48,7 @@ VERBS: dict[str, str] = {
     "compare": "compare",
     "rank-costs": "rank_costs",
     "demo": "demo",
+    "advise": "advise",
 }
 
 

@@ -18,7 +18,7 @@ from tmaplan.cli._args import (
 )
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
-from tmaplan.plotting import plot_geometry
+from tmaplan.plotting import plot_bearings, plot_geometry
 from tmaplan.scenario import load
 from tmaplan.simulate import Simulation, simulate
 
@@ -71,6 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
              f"{DEFAULT_ORIGIN[0]:g},{DEFAULT_ORIGIN[1]:g}); the exported plane is the "
              "scenario's shifted so that the own ship starts at its origin; a southern "
              "latitude with '=': --origin=-33.5,151.5")
+    parser.add_argument(
+        "--observer-plan", default=None, metavar="FILE",
+        help="fly this plan: a `tmaplan plan P --json` file or a legs CSV (docs/recordings.md)")
     parser.add_argument(
         "--start", type=_start, default=None, metavar="TIME",
         help=f"with --export: UTC time of the run's first step (default {DEFAULT_START})")
@@ -166,6 +169,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             if getattr(args, flag, None) is not None:
                 raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
                                     source=scenario.name)
+    if getattr(args, "observer_plan", None) is not None:
+        from tmaplan.cli._observer_plan import with_observer_plan
+
+        scenario = with_observer_plan(scenario, args.observer_plan)
     sim = simulate(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
@@ -187,6 +194,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         path = Path(args.out) / f"{scenario.name}_geometry.png"
         plot_geometry(sim, path)
         payload["figure"] = str(path)
+        bearings = plot_bearings(sim, Path(args.out) / f"{scenario.name}_bearings.png")
+        if bearings is not None:
+            payload["bearings_figure"] = str(bearings)
         if args.json != "-":
-            print(f"wrote {path}")
+            print(f"wrote {path}" + (f", {bearings}" if bearings is not None else ""))
     return payload

@@ -63,6 +63,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         choices=("auto", "either", "clockwise", "anticlockwise"),
                         help="mle, constant-turn source: sense of turn searched (default auto: "
                              "the problem's [estimation] section, else either)")
+    parser.add_argument("--observer-plan", default=None, metavar="FILE",
+                        help="fly this plan: a `tmaplan plan P --json` file or a legs CSV "
+                             "(docs/recordings.md)")
     add_figure_arguments(parser)
 
 
@@ -133,6 +136,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if particles < 2:
         raise ArgumentError("--particles", ">= 2", particles)
     scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
+    if getattr(args, "observer_plan", None) is not None:
+        from tmaplan.cli._observer_plan import with_observer_plan
+
+        scenario = with_observer_plan(scenario, args.observer_plan)
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
 

@@ -543,7 +543,9 @@ class HeadingPlanner:
         outs = self._f_eval(x, P) if evaluated is None else evaluated
         f, rb, pos, vbar, head = (np.asarray(o) for o in outs[:5])
         head, times = head.reshape(-1), t0 + self.times
-        tr = np.diff(nodes := head[:: self.m]) / self.Tc
+        # the solver meets the bound to its tolerance (~1e-8 rad/s over): clipped here, so
+        # a plan's rates pass observer.turn_rates' check (issue 41)
+        tr = np.clip(np.diff(nodes := head[:: self.m]) / self.Tc, -self.u_max, self.u_max)
         spd = x[-self.n:] if self.speed_choice else np.full(self.n, speed0)
         spd_steps = np.concatenate([[speed0], np.repeat(spd, self.m)])
         track = ObserverTrack(times=times, position=p0 + pos, velocity=velocity_from_course(

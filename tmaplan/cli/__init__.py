@@ -26,7 +26,12 @@ from typing import Any
 import numpy as np
 
 from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
-from tmaplan.cli._contacts import preflight_per_contact, refuse_several, run_per_contact
+from tmaplan.cli._contacts import (
+    per_contact,
+    preflight_per_contact,
+    refuse_several,
+    run_per_contact,
+)
 from tmaplan.cli._finite import require_finite
 from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
@@ -184,8 +189,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 check_scenario(scenario, source=args.problem if fixed is None else None)
                 # a verb that cannot handle several contacts says so (tmaplan.cli._contacts)
                 refuse_several(args.verb, modules[args.verb], scenario, modules)
-                several = len(scenario.contacts) > 1
-                if several:
+                several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
+                if len(scenario.contacts) > 1:
                     preflight_per_contact(args, scenario, preflight)
                 else:
                     preflight(args, scenario)

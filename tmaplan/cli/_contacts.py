@@ -1,12 +1,14 @@
 """Several contacts on the command line: the one place that says which verbs take them.
 
-A verb module that handles a several-contact scenario declares ``SEVERAL_CONTACTS = True``;
-:func:`refuse_several` refuses the others with one line (never running them silently on the
-first contact), so a verb is lifted by setting its flag. ``crlb``, ``bound`` and ``track``
-run their single-contact machinery on each contact's view (:meth:`tmaplan.scenario.Scenario.
-contact_view`) through :func:`run_per_contact`: the JSON holds ``contacts: {name: {...the
-one-contact keys...}}`` and the console prints each contact's block; a one-contact scenario
-runs exactly as before. Each contact's runs use the same seeds (common random numbers).
+A verb module that handles a several-contact scenario declares ``SEVERAL_CONTACTS``:
+``"per-contact"`` (``crlb``, ``bound``, ``track``: the single-contact machinery runs on each
+contact's view, :meth:`tmaplan.scenario.Scenario.contact_view`, through
+:func:`run_per_contact`; the JSON holds ``contacts: {name: {...the one-contact keys...}}`` and
+the console prints each contact's block; each contact's runs use the same seeds, common random
+numbers) or ``"joint"`` (``simulate``: its ``run`` takes the whole scenario).
+:func:`refuse_several` refuses the other verbs with one line (never running them silently on
+the first contact), so a verb is lifted by setting its flag. A one-contact scenario runs
+exactly as before.
 """
 
 from __future__ import annotations
@@ -21,12 +23,18 @@ from tmaplan.errors import ScenarioError
 from tmaplan.scenario import Scenario, load
 from tmaplan.scenario.contacts import in_contact
 
-__all__ = ["refuse_several", "run_per_contact", "scenario_of", "takes_several"]
+__all__ = ["per_contact", "preflight_per_contact", "refuse_several", "run_per_contact",
+           "scenario_of", "takes_several"]
 
 
 def takes_several(module: Any) -> bool:
-    """Whether the verb ``module`` handles several contacts (``SEVERAL_CONTACTS = True``)."""
-    return bool(getattr(module, "SEVERAL_CONTACTS", False))
+    """Whether the verb ``module`` handles several contacts (its ``SEVERAL_CONTACTS``)."""
+    return getattr(module, "SEVERAL_CONTACTS", None) in ("per-contact", "joint")
+
+
+def per_contact(module: Any) -> bool:
+    """Whether the verb ``module`` runs per contact (``SEVERAL_CONTACTS = "per-contact"``)."""
+    return getattr(module, "SEVERAL_CONTACTS", None) == "per-contact"
 
 
 def refuse_several(verb: str, module: Any, scenario: Scenario,

@@ -48,7 +48,7 @@ HELP = ("posterior Cramér-Rao bound over time (default: Monte Carlo, conditione
         "true track; or the closed form in LPC)")
 
 #: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
-SEVERAL_CONTACTS = True
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("range_std[-1]", "position_std[-1]")

@@ -29,7 +29,7 @@ from tmaplan.scenario import Scenario
 HELP = "CRLB of the batch (deterministic-track) estimate"
 
 #: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
-SEVERAL_CONTACTS = True
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("final_range_std",)

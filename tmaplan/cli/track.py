@@ -33,7 +33,7 @@ from tmaplan.scenario import Scenario
 HELP = "run an estimator over Monte Carlo runs against its bound"
 
 #: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
-SEVERAL_CONTACTS = True
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")

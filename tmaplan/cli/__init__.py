@@ -26,6 +26,12 @@ from typing import Any
 import numpy as np
 
 from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
+from tmaplan.cli._contacts import (
+    per_contact,
+    preflight_per_contact,
+    refuse_several,
+    run_per_contact,
+)
 from tmaplan.cli._finite import require_finite
 from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
@@ -182,13 +188,24 @@ def main(argv: Sequence[str] | None = None) -> int:
                 problem = scenario.name
                 # the rules that need the motion model (tmaplan.scenario is below the models)
                 check_scenario(scenario, source=args.problem if fixed is None else None)
-                preflight(args, scenario)
+                # a verb that cannot handle several contacts says so (tmaplan.cli._contacts)
+                refuse_several(args.verb, modules[args.verb], scenario, modules)
+                several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
+                if len(scenario.contacts) > 1:
+                    preflight_per_contact(args, scenario, preflight)
+                else:
+                    preflight(args, scenario)
             else:  # (preflight checks them with the problem)
+                several = False
                 check_outputs(args)
-            payload = modules[args.verb].run(args)
+            finite = tuple(getattr(modules[args.verb], "FINITE", ()))
+            if several:  # each contact's view through the one-contact verb
+                payload = run_per_contact(modules[args.verb], args, scenario)
+                finite = tuple(f"contacts.*.{p}" for p in finite)
+            else:
+                payload = modules[args.verb].run(args)
             checkpoint()  # an interrupt that Python ignored on the way is still one
-            require_finite(payload, getattr(modules[args.verb], "FINITE", ()),
-                           source=problem)
+            require_finite(payload, finite, source=problem)
             if isinstance(payload, dict) and problem is not None:
                 payload.setdefault("problem", problem)
             if args.json is not None and payload is not None:

@@ -38,12 +38,17 @@ from tmaplan.cli._args import (
     integer,
     step_list,
 )
+from tmaplan.cli._contacts import scenario_of
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError, ScenarioError
-from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
+from tmaplan.scenario import RangeSensor, Scenario, measurement_steps
 
 HELP = ("posterior Cramér-Rao bound over time (default: Monte Carlo, conditioned on the "
+
         "true track; or the closed form in LPC)")
+
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("range_std[-1]", "position_std[-1]")
@@ -251,7 +256,7 @@ def _samples(samples: int | None, method: str, overlay: bool) -> int:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Compute the bound, write the figure, return the docs/cli.md JSON fields."""
-    scenario = load(args.problem)
+    scenario = scenario_of(args)
     coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
     overlay = not args.no_figure and not args.no_overlay
     samples = _samples(args.samples, args.method, overlay)

@@ -22,10 +22,14 @@ import numpy as np
 
 from tmaplan.bounds.crlb import CRLBResult, crlb
 from tmaplan.cli._args import add_figure_arguments, add_problem_argument, frequency_lines
+from tmaplan.cli._contacts import scenario_of
 from tmaplan.display import timespan
-from tmaplan.scenario import Scenario, load
+from tmaplan.scenario import Scenario
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
+
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("final_range_std",)
@@ -82,7 +86,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     """Compute the CRLB, print a table (unless ``--json -``) and return the JSON payload."""
     from tmaplan.bounds.observability import observability
 
-    scenario = load(args.problem)
+    scenario = scenario_of(args)
     res = crlb(scenario, frequencies=args.frequencies)
     n_tones = sum(1 for p in res.parameters if p.startswith("f0["))
     units = res.units

@@ -20,9 +20,12 @@ from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
 from tmaplan.plotting import plot_bearings, plot_geometry
 from tmaplan.scenario import load
-from tmaplan.simulate import Simulation, simulate
+from tmaplan.simulate import ContactsSimulation, Simulation, simulate, simulate_contacts
 
 HELP = "simulate one truth and measurement run of a problem and plot its geometry"
+
+#: Several contacts: one run of them all (:func:`tmaplan.simulate.simulate_contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Default ``--origin``: the own ship's start (latitude, longitude) [deg] in the Bay of Biscay.
 DEFAULT_ORIGIN = (45.0, -5.0)
@@ -173,17 +176,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         from tmaplan.cli._observer_plan import with_observer_plan
 
         scenario = with_observer_plan(scenario, args.observer_plan)
+    if len(scenario.contacts) > 1:
+        return _run_several(args, scenario)
     sim = simulate(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
     if args.json != "-":
-        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
-                           for m in sim.measurements)
-        r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
-        print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
-              f"{scenario.time.dt:g} s over {timespan(scenario.time.horizon)}; range "
-              f"{r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km (min {r.min() / 1e3:.2f} km); "
-              f"measurements: {counts or 'none'}")
+        print(_summary(scenario.name, sim, args.seed))
     if args.export is not None:
         files = export(sim, args.export, origin=args.origin or DEFAULT_ORIGIN,
                        start=args.start or _start(DEFAULT_START), seed=args.seed)
@@ -199,4 +198,43 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             payload["bearings_figure"] = str(bearings)
         if args.json != "-":
             print(f"wrote {path}" + (f", {bearings}" if bearings is not None else ""))
+    return payload
+
+
+def _summary(name: str, sim: Simulation, seed: int) -> str:
+    """The console line of one contact's run."""
+    sc = sim.scenario
+    counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
+                       for m in sim.measurements)
+    r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
+    return (f"{name}: seed {seed}, {sc.n_steps} steps of {sc.time.dt:g} s over "
+            f"{timespan(sc.time.horizon)}; range {r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km "
+            f"(min {r.min() / 1e3:.2f} km); measurements: {counts or 'none'}")
+
+
+def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
+    """``simulate`` of a several-contact scenario: one run of every contact
+    (:class:`ContactsSimulation`), a console line and a geometry figure per contact
+    (``<out>/<problem>-<contact>_geometry.png``). ``--export`` writes one contact's bearings
+    and is refused here."""
+    if args.export is not None:
+        raise ArgumentError("--export", "a one-contact problem (the export of several "
+                            "contacts is not written yet)", list(scenario.contact_names),
+                            source=scenario.name)
+    for flag in ("origin", "start"):
+        if getattr(args, flag, None) is not None:
+            raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
+                                source=scenario.name)
+    sim: ContactsSimulation = simulate_contacts(scenario, np.random.default_rng(args.seed))
+    payload = sim.to_json()
+    payload["seed"] = args.seed
+    for name, run in sim.runs.items():
+        if args.json != "-":
+            print(_summary(f"{scenario.name} contact {name}", run, args.seed))
+        if not args.no_figure:
+            path = Path(args.out) / f"{scenario.name}-{name}_geometry.png"
+            plot_geometry(run, path)
+            payload["contacts"][name]["figure"] = str(path)
+            if args.json != "-":
+                print(f"wrote {path}")
     return payload

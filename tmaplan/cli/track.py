@@ -20,6 +20,7 @@ from tmaplan.cli._args import (
     frequency_lines,
     integer,
 )
+from tmaplan.cli._contacts import scenario_of
 from tmaplan.cli._finite import require_finite
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig
@@ -27,9 +28,12 @@ from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import ESTIMATORS
 from tmaplan.evaluation.tracking import monte_carlo
-from tmaplan.scenario import Scenario, load
+from tmaplan.scenario import Scenario
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
+
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli._contacts`).
+SEVERAL_CONTACTS = "per-contact"
 
 #: Results that must be numbers (:mod:`tmaplan.cli._finite`).
 FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")
@@ -135,7 +139,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     particles = 10_000 if getattr(args, "particles", None) is None else args.particles
     if particles < 2:
         raise ArgumentError("--particles", ">= 2", particles)
-    scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
+    scenario = _with_lines(scenario_of(args), getattr(args, "frequencies", 0))
     if getattr(args, "observer_plan", None) is not None:
         from tmaplan.cli._observer_plan import with_observer_plan
 

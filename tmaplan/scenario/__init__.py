@@ -1,7 +1,9 @@
 """Scenarios: frozen dataclasses, TOML load/dump, validation.
 
 A scenario holds the time grid, the target's motion model (and prior), the observer's initial
-state, constraints and scripted manoeuvres, the sensors and optional planning settings. Files are
+state, constraints and scripted manoeuvres, the sensors and optional planning settings; one or
+several contacts (:class:`Contact`, a file's ``[target]``/``[prior]`` or its ``[[contacts]]``
+tables, :mod:`~tmaplan.scenario.contacts`). Files are
 TOML; every dimensional value may be a plain SI number or a string with a unit (``"12 kn"``,
 ``"3.5 km"``, ``"45 deg"``, ``"10 min"``), see :mod:`tmaplan.units`.
 
@@ -35,6 +37,7 @@ from tmaplan.scenario.io import (
     to_dict,
 )
 from tmaplan.scenario.schema import (
+    Contact,
     Estimation,
     Observer,
     ObserverLeg,
@@ -50,6 +53,7 @@ from tmaplan.scenario.sensors import BearingSensor, FrequencySensor, RangeSensor
 
 __all__ = [
     "BearingSensor",
+    "Contact",
     "Estimation",
     "Faults",
     "FrequencySensor",

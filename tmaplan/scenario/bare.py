@@ -47,6 +47,10 @@ _BARE_FIELDS: tuple[tuple[str, str], ...] = (
     ("faults.target_manoeuvres.*.course_change", "direction"),
 )
 
+# the same fields of each [[contacts]] table
+_BARE_FIELDS += tuple((f"contacts.*.{path}", role) for path, role in _BARE_FIELDS
+                      if path.split(".", 1)[0] in ("target", "prior"))
+
 _BARE_RE = re.compile(r"^\s*[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\s*$")
 
 def _walk(node: Any, parts: list[str], where: str, parent: Any = None

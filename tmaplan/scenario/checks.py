@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.errors import ScenarioError, is_whole_count, whole_steps_text
+from tmaplan.scenario.contacts import contact_parts, in_contact
 from tmaplan.scenario.faults import check_faults
 from tmaplan.scenario.plausible import check_speeds, check_turn_rates
 from tmaplan.scenario.prior_checks import check_prior
@@ -53,47 +54,10 @@ def check(s: Any, source: str | None) -> None:
     if not is_whole_count(g.horizon / g.dt):
         raise _err("time.horizon", whole_steps_text(g.dt), g.horizon, source)
     n = g.n_steps
-    t = s.target
-    if t.model in ("ncv", "multi-leg"):
-        if t.position is None:
-            raise _err("target.position", f"[x, y] for model '{t.model}'", None, source)
-        _check_velocity(t, "target", source, required=True)
-        for name in ("centre", "radius", "phase", "omega"):
-            if getattr(t, name) is not None:
-                raise _err(f"target.{name}", f"absent for model '{t.model}'",
-                           getattr(t, name), source)
-        if t.model == "ncv" and t.legs:
-            raise _err("target.legs", "no legs for model 'ncv' (use 'multi-leg')", t.legs, source)
-        if t.model == "multi-leg" and not t.legs:
-            raise _err("target.legs", "at least one leg for model 'multi-leg'", t.legs, source)
-    else:
-        for name in ("centre", "radius", "phase", "omega"):
-            if getattr(t, name) is None:
-                raise _err(f"target.{name}", "a value for model 'constant-turn'", None, source)
-        if t.omega == 0.0:
-            raise _err("target.omega", "a non-zero turn rate (use model 'ncv' for a straight "
-                       "track)", t.omega, source)
-        for name in ("position", "velocity", "course", "speed"):
-            if getattr(t, name) is not None:
-                raise _err(f"target.{name}", "absent for model 'constant-turn' (the circle "
-                           "defines the track)", getattr(t, name), source)
-        if t.legs:
-            raise _err("target.legs", "no legs for model 'constant-turn'", t.legs, source)
-        if t.q != 0.0:
-            raise _err("target.q", "0 for the deterministic model 'constant-turn'", t.q, source)
-    last = -np.inf
-    for i, leg in enumerate(t.legs):
-        _check_velocity(leg, f"target.legs[{i}]", source, required=True)
-        if leg.start <= last:
-            raise _err(f"target.legs[{i}].start", f"> {last} s (legs in time order)",
-                       leg.start, source)
-        if leg.start <= g.t0:
-            raise _err(f"target.legs[{i}].start", f"> t0 = {g.t0} s (target.position and its "
-                       "velocity hold at t0)", leg.start, source)
-        if leg.start > g.t0 + g.horizon:
-            raise _err(f"target.legs[{i}].start", f"within the horizon ({g.t0}, "
-                       f"{g.t0 + g.horizon}] s", leg.start, source)
-        last = leg.start
+    _check_contact_names(s, source)
+    for i, _ in enumerate(s.contacts):
+        with in_contact(s, i):
+            _check_target(s.contacts[i].target, g, source)
 
     o = s.observer
     if o.turn_rates:
@@ -141,7 +105,9 @@ def check(s: Any, source: str | None) -> None:
             if abs(u) > o.turn_rate_max * (1 + 1e-12):
                 raise _err(f"observer.turn_rates[{i}]",
                            f"|u| <= observer.turn_rate_max = {o.turn_rate_max} rad/s", u, source)
-    check_turn_rates(s, source)  # no ship turns faster than 10 °/s
+    for i, part in contact_parts(s):  # no ship turns faster than 10 °/s
+        with in_contact(s, i):
+            check_turn_rates(part, source)
     if o.heading_min is not None and o.heading_max is not None \
             and o.heading_min >= o.heading_max:
         raise _err("observer.heading_max", f"> heading_min = {o.heading_min} rad",
@@ -168,14 +134,20 @@ def check(s: Any, source: str | None) -> None:
         if sen.kind == "range" and sen.period is not None and sen.period < g.dt:
             raise _err(f"{f}.period", f">= dt = {g.dt} s", sen.period, source)
 
-    check_speeds(s, source)
-    if s.prior is not None:
-        check_prior(s.prior, t.model, source)
+    for i, part in contact_parts(s):
+        with in_contact(s, i):
+            check_speeds(part, source)
+    for i, c in enumerate(s.contacts):
+        with in_contact(s, i):
+            if c.prior is not None:
+                check_prior(c.prior, c.target.model, source)
 
     est = s.estimation
-    if est is not None and est.turn_direction != "either" and t.model != "constant-turn":
+    if est is not None and est.turn_direction != "either" and any(
+            c.target.model != "constant-turn" for c in s.contacts):
         raise _err("estimation.turn_direction", "'either' unless the target model is "
-                   "'constant-turn'", est.turn_direction, source)
+                   "'constant-turn'" + ("" if len(s.contacts) == 1 else " for every contact"),
+                   est.turn_direction, source)
 
     pl = s.planning
     if pl is not None:
@@ -192,6 +164,66 @@ def check(s: Any, source: str | None) -> None:
                        source)
     if s.faults is not None:
         check_faults(s.faults, g, source)
+
+
+def _check_target(t: Any, g: Any, source: str | None) -> None:
+    """The rules of one contact's ``[target]`` on time grid ``g``."""
+    if t.model in ("ncv", "multi-leg"):
+        if t.position is None:
+            raise _err("target.position", f"[x, y] for model '{t.model}'", None, source)
+        _check_velocity(t, "target", source, required=True)
+        for name in ("centre", "radius", "phase", "omega"):
+            if getattr(t, name) is not None:
+                raise _err(f"target.{name}", f"absent for model '{t.model}'",
+                           getattr(t, name), source)
+        if t.model == "ncv" and t.legs:
+            raise _err("target.legs", "no legs for model 'ncv' (use 'multi-leg')", t.legs, source)
+        if t.model == "multi-leg" and not t.legs:
+            raise _err("target.legs", "at least one leg for model 'multi-leg'", t.legs, source)
+    else:
+        for name in ("centre", "radius", "phase", "omega"):
+            if getattr(t, name) is None:
+                raise _err(f"target.{name}", "a value for model 'constant-turn'", None, source)
+        if t.omega == 0.0:
+            raise _err("target.omega", "a non-zero turn rate (use model 'ncv' for a straight "
+                       "track)", t.omega, source)
+        for name in ("position", "velocity", "course", "speed"):
+            if getattr(t, name) is not None:
+                raise _err(f"target.{name}", "absent for model 'constant-turn' (the circle "
+                           "defines the track)", getattr(t, name), source)
+        if t.legs:
+            raise _err("target.legs", "no legs for model 'constant-turn'", t.legs, source)
+        if t.q != 0.0:
+            raise _err("target.q", "0 for the deterministic model 'constant-turn'", t.q, source)
+    last = -np.inf
+    for i, leg in enumerate(t.legs):
+        _check_velocity(leg, f"target.legs[{i}]", source, required=True)
+        if leg.start <= last:
+            raise _err(f"target.legs[{i}].start", f"> {last} s (legs in time order)",
+                       leg.start, source)
+        if leg.start <= g.t0:
+            raise _err(f"target.legs[{i}].start", f"> t0 = {g.t0} s (target.position and its "
+                       "velocity hold at t0)", leg.start, source)
+        if leg.start > g.t0 + g.horizon:
+            raise _err(f"target.legs[{i}].start", f"within the horizon ({g.t0}, "
+                       f"{g.t0 + g.horizon}] s", leg.start, source)
+        last = leg.start
+
+
+def _check_contact_names(s: Any, source: str | None) -> None:
+    """Contact names: non-empty, unique (the keys of the per-contact output)."""
+    if not s.contacts:
+        raise _err("contacts", "at least one contact ([target] or [[contacts]])", [], source)
+    seen: dict[str, int] = {}
+    for i, c in enumerate(s.contacts):
+        if not c.name.strip() or any(ch in "/\\" or ord(ch) < 32 for ch in c.name):
+            raise _err(f"contacts[{i}].name", "a non-empty name without '/', '\\' or control "
+                       "characters (the command line names its figures after it)", c.name,
+                       source)
+        if c.name in seen:
+            raise _err(f"contacts[{i}].name", f"a name not used by another contact (contacts"
+                       f"[{seen[c.name]}] is already '{c.name}')", c.name, source)
+        seen[c.name] = i
 
 
 def _check_sensor_keys(sen: Any, field: str, source: str | None) -> None:

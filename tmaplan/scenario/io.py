@@ -22,6 +22,8 @@ from pydantic import TypeAdapter, ValidationError
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario.bare import check_bare_numbers, with_units
 from tmaplan.scenario.checks import check
+from tmaplan.scenario.contacts import CONTACT_FIELDS, single_form
+from tmaplan.scenario.names import DEFAULT_CONTACT
 from tmaplan.scenario.plausible import warn as warn_implausible
 from tmaplan.scenario.schema import Scenario
 
@@ -56,9 +58,24 @@ def _loc(loc: tuple[Any, ...]) -> str:
     return out or "<root>"
 
 
-def _convert_validation_error(exc: ValidationError, source: str | None) -> ScenarioError:
+def _contact_loc(loc: tuple[Any, ...], contacts: Any, single: bool) -> tuple[tuple[Any, ...],
+                                                                            str]:
+    """``loc`` of an error inside ``contacts`` as the file gives it (the single form's
+    ``target.…``), and ``" (contact 'name')"`` to name a ``[[contacts]]`` table's contact."""
+    if len(loc) < 2 or loc[0] != "contacts" or not isinstance(loc[1], int):
+        return loc, ""
+    if single:
+        return loc[2:], ""
+    item = contacts[loc[1]] if isinstance(contacts, list) and loc[1] < len(contacts) else None
+    name = item.get("name") if isinstance(item, dict) else None
+    return loc, (f" (contact '{name}')" if isinstance(name, str) else "")
+
+
+def _convert_validation_error(exc: ValidationError, source: str | None, contacts: Any = None,
+                              single: bool = False) -> ScenarioError:
     e = exc.errors()[0]
-    field = _loc(tuple(e["loc"]))
+    loc, whose = _contact_loc(tuple(e["loc"]), contacts, single)
+    field = _loc(loc)
     msg = str(e["msg"])
     received = e.get("input")
     kind = e["type"]
@@ -81,7 +98,25 @@ def _convert_validation_error(exc: ValidationError, source: str | None) -> Scena
             expected = msg.removeprefix("Value error, ").removeprefix("Input should be ")
     if isinstance(received, dict):
         received = "{" + ", ".join(received) + "}"
-    return ScenarioError(field, expected, received, source=source)
+    return ScenarioError(field, expected + whose, received, source=source)
+
+
+def _with_contacts(data: Mapping[str, Any], source: str | None) -> tuple[dict[str, Any], bool]:
+    """``data`` with a bare ``[target]``/``[prior]`` moved into ``contacts`` (one contact
+    named ``"contact"``), and whether the file used that single form."""
+    data = dict(data)
+    given = [k for k in CONTACT_FIELDS if k in data]
+    if "contacts" in data:
+        if given:
+            raise ScenarioError(given[0], "either [[contacts]] tables or a bare [target]/"
+                                "[prior], not both (move it into a [[contacts]] table)",
+                                "{" + ", ".join(given) + "}", source=source)
+        return data, False
+    contact: dict[str, Any] = {"name": DEFAULT_CONTACT}
+    for key in given:
+        contact[key] = data.pop(key)
+    data["contacts"] = [contact]
+    return data, True
 
 
 def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario:
@@ -99,10 +134,11 @@ def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario
         raise ScenarioError("<root>", "a table of scenario fields", type(data).__name__,
                             source=source)
     check_bare_numbers(data, source)
+    data, single = _with_contacts(data, source)
     try:
-        scenario = _adapter().validate_python(dict(data))
+        scenario = _adapter().validate_python(data)
     except ValidationError as exc:
-        raise _convert_validation_error(exc, source) from None
+        raise _convert_validation_error(exc, source, data["contacts"], single) from None
     check(scenario, source)
     warn_implausible(scenario, source)  # a course of 400°, a bearing σ of 90°, ...
     return scenario
@@ -117,8 +153,19 @@ def _strip_none(obj: Any) -> Any:
 
 
 def to_dict(scenario: Scenario) -> dict[str, Any]:
-    """Plain-dict (TOML-ready) form of a scenario, SI values, ``None`` fields omitted."""
-    return _strip_none(dataclasses.asdict(scenario))
+    """Plain-dict (TOML-ready) form of a scenario, SI values, ``None`` fields omitted.
+
+    A scenario of one default contact (:func:`tmaplan.scenario.contacts.single_form`) is
+    written with a bare ``target`` and ``prior`` in their places of a one-contact file; any
+    other as a list ``contacts``.
+    """
+    out = _strip_none(dataclasses.asdict(scenario))
+    if not single_form(scenario):
+        return out
+    contact = out.pop("contacts")[0]
+    order = ("name", "description", "time", "target", "observer", "sensors", "prior")
+    merged = {**out, **{k: contact[k] for k in CONTACT_FIELDS if k in contact}}
+    return {k: merged[k] for k in (*order, *out) if k in merged}
 
 
 def dump(scenario: Scenario) -> str:

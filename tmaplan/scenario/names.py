@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Literal, get_args
 
-__all__ = ["DEFAULT_OBJECTIVE", "OBJECTIVE_NAMES", "ObjectiveName"]
+__all__ = ["DEFAULT_CONTACT", "DEFAULT_OBJECTIVE", "DEFAULT_REQUIRED_ACCURACY", "OBJECTIVE_NAMES",
+           "ObjectiveName"]
 
 #: Names accepted by :func:`tmaplan.planning.objectives.make_objective` (heading objectives;
 #: the scenario's ``planning.objective`` and ``tmaplan plan --objective``).
@@ -24,3 +25,9 @@ OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
 #: ``planned``/``receding`` policies): the one whose ranking of manoeuvres agrees best with the
 #: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, docs/findings.md).
 DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
+
+#: Name of the one contact of a file that gives a bare ``[target]``/``[prior]``.
+DEFAULT_CONTACT = "contact"
+#: Relative range accuracy [-] at which a contact counts as localised unless the scenario
+#: (``planning.required_accuracy``) or the contact (``required_accuracy``) says otherwise.
+DEFAULT_REQUIRED_ACCURACY = 0.1

@@ -49,6 +49,7 @@ import numpy as np
 from tmaplan.display import angle, distance, rate, speed
 from tmaplan.errors import ScenarioError, warn_field
 from tmaplan.scenario.bare import BARE_LIMITS
+from tmaplan.scenario.contacts import contact_field, contact_parts
 from tmaplan.units import KNOT
 
 __all__ = ["MAX_SPEED", "MAX_TURN_RATE", "PLAUSIBLE_TURN_RATE", "check_speeds",
@@ -216,6 +217,13 @@ def warnings_of(s: Any) -> list[tuple[str, str]]:
 
 
 def warn(s: Any, source: str | None) -> None:
-    """Issue a :class:`tmaplan.errors.ScenarioWarning` for each of :func:`warnings_of`."""
-    for field, text in warnings_of(s):
-        warn_field(field, text, source=source, stacklevel=3)
+    """Issue a :class:`tmaplan.errors.ScenarioWarning` for each of :func:`warnings_of`, per
+    contact (a shared field's once; a contact's field named by
+    :func:`tmaplan.scenario.contacts.contact_field`)."""
+    seen: set[tuple[str, str]] = set()
+    for i, part in contact_parts(s):
+        for field, text in warnings_of(part):
+            field = contact_field(s, i, field)
+            if (field, text) not in seen:
+                seen.add((field, text))
+                warn_field(field, text, source=source, stacklevel=3)

@@ -17,6 +17,7 @@ from pydantic.dataclasses import dataclass as pydantic_dataclass
 from tmaplan.units import si_validator
 
 __all__ = [
+    "Accuracy",
     "Angle",
     "AngularRate",
     "Bias",
@@ -34,6 +35,7 @@ __all__ = [
     "PositiveLength",
     "PositiveSpeed",
     "PositiveTime",
+    "PositiveWeight",
     "Probability",
     "Speed",
     "Spread",
@@ -87,3 +89,8 @@ WildProbability = Annotated[float, si_validator("dimensionless"),
 Spread = Annotated[float, si_validator("angle"), Field(allow_inf_nan=False, gt=0.0, le=math.pi)]
 Bias = Annotated[float, si_validator("angle"),
                  Field(allow_inf_nan=False, ge=-math.pi / 2, le=math.pi / 2)]
+
+# a contact's (tmaplan.scenario.schema.Contact)
+PositiveWeight = Annotated[float, si_validator("dimensionless"), _POS]
+Accuracy = Annotated[float, si_validator("dimensionless"),
+                     Field(allow_inf_nan=False, gt=0.0, lt=1.0)]

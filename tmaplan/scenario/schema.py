@@ -16,10 +16,17 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import AfterValidator, StrictBool
 
+from tmaplan.errors import ScenarioError
 from tmaplan.scenario.checks import check
 from tmaplan.scenario.faults import Faults
-from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES
+from tmaplan.scenario.names import (
+    DEFAULT_CONTACT,
+    DEFAULT_OBJECTIVE,
+    DEFAULT_REQUIRED_ACCURACY,
+    OBJECTIVE_NAMES,
+)
 from tmaplan.scenario.quantities import (
+    Accuracy,
     Angle,
     AngularRate,
     Length,
@@ -34,15 +41,17 @@ from tmaplan.scenario.quantities import (
     PositiveLength,
     PositiveSpeed,
     PositiveTime,
+    PositiveWeight,
     Speed,
     Time,
     Vec2Length,
     Vec2Speed,
     frozen,
 )
-from tmaplan.scenario.sensors import RangeSensor, Sensor
+from tmaplan.scenario.sensors import Sensor, measurement_steps
 
 __all__ = [
+    "Contact",
     "Estimation",
     "Observer",
     "ObserverLeg",
@@ -366,6 +375,10 @@ class Planning:
         Piecewise-constant turn-rate control [s], whole steps of dt (default: dt).
     replan_interval : float, optional
         Receding-horizon re-planning interval [s], whole steps of dt.
+    required_accuracy : float, optional
+        Relative range accuracy [-] in (0, 1) at which a contact counts as localised (the
+        time-to-accuracy objectives and metrics); None: :data:`tmaplan.scenario.names.
+        DEFAULT_REQUIRED_ACCURACY` (10 %). A contact's own ``required_accuracy`` overrides it.
     """
 
     horizon: PositiveTime | None = None
@@ -377,6 +390,7 @@ class Planning:
     keep_out_range: NonNegLength = 0.0
     control_interval: PositiveTime | None = None
     replan_interval: PositiveTime | None = None
+    required_accuracy: Accuracy | None = None
 
 
 @frozen
@@ -397,18 +411,59 @@ class Estimation:
 
 
 @frozen
+class Contact:
+    """One contact of a several-contact scenario (a ``[[contacts]]`` table of a file).
+
+    A file with one ``[target]`` (and ``[prior]``) is one contact named
+    :data:`tmaplan.scenario.names.DEFAULT_CONTACT` (``"contact"``). Association is known:
+    every bearing is tagged with its contact (docs/several-contacts.md).
+
+    Attributes
+    ----------
+    name : str
+        Unique, non-empty name (the key of the contact in JSON output).
+    target : Target
+        Its motion model and true initial state.
+    prior : Prior, optional
+        Its prior (required by the verbs that need one, per contact).
+    weight : float
+        Weight [-], > 0, of the contact in the weighted objectives and metrics (default 1).
+    required_accuracy : float, optional
+        Relative range accuracy [-] in (0, 1) at which it counts as localised; None: the
+        scenario's (``planning.required_accuracy``, default 10 %).
+    """
+
+    name: str
+    target: Target
+    prior: Prior | None = None
+    weight: PositiveWeight = 1.0
+    required_accuracy: Accuracy | None = None
+
+    @property
+    def is_default(self) -> bool:
+        """Whether a file gives this contact as a bare ``[target]``/``[prior]`` (the name
+        ``"contact"``, weight 1 and the scenario's required accuracy)."""
+        return (self.name == DEFAULT_CONTACT and self.weight == 1.0
+                and self.required_accuracy is None)
+
+
+_SEVERAL = "several contacts: use scenario.contacts or scenario.contact_view(name)"
+
+
+@frozen
 class Scenario:
-    """A complete TMA scenario.
+    """A complete TMA scenario: one or several contacts seen by one own ship.
 
     Attributes
     ----------
     name : str
     description : str
     time : TimeGrid
-    target : Target
+    contacts : tuple of Contact
+        At least one (a file's ``[target]``/``[prior]`` is the one contact ``"contact"``).
     observer : Observer
     sensors : tuple of BearingSensor | RangeSensor | FrequencySensor
-    prior : Prior, optional
+        Shared by every contact.
     planning : Planning, optional
     estimation : Estimation, optional
     faults : Faults, optional
@@ -419,10 +474,9 @@ class Scenario:
     name: str
     description: str = ""
     time: TimeGrid
-    target: Target
+    contacts: tuple[Contact, ...]
     observer: Observer
     sensors: tuple[Sensor, ...]
-    prior: Prior | None = None
     planning: Planning | None = None
     estimation: Estimation | None = None
     faults: Faults | None = None
@@ -438,38 +492,107 @@ class Scenario:
         """Grid instants, shape (K + 1,) [s]."""
         return self.time.times
 
+    @property
+    def target(self) -> Target:
+        """The target of a one-contact scenario (:class:`ScenarioError` with several:
+        use :attr:`contacts` or :meth:`contact_view`)."""
+        return self._single().target
+
+    # ``object.__setattr__(s, "target" | "prior", value)`` (the frozen class refuses plain
+    # assignment) replaces the one contact's, unvalidated, as it would a field's
+    @target.setter
+    def target(self, value: Target) -> None:
+        self._set_single(target=value)
+
+    @property
+    def prior(self) -> Prior | None:
+        """The prior of a one-contact scenario, None if none is given (:class:`ScenarioError`
+        with several contacts: use :attr:`contacts` or :meth:`contact_view`)."""
+        return self._single().prior
+
+    @prior.setter
+    def prior(self, value: Prior | None) -> None:
+        self._set_single(prior=value)
+
+    def _set_single(self, **change: Any) -> None:
+        object.__setattr__(self, "contacts", (dataclasses.replace(self._single(), **change),))
+
+    def _single(self) -> Contact:
+        if len(self.contacts) != 1:
+            raise ScenarioError("contacts", _SEVERAL,
+                                [c.name for c in self.contacts], source=self.name)
+        return self.contacts[0]
+
+    @property
+    def contact_names(self) -> tuple[str, ...]:
+        """Names of the contacts, in file order."""
+        return tuple(c.name for c in self.contacts)
+
+    @property
+    def required_accuracy(self) -> float:
+        """Relative range accuracy [-] at which the (one) contact counts as localised:
+        ``planning.required_accuracy`` or 10 % (a contact's own value in its
+        :meth:`contact_view`)."""
+        pl = self.planning
+        if pl is None or pl.required_accuracy is None:
+            return DEFAULT_REQUIRED_ACCURACY
+        return pl.required_accuracy
+
+    def contact(self, name: str) -> Contact:
+        """The contact called ``name``.
+
+        Raises
+        ------
+        ScenarioError
+            No such contact; the message lists the names.
+        """
+        for c in self.contacts:
+            if c.name == name:
+                return c
+        raise ScenarioError("contact", "one of " + ", ".join(repr(n) for n in
+                                                            self.contact_names),
+                            name, source=self.name)
+
+    def contact_view(self, name: str) -> Scenario:
+        """The one-contact scenario of contact ``name``: its target, prior and required
+        accuracy (as ``planning.required_accuracy``), everything else shared, written as a
+        file with a bare ``[target]``/``[prior]`` would give it (its one contact is
+        ``"contact"``, weight 1). Every single-contact computation (bounds, estimators,
+        single-contact objectives) runs on it.
+
+        A scenario of one default contact is its own view. Raises :class:`ScenarioError` for
+        an unknown name.
+        """
+        c = self.contact(name)
+        if len(self.contacts) == 1 and c.is_default:
+            return self
+        planning = self.planning
+        if c.required_accuracy is not None:
+            planning = dataclasses.replace(planning or Planning(),
+                                           required_accuracy=c.required_accuracy)
+        one = Contact(name=DEFAULT_CONTACT, target=c.target, prior=c.prior)
+        return dataclasses.replace(self, contacts=(one,), planning=planning)
+
+    def contact_views(self) -> dict[str, Scenario]:
+        """``{name: contact_view(name)}`` in file order."""
+        return {c.name: self.contact_view(c.name) for c in self.contacts}
+
     def sensors_of(self, kind: str) -> tuple[Any, ...]:
         """Sensors of one kind ("bearing", "range", "frequency")."""
         return tuple(s for s in self.sensors if s.kind == kind)
 
     def replace(self, **changes: Any) -> Scenario:
-        """A validated copy with top-level fields replaced."""
+        """A validated copy with top-level fields replaced.
+
+        ``target=`` and ``prior=`` replace those of a one-contact scenario's contact (a
+        :class:`ScenarioError` with several contacts).
+        """
+        single = {k: changes.pop(k) for k in ("target", "prior") if k in changes}
+        if single:
+            if "contacts" in changes:
+                raise ScenarioError("contacts", "either 'contacts' or 'target'/'prior', not "
+                                    "both", sorted(single), source=self.name)
+            changes["contacts"] = (dataclasses.replace(self._single(), **single),)
         new = dataclasses.replace(self, **changes)
         check(new, source=self.name)
         return new
-
-
-# -- Measurement steps -----------------------------------------------------------------------
-
-
-def measurement_steps(sensor: Any, grid: TimeGrid) -> np.ndarray:
-    """Grid steps at which ``sensor`` measures, sorted, unique, shape (n,), dtype int.
-
-    Parameters
-    ----------
-    sensor : BearingSensor | RangeSensor | FrequencySensor
-    grid : TimeGrid
-    """
-    k_max = grid.n_steps
-    if isinstance(sensor, RangeSensor):
-        parts = [np.asarray(sensor.steps, dtype=int)]
-        if sensor.period is not None:
-            m = np.arange(1, int(np.floor(grid.horizon / sensor.period + 1e-9)) + 1)
-            k = np.ceil(m * sensor.period / grid.dt - 1e-9).astype(int)
-            parts.append(k[k <= k_max])
-        if sensor.every is not None:
-            parts.append(np.arange(sensor.first_step, k_max + 1, sensor.every))
-        return np.unique(np.concatenate(parts)).astype(int)
-    if sensor.steps is not None:
-        return np.unique(np.asarray(sensor.steps, dtype=int))
-    return np.arange(sensor.first_step, k_max + 1, sensor.every, dtype=int)

@@ -1,13 +1,14 @@
 """The scenario's sensors: bearings, ranges (pings or continuous) and frequency lines.
 
 Each is a frozen dataclass told apart by its ``kind`` (the ``[[sensors]]`` tables of a file);
-:func:`tmaplan.scenario.measurement_steps` gives the grid steps at which one measures.
+:func:`measurement_steps` gives the grid steps at which one measures.
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import Field, StrictBool
 
 from tmaplan.scenario.quantities import (
@@ -21,7 +22,7 @@ from tmaplan.scenario.quantities import (
     frozen,
 )
 
-__all__ = ["BearingSensor", "FrequencySensor", "RangeSensor", "Sensor"]
+__all__ = ["BearingSensor", "FrequencySensor", "RangeSensor", "Sensor", "measurement_steps"]
 
 
 @frozen
@@ -77,6 +78,9 @@ class RangeSensor:
         First step for ``every`` (without ``every`` it keeps its default 1).
     active : bool
         True for an active sonar ping (reveals own ship; counts against the budget).
+    max_range : float, optional
+        Reach [m], > 0: a reading returns the range of every contact whose true range is at
+        most ``max_range`` (one ping, several ranges); None (default): unlimited.
     """
 
     kind: Literal["range"] = "range"
@@ -86,6 +90,7 @@ class RangeSensor:
     every: PositiveInt | None = None
     first_step: NonNegInt = 1
     active: StrictBool = True
+    max_range: PositiveLength | None = None
 
 
 @frozen
@@ -115,3 +120,26 @@ class FrequencySensor:
 
 
 Sensor = Annotated[BearingSensor | RangeSensor | FrequencySensor, Field(discriminator="kind")]
+
+
+def measurement_steps(sensor: Any, grid: Any) -> np.ndarray:
+    """Grid steps at which ``sensor`` measures, sorted, unique, shape (n,), dtype int.
+
+    Parameters
+    ----------
+    sensor : BearingSensor | RangeSensor | FrequencySensor
+    grid : TimeGrid
+    """
+    k_max = grid.n_steps
+    if isinstance(sensor, RangeSensor):
+        parts = [np.asarray(sensor.steps, dtype=int)]
+        if sensor.period is not None:
+            m = np.arange(1, int(np.floor(grid.horizon / sensor.period + 1e-9)) + 1)
+            k = np.ceil(m * sensor.period / grid.dt - 1e-9).astype(int)
+            parts.append(k[k <= k_max])
+        if sensor.every is not None:
+            parts.append(np.arange(sensor.first_step, k_max + 1, sensor.every))
+        return np.unique(np.concatenate(parts)).astype(int)
+    if sensor.steps is not None:
+        return np.unique(np.asarray(sensor.steps, dtype=int))
+    return np.arange(sensor.first_step, k_max + 1, sensor.every, dtype=int)

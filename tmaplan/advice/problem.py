@@ -43,6 +43,8 @@ from tmaplan.scenario import (
     Target,
     TimeGrid,
 )
+from tmaplan.scenario import Contact as ScenarioContact
+from tmaplan.scenario.names import DEFAULT_CONTACT
 from tmaplan.simulate import MeasurementSet
 from tmaplan.units import to_si
 
@@ -344,23 +346,24 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
     r_mid = 0.5 * (platform.range_min + platform.range_max)
     p0 = obs.position[0]
     top = float(np.max(np.hypot(obs.mean_velocity[:, 0], obs.mean_velocity[:, 1])))
+    target = Target(model="ncv", position=(float(p0[0] + r_mid * np.sin(b0)),
+                                           float(p0[1] + r_mid * np.cos(b0))),
+                    velocity=(0.0, 0.0), q=platform.q)
+    prior = Prior(kind="polar", bearing_mean=b0, bearing_std=platform.bearing_std,
+                  range_distribution="uniform", range_min=platform.range_min,
+                  range_max=platform.range_max, velocity_distribution="speed-course",
+                  speed_distribution="uniform", speed_max=platform.speed_max,
+                  course_mode="uniform")
     scenario = Scenario(
         name=name, description=f"recorded contact '{name}' ({source})",
         time=TimeGrid(dt=dt, horizon=K * dt, t0=t0),
-        target=Target(model="ncv", position=(float(p0[0] + r_mid * np.sin(b0)),
-                                             float(p0[1] + r_mid * np.cos(b0))),
-                      velocity=(0.0, 0.0), q=platform.q),
+        contacts=(ScenarioContact(name=DEFAULT_CONTACT, target=target, prior=prior),),
         observer=Observer(position=(float(p0[0]), float(p0[1])),
                           velocity=(float(obs.mean_velocity[0, 0]),
                                     float(obs.mean_velocity[0, 1])),
                           speed_max=max(top * (1 + 1e-9), 1e-3),
                           turn_rate_max=platform.turn_rate_max),
         sensors=(*sensors, RangeSensor(sigma=platform.ping_sigma, steps=())),
-        prior=Prior(kind="polar", bearing_mean=b0, bearing_std=platform.bearing_std,
-                    range_distribution="uniform", range_min=platform.range_min,
-                    range_max=platform.range_max, velocity_distribution="speed-course",
-                    speed_distribution="uniform", speed_max=platform.speed_max,
-                    course_mode="uniform"),
         planning=Planning(keep_out_range=platform.keep_out_range,
                           ping_min_spacing=platform.ping_min_spacing))
     return ContactProblem(name=name, scenario=scenario, measurements=meas,

@@ -39,12 +39,14 @@ from tmaplan.planning.objectives import ObjectiveEvaluator, expected_time_to_acc
 from tmaplan.planning.pings import PingSchedule, schedule_pings
 from tmaplan.scenario import (
     BearingSensor,
+    Contact,
     Observer,
     Planning,
     RangeSensor,
     Scenario,
     TimeGrid,
 )
+from tmaplan.scenario.names import DEFAULT_CONTACT
 
 __all__ = ["ACCURACY", "CONTROL_INTERVAL", "PLAN_STEP", "Advice", "advise_contact",
            "planning_scenario"]
@@ -127,7 +129,7 @@ def planning_scenario(problem: ContactProblem, platform: Platform, horizon: floa
     sc = Scenario(
         name=problem.name, description=f"advice for contact '{problem.name}'",
         time=TimeGrid(dt=PLAN_STEP, horizon=H, t0=now),
-        target=est,
+        contacts=(Contact(name=DEFAULT_CONTACT, target=est),),
         observer=Observer(position=(float(p0[0]), float(p0[1])), course=heading0,
                           speed=speed0, speed_min=speed0, speed_max=max(speed0, 1e-3),
                           turn_rate_max=platform.turn_rate_max),

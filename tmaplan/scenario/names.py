@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Literal, get_args
 
-__all__ = ["DEFAULT_OBJECTIVE", "OBJECTIVE_NAMES", "ObjectiveName"]
+__all__ = ["CONTACTS_OBJECTIVE_NAMES", "DEFAULT_CONTACTS_OBJECTIVE", "DEFAULT_OBJECTIVE",
+           "OBJECTIVE_NAMES", "ContactsObjectiveName", "ObjectiveName"]
 
 #: Names accepted by :func:`tmaplan.planning.objectives.make_objective` (heading objectives;
 #: the scenario's ``planning.objective`` and ``tmaplan plan --objective``).
@@ -24,3 +25,13 @@ OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
 #: ``planned``/``receding`` policies): the one whose ranking of manoeuvres agrees best with the
 #: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, docs/findings.md).
 DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
+
+#: Objectives of a plan for several contacts at once (issue 40, DESIGN.md §6;
+#: :func:`tmaplan.planning.multi_objectives.contacts_objective` builds each): the expected time
+#: until every contact is localised, the weighted mean of the contacts' expected times, and the
+#: worst contact's expected time (min-max through an epigraph variable).
+ContactsObjectiveName = Literal["all-contacts-time-to-accuracy", "weighted-time-to-accuracy",
+                                "worst-contact"]
+CONTACTS_OBJECTIVE_NAMES: tuple[str, ...] = get_args(ContactsObjectiveName)
+#: Default objective of a plan for several contacts.
+DEFAULT_CONTACTS_OBJECTIVE = "all-contacts-time-to-accuracy"

@@ -197,8 +197,8 @@ class HeadingPlanner:
             self._epi_guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
             w, f = ca.vertcat(w, t_epi), f + t_epi
             lbw, ubw = np.append(lbw, -np.inf), np.append(ubw, np.inf)
-            g, lbg, ubg = g + [gc - t_epi], lbg + [np.full(len(epi), -np.inf)], ubg + [
-                np.zeros(len(epi))]
+            g, lbg, ubg = [*g, gc - t_epi], [*lbg, np.full(len(epi), -np.inf)], [
+                *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
         # keep-out from the target estimate: E X_0 propagated at constant velocity
         if self.keep_out > 0:

@@ -129,11 +129,19 @@ class ContactSet:
                        DEFAULT_REQUIRED_ACCURACY if c.required_accuracy is None
                        else float(c.required_accuracy) for c in contacts))
 
-    def beliefs(self) -> ContactBeliefs:
-        """Each contact's prior belief (:meth:`tmaplan.planning.Belief.from_prior` of its
-        view)."""
-        return ContactBeliefs(beliefs=tuple(Belief.from_prior(v) for v in self.views),
-                              names=self.names)
+    def beliefs(self, given: ContactBeliefs | Sequence[Belief] | None = None,
+                ) -> ContactBeliefs:
+        """The contacts' beliefs: ``given`` (one per contact, in order; checked), default
+        each contact's prior (:meth:`tmaplan.planning.Belief.from_prior` of its view)."""
+        if given is None:
+            return ContactBeliefs(beliefs=tuple(Belief.from_prior(v) for v in self.views),
+                                  names=self.names)
+        bel = given if isinstance(given, ContactBeliefs) else ContactBeliefs(
+            beliefs=tuple(given), names=self.names)
+        if bel.names != self.names:
+            raise ArgumentError("beliefs", f"beliefs of the contacts {list(self.names)}",
+                                list(bel.names))
+        return bel
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -284,15 +292,7 @@ class ContactsPlanner:
         """
         t0 = time.perf_counter()
         cs = self.contacts
-        if beliefs is None:
-            bel = cs.beliefs()
-        elif isinstance(beliefs, ContactBeliefs):
-            bel = beliefs
-        else:
-            bel = ContactBeliefs(beliefs=tuple(beliefs), names=cs.names)
-        if bel.names != cs.names:
-            raise ArgumentError("beliefs", f"beliefs of the contacts {list(cs.names)}",
-                                list(bel.names))
+        bel = cs.beliefs(beliefs)
         kw: dict[str, Any] = {"heading0": heading0, "position0": position0, "speed0": speed0,
                               "tol": tol}
         if self.single:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from typing import Literal, get_args
 
-__all__ = ["DEFAULT_CONTACT", "DEFAULT_OBJECTIVE", "DEFAULT_REQUIRED_ACCURACY", "OBJECTIVE_NAMES",
-           "ObjectiveName"]
+__all__ = ["CONTACTS_OBJECTIVE_NAMES", "DEFAULT_CONTACT", "DEFAULT_CONTACTS_OBJECTIVE",
+           "DEFAULT_OBJECTIVE", "DEFAULT_REQUIRED_ACCURACY", "OBJECTIVE_NAMES",
+           "ContactsObjectiveName", "ObjectiveName"]
 
 #: Names accepted by :func:`tmaplan.planning.objectives.make_objective` (heading objectives;
 #: the scenario's ``planning.objective`` and ``tmaplan plan --objective``).
@@ -31,3 +32,12 @@ DEFAULT_CONTACT = "contact"
 #: Relative range accuracy [-] at which a contact counts as localised unless the scenario
 #: (``planning.required_accuracy``) or the contact (``required_accuracy``) says otherwise.
 DEFAULT_REQUIRED_ACCURACY = 0.1
+#: Objectives of a plan for several contacts at once (issue 40, DESIGN.md §6;
+#: :func:`tmaplan.planning.multi_objectives.contacts_objective` builds each): the expected time
+#: until every contact is localised, the weighted mean of the contacts' expected times, and the
+#: worst contact's expected time (min-max through an epigraph variable).
+ContactsObjectiveName = Literal["all-contacts-time-to-accuracy", "weighted-time-to-accuracy",
+                                "worst-contact"]
+CONTACTS_OBJECTIVE_NAMES: tuple[str, ...] = get_args(ContactsObjectiveName)
+#: Default objective of a plan for several contacts.
+DEFAULT_CONTACTS_OBJECTIVE = "all-contacts-time-to-accuracy"

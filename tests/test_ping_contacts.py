@@ -26,7 +26,7 @@ def pair():
                   planning=dataclasses.replace(d.planning, horizon=300.0,
                                                ping_min_spacing=0.0))
     a = load_problem("contact-astern")
-    astern = dataclasses.replace(d, name="astern", target=a.target, prior=a.prior)
+    astern = d.replace(name="astern", target=a.target, prior=a.prior)
     return d, astern
 
 

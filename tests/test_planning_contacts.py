@@ -44,8 +44,8 @@ def _short(sc, horizon=1200.0, interval=120.0):
 def views():
     d = _short(load_problem("default"))
     a = load_problem("contact-astern")
-    astern = dataclasses.replace(d, name="astern", target=a.target, prior=a.prior)
-    west = dataclasses.replace(d, name="west", prior=dataclasses.replace(
+    astern = d.replace(name="astern", target=a.target, prior=a.prior)
+    west = d.replace(name="west", prior=dataclasses.replace(
         d.prior, bearing_mean=math.radians(290.0)))
     return d, astern, west
 

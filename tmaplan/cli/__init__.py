@@ -2,12 +2,12 @@
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
 ``add_arguments(parser)``, ``run(args) -> dict | None``, optionally ``FINITE`` (payload
-quantities that must not be NaN, :mod:`tmaplan.cli._finite`: a NaN there is an error, never exit
+quantities that must not be NaN, :mod:`tmaplan.cli.finite`: a NaN there is an error, never exit
 0) and, for a verb without a problem argument that works on a fixed problem, ``PROBLEM`` (its
 name); the returned dict is written as JSON
 to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
 Argument types, limits and the up-front checks that need the scenario live in
-:mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
+:mod:`tmaplan.cli.args`, shared by every verb. Every error, a bad flag value included, exits 1
 with one line on stderr (a traceback only with ``--debug``).
 """
 
@@ -25,9 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
-from tmaplan.cli._finite import require_finite
-from tmaplan.cli._paths import check_outputs
+from tmaplan.cli.args import OneLineParser, UsageError, json_path
+from tmaplan.cli.finite import require_finite
+from tmaplan.cli.paths import check_outputs
+from tmaplan.cli.preflight import preflight
 from tmaplan.errors import ArgumentError
 from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
 from tmaplan.models.checks import check_scenario

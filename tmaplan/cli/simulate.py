@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
@@ -47,7 +47,7 @@ def _origin(text: str) -> tuple[float, float]:
 
 def _start(text: str) -> dt.datetime:
     """Type of ``--start``: an ISO 8601 time with a zone."""
-    from tmaplan.io.times import parse_utc  # pyproj and co. only when exporting
+    from tmaplan.io.times import parse_utc  # deferred: tmaplan.io loads pyproj, pynmea2, gpxpy
 
     t = parse_utc(text)
     if t is None:
@@ -108,7 +108,7 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     ArgumentError
         (``--export``) The run has no bearing, or the directory cannot be written.
     """
-    from tmaplan.io import (  # pyproj, pynmea2, gpxpy: only when exporting
+    from tmaplan.io import (  # deferred: pyproj, pynmea2, gpxpy only when exporting
         LocalFrame,
         write_bearings,
         write_gpx,

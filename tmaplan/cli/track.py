@@ -9,9 +9,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     add_figure_arguments,
@@ -20,7 +21,7 @@ from tmaplan.cli._args import (
     frequency_lines,
     integer,
 )
-from tmaplan.cli._finite import require_finite
+from tmaplan.cli.finite import require_finite
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
@@ -31,7 +32,7 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")
 
 
@@ -83,10 +84,8 @@ def _with_lines(scenario: Scenario, n: int | None) -> Scenario:
 
 
 def _figure(res: Any, path: Path) -> None:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 
     fig, ax = plt.subplots(figsize=(7, 4))
     t = res.times / 60.0

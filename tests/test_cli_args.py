@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tmaplan.cli import main
-from tmaplan.cli._args import MAX_PLAN_STEPS
+from tmaplan.cli.args import MAX_PLAN_STEPS
 from tmaplan.scenario import load_problem
 
 # (argv, text the one-line error must contain). Values that need no scenario are refused by

@@ -263,7 +263,7 @@ def test_the_refusal_lives_in_one_place():
     import importlib
 
     from tmaplan.cli import VERBS
-    from tmaplan.cli._contacts import takes_several
+    from tmaplan.cli.contacts import takes_several
 
     able = {v for v, m in VERBS.items()
             if takes_several(importlib.import_module(f"tmaplan.cli.{m}"))}

@@ -387,7 +387,7 @@ def test_default_fits_in_the_memory_of_a_small_machine():
     # every verb's estimate on the built-in problems stays under 2 GiB
     import argparse
 
-    from tmaplan.cli._feasible import check_memory
+    from tmaplan.cli.feasible import check_memory
 
     for p in list_problems():
         sc = load_problem(p["name"])

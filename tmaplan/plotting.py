@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-if TYPE_CHECKING:
-    from tmaplan.simulate import Simulation
+from tmaplan.planning import PingEvaluator
+from tmaplan.simulate import Simulation
 
 __all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_bearings", "plot_geometry",
            "plot_plan", "plot_schedule", "save_figure"]
@@ -243,8 +243,6 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     path : path
         PNG file.
     """
-    from tmaplan.planning import PingEvaluator
-
     ev = PingEvaluator(scenario, obs, belief, res.objective_name)
     curves = ev.per_step(ev.schedules([[], res.uniform_steps.tolist()]))
     fig, axes = new_figure(1, 1, size=(8.0, 5.0))

@@ -5,11 +5,13 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from tmaplan.display import scenario_text
+from tmaplan.experiments import CampaignResult
 from tmaplan.plotting import new_figure, save_figure
 from tmaplan.report_tables import (
     differences_html,
@@ -18,11 +20,6 @@ from tmaplan.report_tables import (
     sample_warning,
 )
 from tmaplan.scenario import to_dict
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
-    from tmaplan.experiments import CampaignResult
 
 __all__ = ["BOUND_NAME", "comparison_figures", "efficiency", "line_style", "outside_legend",
            "rmse_figure", "write_report"]

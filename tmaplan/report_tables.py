@@ -9,16 +9,14 @@ from __future__ import annotations
 
 import html
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from tmaplan.display import angle, minutes, speed
-
-if TYPE_CHECKING:
-    from tmaplan.evaluation.metrics import PairedDifference
-    from tmaplan.evaluation.replans import ReplanCounts
-    from tmaplan.experiments import CampaignResult
+from tmaplan.evaluation.metrics import PairedDifference
+from tmaplan.evaluation.replans import ReplanCounts
+from tmaplan.experiments import CampaignResult
 
 __all__ = ["FEW_RUNS", "baseline_parameters", "differences_html", "replan_warning",
            "results_table", "sample_warning"]

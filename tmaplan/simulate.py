@@ -19,6 +19,7 @@ from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.faults import apply_manoeuvres, corrupt_bearings, dropped
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.prior import sample_prior, true_initial_state
 from tmaplan.models.sensors import doppler_frequency
 from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import (
@@ -414,8 +415,6 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
         ``from_prior`` with a prior and a constant-turn target: its circle (centre, radius,
         phase, ω) is given, not an initial state a prior could replace.
     """
-    from tmaplan.models.prior import sample_prior, true_initial_state
-
     check_truth_source(scenario, from_prior)
     prior = from_prior and scenario.prior is not None
     model = scenario.target.model

@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import linalg
@@ -40,15 +39,20 @@ from tmaplan.errors import (
     is_integer,
 )
 from tmaplan.geometry import range_of
+from tmaplan.models.observer import observer_track
 from tmaplan.models.tracks import (
     TrackModel,
     constant_turn_model,
     cv_model,
     multi_leg_model,
 )
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import (
+    BearingSensor,
+    FrequencySensor,
+    RangeSensor,
+    Scenario,
+    measurement_steps,
+)
 
 __all__ = [
     "BearingData",
@@ -410,14 +414,6 @@ def scenario_data(
     model, theta, data, notes
         ``data`` holds keyword arguments for :func:`crlb_from_data`.
     """
-    from tmaplan.models.observer import observer_track
-    from tmaplan.scenario import (
-        BearingSensor,
-        FrequencySensor,
-        RangeSensor,
-        measurement_steps,
-    )
-
     if frequencies is not None and not is_integer(frequencies, 0):
         raise ArgumentError("frequencies", "an integer >= 0 or None (all lines)", frequencies,
                             source=scenario.name)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -36,13 +36,11 @@ from tmaplan.scenario import (
     BearingSensor,
     FrequencySensor,
     RangeSensor,
+    Scenario,
     TimeGrid,
     measurement_steps,
 )
 from tmaplan.scenario.prior_checks import zero_prior_stds
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "check_ping_steps", "information_rates",
            "lpc_prior_information", "prepare", "resolve_ping_steps"]

@@ -2,12 +2,12 @@
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
 ``add_arguments(parser)``, ``run(args) -> dict | None``, optionally ``FINITE`` (payload
-quantities that must not be NaN, :mod:`tmaplan.cli._finite`: a NaN there is an error, never exit
+quantities that must not be NaN, :mod:`tmaplan.cli.finite`: a NaN there is an error, never exit
 0) and, for a verb without a problem argument that works on a fixed problem, ``PROBLEM`` (its
 name); the returned dict is written as JSON
 to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
 Argument types, limits and the up-front checks that need the scenario live in
-:mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
+:mod:`tmaplan.cli.args`, shared by every verb. Every error, a bad flag value included, exits 1
 with one line on stderr (a traceback only with ``--debug``).
 """
 
@@ -25,15 +25,16 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
-from tmaplan.cli._contacts import (
+from tmaplan.cli.args import OneLineParser, UsageError, json_path
+from tmaplan.cli.contacts import (
     per_contact,
     preflight_per_contact,
     refuse_several,
     run_per_contact,
 )
-from tmaplan.cli._finite import require_finite
-from tmaplan.cli._paths import check_outputs
+from tmaplan.cli.finite import require_finite
+from tmaplan.cli.paths import check_outputs
+from tmaplan.cli.preflight import preflight
 from tmaplan.errors import ArgumentError
 from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
 from tmaplan.models.checks import check_scenario
@@ -188,7 +189,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 problem = scenario.name
                 # the rules that need the motion model (tmaplan.scenario is below the models)
                 check_scenario(scenario, source=args.problem if fixed is None else None)
-                # a verb that cannot handle several contacts says so (tmaplan.cli._contacts)
+                # a verb that cannot handle several contacts says so (tmaplan.cli.contacts)
                 refuse_several(args.verb, modules[args.verb], scenario, modules)
                 several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
                 if len(scenario.contacts) > 1:

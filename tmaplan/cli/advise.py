@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import add_figure_arguments, add_seed_argument, duration, integer
+from tmaplan.cli.args import add_figure_arguments, add_seed_argument, duration, integer
 from tmaplan.errors import ArgumentError, UnitError
 from tmaplan.units import to_si
 
@@ -279,7 +279,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from tmaplan.advice.recommend import advise_contact
     from tmaplan.advice.report import advice_figures, write_advice_page
     from tmaplan.advice.solution import contact_rng, solve_contact
-    from tmaplan.cli._args import command_line
+    from tmaplan.cli.args import command_line
     from tmaplan.io import read_recording
 
     if args.sigma_deg is not None and not 0 < args.sigma_deg < 180:

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
@@ -61,7 +61,7 @@ from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 #: The problem the demo works on.

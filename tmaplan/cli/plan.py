@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_STARTS,
     PLAN_STARTS,
     add_figure_arguments,
@@ -38,7 +38,7 @@ from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
 
 
@@ -195,7 +195,7 @@ def figure_name(problem: str, objective: str, pings: int = 0, *,
 
 def _starts(args: argparse.Namespace) -> int:
     """``--starts`` (default :data:`STARTS`); the preflight refused it where it has no effect
-    (:func:`tmaplan.cli._args.preflight`), so a figure named ``_<N>starts`` was started from
+    (:func:`tmaplan.cli.preflight.preflight`), so a figure named ``_<N>starts`` was started from
     N guesses."""
     return STARTS if args.starts is None else int(args.starts)
 

@@ -13,18 +13,19 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_WORKERS,
     add_figure_arguments,
     add_problem_argument,
     duration,
     integer,
 )
-from tmaplan.display import minute_list
+from tmaplan.display import minute_list, seconds_text
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import course_speed
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.target import initial_velocity
+from tmaplan.planning import max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
 from tmaplan.plotting import plot_schedule
@@ -32,7 +33,7 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
 
 #: Defaults of ``--method``, ``--objective`` and ``--time-limit`` [s].
@@ -171,8 +172,6 @@ def check_options(args: argparse.Namespace, scenario: Scenario) -> None:
     for flag, (name, where, applies) in _METHOD_OPTIONS.items():
         value = getattr(args, name, None)
         if value is not None and not applies(args.method, args.objective):
-            from tmaplan.cli._args import seconds_text
-
             shown = seconds_text(value) if flag == "--time-limit" else value
             raise ArgumentError(flag, f"{where}; it is not used by --method {args.method} "
                                 f"--objective {args.objective}", shown, source=scenario.name)
@@ -185,9 +184,6 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
     ``--min-spacing`` or ``planning.ping_min_spacing`` (a spacing that lets too few pings
     fit), else ``--budget`` / ``planning.ping_budget`` (too few steps outside
     ``planning.ping_forbidden``)."""
-    from tmaplan.cli._args import seconds_text
-    from tmaplan.planning import max_pings, ping_candidates
-
     pl = scenario.planning
     budget = args.budget if args.budget is not None else (pl.ping_budget if pl else 0)
     if budget == 0:

@@ -10,12 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
     out_dir,
 )
+from tmaplan.cli.observer_plan import with_observer_plan
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
 from tmaplan.plotting import plot_bearings, plot_geometry
@@ -50,7 +51,7 @@ def _origin(text: str) -> tuple[float, float]:
 
 def _start(text: str) -> dt.datetime:
     """Type of ``--start``: an ISO 8601 time with a zone."""
-    from tmaplan.io.times import parse_utc  # pyproj and co. only when exporting
+    from tmaplan.io.times import parse_utc  # deferred: tmaplan.io loads pyproj, pynmea2, gpxpy
 
     t = parse_utc(text)
     if t is None:
@@ -114,7 +115,7 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     ArgumentError
         (``--export``) The run has no bearing, or the directory cannot be written.
     """
-    from tmaplan.io import (  # pyproj, pynmea2, gpxpy: only when exporting
+    from tmaplan.io import (  # deferred: pyproj, pynmea2, gpxpy only when exporting
         LocalFrame,
         write_bearings,
         write_gpx,
@@ -173,8 +174,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                 raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
                                     source=scenario.name)
     if getattr(args, "observer_plan", None) is not None:
-        from tmaplan.cli._observer_plan import with_observer_plan
-
         scenario = with_observer_plan(scenario, args.observer_plan)
     if len(scenario.contacts) > 1:
         return _run_several(args, scenario)

@@ -66,7 +66,7 @@ import dataclasses
 import functools
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy import optimize, stats
@@ -75,10 +75,9 @@ from tmaplan.errors import ArgumentError
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.geometry import wrap_angle, wrap_half_angle
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
-    from tmaplan.simulate import Measurement
+from tmaplan.models.target import initial_velocity
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import Measurement
 
 __all__ = [
     "MonitorConfig",
@@ -365,8 +364,6 @@ class MonitoredFilter:
 
     def init(self, scenario: Scenario, rng: np.random.Generator) -> MonitoredState:
         """The inner filter's initial state, the observer's initial velocity."""
-        from tmaplan.models.target import initial_velocity
-
         return MonitoredState(inner=self.inner.init(scenario, rng), prior=scenario.prior,
                               velocity=np.asarray(initial_velocity(scenario.observer), float))
 

@@ -29,10 +29,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import ArgumentError, DataError
-from tmaplan.io._table import read_table, write_csv
 from tmaplan.io.frame import LocalFrame
 from tmaplan.io.gpx import write_gpx
 from tmaplan.io.nav import write_ownship_csv
+from tmaplan.io.table import read_table, write_csv
 from tmaplan.io.times import parse_utc, time_text
 
 __all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "legs_table", "read_legs_csv",

@@ -8,18 +8,14 @@ N(true bearing, σ_θ²) has the same distribution over runs.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from scipy import stats
 
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
 from tmaplan.models.target import circle_state, initial_velocity
+from tmaplan.scenario import Prior, Scenario
 from tmaplan.scenario.prior_checks import check_truncated_normal
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Prior, Scenario
 
 __all__ = ["prior_relative_moments", "relative_prior_covariance", "relative_prior_samples",
            "sample_prior", "true_initial_state"]

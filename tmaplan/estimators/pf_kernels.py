@@ -1,7 +1,8 @@
 """Batched numerical kernels of the particle filter (resampling, noise, likelihoods).
 
-Private helpers of :mod:`tmaplan.estimators.particle_filter`, split out by role. Clouds are
-handled in the (4, N) row layout (see :func:`_rows`); every function is vectorised over
+The kernels of :mod:`tmaplan.estimators.particle_filter`, split out by role (and shared with
+its compiled twin :mod:`tmaplan.estimators.pf_numba`). Clouds are
+handled in the (4, N) row layout (see :func:`particle_rows`); every function is vectorised over
 particles.
 """
 
@@ -16,11 +17,15 @@ from scipy.special import logsumexp
 
 from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.models.sensors import bearing_loglik
+from tmaplan.simulate import Measurement
 
-if TYPE_CHECKING:
-    from tmaplan.estimators.particle_filter import Measurement, PFConfig
+if TYPE_CHECKING:  # the filter imports these kernels
+    from tmaplan.estimators.particle_filter import PFConfig
 
-__all__ = ["systematic_resample"]
+__all__ = ["check_measurement", "clutter_floor", "effective_sample_size", "frequency_update",
+           "gated", "measurement_ll", "mh_move", "ncv_noise_factor", "normals_f32",
+           "particle_rows", "safe_cholesky", "systematic_indices", "systematic_resample",
+           "weighted_cov"]
 
 _TWO_PI = 2.0 * np.pi
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
@@ -30,7 +35,7 @@ _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 # OpenBLAS spins on those, and limiting its threads per call costs milliseconds).
 
 
-def _rows(X: np.ndarray) -> np.ndarray:
+def particle_rows(X: np.ndarray) -> np.ndarray:
     """The (4, N) C-contiguous row view of a cloud (a copy if X is not column-major)."""
     A = X.T
     return A if A.flags.c_contiguous else np.ascontiguousarray(A)
@@ -41,7 +46,7 @@ def _rows(X: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 
 
-def _check_measurement(m: Any) -> None:
+def check_measurement(m: Any) -> None:
     """ArgumentError naming the field of an invalid :class:`Measurement` (kind, finite value,
     finite std > 0 per line, ping only on a range)."""
     if m.kind not in ("bearing", "range", "frequency"):
@@ -105,7 +110,7 @@ def systematic_resample(log_weights: np.ndarray, rng: np.random.Generator,
     return idx
 
 
-def _systematic(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def systematic_indices(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Systematic resampling from normalised weights ``w`` (no exp), in O(N).
 
     Same draw as :func:`systematic_resample` (``u_j = (u + j)/N``, index = number of CDF
@@ -125,17 +130,21 @@ def _systematic(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return idx
 
 
-def _ess(log_weights: np.ndarray) -> float:
+def effective_sample_size(log_weights: np.ndarray) -> float:
+    """Kish's effective sample size ``1 / Σ w²`` of normalised log-weights (N,)."""
     return float(np.exp(-logsumexp(2.0 * log_weights)))
 
 
-def _weighted_cov(A: np.ndarray, w: np.ndarray) -> np.ndarray:
+def weighted_cov(A: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Weighted covariance of a (4, N) row-layout cloud with normalised weights w."""
     D = A - (A @ w)[:, None]
     return (D * w) @ D.T
 
 
-def _safe_cholesky(C: np.ndarray) -> np.ndarray:
+def safe_cholesky(C: np.ndarray) -> np.ndarray:
+    """A lower Cholesky factor of the symmetric part of ``C`` (d, d), scaled to unit diagonal
+    first and regularised by the smallest jitter in 0, 1e-12, …, 1e-3 that factorises (else the
+    diagonal of square roots)."""
     C = 0.5 * (C + C.T)
     scale = np.sqrt(np.maximum(np.diag(C), 1e-300))
     Cn = C / np.outer(scale, scale)
@@ -151,7 +160,7 @@ def _safe_cholesky(C: np.ndarray) -> np.ndarray:
 _TWO_PI_F32 = np.float32(_TWO_PI)
 
 
-def _normals_f32(rng: np.random.Generator, out: np.ndarray) -> None:
+def normals_f32(rng: np.random.Generator, out: np.ndarray) -> None:
     """Fill ``out`` (2m, n) float64 with standard normals by float32 Box–Muller.
 
     ``z1 = ρ cos φ``, ``z2 = ρ sin φ`` with ``ρ = sqrt(−2 ln(1 − u1))``, ``φ = 2π u2`` for
@@ -171,7 +180,7 @@ def _normals_f32(rng: np.random.Generator, out: np.ndarray) -> None:
 
 
 @functools.lru_cache(maxsize=64)
-def _dynamics(dt: float, q: float) -> tuple[float, float, float]:
+def ncv_noise_factor(dt: float, q: float) -> tuple[float, float, float]:
     """Per-axis Cholesky factor ``[[l11, 0], [l21, l22]]`` of the NCV
     ``Q`` (docs/conventions.md)."""
     l11 = np.sqrt(q * dt**3 / 3.0)
@@ -189,7 +198,7 @@ def _bearing_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
     if m.ambiguity == "pi":
         sigma = float(m.sigma)
         return bearing_loglik(m.value, X, sigma, "pi") + (_LOG_SQRT_2PI + np.log(sigma))
-    A = _rows(X)
+    A = particle_rows(X)
     d = np.arctan2(A[0], A[1])  # one atan2, contiguous rows
     np.subtract(float(m.value), d, out=d)
     # wrap to [−π, π]: d − 2π·round(d/2π) (cheaper than np.mod), in place
@@ -208,15 +217,15 @@ def _clutter(ll: np.ndarray, sigma: float, eps: float, period: float = _TWO_PI) 
     (:func:`_bearing_ll`): ``log((1 − ε) N(d; 0, σ²) + ε/period)`` up to the constant
     ``log((1 − ε)/(√(2π) σ))``; ``period`` 2π, or π for a bearing known modulo π (clutter
     uniform on the half circle its density lives on)."""
-    return np.logaddexp(ll, _clutter_floor(sigma, eps, period))
+    return np.logaddexp(ll, clutter_floor(sigma, eps, period))
 
 
-def _clutter_floor(sigma: float, eps: float, period: float) -> float:
+def clutter_floor(sigma: float, eps: float, period: float) -> float:
     """The clutter term ``log(ε √(2π) σ / ((1 − ε) period))`` of :func:`_clutter`."""
     return float(np.log(eps * np.sqrt(2.0 * np.pi) * sigma / ((1.0 - eps) * period)))
 
 
-def _measurement_ll(X: np.ndarray, m: Measurement, clutter: float = 0.0) -> np.ndarray:
+def measurement_ll(X: np.ndarray, m: Measurement, clutter: float = 0.0) -> np.ndarray:
     """Log-likelihood (N,) of a bearing (with the clutter mixture when ``clutter`` > 0) or
     range measurement for the cloud X (N, 4), up to a constant: the one likelihood the
     filter's update and its Metropolis–Hastings moves share."""
@@ -228,7 +237,7 @@ def _measurement_ll(X: np.ndarray, m: Measurement, clutter: float = 0.0) -> np.n
     return c
 
 
-def _gated(state: Any, m: Measurement, gate: float | None) -> bool:
+def gated(state: Any, m: Measurement, gate: float | None) -> bool:
     """Whether ping ``m`` falls outside ``gate`` σ of the cloud's predicted range."""
     if gate is None:
         return False
@@ -240,7 +249,7 @@ def _gated(state: Any, m: Measurement, gate: float | None) -> bool:
 
 
 def _range_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
-    A = _rows(X)
+    A = particle_rows(X)
     d = np.hypot(A[0], A[1])
     np.subtract(float(m.value), d, out=d)
     d *= np.sqrt(0.5) / float(m.sigma)
@@ -249,8 +258,11 @@ def _range_ll(X: np.ndarray, m: Measurement) -> np.ndarray:
     return d
 
 
-def _frequency_update(X: np.ndarray, m: Measurement, fm: np.ndarray | None,
+def frequency_update(X: np.ndarray, m: Measurement, fm: np.ndarray | None,
                       fv: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-particle Rao–Blackwellised update of the emitted frequencies (P lines) by one
+    frequency measurement: (log-likelihoods (N,), means (N, P), variances (N, P)); a line seen
+    for the first time (NaN mean) starts from a flat prior."""
     z = np.atleast_1d(np.asarray(m.value, float))
     s2 = np.atleast_1d(np.asarray(m.sigma, float)) ** 2 * np.ones_like(z)
     P = z.shape[0]
@@ -288,11 +300,11 @@ def _loglik(A: np.ndarray, measurements: Sequence[Measurement], clutter: float =
     likelihood of the filter's update (the same clutter mixture), up to a constant."""
     ll = np.zeros(A.shape[1])
     for m in measurements:
-        ll += _measurement_ll(A.T, m, clutter)
+        ll += measurement_ll(A.T, m, clutter)
     return ll
 
 
-def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.ndarray,
+def mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.ndarray,
              measurements: Sequence[Measurement], rng: np.random.Generator,
              config: PFConfig) -> np.ndarray:
     """Random-walk Metropolis–Hastings sweeps on x_k with target ``f(x_k | x_{k−1}) g(z | x_k)``.
@@ -308,7 +320,7 @@ def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.nd
     ll : ndarray, shape (N,)
         log g(z | x) of the resampled particles.
     """
-    l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
+    l11, l21, l22 = ncv_noise_factor(float(config.dt), float(config.q))
     dt = float(config.dt)
     d = np.zeros(2) if dv is None else np.asarray(dv, float)
     mu = np.empty_like(parent)  # F x_{k−1} − H Δv
@@ -326,7 +338,7 @@ def _mh_move(A: np.ndarray, parent: np.ndarray, dv: np.ndarray | None, ll: np.nd
     Z = np.empty_like(A)
     for _ in range(int(config.move_steps)):
         if config.noise == "float32":
-            _normals_f32(rng, Z)
+            normals_f32(rng, Z)
         else:
             rng.standard_normal(out=Z)
         prop = A.copy()

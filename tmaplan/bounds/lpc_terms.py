@@ -10,7 +10,7 @@ same code gives
 * the casadi one-step functions (:func:`step_functions`) that are ``mapaccum``-ed over the
   horizon, evaluated numerically (fast single evaluation) or symbolically (planning with exact
   derivatives),
-* their compiled C versions for numeric speed (:mod:`tmaplan.bounds._jit`).
+* their compiled C versions for numeric speed (:mod:`tmaplan.bounds.lpc_codegen`).
 
 Mathematics (brehard2005 §4 with the corrections of docs/errata.md, moment form of docs/errata.md):
 the relative state obeys ``X_{t+1} = A X_t + c_t + w_t``, ``w_t ~ N(0, Q)`` with
@@ -356,7 +356,7 @@ def step_functions(A: np.ndarray, Q: np.ndarray) -> tuple[Any, Any]:
     key = (A.tobytes(), Q.tobytes())
     if key in _STEP_CACHE:
         return _STEP_CACHE[key]
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import
 
     x = ca.SX.sym("x", 14)
     c = ca.SX.sym("c", 4)

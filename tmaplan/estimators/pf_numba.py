@@ -1,7 +1,7 @@
 """Numba kernels of the particle filter (``PFConfig.kernel = "numba"``, the default).
 
 Private helpers of :mod:`tmaplan.estimators.particle_filter`; the numpy kernels of
-:mod:`tmaplan.estimators._pf_kernels` stay the reference (``kernel="numpy"``).
+:mod:`tmaplan.estimators.pf_kernels` stay the reference (``kernel="numpy"``).
 
 Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
 
@@ -49,23 +49,23 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators._pf_kernels import (
-    _clutter_floor,
-    _frequency_update,
-    _measurement_ll,
-    _rows,
+from tmaplan.estimators.pf_kernels import (
+    clutter_floor,
+    frequency_update,
+    measurement_ll,
+    particle_rows,
 )
-from tmaplan.estimators._pf_math import (
-    _MASK32,
-    _SH32,
-    _U,
-    _abs_atan2,
-    _exp,
-    _log,
-    _normals,
-    _philox,
+from tmaplan.estimators.pf_math import (
+    MASK32,
+    SH32,
+    U64,
+    abs_atan2,
+    box_muller_f32,
+    fast_exp,
+    fast_log,
     njit,
     numba,
+    philox,
     prange,
 )
 
@@ -165,9 +165,9 @@ def _predict_kernel(A: np.ndarray, out: np.ndarray, dt: float, l11: float, l21: 
         ox, oy = out[0, lo:lo + m], out[1, lo:lo + m]
         ovx, ovy = out[2, lo:lo + m], out[3, lo:lo + m]
         for j in range(m):
-            r0, r1, r2, r3 = _philox(_U(lo + j), _U(0), s0, s1, k0, k1)
-            z1x, z1y = _normals(r0, r1)
-            z2x, z2y = _normals(r2, r3)
+            r0, r1, r2, r3 = philox(U64(lo + j), U64(0), s0, s1, k0, k1)
+            z1x, z1y = box_muller_f32(r0, r1)
+            z2x, z2y = box_muller_f32(r2, r3)
             ox[j] = ((x[j] + dt * vx[j]) + l11 * z1x) - pdx
             oy[j] = ((y[j] + dt * vy[j]) + l11 * z1y) - pdy
             ovx[j] = (vx[j] + (l21 * z1x + l22 * z2x)) - dvx
@@ -204,16 +204,16 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
             sz, cz, g, d0, fl = bear[k, 0], bear[k, 1], bear[k, 2], bear[k, 3], bear[k, 4]
             if fl == -np.inf:
                 for j in range(m):
-                    d = _abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
+                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
                     d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
                     o[j] = o[j] - d * d
             else:  # log(e^ll + e^fl) = max + log(1 + e^(min − max))
                 for j in range(m):
-                    d = _abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
+                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
                     d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
                     ll = -(d * d)
                     hi = max(ll, fl)
-                    o[j] = o[j] + (hi + _log(1.0 + _exp(min(ll, fl) - hi)))
+                    o[j] = o[j] + (hi + fast_log(1.0 + fast_exp(min(ll, fl) - hi)))
         for k in range(rng_.shape[0]):
             z, g = rng_[k, 0], rng_[k, 1]
             for j in range(m):
@@ -225,7 +225,7 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
         wb = w[lo:lo + m]
         if bad == 0 and mx > -np.inf:
             for j in range(m):
-                wb[j] = _exp(o[j] - mx)
+                wb[j] = fast_exp(o[j] - mx)
             part[blk, 2], part[blk, 3] = _block_sums(wb)
         else:
             for j in range(m):
@@ -259,7 +259,7 @@ def _cumsum_kernel(w: np.ndarray, c: np.ndarray) -> None:
 @_kernel()
 def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
     """Systematic resampling indices from the CDF ``c`` of normalised weights and one uniform
-    u: the arithmetic of :func:`tmaplan.estimators._pf_kernels._systematic`, so the same
+    u: the arithmetic of :func:`tmaplan.estimators.pf_kernels.systematic_indices`, so the same
     indices bit for bit. With ``c'_i = max(⌈(N / c_{N−1}) c_i − u⌉, 0)`` (``c'_{N−1} = N``),
     non-decreasing, output position j takes ``#{i : c'_i ≤ j}``. Block b owns the positions
     ``[c'_{lo−1}, c'_{hi−1})``; each of its particles marks ``t = c'_i`` with i + 1 (the last
@@ -304,9 +304,9 @@ def _gather_kernel(A: np.ndarray, idx: np.ndarray, L: np.ndarray, key: np.ndarra
             o0[j], o1[j], o2[j], o3[j] = a0[ix[j]], a1[ix[j]], a2[ix[j]], a3[ix[j]]
         if jitter:
             for j in range(m):
-                r0, r1, r2, r3 = _philox(_U(lo + j), _U(0), s0, s1, k0, k1)
-                z0, z1 = _normals(r0, r1)
-                z2, z3 = _normals(r2, r3)
+                r0, r1, r2, r3 = philox(U64(lo + j), U64(0), s0, s1, k0, k1)
+                z0, z1 = box_muller_f32(r0, r1)
+                z2, z3 = box_muller_f32(r2, r3)
                 o0[j] = o0[j] + l00 * z0  # the numpy kernel's order (row by row)
                 o1[j] = (o1[j] + l10 * z0) + l11 * z1
                 o2[j] = ((o2[j] + l20 * z0) + l21 * z1) + l22 * z2
@@ -368,7 +368,7 @@ def _key(rng: np.random.Generator) -> np.ndarray:
     """Four 32-bit words (key k0, k1; counter words s0, s1): two raw 64-bit draws of the
     injected Generator's bit generator (a tenth of the cost of ``integers``)."""
     r = np.asarray(rng.bit_generator.random_raw(2), dtype=np.uint64)
-    return np.array([r[0] & _MASK32, r[0] >> _SH32, r[1] & _MASK32, r[1] >> _SH32],
+    return np.array([r[0] & MASK32, r[0] >> SH32, r[1] & MASK32, r[1] >> SH32],
                     dtype=np.uint64)
 
 
@@ -412,7 +412,7 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
         What :func:`normalise` needs of this pass (when mx is finite).
     """
     X = state.particles
-    A = _rows(X)
+    A = particle_rows(X)
     clutter = float(config.bearing_clutter)
     bear: list[tuple[float, ...]] = []
     ranges: list[tuple[float, float]] = []
@@ -421,16 +421,16 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
     for m in measurements:
         if m.kind == "bearing" and m.ambiguity == "none":
             z, sigma = float(m.value), float(m.sigma)
-            fl = _clutter_floor(sigma, clutter, 2.0 * math.pi) if clutter > 0.0 else -np.inf
+            fl = clutter_floor(sigma, clutter, 2.0 * math.pi) if clutter > 0.0 else -np.inf
             bear.append((math.sin(z), math.cos(z), math.sqrt(0.5) / sigma,
                          abs(z - 2.0 * math.pi * round(z / (2.0 * math.pi))), fl))
         elif m.kind == "range":
             ranges.append((float(m.value), math.sqrt(0.5) / float(m.sigma)))
         else:
             if m.kind == "frequency":
-                c, fm, fv = _frequency_update(X, m, fm, fv)
+                c, fm, fv = frequency_update(X, m, fm, fv)
             else:
-                c = _measurement_ll(X, m, clutter)
+                c = measurement_ll(X, m, clutter)
             extra = c if extra is None else extra + c
     B = np.array(bear, dtype=float).reshape(-1, 5)
     R = np.array(ranges, dtype=float).reshape(-1, 2)
@@ -496,7 +496,7 @@ def _weights_finish(part: np.ndarray) -> tuple[float, np.ndarray, float]:
 
 def systematic(w: np.ndarray, u: float) -> np.ndarray:
     """Systematic resampling indices from normalised weights and one uniform (the indices of
-    :func:`tmaplan.estimators._pf_kernels._systematic` for the same u, bit for bit)."""
+    :func:`tmaplan.estimators.pf_kernels.systematic_indices` for the same u, bit for bit)."""
     n = w.shape[0]
     c = np.empty(n)
     idx = np.empty(n, dtype=np.intp)

@@ -1,15 +1,15 @@
 """Branch-free float64 elementary functions and the Philox4x32-10 generator, for numba.
 
-Private helpers of :mod:`tmaplan.estimators._pf_numba` (the particle filter's compiled
+Helpers of :mod:`tmaplan.estimators.pf_numba` (the particle filter's compiled
 kernels). Every function here is scalar and free of branches and calls, so that the loops of
 the kernels that inline it vectorise without a vector math library (the same code, hence the
 same bits, whatever the SIMD width):
 
-* :func:`_philox`: Philox4x32-10 (Salmon, Moraes, Dror & Shaw 2011, "Parallel random numbers:
+* :func:`philox`: Philox4x32-10 (Salmon, Moraes, Dror & Shaw 2011, "Parallel random numbers:
   as easy as 1, 2, 3"), checked against Random123's known-answer vectors in the tests;
-* :func:`_normals`: Box–Muller on two 32-bit words, in float32 (:func:`_log32`,
+* :func:`box_muller_f32`: Box–Muller on two 32-bit words, in float32 (:func:`_log32`,
   :func:`_sincos_turn32`: Cephes' logf.c, sinf.c, cosf.c);
-* :func:`_log`, :func:`_atan01` / :func:`_abs_atan2`, :func:`_exp`: fdlibm's (e_log.c,
+* :func:`fast_log`, :func:`_atan01` / :func:`abs_atan2`, :func:`fast_exp`: fdlibm's (e_log.c,
   e_exp.c) and Cephes' (atan.c) float64 polynomials.
 
 All accurate to about 1 ulp of their type (tested against numpy).
@@ -33,13 +33,14 @@ except ImportError as exc:  # a declared dependency: say so plainly
                       "(pip install 'numba>=0.60'); PFConfig(kernel='numpy') runs without it"
                       ) from exc
 
-__all__ = ["get_num_threads", "njit", "numba", "prange", "set_num_threads"]
+__all__ = ["MASK32", "SH32", "U64", "abs_atan2", "box_muller_f32", "fast_exp", "fast_log",
+           "get_num_threads", "njit", "numba", "philox", "prange", "set_num_threads"]
 
-_U = np.uint64
-_MASK32 = _U(0xFFFFFFFF)
-_SH32 = _U(32)
-_PHILOX_M0, _PHILOX_M1 = _U(0xD2511F53), _U(0xCD9E8D57)
-_PHILOX_W0, _PHILOX_W1 = _U(0x9E3779B9), _U(0xBB67AE85)
+U64 = np.uint64
+MASK32 = U64(0xFFFFFFFF)
+SH32 = U64(32)
+_PHILOX_M0, _PHILOX_M1 = U64(0xD2511F53), U64(0xCD9E8D57)
+_PHILOX_W0, _PHILOX_W1 = U64(0x9E3779B9), U64(0xBB67AE85)
 
 # fdlibm e_log.c
 _LN2_HI, _LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10
@@ -134,20 +135,20 @@ _from_bits32: Any = intrinsic(_from_bits32_typer)
 
 
 @njit(inline="always")
-def _philox(c0: Any, c1: Any, c2: Any, c3: Any, k0: Any, k1: Any) -> tuple[Any, Any, Any, Any]:
+def philox(c0: Any, c1: Any, c2: Any, c3: Any, k0: Any, k1: Any) -> tuple[Any, Any, Any, Any]:
     """Philox4x32-10 of counter (c0, c1, c2, c3) under key (k0, k1): 4 words < 2³² (uint64)."""
     for _ in range(10):
         p0 = _PHILOX_M0 * c0
         p1 = _PHILOX_M1 * c2
-        c0, c1, c2, c3 = ((p1 >> _SH32) ^ c1 ^ k0, p1 & _MASK32,
-                          (p0 >> _SH32) ^ c3 ^ k1, p0 & _MASK32)
-        k0 = (k0 + _PHILOX_W0) & _MASK32
-        k1 = (k1 + _PHILOX_W1) & _MASK32
+        c0, c1, c2, c3 = ((p1 >> SH32) ^ c1 ^ k0, p1 & MASK32,
+                          (p0 >> SH32) ^ c3 ^ k1, p0 & MASK32)
+        k0 = (k0 + _PHILOX_W0) & MASK32
+        k1 = (k1 + _PHILOX_W1) & MASK32
     return c0, c1, c2, c3
 
 
 @njit(inline="always")
-def _log(x: float) -> float:
+def fast_log(x: float) -> float:
     """ln x for a normal float64 x > 0 (fdlibm's e_log.c, < 1 ulp), branch-free."""
     b = _bits(x)
     e = (b >> 52) - 1023
@@ -186,26 +187,26 @@ def _log32(x: Any) -> Any:
 def _sincos_turn32(k: Any) -> tuple[Any, Any]:
     """float32 (sin φ, cos φ) of φ = 2π k/2³² for an integer 0 ≤ k < 2³²: exact reduction to
     the nearest quarter turn, Cephes' sinf/cosf polynomials on [−π/4, π/4] (≈ 1 ulp)."""
-    qb = (k + _U(0x20000000)) >> _U(30)  # nearest quarter turn, 0..4
-    x = _F(np.int64(k) - np.int64(qb << _U(30))) * _TURN_F
+    qb = (k + U64(0x20000000)) >> U64(30)  # nearest quarter turn, 0..4
+    x = _F(np.int64(k) - np.int64(qb << U64(30))) * _TURN_F
     z = x * x
     s = ((_SF0 * z + _SF1) * z + _SF2) * z * x + x
     c = (((_CF0 * z + _CF1) * z + _CF2) * z * z - _HALF_F * z) + _ONE_F
-    q = qb & _U(3)
-    odd = (q & _U(1)) != _U(0)
+    q = qb & U64(3)
+    odd = (q & U64(1)) != U64(0)
     sq = c if odd else s
     cq = s if odd else c
-    sq = -sq if q >= _U(2) else sq
-    cq = -cq if (q == _U(1) or q == _U(2)) else cq
+    sq = -sq if q >= U64(2) else sq
+    cq = -cq if (q == U64(1) or q == U64(2)) else cq
     return sq, cq
 
 
 @njit(inline="always")
-def _normals(a: Any, b: Any) -> tuple[float, float]:
+def box_muller_f32(a: Any, b: Any) -> tuple[float, float]:
     """Two independent standard normals from two 32-bit words: Box–Muller in float32 (as the
     numpy kernel's default noise), ``u = (2⌊a/2⁸⌋ + 1)/2²⁵`` so that ``ln u`` is finite: the
     radius is at most 5.89, the Gaussian mass beyond (2⁻²⁵ ≈ 3·10⁻⁸ per pair) not drawn."""
-    u = _F(np.int64(((a >> _U(8)) << _U(1)) | _U(1))) * _TWO_M25_F
+    u = _F(np.int64(((a >> U64(8)) << U64(1)) | U64(1))) * _TWO_M25_F
     rho = np.sqrt(_M2_F * _log32(u))
     s, c = _sincos_turn32(b)
     return float(rho * c), float(rho * s)
@@ -224,7 +225,7 @@ def _atan01(t: float) -> float:
 
 
 @njit(inline="always")
-def _abs_atan2(s: float, c: float) -> float:
+def abs_atan2(s: float, c: float) -> float:
     """|atan2(s, c)| ∈ [0, π] (0 for s = c = 0)."""
     a = abs(s)
     b = abs(c)
@@ -236,7 +237,7 @@ def _abs_atan2(s: float, c: float) -> float:
 
 
 @njit(inline="always")
-def _exp(x: float) -> float:
+def fast_exp(x: float) -> float:
     """e^x for x ≤ 0 (−inf allowed; fdlibm's e_exp.c, < 1 ulp; 0 below −708)."""
     xc = max(x, -709.0)
     kf = math.floor(xc * _INV_LN2 + 0.5)

@@ -1,5 +1,5 @@
 """Up-front checks that a verb's computation can be done (issue 38), run by
-:func:`tmaplan.cli._args.preflight` before any work starts.
+:func:`tmaplan.cli.preflight.preflight` before any work starts.
 
 * Memory (:func:`check_memory`, first: the verbs' own checks may allocate per step): every
   verb estimates its peak memory from the number of steps (:mod:`tmaplan.memory`): its
@@ -20,8 +20,11 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from tmaplan.cli.demo import DEMO_POLICIES
 from tmaplan.display import seconds_text
 from tmaplan.memory import check_steps
+from tmaplan.models.plausibility import warn_suspicious
+from tmaplan.planning.feasibility import check_keep_out, check_planning_horizon
 
 __all__ = ["check_feasible", "check_memory"]
 
@@ -38,8 +41,6 @@ _SCHEDULING = frozenset({"scheduled", "scheduled-terminal"})
 def _policy_names(args: argparse.Namespace) -> tuple[set[str], set[str]]:
     """(manoeuvres, pings) named by ``compare --policies`` or flown by ``demo``."""
     if args.verb == "demo":
-        from tmaplan.cli.demo import DEMO_POLICIES
-
         names: Any = DEMO_POLICIES
     else:
         names = [p.strip() for p in args.policies.split(",") if p.strip()]
@@ -111,13 +112,9 @@ def check_memory(args: argparse.Namespace, scenario: Any, *,
 def check_feasible(args: argparse.Namespace, scenario: Any, *, prior_verb: bool = True) -> None:
     """The planning checks and the motion model's warnings of the module notes for
     ``args.verb`` on ``scenario`` (``prior_verb``: the verb reads the prior)."""
-    from tmaplan.models.plausibility import warn_suspicious
-
     warn_suspicious(scenario, prior=prior_verb)
     if not _plans(args):
         return
-    from tmaplan.planning.feasibility import check_keep_out, check_planning_horizon
-
     if args.verb != "plan" or (args.horizon is None and args.control_interval is None):
         check_planning_horizon(scenario)  # (plan's flags are checked by _check_plan)
     check_keep_out(scenario)

@@ -23,7 +23,7 @@ from typing import Any, NoReturn
 
 from tmaplan.errors import ArgumentError
 
-__all__ = ["check_json_path", "check_out_dir", "check_outputs"]
+__all__ = ["check_json_path", "check_out_dir", "check_outputs", "fail"]
 
 #: Largest existing ``--json`` target parsed in full to tell a JSON document (a larger one
 #: must begin with ``{"`` or ``[`` and end with ``}`` or ``]``).
@@ -43,7 +43,7 @@ def _regular_file_above(path: Path) -> Path | None:
     return None
 
 
-def _fail(constraint: str, received: Any) -> NoReturn:
+def fail(constraint: str, received: Any) -> NoReturn:
     """The argparse-type error of every ``tmaplan`` flag: ``must be …, received …``."""
     raise argparse.ArgumentTypeError(f"must be {constraint}, received {received}")
 
@@ -53,10 +53,10 @@ def check_out_dir(text: str) -> str:
     under one."""
     path = Path(text)
     if path.exists() and not path.is_dir():
-        _fail("a directory", f"{text!r} (an existing file)")
+        fail("a directory", f"{text!r} (an existing file)")
     above = _regular_file_above(path)
     if above is not None:
-        _fail("a directory that exists or can be created", f"{text!r} (under the existing "
+        fail("a directory that exists or can be created", f"{text!r} (under the existing "
               f"file {str(above)!r})")
     return text
 
@@ -68,10 +68,10 @@ def check_json_path(text: str) -> str:
         return text
     path = Path(text)
     if path.is_dir():
-        _fail("a file path or '-' (stdout)", f"{text!r} (an existing directory)")
+        fail("a file path or '-' (stdout)", f"{text!r} (an existing directory)")
     above = _regular_file_above(path)
     if above is not None:
-        _fail("a file path in a directory that exists or can be created",
+        fail("a file path in a directory that exists or can be created",
               f"{text!r} (under the existing file {str(above)!r})")
     return text
 

@@ -20,6 +20,8 @@ import numpy as np
 from tmaplan.errors import DataError
 from tmaplan.io.faults import warn
 
+__all__ = ["Table", "csv_text", "read_table", "read_text", "write_csv"]
+
 #: Separators a CSV file is sometimes written with instead of a comma, in the order tried.
 _OTHER_SEPARATORS = {";": "';'", "\t": "tab", "|": "'|'"}
 

@@ -2,7 +2,7 @@
 
 For each policy (``planned+scheduled`` by default; ``receding`` is slow, add it with
 ``--policies``), each fault of :data:`FAULTS` (a ``[faults]`` table appended to the ``default``
-problem) and each filter option (:class:`tmaplan.estimators.consistency.FilterOptions`:
+problem) and each filter option (:class:`tmaplan.evaluation.filter_options.FilterOptions`:
 plain, monitored, robust), a campaign of paired runs (same truths, noise and filter seeds as
 the fault-free campaign) prints the divergence rate, the median time to 10 % range accuracy,
 the final range RMSE, its ratio to the fault-free RMSE of the same option with a paired
@@ -46,11 +46,12 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
+from tmaplan.estimators.consistency import MonitorConfig
 from tmaplan.estimators.particle_filter import DegeneracyWarning
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
 from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.detectability import detection_probability, manoeuvre_detectability
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.seeding import run_streams
 from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads

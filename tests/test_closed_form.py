@@ -19,9 +19,9 @@ from tmaplan.bounds.inputs import lpc_prior_information
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
-from tmaplan.models.prior import zero_prior_stds
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem, measurement_steps
+from tmaplan.scenario.prior_checks import zero_prior_stds
 
 PING_PERIOD = 80.0  # brehard2005 §6: a ping every 80 s, σ_r = 100 m
 

@@ -10,7 +10,8 @@ from oracles.cartesian_pcrb import cartesian_pcrb
 
 from tmaplan.cli import main
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators import Track, monte_carlo, run
+from tmaplan.estimators import Track, run
+from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
 

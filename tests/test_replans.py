@@ -311,7 +311,7 @@ def test_demo_says_the_re_plans_of_the_policies_that_re_plan(capsys):
                                    summary={k: {"replans": c} for k, c in counts.items()})
     _say_replans(argparse.Namespace(json=None), result)
     out = capsys.readouterr().out.splitlines()
-    assert out == ["      receding-realtime    360 re-plans, 1 not converged (0.3 %), "
+    assert out == [f"    {'receding-realtime':<28} 360 re-plans, 1 not converged (0.3 %), "
                    "3 fell back"], out
     _say_replans(argparse.Namespace(json="-"), result)
     assert capsys.readouterr().out == ""

@@ -21,7 +21,7 @@ from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.ranking_report import candidate_label
 from tmaplan.report import comparison_figures, rmse_figure, write_report
 from tmaplan.report_tables import baseline_parameters, differences_html, sample_warning
-from tmaplan.scenario import list_problems, load_problem, loads
+from tmaplan.scenario import list_problems, load_problem, loads, to_dict
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
@@ -115,7 +115,7 @@ def test_small_sample_warnings(one_run, three_runs):
 def test_scenario_text_round_trips_for_every_problem():
     for p in list_problems():
         sc = load_problem(p["name"])
-        text = scenario_text(sc)
+        text = scenario_text(to_dict(sc))
         back = loads(text, source="display")
         assert back.name == sc.name
         a, b = np.asarray(sc.times), np.asarray(back.times)

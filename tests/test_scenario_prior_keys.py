@@ -117,16 +117,16 @@ WITH_PRIOR = [p["name"] for p in list_problems() if load_problem(p["name"]).prio
 @pytest.mark.parametrize("problem", WITH_PRIOR)
 def test_a_prior_key_reported_as_ignored_does_not_change_the_draws(problem):
     """Cross-check of the key check's table against the sampler it describes: changing any
-    key that ``_ignored_prior_keys`` reports as ignored leaves ``sample_prior``'s draws bit for
+    key that ``ignored_prior_keys`` reports as ignored leaves ``sample_prior``'s draws bit for
     bit unchanged (if the sampler starts reading one, the table must change too)."""
     import copy
     import dataclasses
 
-    from tmaplan._scenario_checks import _ignored_prior_keys
     from tmaplan.models.prior import sample_prior
+    from tmaplan.scenario.prior_checks import ignored_prior_keys
 
     sc = load_problem(problem)
-    ignored = _ignored_prior_keys(sc.prior)
+    ignored = ignored_prior_keys(sc.prior)
     base = sample_prior(sc, 64, np.random.default_rng(5))
     assert ignored, "every built-in prior leaves some key unused"
     for name in ignored:

@@ -17,6 +17,7 @@ from tmaplan.report_tables import (
     results_table,
     sample_warning,
 )
+from tmaplan.scenario import to_dict
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -240,7 +241,7 @@ every policy in a run (paired comparison). Localised = relative range error belo
 {''.join(imgs)}
 <h2>Scenario</h2>
 <p>The scenario file of this report, in display units (a valid scenario file).</p>
-<pre>{html.escape(scenario_text(spec.scenario))}</pre>
+<pre>{html.escape(scenario_text(to_dict(spec.scenario)))}</pre>
 </body></html>
 """
     path = out / "report.html"

@@ -30,7 +30,6 @@ from tmaplan.models.prior import (
     relative_prior_covariance,
     relative_prior_samples,
     true_initial_state,
-    zero_prior_stds,
 )
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import (
@@ -40,6 +39,7 @@ from tmaplan.scenario import (
     TimeGrid,
     measurement_steps,
 )
+from tmaplan.scenario.prior_checks import zero_prior_stds
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario

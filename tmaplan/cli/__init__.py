@@ -25,13 +25,14 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan import __version__
 from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
 from tmaplan.cli._finite import require_finite
 from tmaplan.cli._paths import check_outputs
 from tmaplan.errors import ArgumentError
 from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
+from tmaplan.models.checks import check_scenario
 from tmaplan.scenario import load, load_problem
+from tmaplan.version import __version__
 
 __all__ = ["VERBS", "main", "write_json"]
 
@@ -178,6 +179,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             if getattr(args, "problem", None) is not None or fixed is not None:
                 scenario = load(args.problem) if fixed is None else load_problem(fixed)
                 problem = scenario.name
+                # the rules that need the motion model (tmaplan.scenario is below the models)
+                check_scenario(scenario, source=args.problem if fixed is None else None)
                 preflight(args, scenario)
             else:  # (preflight checks them with the problem)
                 check_outputs(args)

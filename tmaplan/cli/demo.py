@@ -108,8 +108,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     # one pool of workers for the whole demo, importing while the main process starts: the
-    # offline plan's multi-start and the campaign run on it
-    pool = process_pool(args.workers) if args.workers > 1 else None
+    # offline plan's multi-start and the campaign run on it (campaigns imports plan_starts)
+    pool = (process_pool(args.workers, warm_up=(run_campaign.__module__,))
+            if args.workers > 1 else None)
     with closing_pool(pool):  # (stopped at once by an interrupt)
         return _run(args, out, pool, t0)
 
@@ -191,7 +192,7 @@ def _say_replans(args: argparse.Namespace, result: Any) -> None:
     (:mod:`tmaplan.evaluation.replans`)."""
     for name in result.policies:
         if (counts := result.summary[name]["replans"]).total:
-            _say(args, f"      {name:<20} {counts.text()}")
+            _say(args, f"    {name:<28} {counts.text()}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

@@ -33,9 +33,9 @@ import numpy as np
 from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
-from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
 from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
 from tmaplan.evaluation.records import (
     FORMAT,
@@ -50,6 +50,7 @@ from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, proce
 from tmaplan.policies import Planned, Policy, Receding, parse_policy
 from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario, dump
+from tmaplan.version import __version__
 
 __all__ = [
     "CampaignResult",
@@ -114,8 +115,6 @@ class CampaignSpec:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def _meta(self, policies: Mapping[str, Policy] | None = None) -> dict[str, Any]:
-        from tmaplan import __version__
-
         meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
@@ -524,7 +523,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                 todo = todo[:max_new_runs]
             if backend == "processes" and pool is None and todo:
                 # started before the policies are resolved: the workers import meanwhile
-                pool = own_pool = process_pool(workers)
+                pool = own_pool = process_pool(workers, warm_up=(__name__,))
             pols: Mapping[str, Policy] = policies if policies is not None else {}
             if parsed is not None and todo:  # nothing to resolve when every run is stored
                 pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,

@@ -21,9 +21,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError, finite_real
-from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
 from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.metrics import RunMetrics, run_metrics
 from tmaplan.evaluation.seeding import RunStreams, run_streams
 from tmaplan.geometry import course_speed, wrap_angle

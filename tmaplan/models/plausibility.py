@@ -4,7 +4,7 @@ The truth (the target's true initial state, :func:`tmaplan.models.prior.true_ini
 against the own ship and against the scenario's own prior; each rule gives a
 :class:`tmaplan.errors.ScenarioWarning` naming the field (:func:`warn_suspicious`; the
 command line runs it before every verb, :func:`tmaplan.cli._args.preflight`). The rules
-that read a field alone are :mod:`tmaplan._scenario_plausible`'s, at load.
+that read a field alone are :mod:`tmaplan.scenario.plausible`'s, at load.
 
 * The contact on the own ship: a true initial range below :data:`MIN_RANGE` (100 m, less
   than a ship's length): its bearing is undefined at zero range, and every bound's

@@ -47,6 +47,7 @@ from tmaplan.planning._objective_graphs import (
     position_bound_graph,
     relative_range_crlb_graph,
 )
+from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES, ObjectiveName
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -77,22 +78,10 @@ __all__ = [
     "until_end_weights",
 ]
 
-#: Names accepted by :func:`make_objective` (heading objectives; the scenario's
-#: ``planning.objective`` and ``tmaplan plan --objective``).
-ObjectiveName = Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
-                        "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
-                        "relative-range-bound", "mean-relative-range-bound",
-                        "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy",
-                        "expected-time-to-accuracy"]
-OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
 #: Objectives of the ping scheduler (:func:`tmaplan.planning.schedule_pings`,
 #: ``tmaplan schedule --objective``): closed-form bounds of a fixed track.
 PingObjectiveName = Literal["mean-range-bound", "terminal-range-bound", "mean-position-bound"]
 PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
-#: Default heading objective (``tmaplan plan``, ``planning.objective``, the closed-loop
-#: ``planned``/``receding`` policies): the one whose ranking of manoeuvres agrees best with the
-#: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, docs/findings.md).
-DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
 
 
 def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int, *,

@@ -1,6 +1,8 @@
 """Scenario TOML load/dump, validation errors in one line, and the built-in problem registry.
 
-The public names are re-exported by :mod:`tmaplan.scenario`; import them from there.
+Load -> dump -> load is the identity (SI values, ``repr`` floats). Every invalid value raises
+:class:`tmaplan.errors.ScenarioError` naming the field, the expected and the received value.
+The public names are re-exported by :mod:`tmaplan.scenario`.
 """
 
 from __future__ import annotations
@@ -17,10 +19,11 @@ from typing import Any
 import tomli_w
 from pydantic import TypeAdapter, ValidationError
 
-from tmaplan._scenario_checks import check, check_bare_numbers, with_units
-from tmaplan._scenario_plausible import warn as warn_implausible
 from tmaplan.errors import ScenarioError
-from tmaplan.scenario import Scenario
+from tmaplan.scenario.bare import check_bare_numbers, with_units
+from tmaplan.scenario.checks import check
+from tmaplan.scenario.plausible import warn as warn_implausible
+from tmaplan.scenario.schema import Scenario
 
 __all__ = [
     "dump",
@@ -85,7 +88,7 @@ def from_dict(data: Mapping[str, Any], *, source: str | None = None) -> Scenario
     """Build and validate a scenario from a plain dict (as read from TOML).
 
     Bare numbers are SI; a bare angle or turn rate that is implausible in SI (surely
-    degrees) is refused, see :mod:`tmaplan._scenario_checks`.
+    degrees) is refused, see :mod:`tmaplan.scenario.bare`.
 
     Raises
     ------

@@ -1,88 +1,59 @@
-"""Scenarios: frozen dataclasses, TOML load/dump, validation.
+"""The scenario schema: frozen dataclasses of the time grid, target, prior, observer, settings.
 
-A scenario holds the time grid, the target's motion model (and prior), the observer's initial
-state, constraints and scripted manoeuvres, the sensors and optional planning settings. Files are
-TOML; every dimensional value may be a plain SI number or a string with a unit (``"12 kn"``,
-``"3.5 km"``, ``"45 deg"``, ``"10 min"``), see :mod:`tmaplan.units`.
-
-Load -> dump -> load is the identity (SI values, ``repr`` floats). Every invalid value raises
-:class:`tmaplan.errors.ScenarioError` naming the field, the expected and the received value.
+A :class:`Scenario` holds the time grid, the target's motion model (and prior), the
+observer's initial state, constraints and scripted manoeuvres, the sensors
+(:mod:`tmaplan.scenario.sensors`), optional planning and estimation settings and the faults
+(:mod:`tmaplan.scenario.faults`). Constructing one validates each value (the field types of
+:mod:`tmaplan.scenario.quantities`); :func:`tmaplan.scenario.from_dict` and
+:meth:`Scenario.replace` then check the rules across fields (:mod:`tmaplan.scenario.checks`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Annotated, Any, Literal, TypeVar, cast, dataclass_transform
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import AfterValidator, ConfigDict, Field, StrictBool
-from pydantic.dataclasses import dataclass as _pydantic_dataclass
+from pydantic import AfterValidator, StrictBool
 
-from tmaplan.models.faults import Faults
-from tmaplan.units import si_validator
+from tmaplan.scenario.checks import check
+from tmaplan.scenario.faults import Faults
+from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES
+from tmaplan.scenario.quantities import (
+    Angle,
+    AngularRate,
+    Length,
+    NonNegAngle,
+    NonNegInt,
+    NonNegLength,
+    NonNegProcessNoise,
+    NonNegSpeed,
+    NonNegTime,
+    PositiveAngularRate,
+    PositiveInt,
+    PositiveLength,
+    PositiveSpeed,
+    PositiveTime,
+    Speed,
+    Time,
+    Vec2Length,
+    Vec2Speed,
+    frozen,
+)
+from tmaplan.scenario.sensors import RangeSensor, Sensor
 
 __all__ = [
-    "BearingSensor",
     "Estimation",
-    "Faults",
-    "FrequencySensor",
     "Observer",
     "ObserverLeg",
     "Planning",
     "Prior",
-    "RangeSensor",
     "Scenario",
-    "Sensor",
     "Target",
     "TargetLeg",
     "TimeGrid",
-    "dump",
-    "from_dict",
-    "list_problems",
-    "load",
-    "load_problem",
-    "loads",
     "measurement_steps",
-    "problems_dir",
-    "save",
-    "to_dict",
 ]
-
-_CONFIG = ConfigDict(extra="forbid", arbitrary_types_allowed=False)
-_T = TypeVar("_T")
-
-
-@dataclass_transform(frozen_default=True, kw_only_default=True)
-def _frozen(cls: type[_T]) -> type[_T]:
-    return cast("type[_T]", _pydantic_dataclass(frozen=True, kw_only=True, config=_CONFIG)(cls))
-
-
-_unit = si_validator  # SI number or string with a unit; a bool is refused by name
-
-
-_FINITE = Field(allow_inf_nan=False)
-_POS = Field(allow_inf_nan=False, gt=0)
-_NONNEG = Field(allow_inf_nan=False, ge=0)
-Length = Annotated[float, _unit("length"), _FINITE]
-PositiveLength = Annotated[float, _unit("length"), _POS]
-NonNegLength = Annotated[float, _unit("length"), _NONNEG]
-Time = Annotated[float, _unit("time"), _FINITE]
-PositiveTime = Annotated[float, _unit("time"), _POS]
-NonNegTime = Annotated[float, _unit("time"), _NONNEG]
-Angle = Annotated[float, _unit("angle"), _FINITE]
-PositiveAngle = Annotated[float, _unit("angle"), _POS]
-NonNegAngle = Annotated[float, _unit("angle"), _NONNEG]
-Speed = Annotated[float, _unit("speed"), _FINITE]
-NonNegSpeed = Annotated[float, _unit("speed"), _NONNEG]
-PositiveSpeed = Annotated[float, _unit("speed"), _POS]
-AngularRate = Annotated[float, _unit("angular_rate"), _FINITE]
-PositiveAngularRate = Annotated[float, _unit("angular_rate"), _POS]
-PositiveFrequency = Annotated[float, _unit("frequency"), _POS]
-NonNegProcessNoise = Annotated[float, _unit("process_noise"), _NONNEG]
-NonNegInt = Annotated[int, Field(ge=0, strict=True)]
-PositiveInt = Annotated[int, Field(gt=0, strict=True)]
-Vec2Length = tuple[Length, Length]
-Vec2Speed = tuple[Speed, Speed]
 
 
 # --------------------------------------------------------------------------------------------
@@ -90,7 +61,7 @@ Vec2Speed = tuple[Speed, Speed]
 # --------------------------------------------------------------------------------------------
 
 
-@_frozen
+@frozen
 class TimeGrid:
     """Uniform time grid ``t_k = t0 + k·dt``, ``k = 0..n_steps``.
 
@@ -119,7 +90,7 @@ class TimeGrid:
         return self.t0 + self.dt * np.arange(self.n_steps + 1)
 
 
-@_frozen
+@frozen
 class TargetLeg:
     """A velocity change of a multi-leg target at a known time.
 
@@ -143,7 +114,7 @@ class TargetLeg:
     speed: NonNegSpeed | None = None
 
 
-@_frozen
+@frozen
 class Target:
     """Target motion model and its true initial state.
 
@@ -188,7 +159,7 @@ class Target:
     omega: AngularRate | None = None
 
 
-@_frozen
+@frozen
 class Prior:
     """Prior on the target's initial state (used by bounds, filters and planners).
 
@@ -270,9 +241,24 @@ class Prior:
 
     @property
     def truth_fields(self) -> tuple[str, ...]:
-        """Fields that take the truth (:attr:`truth_means`, ``course_mode`` when "true")."""
-        from tmaplan._scenario_checks import truth_fields
-        return truth_fields(self)
+        """Fields that take the truth (:attr:`truth_means`, ``course_mode`` when "true"): the
+        target's true initial value, in file order."""
+        if self.kind == "gaussian":
+            return ("mean",) if self.mean is None else ()
+        out = []
+        if self.bearing_mean is None:
+            out.append("bearing_mean")
+        if self.range_distribution == "normal" and self.range_mean is None:
+            out.append("range_mean")
+        if self.velocity_distribution == "normal":
+            if self.velocity_mean is None:
+                out.append("velocity_mean")
+        else:
+            if self.speed_distribution == "normal" and self.speed_mean is None:
+                out.append("speed_mean")
+            if self.course_mode == "true":
+                out.append("course_mode")
+        return tuple(out)
 
     @property
     def truth_means(self) -> tuple[str, ...]:
@@ -280,7 +266,7 @@ class Prior:
         return tuple(f for f in self.truth_fields if f != "course_mode")
 
 
-@_frozen
+@frozen
 class ObserverLeg:
     """A scripted observer leg starting at ``start``.
 
@@ -312,7 +298,7 @@ class ObserverLeg:
     turn_direction: Literal["shortest", "starboard", "port"] = "shortest"
 
 
-@_frozen
+@frozen
 class Observer:
     """Own ship: initial state, limits, and either scripted legs or a turn-rate sequence.
 
@@ -348,108 +334,14 @@ class Observer:
     heading_max: Angle | None = None
 
 
-@_frozen
-class BearingSensor:
-    """Passive bearing sensor: ``z = atan2(Δx, Δy) + v``, v ~ N(0, σ²).
-
-    Measurement steps: ``steps`` if given, else ``first_step, first_step + every, ...``.
-
-    Attributes
-    ----------
-    kind : "bearing"
-    sigma : float
-        Bearing noise std [rad].
-    first_step : int
-        First measurement step (1 by default: no bearing at t0).
-    every : int
-        Steps between measurements.
-    steps : tuple of int, optional
-        Explicit measurement steps (``first_step`` and ``every`` then keep their default 1).
-    ambiguity : {"none", "pi"}
-        "pi": bearing known modulo π, in (−π/2, π/2] (linear array, brehard2005 eq. 4).
-    """
-
-    kind: Literal["bearing"] = "bearing"
-    sigma: PositiveAngle
-    first_step: NonNegInt = 1
-    every: PositiveInt = 1
-    steps: tuple[NonNegInt, ...] | None = None
-    ambiguity: Literal["none", "pi"] = "none"
-
-
-@_frozen
-class RangeSensor:
-    """Range sensor: active pings at chosen steps, or continuous range-only measurement.
-
-    ``z = ‖r‖ + v``, v ~ N(0, σ²). Steps: the union of ``steps``; for ``period`` the first
-    grid step at or after each multiple of the period (brehard2005 §6's "every 80 s" with
-    δ = 6 s gives k = 14, 27, 40, 54, ...); for ``every`` the steps ``first_step + i·every``.
-    No steps at all is allowed (a ping sensor left to the scheduler).
-
-    Attributes
-    ----------
-    kind : "range"
-    sigma : float
-        Range noise std [m].
-    steps : tuple of int
-        Explicit ping steps.
-    period : float, optional
-        Ping period [s].
-    every : int, optional
-        Continuous ranging every n steps (range-only tracking).
-    first_step : int
-        First step for ``every`` (without ``every`` it keeps its default 1).
-    active : bool
-        True for an active sonar ping (reveals own ship; counts against the budget).
-    """
-
-    kind: Literal["range"] = "range"
-    sigma: PositiveLength
-    steps: tuple[NonNegInt, ...] = ()
-    period: PositiveTime | None = None
-    every: PositiveInt | None = None
-    first_step: NonNegInt = 1
-    active: StrictBool = True
-
-
-@_frozen
-class FrequencySensor:
-    """Narrow-band frequency lines: ``f_p(t) = f_p·(1 − Ṙ(t)/c) + v`` (clavard2013 eq. 3).
-
-    Attributes
-    ----------
-    kind : "frequency"
-    f0 : tuple of float
-        Emitted tones f_p [Hz] (unknown to estimators).
-    sigma : tuple of float
-        Noise std per line [Hz].
-    c : float
-        Sound speed [m/s].
-    first_step, every, steps
-        As for :class:`BearingSensor`.
-    """
-
-    kind: Literal["frequency"] = "frequency"
-    f0: tuple[PositiveFrequency, ...]
-    sigma: tuple[PositiveFrequency, ...]
-    c: PositiveSpeed = 1500.0
-    first_step: NonNegInt = 1
-    every: PositiveInt = 1
-    steps: tuple[NonNegInt, ...] | None = None
-
-
-Sensor = Annotated[BearingSensor | RangeSensor | FrequencySensor, Field(discriminator="kind")]
-
 
 def _objective_name(name: str) -> str:
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES  # the one list (planning imports us)
-
     if name not in OBJECTIVE_NAMES:
         raise ValueError(f"one of {', '.join(repr(n) for n in OBJECTIVE_NAMES)}")
     return name
 
 
-@_frozen
+@frozen
 class Planning:
     """Optional planning settings.
 
@@ -458,7 +350,7 @@ class Planning:
     horizon : float, optional
         Planning horizon [s], whole control intervals (default: the scenario's).
     objective : str
-        Default heading objective (:data:`tmaplan.planning.objectives.OBJECTIVE_NAMES`:
+        Default heading objective (:data:`tmaplan.scenario.names.OBJECTIVE_NAMES`:
         "logdet", "range-bound", "position-bound", "mean-relative-range-bound", ...).
     ping_budget : int
         Maximum number of active pings.
@@ -477,8 +369,7 @@ class Planning:
     """
 
     horizon: PositiveTime | None = None
-    # tmaplan.planning.objectives.DEFAULT_OBJECTIVE (not imported: no cycle)
-    objective: Annotated[str, AfterValidator(_objective_name)] = "expected-time-to-accuracy"
+    objective: Annotated[str, AfterValidator(_objective_name)] = DEFAULT_OBJECTIVE
     ping_budget: NonNegInt = 0
     ping_sigma: PositiveLength | None = None
     ping_min_spacing: NonNegTime = 0.0
@@ -488,7 +379,7 @@ class Planning:
     replan_interval: PositiveTime | None = None
 
 
-@_frozen
+@frozen
 class Estimation:
     """Optional settings of the batch estimators (``tmaplan track --estimator mle``).
 
@@ -505,7 +396,7 @@ class Estimation:
     turn_direction: Literal["either", "clockwise", "anticlockwise"] = "either"
 
 
-@_frozen
+@frozen
 class Scenario:
     """A complete TMA scenario.
 
@@ -553,8 +444,6 @@ class Scenario:
 
     def replace(self, **changes: Any) -> Scenario:
         """A validated copy with top-level fields replaced."""
-        from tmaplan._scenario_checks import check
-
         new = dataclasses.replace(self, **changes)
         check(new, source=self.name)
         return new
@@ -584,17 +473,3 @@ def measurement_steps(sensor: Any, grid: TimeGrid) -> np.ndarray:
     if sensor.steps is not None:
         return np.unique(np.asarray(sensor.steps, dtype=int))
     return np.arange(sensor.first_step, k_max + 1, sensor.every, dtype=int)
-
-
-# Load / dump live in their own module; re-exported here (the public home of the API).
-from tmaplan._scenario_io import (  # noqa: E402
-    dump,
-    from_dict,
-    list_problems,
-    load,
-    load_problem,
-    loads,
-    problems_dir,
-    save,
-    to_dict,
-)

@@ -1,13 +1,19 @@
-"""Plausibility of the values the schema accepts: impossible turn rates refused, suspicious
-but legal values warned (one line naming the field, :func:`tmaplan.errors.warn_field`).
+"""Plausibility of the values the schema accepts: impossible speeds and turn rates refused,
+suspicious but legal values warned (one line naming the field, :func:`tmaplan.errors.warn_field`).
 
-These rules read the scenario's own fields only (no motion model): :func:`check` is called
-by :func:`tmaplan._scenario_checks.check` (every construction path), :func:`warn` by
-:func:`tmaplan.scenario.from_dict` (files and dicts; a Python ``Scenario.replace`` is taken
-as meant). The rules that need the target's motion (a contact outside its own prior, on the
-own ship) and the planner (keep-out, memory) are in :mod:`tmaplan.planning.feasibility`.
-Documented in docs/scenario-files.md, "Plausibility".
+These rules read the scenario's own fields only (no motion model): :func:`check_speeds` and
+:func:`check_turn_rates` are called by :func:`tmaplan.scenario.checks.check` (every
+construction path), :func:`warn` by :func:`tmaplan.scenario.from_dict` (files and dicts; a
+Python ``Scenario.replace`` is taken as meant). The rules that need the target's motion (a
+contact outside its own prior, on the own ship) are in :mod:`tmaplan.models.plausibility`,
+and the planner's (keep-out, memory) in :mod:`tmaplan.planning.feasibility`. Documented in
+docs/scenario-files.md, "Plausibility".
 
+Speeds
+    In any unit: at most :data:`MAX_SPEED` = 150 m/s (≈ 292 kn) for the target (its
+    unmodelled manoeuvres of ``[faults]`` too), the observer and the prior (speeds, velocity
+    components and their stds). The sound speed of a frequency sensor is not a platform speed
+    and is not limited.
 Turn rates
     ``observer.turn_rate_max``, ``observer.legs[].turn_rate``, ``observer.turn_rates[]``
     and ``target.omega`` are refused above :data:`MAX_TURN_RATE` = 10 °/s (600 °/min, a
@@ -18,13 +24,13 @@ Turn rates
     and a planner given such a limit plans turns on the spot that no ship flies (after
     minutes of solving; on ``default`` IPOPT also failed from every start). Warned above
     :data:`PLAUSIBLE_TURN_RATE` = 0.1 rad/s (5.7 °/s, the limit of a bare turn rate,
-    :data:`tmaplan._scenario_checks.BARE_LIMITS`): a frigate's hard turn at 30 kn, not a
+    :data:`tmaplan.scenario.bare.BARE_LIMITS`): a frigate's hard turn at 30 kn, not a
     ship's at a tracking speed. Rates of turn are often quoted per minute (a ship's
     rate-of-turn indicator): the messages give the per-minute reading.
 Directions (courses, the prior's bearing and course means, the circle's phase)
     A direction beyond ±360° is taken modulo 360°: ``course = "400 deg"`` flies 40°, warned.
 Angular spreads with an explicit unit
-    Warned beyond the limits of a bare number (:data:`tmaplan._scenario_checks.BARE_LIMITS`):
+    Warned beyond the limits of a bare number (:data:`tmaplan.scenario.bare.BARE_LIMITS`):
     a bearing noise (``sensors[].sigma`` of a bearing sensor) above 0.2 rad (11.5°, a
     bearing that hardly informs, with an error model that ignores the wrap at ±180°); a
     prior's ``bearing_std`` or ``course_std`` above 1 rad (57°): a normal angle that wide
@@ -38,11 +44,18 @@ import math
 from collections.abc import Iterator
 from typing import Any
 
-from tmaplan._scenario_checks import BARE_LIMITS
-from tmaplan.display import angle, rate
-from tmaplan.errors import ScenarioError, warn_field
+import numpy as np
 
-__all__ = ["MAX_TURN_RATE", "PLAUSIBLE_TURN_RATE", "check", "warn", "warnings_of"]
+from tmaplan.display import angle, distance, rate, speed
+from tmaplan.errors import ScenarioError, warn_field
+from tmaplan.scenario.bare import BARE_LIMITS
+from tmaplan.units import KNOT
+
+__all__ = ["MAX_SPEED", "MAX_TURN_RATE", "PLAUSIBLE_TURN_RATE", "check_speeds",
+           "check_turn_rates", "warn", "warnings_of"]
+
+MAX_SPEED = 150.0
+"""Largest plausible platform speed [m/s] (≈ 292 kn)."""
 
 MAX_TURN_RATE = math.radians(10.0)
 """Largest turn rate of a ship [rad/s] (10 °/s); above it a scenario is refused."""
@@ -63,14 +76,12 @@ def _turn_rates(s: Any) -> Iterator[tuple[str, float, float | None]]:
         i = max(range(len(o.turn_rates)), key=lambda j: abs(o.turn_rates[j]))
         yield f"observer.turn_rates[{i}]", abs(o.turn_rates[i]), v0
     if t.omega is not None:
-        speed = abs(t.omega) * t.radius if t.radius is not None else None
-        yield "target.omega", abs(t.omega), speed
+        circle_speed = abs(t.omega) * t.radius if t.radius is not None else None
+        yield "target.omega", abs(t.omega), circle_speed
 
 
 def _circle(u: float, v: float | None) -> str:
     """``", a circle of radius 2 m at 6.0 kn"`` for turn rate ``u`` at speed ``v``."""
-    from tmaplan.display import distance, speed
-
     if not v or not u:
         return ""
     return f", a circle of radius {distance(v / u)} at {speed(v)}"
@@ -80,7 +91,7 @@ def _per_minute(u: float) -> str:
     return f"{math.degrees(u) * 60:.4g} °/min"
 
 
-def check(s: Any, source: str | None) -> None:
+def check_turn_rates(s: Any, source: str | None) -> None:
     """Refuse a turn rate above :data:`MAX_TURN_RATE` (module notes)."""
     for field, u, v in _turn_rates(s):
         if u > MAX_TURN_RATE * (1 + 1e-12):
@@ -91,6 +102,52 @@ def check(s: Any, source: str | None) -> None:
                 f"at most 5 lengths); rates of turn are often given per minute: \"{deg:.4g} "
                 f"deg/min\" is {deg / 60:.3g} °/s", f"{rate(u)} = {_per_minute(u)}"
                 f"{_circle(u, v)}", source=source)
+
+
+def _speeds(s: Any) -> Iterator[tuple[str, float]]:
+    """Every platform speed of a scenario (SI), with its field name."""
+    def norm(v: Any) -> float:
+        return float(np.hypot(*v))
+
+    t, o, p = s.target, s.observer, s.prior
+    for name, obj in (("target", t), ("observer", o)):
+        if obj.velocity is not None:
+            yield f"{name}.velocity", norm(obj.velocity)
+        if obj.speed is not None:
+            yield f"{name}.speed", obj.speed
+        for i, leg in enumerate(obj.legs):
+            if leg.velocity is not None:
+                yield f"{name}.legs[{i}].velocity", norm(leg.velocity)
+            if leg.speed is not None:
+                yield f"{name}.legs[{i}].speed", leg.speed
+    if t.omega is not None and t.radius is not None:
+        yield "target.omega", abs(t.omega) * t.radius
+    for name in ("speed_min", "speed_max"):
+        if getattr(o, name) is not None:
+            yield f"observer.{name}", getattr(o, name)
+    if p is not None:
+        if p.velocity_mean is not None:
+            yield "prior.velocity_mean", norm(p.velocity_mean)
+        for name in ("velocity_std", "speed_mean", "speed_std", "speed_min", "speed_max"):
+            if getattr(p, name) is not None:
+                yield f"prior.{name}", getattr(p, name)
+        if p.mean is not None:
+            yield "prior.mean", norm(p.mean[2:])
+        if p.std is not None:
+            yield "prior.std", norm(p.std[2:])
+    for i, m in enumerate(s.faults.target_manoeuvres if s.faults is not None else ()):
+        if m.speed is not None:
+            yield f"faults.target_manoeuvres[{i}].speed", m.speed
+
+
+def check_speeds(s: Any, source: str | None) -> None:
+    """Refuse a platform speed above :data:`MAX_SPEED` (module notes)."""
+    for field, v in _speeds(s):
+        if v > MAX_SPEED:
+            raise ScenarioError(
+                field, f"a speed of at most {MAX_SPEED:g} m/s ({MAX_SPEED / KNOT:.0f} kn, the "
+                "plausibility limit for a ship, a submarine or a contact)",
+                f"{v:.6g} m/s ({v / KNOT:.5g} kn)", source=source)
 
 
 #: (file path of a direction, the values it holds)

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -46,11 +46,9 @@ from tmaplan.geometry import (
     wrap_angle,
     wrap_half_angle,
 )
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.prior import relative_prior_samples
-
-if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import Scenario
 
 __all__ = [
     "PCRBResult",

@@ -28,7 +28,6 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,13 +35,10 @@ from tmaplan.bounds.inputs import information_rates, prepare
 from tmaplan.bounds.pcrb import PCRBResult, conditional_information, predicted_information
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import range_of
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices, target_track
-from tmaplan.scenario import RangeSensor
-
-if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import RangeSensor, Scenario
 
 __all__ = ["closed_loop_truth_bounds", "truth_bounds", "truth_conditioned_pcrb",
            "truth_covariance", "truth_pcrb"]

@@ -49,6 +49,7 @@ from tmaplan.headline import (
     stored_lines,
     stored_payload,
 )
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.parallel import closing_pool, process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
@@ -137,7 +138,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
 
     if pool is not None:  # receding-realtime's Hessian model on a worker while we schedule
         prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
-    budget = scenario.planning.ping_budget if scenario.planning else 0
+    budget = default_ping_budget(scenario)
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
     sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,
                            belief=belief)

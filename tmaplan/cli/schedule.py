@@ -24,6 +24,7 @@ from tmaplan.display import minute_list, seconds_text
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import course_speed
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
@@ -184,8 +185,7 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
     ``--min-spacing`` or ``planning.ping_min_spacing`` (a spacing that lets too few pings
     fit), else ``--budget`` / ``planning.ping_budget`` (too few steps outside
     ``planning.ping_forbidden``)."""
-    pl = scenario.planning
-    budget = args.budget if args.budget is not None else (pl.ping_budget if pl else 0)
+    budget = args.budget if args.budget is not None else default_ping_budget(scenario)
     if budget == 0:
         return
     times = track.times if track is not None else np.asarray(scenario.time.times, float)
@@ -210,9 +210,7 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Schedule, write ``<out>/<problem>_schedule.png`` and return the payload."""
     scenario = load(args.problem)
-    budget = args.budget
-    if budget is None:
-        budget = scenario.planning.ping_budget if scenario.planning is not None else 0
+    budget = args.budget if args.budget is not None else default_ping_budget(scenario)
     belief = Belief.from_prior(scenario)
     if args.observer_plan is not None:
         obs = read_observer_plan(args.observer_plan, scenario)

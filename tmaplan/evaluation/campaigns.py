@@ -30,8 +30,9 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
 from tmaplan.display import short_repr
-from tmaplan.errors import PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
 from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.filter_options import FilterOptions
@@ -46,7 +47,8 @@ from tmaplan.evaluation.records import (
 from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
 from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
-from tmaplan.policies import Policy, parse_policy
+from tmaplan.policies import Planned, Policy, Receding, parse_policy
+from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario, dump
 from tmaplan.version import __version__
 
@@ -171,9 +173,6 @@ def _parse(scenario: Scenario, specs: Sequence[str]) -> dict[str, Any]:
 
 def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
              pool: Executor | None) -> dict[str, Policy]:
-    from tmaplan.policies import Planned, Receding
-    from tmaplan.policies.manoeuvres import offline_plan
-
     if workers > 1 or pool is not None:  # the offline plans first, their starts on workers
         for pol in parsed.values():
             m = pol.manoeuvre
@@ -363,8 +362,8 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
             for f in as_completed(futs):
                 yield futs[f], f.result()
     elif backend == "dask":
-        from dask.distributed import Client, LocalCluster
-        from dask.distributed import as_completed as d_as_completed
+        from dask.distributed import Client, LocalCluster  # deferred: dask, optional and slow
+        from dask.distributed import as_completed as d_as_completed  # deferred: dask
 
         cluster = None
         if scheduler is None:
@@ -415,7 +414,7 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     finishes, its index appended to ``computed``). An interrupted run is never stored."""
     bar = None
     if progress:
-        from rich.progress import Progress
+        from rich.progress import Progress  # deferred: rich, for a progress bar only
 
         bar = Progress(transient=True)
         bar.start()
@@ -442,8 +441,6 @@ def _check_arguments(spec: CampaignSpec, workers: int, backend: str | None,
     source other than the two (read as "scenario"), a misspelt backend (found only after the
     policies are resolved), a negative ``max_new_runs`` (a slice from the end), ``policies``
     whose names are not the spec's (extra ones flown and left out of the results)."""
-    from tmaplan.errors import ArgumentError, as_real, is_integer
-
     if isinstance(spec.policies, str) or not spec.policies:
         raise ArgumentError("policies", "a non-empty tuple of policy specs", spec.policies)
     for name, v, least in (("runs", spec.runs, 1), ("n_particles", spec.n_particles, 2),
@@ -563,9 +560,6 @@ def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndar
     over their truths, tracks and pings
     (:func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
-    from tmaplan.errors import ArgumentError
-
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
                                             np.stack([r.target for r in runs]),

@@ -37,12 +37,22 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from tmaplan.bounds.pcrb import monte_carlo_pcrb
+from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import censor_time
 from tmaplan.evaluation.seeding import root_rng, run_seeds
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
+from tmaplan.planning import HeadingPlanner
+from tmaplan.planning.baselines import SINGLE_TURN_ANGLES, SINGLE_TURN_FRACTIONS, ZIGZAG_GRID
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.objectives import (
+    OBJECTIVE_NAMES,
+    ObjectiveEvaluator,
+    make_objective,
+)
 from tmaplan.policies import (
     CLOSED_LOOP_OBJECTIVE,
     Combined,
@@ -54,7 +64,9 @@ from tmaplan.policies import (
     Straight,
     Zigzag,
 )
+from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario
+from tmaplan.simulate import draw_truth
 
 __all__ = ["Candidate", "CostCorrelation", "CostRankingResult", "candidate_manoeuvres",
            "cost_functionals", "default_objective", "evaluate_costs", "rank_correlations",
@@ -87,18 +99,10 @@ class Candidate:
 def default_objective(scenario: Scenario) -> str:
     """Name of the objective that ``tmaplan plan`` optimises by default on ``scenario`` (read
     from :class:`tmaplan.planning.HeadingPlanner`, never restated here)."""
-    from tmaplan.planning import HeadingPlanner
-
     return str(HeadingPlanner(scenario).objective.name)
 
 
 def _grid(scenario: Scenario) -> list[Candidate]:
-    from tmaplan.planning.baselines import (
-        SINGLE_TURN_ANGLES,
-        SINGLE_TURN_FRACTIONS,
-        ZIGZAG_GRID,
-    )
-
     t0, H = scenario.time.t0, scenario.time.horizon
     out = []
     for f in SINGLE_TURN_FRACTIONS:
@@ -134,9 +138,6 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
     skipped : dict
         Objective name -> why its plan is not a candidate (solver failure, alias).
     """
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES, make_objective
-    from tmaplan.policies.manoeuvres import offline_plan
-
     if not is_integer(n, 3):
         raise ArgumentError("candidates", "an integer >= 3 (a rank correlation needs three)", n)
     fixed = [Candidate(name="straight", family="straight", policy=Straight()),
@@ -226,12 +227,6 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
     skipped : dict
         Name -> why it cannot be evaluated on ``scenario``.
     """
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-    from tmaplan.bounds.truth_bound import truth_bounds
-    from tmaplan.planning.belief import Belief
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
-    from tmaplan.simulate import draw_truth
-
     costs: dict[str, CostFn] = {}
     skipped: dict[str, str] = {}
     belief = Belief.from_prior(scenario)

@@ -16,12 +16,13 @@ import dataclasses
 import time as _time
 import warnings
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from tmaplan.bounds.batch_fim import tma_data, true_parameters
 from tmaplan.bounds.crlb import information_covariance
+from tmaplan.bounds.pcrb import monte_carlo_pcrb
 from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, is_integer
@@ -32,10 +33,8 @@ from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
 from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.geometry import range_of
+from tmaplan.scenario import Scenario
 from tmaplan.simulate import simulate
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = ["MonteCarloResult", "monte_carlo"]
 
@@ -47,8 +46,6 @@ __all__ = ["MonteCarloResult", "monte_carlo"]
 
 def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -> np.ndarray:
     """Prior-averaged Cartesian PCRB position std (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`)."""
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # side-assumption notes concern the LPC bound only
         res = monte_carlo_pcrb(scenario, samples=samples, rng=rng, coords="cartesian")

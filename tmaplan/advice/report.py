@@ -113,6 +113,8 @@ def advice_figures(recording: Recording, solutions: Sequence[ContactSolution],
         r = sol.pf.range if np.isfinite(sol.pf.range) else sol.mle.range
         if np.isfinite(r):
             a.axhline(ACCURACY * r, color=col, lw=0.8, ls=":")
+    a.plot([], [], "k--", label="holding course")
+    a.plot([], [], "k:", lw=0.8, label=f"{ACCURACY:.0%} of the range")
     a.set_xlabel("time from now [min]")
     a.set_ylabel("range bound [m]")
     a.grid(True, which="both", alpha=0.3)

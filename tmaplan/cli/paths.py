@@ -30,8 +30,9 @@ __all__ = ["check_json_path", "check_out_dir", "check_outputs", "fail"]
 JSON_PARSE_LIMIT = 64 * 2**20
 
 
-#: Verbs with ``--no-figure`` that write to ``--out`` all the same (their report and runs).
-ALWAYS_WRITE_OUT = frozenset({"rank-costs"})
+#: Verbs with ``--no-figure`` that write to ``--out`` all the same (their report and runs;
+#: a plan's leg table and track).
+ALWAYS_WRITE_OUT = frozenset({"rank-costs", "plan", "advise"})
 
 
 def _regular_file_above(path: Path) -> Path | None:

@@ -334,3 +334,24 @@ def test_two_contacts_crossing_the_best_turn_for_one_is_poor_for_the_other():
     assert rsd[90.0]["alpha"] < 0.05 < rsd[90.0]["bravo"]
     assert rsd[90.0]["bravo"] > 5 * rsd[90.0]["alpha"]
     assert rsd[270.0]["bravo"] < rsd[90.0]["bravo"] and rsd[270.0]["alpha"] > rsd[90.0]["alpha"]
+
+
+def test_a_failed_per_contact_computation_names_the_contact(capsys, tmp_path):
+    # the own ship of the built-in problem flies straight: no contact is observable
+    assert main(["crlb", "two-contacts-crossing", "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two-contacts-crossing: contact 'alpha': the Fisher" in err[0]
+
+
+def test_a_contact_without_prior_is_named_where_the_verb_needs_one(capsys, tmp_path):
+    d = _two()
+    del d["contacts"][1]["prior"]
+    path = tmp_path / "np.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["track", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field '--estimator'" in err and "no [prior] table" in err, err
+    assert "(contact 'bravo')" in err, err
+    assert main(["bound", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field 'contacts[1].prior'" in err and "(contact 'bravo')" in err, err

@@ -8,6 +8,7 @@ import json
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tmaplan.cli import main
@@ -276,3 +277,81 @@ def test_corpus_has_the_several_contact_errors():
     for part in ("duplicate_name", "weight_zero", "required_accuracy", "contacts_and_target",
                  "max_range_zero"):
         assert any(part in s for s in stems), part
+
+
+# ------------------------------------------------------------------ the built-in problems
+
+
+@pytest.mark.parametrize(("name", "bearings"), [
+    ("two-contacts-crossing", {"alpha": 45.0, "bravo": 315.0}),
+    ("three-contacts-screen", {"alpha": 30.0, "bravo": 330.0, "charlie": 90.0})])
+def test_the_several_contact_problems_have_their_geometry(name, bearings):
+    """Each contact's prior (never the truth) puts it where the comment says, its truth lies
+    inside its prior, a ping reaches 20 km; three-contacts-screen's fast contact closes and
+    weighs most."""
+
+    from tmaplan.geometry import wrap_angle
+    from tmaplan.planning.belief import Belief
+
+    s = load_problem(name)
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    assert text.startswith("# tmaplan's planning case") and "What it exercises:" in text
+    assert s.contact_names == tuple(bearings)
+    assert s.sensors_of("range")[0].max_range == 20e3
+    for c in s.contacts:
+        view = s.contact_view(c.name)
+        assert not c.prior.centred_on_truth
+        m = Belief.from_prior(view).mean
+        bearing = np.degrees(float(wrap_angle(np.arctan2(m[0], m[1]))))
+        assert abs(wrap_angle(np.radians(bearing - bearings[c.name]))) < np.radians(1.0)
+        r0 = np.hypot(*c.target.position)
+        assert c.prior.range_min <= r0 <= c.prior.range_max
+    if name == "three-contacts-screen":
+        fast = s.contact("charlie")
+        assert fast.weight == max(c.weight for c in s.contacts) == 3.0
+        assert fast.target.speed == max(c.target.speed for c in s.contacts)
+        pos, vel = np.asarray(fast.target.position), fast.target.speed * np.array(
+            [np.sin(fast.target.course), np.cos(fast.target.course)])
+        assert pos @ vel < 0  # closing
+        assert s.contact_view("charlie").required_accuracy == 0.05
+
+
+def test_two_contacts_crossing_the_best_turn_for_one_is_poor_for_the_other():
+    """A turn to starboard onto 090° at 15 min (towards alpha's side) localises alpha (batch
+    CRLB range RSD at 45 min of a few %) but leaves bravo far worse; the mirror turn the other
+    way round (cross-check by symmetry of the geometry)."""
+    from tmaplan.bounds.crlb import crlb
+    from tmaplan.scenario import ObserverLeg
+
+    s = load_problem("two-contacts-crossing")
+    rsd = {}
+    for course in (90.0, 270.0):
+        leg = ObserverLeg(start=900.0, course=float(np.radians(course)),
+                          turn_rate=s.observer.turn_rate_max)
+        turned = s.replace(observer=dataclasses.replace(s.observer, legs=(leg,)))
+        rsd[course] = {c: crlb(turned.contact_view(c), frequencies=0).final_range_rsd
+                       for c in s.contact_names}
+    assert rsd[90.0]["alpha"] < 0.05 < rsd[90.0]["bravo"]
+    assert rsd[90.0]["bravo"] > 5 * rsd[90.0]["alpha"]
+    assert rsd[270.0]["bravo"] < rsd[90.0]["bravo"] and rsd[270.0]["alpha"] > rsd[90.0]["alpha"]
+
+
+def test_a_failed_per_contact_computation_names_the_contact(capsys, tmp_path):
+    # the own ship of the built-in problem flies straight: no contact is observable
+    assert main(["crlb", "two-contacts-crossing", "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two-contacts-crossing: contact 'alpha': the Fisher" in err[0]
+
+
+def test_a_contact_without_prior_is_named_where_the_verb_needs_one(capsys, tmp_path):
+    d = _two()
+    del d["contacts"][1]["prior"]
+    path = tmp_path / "np.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["track", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field '--estimator'" in err and "no [prior] table" in err, err
+    assert "(contact 'bravo')" in err, err
+    assert main(["bound", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field 'contacts[1].prior'" in err and "(contact 'bravo')" in err, err

@@ -137,3 +137,41 @@ def test_simulate_verb_writes_every_contact(tmp_path, capsys):
     assert "default contact alpha:" in printed and "default contact bravo:" in printed
     assert main(["simulate", str(path), "--export", str(tmp_path / "x")]) == 1
     assert "field '--export'" in capsys.readouterr().err
+
+
+def test_the_batch_crlb_leaves_out_the_ranges_beyond_reach():
+    """Cross-check: a reach equals listing only the steps whose true range is within it."""
+    from tmaplan.bounds.crlb import crlb
+    from tmaplan.scenario import ObserverLeg
+
+    s = load_problem("default")
+    leg = ObserverLeg(start=900.0, course=float(np.radians(90.0)),
+                      turn_rate=s.observer.turn_rate_max)
+    s = s.replace(observer=dataclasses.replace(s.observer, legs=(leg,)))
+    every = dataclasses.replace(s.sensors[1], steps=tuple(range(1, s.n_steps + 1, 5)))
+    reach = 9e3
+    limited = s.replace(sensors=(s.sensors[0], dataclasses.replace(every, max_range=reach)))
+    truth = simulate(s, None)
+    inside = tuple(int(k) for k in every.steps if range_of(truth.relative)[k] <= reach)
+    assert 0 < len(inside) < len(every.steps)
+    listed = s.replace(sensors=(s.sensors[0], dataclasses.replace(every, steps=inside)))
+    a, b = crlb(limited, frequencies=0), crlb(listed, frequencies=0)
+    assert a.n_measurements == b.n_measurements
+    np.testing.assert_allclose(a.final_std, b.final_std, rtol=1e-9)
+    assert any("max_range" in n for n in a.notes)
+    full = crlb(s.replace(sensors=(s.sensors[0], every)), frequencies=0)
+    assert full.n_measurements["range"] > a.n_measurements["range"] > 0
+
+
+def test_the_bound_warns_that_it_does_not_apply_the_reach(tmp_path, capsys):
+    d = tomllib.loads((problems_dir() / "default.toml").read_text(encoding="utf-8"))
+    d["sensors"][1]["max_range"] = "10 km"
+    path = tmp_path / "reach.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    argv = ["bound", str(path), "--method", "closed-form", "--no-figure", "--out",
+            str(tmp_path)]
+    assert main([*argv, "--ping-every", "10 min"]) == 0
+    err = capsys.readouterr().err
+    assert "field 'sensors[1].max_range': not applied by the PCRB yet" in err
+    assert main(argv) == 0  # no range reading: nothing to say
+    assert "max_range" not in capsys.readouterr().err

@@ -444,6 +444,15 @@ def scenario_data(
             bearings.append(BearingData(times=times[steps], observer_position=obs.position[steps],
                                         sigma=sen.sigma))
         elif isinstance(sen, RangeSensor):
+            if sen.max_range is not None and steps.size:  # the true range decides the reach
+                from tmaplan.models.target import target_track
+
+                rel = target_track(tgt, grid, None)[steps, :2] - obs.position[steps]
+                reached = np.hypot(rel[:, 0], rel[:, 1]) <= sen.max_range
+                if not reached.all():
+                    notes.append(f"{int((~reached).sum())} range reading(s) beyond the range "
+                                 f"sensor's max_range = {sen.max_range:g} m left out (no echo)")
+                steps = steps[reached]
             if steps.size:
                 ranges.append(RangeData(times=times[steps],
                                         observer_position=obs.position[steps],

@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from tmaplan.errors import ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError, TmaplanError
 from tmaplan.scenario import Scenario, load
 from tmaplan.scenario.contacts import in_contact
 
@@ -69,8 +69,14 @@ def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
     the prior that the verb needs: ``field 'contacts[1].prior': expected a [prior] table: ...
     (contact 'bravo')``."""
     for i, c in enumerate(scenario.contacts):
-        with in_contact(scenario, i):
-            preflight(args, scenario.contact_view(c.name))
+        try:
+            with in_contact(scenario, i):
+                preflight(args, scenario.contact_view(c.name))
+        except ArgumentError as exc:  # a flag that does not suit this contact says whose
+            if exc.field.startswith("contacts") or not exc.field.startswith("-"):
+                raise
+            raise ArgumentError(exc.field, f"{exc.expected} (contact '{c.name}')",
+                                exc.received, source=exc.source) from None
 
 
 def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario
@@ -83,8 +89,15 @@ def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario
             print(f"== {scenario.name}: contact {c.name} ({i + 1} of "
                   f"{len(scenario.contacts)}) ==", file=sys.stdout)
         sub = argparse.Namespace(**vars(args), contact_view=_view(scenario, c.name))
-        with in_contact(scenario, i):
-            payload = module.run(sub)
+        try:
+            with in_contact(scenario, i, source=scenario.name):
+                payload = module.run(sub)
+        except TmaplanError as exc:  # a failed computation says whose
+            if isinstance(exc, ArgumentError) or not exc.args or not isinstance(exc.args[0],
+                                                                                  str):
+                raise
+            exc.args = (f"contact '{c.name}': {exc.args[0]}", *exc.args[1:])
+            raise
         if isinstance(payload, dict):
             payload.pop("problem", None)
         out[c.name] = payload

@@ -41,10 +41,11 @@ def contact_field(s: Any, i: int, field: str) -> str:
 
 
 @contextmanager
-def in_contact(s: Any, i: int) -> Iterator[None]:
+def in_contact(s: Any, i: int, source: str | None = None) -> Iterator[None]:
     """Re-raise a :class:`ScenarioError` on a contact field raised inside as the error of
     contact ``i`` of ``s``: the field as :func:`contact_field` writes it and the contact's name
-    after the expected value (unchanged in the single form)."""
+    after the expected value (unchanged in the single form); ``source``, if given, replaces
+    the error's source (the file, where the error came from a renamed view)."""
     try:
         yield
     except ScenarioError as exc:
@@ -52,7 +53,8 @@ def in_contact(s: Any, i: int) -> Iterator[None]:
         if field == exc.field:
             raise
         raise ScenarioError(field, f"{exc.expected} (contact '{s.contacts[i].name}')",
-                            exc.received, source=exc.source) from None
+                            exc.received, source=exc.source if source is None else source
+                            ) from None
 
 
 def contact_parts(s: Any) -> Iterator[tuple[int, Any]]:

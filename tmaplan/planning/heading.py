@@ -453,15 +453,14 @@ class HeadingPlanner:
             duals, guesses = None, [(self._direct_w(u, heading0, speed0), 1.0) for u in progs]
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
-        guesses = [(self._with_epigraph(x0, np.concatenate([pvec, [heading0, speed0, 1.0, s]])),
-                    s) for x0, s in guesses]
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = self._f_eval(guesses[0][0], P0)[0].item()
+        f0 = self._f_eval(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
         for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
+            x0 = self._with_epigraph(x0, P)
             use_warm = duals is not None
             solver = self._solver(use_warm, tol)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,

@@ -189,15 +189,15 @@ class HeadingPlanner:
                           turn_rate=urate, p=p_obj, layout=self.layout,
                           ping_scale=self._ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)
-        # a min-max objective (Objective.epigraph_terms): an epigraph variable t, last in the
-        # NLP's variables, minimised with f subject to g_c <= t
+        # a min-max objective (Objective.epigraph_terms): an epigraph variable t = scale·τ,
+        # τ last in the NLP's variables (O(1), as the constraints g_c/scale − τ <= 0)
         epi, self._n_w = self.objective.epigraph_terms(ctx), w.shape[0]
         if epi:
-            gc, t_epi = ca.vertcat(*epi), ca.MX.sym("epigraph")
+            gc, tau = ca.vertcat(*epi) / scale, ca.MX.sym("epigraph")
             self._epi_guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
-            w, f = ca.vertcat(w, t_epi), f + t_epi
+            w, f = ca.vertcat(w, tau), f + scale * tau
             lbw, ubw = np.append(lbw, -np.inf), np.append(ubw, np.inf)
-            g, lbg, ubg = [*g, gc - t_epi], [*lbg, np.full(len(epi), -np.inf)], [
+            g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
                 *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
         # keep-out from the target estimate: E X_0 propagated at constant velocity

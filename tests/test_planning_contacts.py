@@ -220,6 +220,10 @@ def test_all_contacts_plan_beats_its_starts(views):
     assert ev(r.plan.observer)[0] == pytest.approx(r.objective, rel=1e-9)
     for p in r.alone.values():
         assert r.objective <= ev(p.observer)[0] + 1e-6 * abs(r.objective)
+    js = r.contacts_json()
+    assert set(js) == {"d", "a"}
+    assert js["a"]["alone_objective"] == r.alone["a"].objective
+    assert js["d"]["expected_time_to_accuracy"] == r.expected_times["d"]
 
 
 def test_contact_set_validation(views):

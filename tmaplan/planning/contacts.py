@@ -189,6 +189,20 @@ class ContactsPlan:
         """The joint plan's objective [s]."""
         return float(self.plan.objective)
 
+    def contacts_json(self) -> dict[str, dict[str, float]]:
+        """The per-contact values of ``tmaplan plan --json`` (DESIGN.md §6, ``contacts:
+        {name: {...}}``): ``expected_time_to_accuracy`` on the joint plan [s], and
+        ``alone_expected_time_to_accuracy`` / ``alone_objective`` of the contact's own plan
+        [s] (absent for one contact)."""
+        out: dict[str, dict[str, float]] = {}
+        for name in self.names:
+            d = {"expected_time_to_accuracy": float(self.expected_times[name])}
+            if name in self.alone:
+                d["alone_expected_time_to_accuracy"] = float(self.alone_times[name])
+                d["alone_objective"] = float(self.alone[name].objective)
+            out[name] = d
+        return out
+
 
 class ContactsPlanner:
     """One heading NLP for the contacts of a :class:`ContactSet`, built once, re-solved.

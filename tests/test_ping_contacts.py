@@ -84,6 +84,9 @@ def test_ping_out_of_reach_does_not_inform(pair):
     assert sorted(bool(r.reach[n].any()) for n in cs.names) == [False, True]
     far = schedule_contact_pings(cs, budget=2, method="greedy", max_range=1.0)
     assert far.objectives == far.no_ping_objectives
+    js = r.contacts_json()
+    assert set(js) == set(cs.names)
+    assert {k: v["pings_in_reach"] for k, v in js.items()} == r.pings_in_reach
 
 
 def test_invariant_to_contact_order(pair):

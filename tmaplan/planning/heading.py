@@ -190,15 +190,15 @@ class HeadingPlanner:
                           turn_rate=urate, p=p_obj, layout=self.layout,
                           ping_scale=self._ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)
-        # a min-max objective (Objective.epigraph_terms): an epigraph variable t, last in the
-        # NLP's variables, minimised with f subject to g_c <= t
+        # a min-max objective (Objective.epigraph_terms): an epigraph variable t = scale·τ,
+        # τ last in the NLP's variables (O(1), as the constraints g_c/scale − τ <= 0)
         epi, self._n_w = self.objective.epigraph_terms(ctx), w.shape[0]
         if epi:
-            gc, t_epi = ca.vertcat(*epi), ca.MX.sym("epigraph")
+            gc, tau = ca.vertcat(*epi) / scale, ca.MX.sym("epigraph")
             self._epi_guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
-            w, f = ca.vertcat(w, t_epi), f + t_epi
+            w, f = ca.vertcat(w, tau), f + scale * tau
             lbw, ubw = np.append(lbw, -np.inf), np.append(ubw, np.inf)
-            g, lbg, ubg = [*g, gc - t_epi], [*lbg, np.full(len(epi), -np.inf)], [
+            g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
                 *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
         # keep-out from the target estimate: E X_0 propagated at constant velocity
@@ -455,15 +455,14 @@ class HeadingPlanner:
             duals, guesses = None, [(self._direct_w(u, heading0, speed0), 1.0) for u in progs]
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
-        guesses = [(self._with_epigraph(x0, np.concatenate([pvec, [heading0, speed0, 1.0, s]])),
-                    s) for x0, s in guesses]
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = self._f_eval(guesses[0][0], P0)[0].item()
+        f0 = self._f_eval(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
         for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
+            x0 = self._with_epigraph(x0, P)
             use_warm = duals is not None
             solver = self._solver(use_warm, tol)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,

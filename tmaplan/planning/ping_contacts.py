@@ -152,6 +152,15 @@ class ContactsPingSchedule:
     reach: dict[str, np.ndarray]
     pings_in_reach: dict[str, int]
 
+    def contacts_json(self) -> dict[str, dict[str, Any]]:
+        """The per-contact values of ``tmaplan schedule --json`` (DESIGN.md §6, ``contacts:
+        {name: {...}}``): ``objective``, ``no_ping_objective`` [m], ``bound`` per step [m],
+        ``pings_in_reach`` and ``reach`` (per step, bool)."""
+        return {n: {"objective": self.objectives[n],
+                    "no_ping_objective": self.no_ping_objectives[n],
+                    "bound": self.bounds[n], "pings_in_reach": self.pings_in_reach[n],
+                    "reach": self.reach[n]} for n in self.names}
+
 
 def schedule_contact_pings(contacts: ContactSet, *, budget: int,
                            method: Literal["exact", "relaxed", "greedy"] = "relaxed",

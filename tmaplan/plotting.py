@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from tmaplan.geometry import bearing_of
 from tmaplan.planning import PingEvaluator
 from tmaplan.simulate import Simulation
 
@@ -116,7 +117,6 @@ def plot_bearings(sim: Simulation, path: str | Path) -> Path | None:
     path : str or Path
         PNG.
     """
-    from tmaplan.geometry import bearing_of
 
     meas = [m for m in sim.measurements if m.kind == "bearing" and m.steps.size]
     if not meas:

@@ -35,6 +35,7 @@ from tmaplan.geometry import course_speed
 from tmaplan.io.plans import Leg, legs_from_track
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.objectives import ObjectiveEvaluator, expected_time_to_accuracy
 from tmaplan.planning.pings import PingSchedule, schedule_pings
 from tmaplan.scenario import (
@@ -171,7 +172,6 @@ def advise_contact(sol: ContactSolution, platform: Platform, *, horizon: float =
     -------
     Advice
     """
-    from tmaplan.planning.heading import HeadingPlanner
 
     problem = sol.problem
     now = float(problem.observer.times[-1])

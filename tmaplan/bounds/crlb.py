@@ -40,6 +40,7 @@ from tmaplan.errors import (
 )
 from tmaplan.geometry import range_of
 from tmaplan.models.observer import observer_track
+from tmaplan.models.target import target_track
 from tmaplan.models.tracks import (
     TrackModel,
     constant_turn_model,
@@ -445,7 +446,6 @@ def scenario_data(
                                         sigma=sen.sigma))
         elif isinstance(sen, RangeSensor):
             if sen.max_range is not None and steps.size:  # the true range decides the reach
-                from tmaplan.models.target import target_track
 
                 rel = target_track(tgt, grid, None)[steps, :2] - obs.position[steps]
                 reached = np.hypot(rel[:, 0], rel[:, 1]) <= sen.max_range

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import datetime as dt
 import html
 import math
 import warnings
@@ -27,8 +28,21 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli.args import add_figure_arguments, add_seed_argument, duration, integer
-from tmaplan.errors import ArgumentError, UnitError
+from tmaplan.advice.problem import Platform, contact_problem, read_platform
+from tmaplan.advice.recommend import advise_contact
+from tmaplan.advice.report import advice_figures, write_advice_page
+from tmaplan.advice.solution import contact_rng, solve_contact
+from tmaplan.cli.args import (
+    add_figure_arguments,
+    add_seed_argument,
+    command_line,
+    duration,
+    integer,
+)
+from tmaplan.errors import ArgumentError, DataError, UnitError
+from tmaplan.io import read_recording
+from tmaplan.io.faults import warn
+from tmaplan.io.plans import legs_table, write_plan
 from tmaplan.units import to_si
 
 HELP = ("recorded bearings + own-ship navigation: each contact's solution with its uncertainty, "
@@ -87,7 +101,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _platform(args: argparse.Namespace) -> Any:
-    from tmaplan.advice.problem import Platform, read_platform
 
     base = read_platform(args.platform) if args.platform else Platform()
     flags = {"range_min": args.range_min, "range_max": args.range_max,
@@ -167,7 +180,6 @@ def _contact_json(sol: Any) -> dict[str, Any]:
 
 
 def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
-    from tmaplan.io.plans import legs_table
 
     names = {"pf": "particle filter", "mle": "batch ML (CRLB)"}
     for sol in solutions:
@@ -231,9 +243,7 @@ def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
 
 
 def _exports(out: Path, rec: Any, advice: Sequence[Any]) -> dict[str, dict[str, str]]:
-    import datetime as dt
 
-    from tmaplan.io.plans import write_plan
 
     files: dict[str, dict[str, str]] = {}
     for adv in advice:
@@ -255,8 +265,6 @@ MIN_BEARINGS = 5
 def _enough_bearings(rec: Any) -> Any:
     """The recording without its contacts of fewer than :data:`MIN_BEARINGS` bearing times
     (left out, warned); none left: an error."""
-    from tmaplan.errors import DataError
-    from tmaplan.io.faults import warn
 
     few = {c.name: int(np.unique(c.times).size) for c in rec.contacts
            if np.unique(c.times).size < MIN_BEARINGS}
@@ -275,12 +283,6 @@ def _enough_bearings(rec: Any) -> Any:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Read, solve, advise; return the docs/cli.md ``advise`` fields."""
-    from tmaplan.advice.problem import contact_problem
-    from tmaplan.advice.recommend import advise_contact
-    from tmaplan.advice.report import advice_figures, write_advice_page
-    from tmaplan.advice.solution import contact_rng, solve_contact
-    from tmaplan.cli.args import command_line
-    from tmaplan.io import read_recording
 
     if args.sigma_deg is not None and not 0 < args.sigma_deg < 180:
         raise ArgumentError("--sigma-deg", "a standard deviation in (0, 180) degrees",

@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from tmaplan.cli.schedule import START_TOLERANCE, read_observer_plan
 from tmaplan.errors import ArgumentError
 from tmaplan.geometry import course_speed
+from tmaplan.io.plans import read_legs_csv, step_turn_rates
 from tmaplan.models.target import initial_velocity
 from tmaplan.scenario import Scenario
 
@@ -43,8 +45,6 @@ def with_observer_plan(scenario: Scenario, path: str | Path) -> Scenario:
         course is not the problem's initial course, a turn rate above the problem's
         ``observer.turn_rate_max``; :class:`~tmaplan.errors.DataError`: the leg table's faults.
     """
-    from tmaplan.cli.schedule import START_TOLERANCE, read_observer_plan
-    from tmaplan.io.plans import read_legs_csv, step_turn_rates
 
     grid = scenario.time
     K, dt = grid.n_steps, float(grid.dt)

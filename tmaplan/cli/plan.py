@@ -24,7 +24,10 @@ from tmaplan.cli.args import (
     duration,
     integer,
 )
+from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, parse_start
 from tmaplan.display import minute_list
+from tmaplan.io import LocalFrame
+from tmaplan.io.plans import legs_from_track, legs_table, write_plan
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
@@ -149,9 +152,6 @@ def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,
     """The plan as a navigator uses it (docs/recordings.md): its leg table, printed and
     written (``<stem>_legs.csv``), and its track as GPX and CSV, the own ship starting at
     ``simulate --export``'s default origin and time (the scenario's plane shifted there)."""
-    from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, _start
-    from tmaplan.io import LocalFrame
-    from tmaplan.io.plans import legs_from_track, legs_table, write_plan
 
     legs = legs_from_track(plan.times - plan.times[0], plan.heading,
                            turn_rates=plan.turn_rate)
@@ -159,7 +159,7 @@ def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,
     p0 = np.asarray(scenario.observer.position, float)
     t0 = float(scenario.time.t0)
     files = write_plan(out, stem, legs, obs.times - t0, obs.position[:, 0] - p0[0],
-                       obs.position[:, 1] - p0[1], start=_start(DEFAULT_START),
+                       obs.position[:, 1] - p0[1], start=parse_start(DEFAULT_START),
                        frame=LocalFrame(lat0=DEFAULT_ORIGIN[0], lon0=DEFAULT_ORIGIN[1]))
     if not quiet:
         print(legs_table(legs))

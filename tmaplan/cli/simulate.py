@@ -49,7 +49,7 @@ def _origin(text: str) -> tuple[float, float]:
     return lat, lon
 
 
-def _start(text: str) -> dt.datetime:
+def parse_start(text: str) -> dt.datetime:
     """Type of ``--start``: an ISO 8601 time with a zone."""
     from tmaplan.io.times import parse_utc  # deferred: tmaplan.io loads pyproj, pynmea2, gpxpy
 
@@ -79,7 +79,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--observer-plan", default=None, metavar="FILE",
         help="fly this plan: a `tmaplan plan P --json` file or a legs CSV (docs/recordings.md)")
     parser.add_argument(
-        "--start", type=_start, default=None, metavar="TIME",
+        "--start", type=parse_start, default=None, metavar="TIME",
         help=f"with --export: UTC time of the run's first step (default {DEFAULT_START})")
 
 
@@ -184,7 +184,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         print(_summary(scenario.name, sim, args.seed))
     if args.export is not None:
         files = export(sim, args.export, origin=args.origin or DEFAULT_ORIGIN,
-                       start=args.start or _start(DEFAULT_START), seed=args.seed)
+                       start=args.start or parse_start(DEFAULT_START), seed=args.seed)
         payload["export"] = files
         if args.json != "-":
             print(f"wrote {', '.join(files.values())}")

@@ -35,6 +35,7 @@ import zlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+import casadi as ca
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
@@ -258,7 +259,6 @@ class ContactsObjective(Objective):
     def combined(self, ctx: PlanContext) -> Any:
         """The contacts' term [s] (casadi scalar; 0 for ``worst-contact``, whose value the
         epigraph variable carries)."""
-        import casadi as ca
 
         if self.kind == "worst-contact":
             return ca.DM(0.0)

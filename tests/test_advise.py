@@ -23,7 +23,7 @@ from scipy import stats
 from tmaplan.advice.problem import Platform, bearings_problem, contact_problem, read_platform
 from tmaplan.advice.solution import Z_95, contact_rng, solve_contact
 from tmaplan.cli import main
-from tmaplan.cli.simulate import DEFAULT_ORIGIN, _start, export
+from tmaplan.cli.simulate import DEFAULT_ORIGIN, export, parse_start
 from tmaplan.errors import DataError
 from tmaplan.estimators.runner import run
 from tmaplan.io import read_nav, read_recording, read_truth
@@ -38,7 +38,7 @@ TURN = 1200.0
 def _export(tmp: Path, seed: int) -> tuple[Path, object]:
     sim = simulate(load(PROBLEM), np.random.default_rng(seed))  # as `simulate --seed`
     d = tmp / f"run{seed}"
-    export(sim, d, origin=DEFAULT_ORIGIN, start=_start("2024-06-01T12:00:00Z"), seed=seed)
+    export(sim, d, origin=DEFAULT_ORIGIN, start=parse_start("2024-06-01T12:00:00Z"), seed=seed)
     return d, sim
 
 

@@ -229,10 +229,10 @@ class ContactsPlanner:
 
     Notes
     -----
-    The keep-out range is enforced from the first contact's estimate only (the heading
-    planner's constraint reads one block); ping steps given to :meth:`solve` inform every
-    contact (the reach of a ping, ``RangeSensor.max_range``, is modelled by the ping
-    scheduler, :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
+    The keep-out range holds from every contact's estimate (its mean propagated at constant
+    velocity); ping steps given to :meth:`solve` inform every contact (the reach of a ping,
+    ``RangeSensor.max_range``, is modelled by the ping scheduler,
+    :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
     """
 
     def __init__(self, contacts: ContactSet, *, objective: str | None = None,

@@ -220,6 +220,11 @@ def test_all_contacts_plan_beats_its_starts(views):
     assert ev(r.plan.observer)[0] == pytest.approx(r.objective, rel=1e-9)
     for p in r.alone.values():
         assert r.objective <= ev(p.observer)[0] + 1e-6 * abs(r.objective)
+    # a re-plan on the same beliefs from the plan stays at its optimum
+    again = planner.solve(warm_start=r)
+    assert again.start == "warm" and again.plan.success
+    span = (planner.joint.K + 1) * planner.joint.dt
+    assert again.objective == pytest.approx(r.objective, abs=1e-3 * span)
     js = r.contacts_json()
     assert set(js) == {"d", "a"}
     assert js["a"]["alone_objective"] == r.alone["a"].objective

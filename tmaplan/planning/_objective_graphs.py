@@ -89,6 +89,11 @@ class ParamLayout:
         """Length of p."""
         return 34 + 4 * self.n_samples + 3 * (self.n_steps + 1)
 
+    def mean_offsets(self) -> tuple[int, ...]:
+        """Offsets in p of each belief's mean relative state ``E X_0`` (4 entries): one
+        belief here (the planner's keep-out reads them)."""
+        return (0,)
+
     def slices(self) -> dict[str, slice]:
         """Name -> slice of p."""
         K1, ns = self.n_steps + 1, 4 * self.n_samples

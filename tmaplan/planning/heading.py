@@ -201,9 +201,9 @@ class HeadingPlanner:
             g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
                 *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
-        # keep-out from the target estimate: E X_0 propagated at constant velocity
-        if self.keep_out > 0:
-            m0 = p_obj[0:4]
+        # keep-out from each target estimate: E X_0 propagated at constant velocity
+        for o in (self.layout.mean_offsets() if self.keep_out > 0 else ()):
+            m0 = p_obj[o:o + 4]
             t = ca.DM(self.times.reshape(-1, 1))
             v_o0 = vbar[0, :]
             tx = m0[0] + t * (m0[2] + v_o0[0]) - pos[:, 0]

@@ -34,11 +34,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.estimators.particle_filter import ParticleFilter
-from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
+from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.metrics import censor_time, paired_difference
 from tmaplan.policies import Combined, Receding, parse_policy
 from tmaplan.scenario import load_problem
-from tmaplan.simulate import draw_truth
 
 _FILTER_SECONDS = [0.0]
 
@@ -91,34 +90,27 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
         print(f"[{path}] campaign setup (offline plans, schedules, RTI model): "
               f"{setup[path]:.1f} s")
         for i in range(first_run, first_run + runs):
-            s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
-            with threadpool_limits(limits=1):
-                target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
-                for name, pol in pols.items():
-                    _FILTER_SECONDS[0] = 0.0
-                    t = time.perf_counter()
-                    res = run_closed_loop(sc, pol, target,
-                                          noise_rng=np.random.default_rng(s_noise),
-                                          filter_rng=np.random.default_rng(s_filter),
-                                          n_particles=particles)
-                    total = time.perf_counter() - t
-                    plan = sum(e["seconds"] for e in res.replans)
-                    r = rows[path][name]
-                    r.append((total, plan, _FILTER_SECONDS[0], [e["seconds"] for e in res.replans],
-                              [e.get("solver", "-") for e in res.replans]))
-                    m = run_metrics(res.times, res.truth, res.estimate,
-                                    res.observer.mean_velocity, accuracy=0.1,
-                                    n_pings=len(res.ping_steps))
-                    metric[name]["tta", path].append(m.time_to_accuracy)
-                    metric[name]["fre", path].append(m.final_range_error)
-                    records.append({"path": path, "policy": name, "run": i, "seed": seed,
-                                    "particles": particles, "problem": problem,
-                                    "time_to_accuracy": _num(m.time_to_accuracy),
-                                    "final_range_error": _num(m.final_range_error),
-                                    "seconds": total, "plan_seconds": plan})
-                    if json_out:
-                        with open(json_out, "w") as fh:
-                            json.dump(records, fh)
+            # the campaigns' run (truth, then each policy on the run's streams); a policy's
+            # seconds: from the previous result (or the run's start) to its own
+            _FILTER_SECONDS[0] = 0.0
+            t = time.perf_counter()
+            for name, res in paired_run(sc, pols, seed=seed, run=i, n_particles=particles):
+                total = time.perf_counter() - t
+                plan = sum(e["seconds"] for e in res.replans)
+                r = rows[path][name]
+                r.append((total, plan, _FILTER_SECONDS[0], [e["seconds"] for e in res.replans],
+                          [e.get("solver", "-") for e in res.replans]))
+                m = res.metrics(0.1)
+                metric[name]["tta", path].append(m.time_to_accuracy)
+                metric[name]["fre", path].append(m.final_range_error)
+                records.append({"path": path, "policy": name, "run": i, "seed": seed,
+                                "particles": particles, "problem": problem, **m.to_json(),
+                                "seconds": total, "plan_seconds": plan})
+                if json_out:
+                    with open(json_out, "w") as fh:
+                        json.dump(records, fh)
+                _FILTER_SECONDS[0] = 0.0
+                t = time.perf_counter()
     print(f"\n{problem}: {runs} runs, {particles} particles, 1 thread (shared machine: ratios "
           "are the figures to read)")
     print(f"{'policy':<22}{'path':<5}{'s/run':>8}{'plan':>8}{'filter':>8}{'rest':>8}"
@@ -157,11 +149,6 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
     if len(paths) == 2:
         print(f"campaign setup new/old: {setup['new'] / setup['old']:.2f}; seconds per run of "
               f"all policies new/old: {per_run['new'] / per_run['old']:.3f}")
-
-
-def _num(x):
-    x = float(x)
-    return x if np.isfinite(x) else None
 
 
 def pair(old_json, new_json, problem="default"):
@@ -216,11 +203,9 @@ def gaps(runs, particles, seed=1000, problem="default"):
     receding._RecedingController._replan = recorded
     try:
         for i in range(runs):
-            s_truth, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
-            with threadpool_limits(limits=1):
-                target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
-                run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(s_noise),
-                                filter_rng=np.random.default_rng(s_filter), n_particles=particles)
+            for _ in paired_run(sc, {"receding-realtime": pol}, seed=seed, run=i,
+                                n_particles=particles):
+                pass
     finally:
         receding._RecedingController._replan = replan
     print(f"{problem}: objective of the shifted previous plan - IPOPT optimum, {runs} runs "

@@ -2,7 +2,7 @@
 
 For each policy (``planned+scheduled`` by default; ``receding`` is slow, add it with
 ``--policies``), each fault of :data:`FAULTS` (a ``[faults]`` table appended to the ``default``
-problem) and each filter option (:class:`tmaplan.estimators.consistency.FilterOptions`:
+problem) and each filter option (:class:`tmaplan.evaluation.filter_options.FilterOptions`:
 plain, monitored, robust), a campaign of paired runs (same truths, noise and filter seeds as
 the fault-free campaign) prints the divergence rate, the median time to 10 % range accuracy,
 the final range RMSE, its ratio to the fault-free RMSE of the same option with a paired
@@ -46,11 +46,13 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.estimators.consistency import FilterOptions, MonitorConfig
+from tmaplan.estimators.consistency import MonitorConfig
 from tmaplan.estimators.particle_filter import DegeneracyWarning
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_campaign
-from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.detectability import detection_probability, manoeuvre_detectability
+from tmaplan.evaluation.filter_options import FilterOptions
+from tmaplan.evaluation.seeding import run_streams
 from tmaplan.policies import AlarmResponse
 from tmaplan.scenario import Scenario, dump, load_problem, loads
 from tmaplan.simulate import draw_truth
@@ -183,14 +185,10 @@ def manoeuvre(*, runs: int, policy: str = "planned+scheduled", option: str = "mo
     sig_r = float(base.sensors_of("range")[0].sigma)
     alpha = (OPTIONS[option]().monitor or MonitorConfig()).alpha
     for i in range(runs):
-        ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
-        out = []
-        for s, pol in ((base, pol_b), (sc, pol_f)):
-            target = draw_truth(s, np.random.default_rng(ss[0]))
-            r = run_closed_loop(s, pol, target, noise_rng=np.random.default_rng(ss[1]),
-                                filter_rng=np.random.default_rng(ss[2]), n_particles=particles,
-                                options=OPTIONS[option]())
-            out.append(r)
+        # run i of the campaigns (its truth and streams) flown without and with the turn
+        out = [r for s, pol in ((base, pol_b), (sc, pol_f))
+               for _, r in paired_run(s, {policy: pol}, seed=seed, run=i,
+                                      n_particles=particles, options=OPTIONS[option]())]
         e0 = np.hypot(*(out[0].estimate[:, :2] - out[0].truth[:, :2]).T)
         r1 = out[1]
         e1 = np.hypot(*(r1.estimate[:, :2] - r1.truth[:, :2]).T)
@@ -264,14 +262,11 @@ def bound_only(*, runs: int, policy: str = "planned+scheduled", seed: int = 0,
     j = int(np.searchsorted(times, t_m - 1e-9))
     bound = []
     for i in range(runs):
-        ss = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
-        straight = draw_truth(base, np.random.default_rng(ss[0]))
+        straight = draw_truth(base, np.random.default_rng(run_streams(seed, i).truth))
         with warnings.catch_warnings():  # 64 particles degenerate at pings; only the path counts
             warnings.simplefilter("ignore", DegeneracyWarning)
-            r = run_closed_loop(sc, pol, draw_truth(sc, np.random.default_rng(ss[0])),
-                                noise_rng=np.random.default_rng(ss[1]),
-                                filter_rng=np.random.default_rng(ss[2]), n_particles=64,
-                                options=FilterOptions.plain())
+            [(_, r)] = paired_run(sc, {policy: pol}, seed=seed, run=i, n_particles=64,
+                                  options=FilterOptions.plain())
         bound.append(manoeuvre_detectability(
             times=times, own_position=r.observer.position, target=r.target, straight=straight,
             onset=j, window=60.0 * window_min,

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.estimators import ParticleFilter, PFConfig, measurement_batches
+from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.models.prior import relative_prior_samples
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
@@ -147,7 +148,7 @@ def paired_z(a: list[float], b: list[float]) -> float:
 def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
     """ns per particle-step of 4 normals: Philox in the kernel, the Generator (float64 and
     float32 ziggurat into a preallocated buffer)."""
-    from tmaplan.estimators import _pf_numba
+    from tmaplan.estimators import pf_numba as _pf_numba
 
     rng = np.random.default_rng(0)
     key = np.arange(4, dtype=np.uint64)
@@ -194,7 +195,7 @@ def _main(argv: list[str] | None) -> int:
     ss = _stonesoup()
     if ss is None:
         print("Stone Soup not installed: tmaplan only (pip install stonesoup==1.9.1)")
-    seeds = np.random.SeedSequence(args.seed).spawn(args.runs)
+    seeds = run_seeds(args.seed, args.runs)
     sims = [simulate(sc, np.random.default_rng(s)) for s in seeds]
     _warm(sc, sims[0])  # first: numba's threads start after tmaplan set OMP_WAIT_POLICY
     print(f"ristic-bot-moderate: {K} steps, {args.runs} runs per N; bootstrap PF, systematic "
@@ -244,7 +245,7 @@ _WARM: dict[str, float] = {}
 def _warm(sc: Any, sim: Any) -> None:
     """Compile (or load from numba's cache) the numba kernels, serial and parallel builds,
     outside the timed loops; prints the time it took."""
-    from tmaplan.estimators import _pf_numba
+    from tmaplan.estimators import pf_numba as _pf_numba
 
     t0 = time.perf_counter()
     for n in (1000, _pf_numba.PARALLEL_MIN):

@@ -25,7 +25,8 @@ import warnings
 
 import numpy as np
 
-from tmaplan.bounds import _jit, _lpc_terms
+from tmaplan.bounds import lpc_codegen as _jit
+from tmaplan.bounds import lpc_terms as _lpc_terms
 from tmaplan.bounds.closed_form import ClosedFormEngine, closed_form_model, closed_form_pcrb
 from tmaplan.bounds.inputs import prepare
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb

@@ -27,6 +27,7 @@ import numpy as np
 
 from tmaplan.evaluation.metrics import paired_difference
 from tmaplan.evaluation.plan_general import CRITERIA
+from tmaplan.evaluation.seeding import run_seed
 from tmaplan.experiments import criteria, general_check, random_problems
 from tmaplan.scenario import load_problem
 from tmaplan.units import KNOT
@@ -34,11 +35,12 @@ from tmaplan.units import KNOT
 
 def evaluation_seed(root: int | None, i: int) -> int:
     """The evaluation seed of problem ``i``: 0 (every problem on the same runs) without a
-    root, else a 31-bit seed of its own from ``SeedSequence(root, spawn_key=(i,))`` (never
+    root, else a 31-bit seed of its own from run ``i``'s seed, ``SeedSequence(root,
+    spawn_key=(i,))`` (:func:`tmaplan.evaluation.seeding.run_seed`; never
     the tuning seed 1000)."""
     if root is None:
         return 0
-    s = int(np.random.SeedSequence(root, spawn_key=(i,)).generate_state(1)[0] >> 1)
+    s = int(run_seed(root, i).generate_state(1)[0] >> 1)
     return s if s != 1000 else s + 1
 
 

@@ -4,7 +4,7 @@ For each Monte Carlo run the *clairvoyant* plan is the heading OCP solved with t
 objective evaluated on the run's true initial relative state (all the objective's draws at
 the truth; the prior information term unchanged), from the planner's own starts and from the
 offline plan. Both plans are flown in closed loop with the same truth, noise and filter
-seeds (the campaigns' seeds: ``SeedSequence(seed, spawn_key=(run,))``), and the paired
+seeds (the campaigns' seeds: :func:`tmaplan.evaluation.seeding.run_streams`), and the paired
 difference of the time to 10 % range accuracy is printed.
 
 No re-planning policy that optimises the same cost can expect more than the clairvoyant plan
@@ -39,8 +39,9 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import censor_time, paired_difference, run_metrics
+from tmaplan.evaluation.closed_loop import fly
+from tmaplan.evaluation.metrics import censor_time, paired_difference
+from tmaplan.evaluation.seeding import run_streams
 from tmaplan.experiments import random_problems
 from tmaplan.models.observer import turn_rate_track
 from tmaplan.models.target import initial_velocity
@@ -89,8 +90,7 @@ def _clairvoyant(seed: int, i: int, mirror: bool = False) -> tuple:
     """Run ``i``'s truth (its first stream), the belief at it and the clairvoyant plan (None
     if no start converged); ``mirror`` adds the offline plan's mirror image to the starts."""
     sc, planner, prior, plan = (_STATE[k] for k in ("sc", "planner", "prior", "plan"))
-    s_truth = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)[0]
-    target = draw_truth(sc, np.random.default_rng(s_truth), from_prior=True)
+    target = draw_truth(sc, np.random.default_rng(run_streams(seed, i).truth), from_prior=True)
     o = sc.observer
     rel = target[0] - np.concatenate([np.asarray(o.position, float), initial_velocity(o)])
     b = _AtTruth(**{f.name: getattr(prior, f.name) for f in dataclasses.fields(Belief)},
@@ -160,7 +160,7 @@ def _waiting_summary(rows: list[dict]) -> None:
 def _run(args: tuple[int, int]) -> dict:
     seed, i = args
     sc, planner, plan = (_STATE[k] for k in ("sc", "planner", "plan"))
-    _, s_noise, s_filter = np.random.SeedSequence(seed, spawn_key=(i,)).spawn(3)
+    streams = run_streams(seed, i)
     with threadpool_limits(limits=1):
         target, _, b, clair = _clairvoyant(seed, i)
         at_truth = ObjectiveEvaluator(sc, planner.objective, n_steps=planner.K, belief=b)
@@ -172,12 +172,10 @@ def _run(args: tuple[int, int]) -> dict:
             pols["clairvoyant"] = Combined(manoeuvre=Planned(objective=_STATE["obj"],
                                                              plan=clair))
         for name, pol in pols.items():
-            res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(s_noise),
-                                  filter_rng=np.random.default_rng(s_filter),
-                                  n_particles=_STATE["particles"])
-            m = run_metrics(res.times, res.truth, res.estimate, res.observer.mean_velocity,
-                            accuracy=0.1, n_pings=len(res.ping_steps))
-            out[name] = None if not np.isfinite(m.time_to_accuracy) else m.time_to_accuracy
+            # the clairvoyant plan depends on the run's truth: each policy flown alone on
+            # the run's streams (the campaigns' per-run loop, tmaplan.evaluation.closed_loop)
+            res = fly(sc, pol, target, streams, n_particles=_STATE["particles"])
+            out[name] = res.metrics(0.1).to_json()["time_to_accuracy"]
     return out
 
 

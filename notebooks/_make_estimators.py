@@ -12,7 +12,8 @@ cells = [
     nbf.v4.new_code_cell("import numpy as np\nimport matplotlib\nmatplotlib.use('Agg')\n"
                          "import matplotlib.pyplot as plt\n"
                          "from tmaplan.scenario import load_problem\n"
-                         "from tmaplan.estimators import monte_carlo, MLEConfig"),
+                         "from tmaplan.estimators import MLEConfig\n"
+                         "from tmaplan.evaluation.tracking import monte_carlo"),
     nbf.v4.new_markdown_cell(
         "## MLE vs CRLB, clavard2013 half turn (Table 1, bearings only)\n"
         "The problem's `[estimation]` section searches the clockwise sense only, as clavard2013's\n"

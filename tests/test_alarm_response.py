@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.evaluation.campaigns import resolve_policies
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.geometry import wrap_angle
 from tmaplan.policies import (
     Action,

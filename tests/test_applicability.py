@@ -1,5 +1,5 @@
 """Estimator applicability (tmaplan.estimators.applicability) through the API, and the output
-guard that turns a NaN result into an error (tmaplan.cli._finite)."""
+guard that turns a NaN result into an error (tmaplan.cli.finite)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tmaplan.cli import main
-from tmaplan.cli._finite import require_finite
+from tmaplan.cli.finite import require_finite
 from tmaplan.errors import ArgumentError, EstimationError
 from tmaplan.estimators import ESTIMATORS, MLEConfig, estimator_for
 from tmaplan.estimators.applicability import (

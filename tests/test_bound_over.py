@@ -10,12 +10,12 @@ import json
 import numpy as np
 import pytest
 
-from tmaplan.cli import main
-from tmaplan.estimators.truth_bound import (
+from tmaplan.bounds.truth_bound import (
     closed_loop_truth_bounds,
     truth_bounds,
     truth_conditioned_pcrb,
 )
+from tmaplan.cli import main
 from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem

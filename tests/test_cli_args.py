@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tmaplan.cli import main
-from tmaplan.cli._args import MAX_PLAN_STEPS
+from tmaplan.cli.args import MAX_PLAN_STEPS
 from tmaplan.scenario import load_problem
 
 # (argv, text the one-line error must contain). Values that need no scenario are refused by
@@ -334,7 +334,7 @@ def test_truths_from_the_prior_of_a_circling_target_are_refused_up_front(tmp_pat
     def flown(*a, **k):
         raise AssertionError("a run was flown before the check")
 
-    monkeypatch.setattr("tmaplan.evaluation.campaigns.draw_truth", flown)
+    monkeypatch.setattr("tmaplan.evaluation.closed_loop.draw_truth", flown)
     monkeypatch.setattr("tmaplan.simulate.draw_truth", flown)  # rank-costs imports it late
     line = one_line_error([verb[0], str(f), *verb[1:], "--out", str(tmp_path)])
     assert "target.model" in line and "constant-turn" in line and "--truth scenario" in line

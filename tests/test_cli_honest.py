@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from tmaplan.cli import _build_parser, main
-from tmaplan.cli._args import PLAN_STARTS, preflight
+from tmaplan.cli.args import PLAN_STARTS
+from tmaplan.cli.preflight import preflight
 from tmaplan.scenario import load_problem, problems_dir
 
 

@@ -156,7 +156,7 @@ def test_control_interval_must_divide_the_problems_horizon(interval, one_line_er
 def test_control_interval_that_divides_the_horizon_passes_the_checks():
     import argparse
 
-    from tmaplan.cli._args import preflight
+    from tmaplan.cli.preflight import preflight
     from tmaplan.scenario import load_problem
 
     args = argparse.Namespace(verb="plan", horizon=None, control_interval=180.0, pings=0,
@@ -165,7 +165,7 @@ def test_control_interval_that_divides_the_horizon_passes_the_checks():
 
 
 def test_report_command_line_leaves_out_top_level_flags(monkeypatch):
-    from tmaplan.cli._args import command_line
+    from tmaplan.cli.args import command_line
 
     monkeypatch.setattr("sys.argv", ["/x/bin/tmaplan", "--debug", "compare", "default",
                                      "--runs", "3", "--out", "my dir"])

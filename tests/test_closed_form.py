@@ -9,19 +9,19 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from tmaplan.bounds._lpc_terms import lpc_noise_constant, moment_dterm_step, unpack_sym
 from tmaplan.bounds.closed_form import (
     closed_form_model,
     closed_form_pcrb,
     side_density_gaussian,
 )
 from tmaplan.bounds.inputs import lpc_prior_information
+from tmaplan.bounds.lpc_terms import lpc_noise_constant, moment_dterm_step, unpack_sym
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import jacobian_cart_wrt_lpc_from_cart
-from tmaplan.models.prior import zero_prior_stds
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem, measurement_steps
+from tmaplan.scenario.prior_checks import zero_prior_stds
 
 PING_PERIOD = 80.0  # brehard2005 §6: a ping every 80 s, σ_r = 100 m
 
@@ -339,7 +339,7 @@ def test_information_is_consistent(s1):
 
 # ------------------------------------------- compiled fast paths vs the reference paths
 def _fresh_jit_caches(monkeypatch):
-    import tmaplan.bounds._jit as lt
+    import tmaplan.bounds.lpc_codegen as lt
 
     monkeypatch.setattr(lt, "_COMPILED", {})
     monkeypatch.setattr(lt, "_KERNEL", {})
@@ -355,7 +355,7 @@ def _schedules(K, rng):
     return U
 
 
-@pytest.mark.skipif(not __import__("tmaplan.bounds._jit", fromlist=["x"]).jit_enabled(),
+@pytest.mark.skipif(not __import__("tmaplan.bounds.lpc_codegen", fromlist=["x"]).jit_enabled(),
                     reason="no C compiler: the compiled path is not available")
 @pytest.mark.solver_sensitive
 def test_compiled_paths_equal_reference_paths():
@@ -394,7 +394,7 @@ def test_compiled_paths_equal_reference_paths():
 
 
 def test_without_compiler_falls_back_to_reference(monkeypatch):
-    import tmaplan.bounds._jit as lt
+    import tmaplan.bounds.lpc_codegen as lt
 
     sc = _short("brehard2005-s1", 600.0)
     base = _quiet(closed_form_model, sc, prior_samples=3000, backend="casadi")
@@ -417,7 +417,7 @@ def test_without_compiler_falls_back_to_reference(monkeypatch):
 
 
 def test_failed_compile_is_reported_not_used(monkeypatch, tmp_path):
-    import tmaplan.bounds._jit as lt
+    import tmaplan.bounds.lpc_codegen as lt
 
     monkeypatch.setenv("TMAPLAN_CACHE_DIR", str(tmp_path))
     monkeypatch.setenv("CC", "false")  # a "compiler" that always fails
@@ -427,7 +427,7 @@ def test_failed_compile_is_reported_not_used(monkeypatch, tmp_path):
 
 
 def test_jit_cache_is_reused(monkeypatch, tmp_path):
-    import tmaplan.bounds._jit as lt
+    import tmaplan.bounds.lpc_codegen as lt
 
     if not lt.jit_enabled():
         pytest.skip("no C compiler")
@@ -441,7 +441,7 @@ def test_jit_cache_is_reused(monkeypatch, tmp_path):
 
 
 def test_kernel_emitter_rejects_unknown_operations():
-    import tmaplan.bounds._jit as lt
+    import tmaplan.bounds.lpc_codegen as lt
 
     x = ca.SX.sym("j", 10)
     f = ca.Function("f", [x, ca.SX.sym("a", 37), ca.SX.sym("b"), ca.SX.sym("p")],

@@ -8,7 +8,6 @@ import warnings
 import numpy as np
 import pytest
 
-from tmaplan.bounds._lpc_terms import SYM_INDEX
 from tmaplan.bounds.closed_form import (
     closed_form_model,
     closed_form_pcrb,
@@ -23,6 +22,7 @@ from tmaplan.bounds.inputs import (
     prepare,
     resolve_ping_steps,
 )
+from tmaplan.bounds.lpc_terms import SYM_INDEX
 from tmaplan.bounds.pcrb import SideAssumptionWarning
 from tmaplan.errors import ArgumentError
 from tmaplan.scenario import RangeSensor, load_problem

@@ -12,7 +12,6 @@ from scipy import stats
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.consistency import (
-    FilterOptions,
     MonitorConfig,
     MonitoredFilter,
     cusum_threshold,
@@ -21,6 +20,7 @@ from tmaplan.estimators.consistency import (
 from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
 from tmaplan.evaluation.campaigns import resolve_policies
 from tmaplan.evaluation.closed_loop import run_closed_loop
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.scenario import dump, load_problem, loads
 from tmaplan.simulate import Measurement, draw_truth
 

@@ -13,7 +13,7 @@ from tmaplan import errors
 from tmaplan.scenario import loads
 
 ROOT = Path(__file__).resolve().parents[1]
-DOC_FILES = ("docs/scenario-files.md",)
+DOC_FILES = ("docs/scenario-files.md", "docs/several-contacts.md")
 
 
 def _toml_blocks(path: str) -> list[str]:
@@ -26,7 +26,8 @@ def test_every_toml_example_of_the_docs_loads_without_the_truth(path):
     assert blocks, path
     for block in blocks:
         s = loads(block, source=path)
-        assert s.prior is not None and s.prior.truth_fields == ()
+        for c in s.contacts:  # each contact's prior (several contacts, issue 40)
+            assert c.prior is not None and c.prior.truth_fields == ()
 
 
 def test_the_error_tree_of_the_architecture_section_is_the_code_s():

@@ -10,7 +10,8 @@ from oracles.cartesian_pcrb import cartesian_pcrb
 
 from tmaplan.cli import main
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators import Track, monte_carlo, run
+from tmaplan.estimators import Track, run
+from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate
 
@@ -140,7 +141,7 @@ def test_cli_track_mle_frequencies_and_turn_direction(tmp_path, capsys) -> None:
 def test_truth_bounds_range_is_the_line_of_sight_projection() -> None:
     # Independent check of the range bound: a single run, the position information recursion
     # re-done here with a plain loop, projected on the true line of sight.
-    from tmaplan.estimators.truth_bound import truth_bounds, truth_pcrb
+    from tmaplan.bounds.truth_bound import truth_bounds, truth_pcrb
     from tmaplan.models.prior import prior_relative_moments
     from tmaplan.models.target import ncv_matrices
     from tmaplan.simulate import simulate

@@ -296,7 +296,6 @@ def test_every_policy_satisfies_the_policy_protocol(scenario):
 def test_resolve_policies_solves_the_offline_plans_on_the_workers(monkeypatch):
     """With ``workers > 1`` the offline plan of ``planned`` (and ``receding``) is computed
     first, its multi-start on the worker processes; not for manoeuvres without one."""
-    import tmaplan.policies.manoeuvres as manoeuvres
     from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
 
     calls = []
@@ -308,7 +307,7 @@ def test_resolve_policies_solves_the_offline_plans_on_the_workers(monkeypatch):
         calls.append((scenario.name, objective, workers))
         raise Stop
 
-    monkeypatch.setattr(manoeuvres, "offline_plan", fake)
+    monkeypatch.setattr("tmaplan.evaluation.campaigns.offline_plan", fake)
     sc = load_problem("default")
     assert set(resolve_policies(sc, ["straight", "zigzag"], workers=2)) == {"straight",
                                                                              "zigzag"}

@@ -7,8 +7,9 @@ import pytest
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed
-from tmaplan.models.faults import Faults, TargetManoeuvre, apply_manoeuvres, dropped
+from tmaplan.models.faults import apply_manoeuvres, dropped
 from tmaplan.scenario import dump, load_problem, loads
+from tmaplan.scenario.faults import Faults, TargetManoeuvre
 from tmaplan.simulate import draw_common_noise, draw_truth, measure_step, simulate
 
 FAULTS = '''
@@ -109,8 +110,8 @@ def test_sensor_faults_in_closed_loop(faulty):
 def test_recoveries_in_campaign_records_and_json(faulty, tmp_path):
     import warnings
 
-    from tmaplan.estimators.consistency import FilterOptions
     from tmaplan.evaluation.campaigns import CampaignSpec, run_campaign
+    from tmaplan.evaluation.filter_options import FilterOptions
     from tmaplan.evaluation.records import RunRecord
 
     spec = CampaignSpec(scenario=faulty, policies=("planned+scheduled",), runs=2,

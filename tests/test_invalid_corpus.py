@@ -1,13 +1,16 @@
 """The corpus of invalid scenario files: each gets one clear line naming the field.
 
 Each file in ``tests/data/invalid`` starts with ``# expect-field: F`` and ``# expect: TEXT``;
-loading it must raise ScenarioError whose one-line message names F and contains TEXT, and the
-CLI must exit non-zero with that line and no traceback. ``tests/data/invalid_cli/cases.toml``
+loading it and checking it as the command line does (:func:`tmaplan.scenario.load`, then the
+rules that need the motion model, :func:`tmaplan.models.checks.check_scenario`) must raise
+ScenarioError whose one-line message names F and contains TEXT, and the CLI must exit non-zero
+with that line and no traceback. ``tests/data/invalid_cli/cases.toml``
 holds command lines that cannot work (an estimator without its measurements, a bound not
 defined for it, turning policies without a turn-rate limit): each is refused with one line.
 ``tests/data/invalid_data/cases.toml`` holds recorded data files with a fault (bearings CSV,
-own-ship CSV, NMEA and GPX, leg tables): each raises a one-line ``DataError`` naming the file
-and line, or reads with one-line ``DataWarning`` s saying what was done.
+own-ship CSV, NMEA and GPX, leg tables, ``advise --platform`` files): each raises a one-line
+``DataError`` naming the file and line, or reads with one-line ``DataWarning`` s saying what
+was done.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import pytest
 
 from tmaplan.cli import main
 from tmaplan.errors import ScenarioError
+from tmaplan.models.checks import check_scenario
 from tmaplan.scenario import load
 
 CORPUS = sorted((Path(__file__).parent / "data" / "invalid").glob("*.toml"))
@@ -42,20 +46,31 @@ def test_corpus_is_large_enough():
 def test_invalid_file(path):
     field, text = _expect(path)
     with pytest.raises(ScenarioError) as exc:
-        load(path)
+        check_scenario(load(path), source=str(path))
     msg = str(exc.value)
     assert f"field '{field}" in msg or f".{field}" in msg or field in msg, msg
     assert text in msg, msg
     assert str(path) in msg and "\n" not in msg
 
 
-def test_cli_reports_one_line(tmp_path):
-    path = CORPUS[0]
+@pytest.mark.parametrize("path", [CORPUS[0], *(p for p in CORPUS if "inside_previous_turn"
+                                               in p.stem)], ids=lambda p: p.stem)
+def test_cli_reports_one_line(tmp_path, path):
+    # the first file (a schema rule), and one that only the motion model refuses
     proc = subprocess.run([sys.executable, "-m", "tmaplan.cli", "simulate", str(path)],
                           capture_output=True, text=True, cwd=tmp_path)
     assert proc.returncode == 1
     err = proc.stderr.strip().splitlines()
-    assert len(err) == 1 and _expect(path)[0] in err[0]
+    assert len(err) == 1 and _expect(path)[0] in err[0] and str(path) in err[0], err
+
+
+def test_the_schema_alone_takes_what_only_the_motion_model_refuses():
+    # tmaplan.scenario sits below the models: a leg inside the previous turn loads, and the
+    # model-level check (run by the command line on every scenario it loads) refuses it
+    path = next(p for p in CORPUS if "inside_previous_turn" in p.stem)
+    scenario = load(path)
+    with pytest.raises(ScenarioError, match=r"observer\.legs\[1\]\.start"):
+        check_scenario(scenario)
 
 
 # ------------------------------------------------------------ command lines that cannot work
@@ -93,6 +108,10 @@ def _read_data(case: dict) -> object:
     path = DATA_DIR / case["file"]
     if case["read"] == "recording":
         return io.read_recording(path, DATA_DIR / case["nav"])
+    if case["read"] == "platform":
+        from tmaplan.advice import read_platform
+
+        return read_platform(path)
     return {"bearings": io.read_bearings, "nav": io.read_nav,
             "legs": io.read_legs_csv}[case["read"]](path)
 
@@ -131,8 +150,9 @@ def test_data_corpus_covers_every_kind_of_fault():
     warned = {c["file"] for c in DATA_CASES if c.get("warn")}
     assert len(errors) >= 20 and len(warned) >= 8
     kinds = {c["file"].rsplit(".", 1)[1] for c in DATA_CASES}
-    assert kinds == {"csv", "nmea", "gpx"}
-    assert {c["read"] for c in DATA_CASES} == {"bearings", "nav", "legs", "recording"}
+    assert kinds == {"csv", "nmea", "gpx", "toml"}
+    assert {c["read"] for c in DATA_CASES} == {"bearings", "nav", "legs", "platform",
+                                               "recording"}
     on_disk = {p.name for p in DATA_DIR.iterdir() if p.name != "cases.toml"}
     named = {c["file"] for c in DATA_CASES} | {c["nav"] for c in DATA_CASES if "nav" in c}
     assert on_disk == named, on_disk ^ named

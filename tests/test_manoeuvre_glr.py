@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators.consistency import FilterOptions, MonitorConfig, MonitoredFilter
+from tmaplan.estimators.consistency import MonitorConfig, MonitoredFilter
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
 from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.simulate import Measurement
 
 SIG, DT = math.radians(1.0), 15.0

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ScenarioError
-from tmaplan.models.faults import Dropout, Faults, dropped
+from tmaplan.models.checks import check_scenario
+from tmaplan.models.faults import dropped
 from tmaplan.models.observer import observer_track
 from tmaplan.models.prior import sample_prior
 from tmaplan.scenario import (
@@ -20,6 +21,7 @@ from tmaplan.scenario import (
     TimeGrid,
     load_problem,
 )
+from tmaplan.scenario.faults import Dropout, Faults
 from tmaplan.simulate import measurement_batches, simulate
 from tmaplan.units import DEG
 
@@ -59,10 +61,14 @@ def test_observer_leg_inside_previous_turn_is_refused(default):
     with pytest.raises(ScenarioError) as exc:
         observer_track(obs, TimeGrid(dt=10.0, horizon=400.0))
     assert exc.value.field == "observer.legs[1].start" and "190" in str(exc.value)
+    # a scenario with such legs: the schema takes them (it reads no motion model), the
+    # model-level check that the command line runs on every scenario it loads refuses them
     slow = tuple(dataclasses.replace(leg, turn_rate=0.4 * DEG) for leg in legs)  # ≤ max
+    flown = default.replace(observer=dataclasses.replace(default.observer, legs=slow))
     with pytest.raises(ScenarioError) as exc:
-        default.replace(observer=dataclasses.replace(default.observer, legs=slow))
-    assert exc.value.field == "observer.legs[1].start"
+        check_scenario(flown, source="file.toml")
+    assert exc.value.field == "observer.legs[1].start" and "file.toml" in str(exc.value)
+    check_scenario(default)  # its own legs are fine
     # a leg at the end of the previous turn (or later) is fine, and starts at its start
     ok = (legs[0], dataclasses.replace(legs[1], start=190.0))
     tr = observer_track(Observer(position=(0.0, 0.0), course=0.0, speed=3.0, legs=ok),

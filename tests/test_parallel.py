@@ -3,6 +3,7 @@
 import os
 import pickle
 import signal
+import sys
 
 import pytest
 
@@ -44,6 +45,20 @@ def test_pool_workers_read_the_payload_once_each():
     pids = {o[1] for o in out}
     assert 1 <= len(pids) <= 2 and os.getpid() not in pids
     assert all(o[2] == 1 for o in out)  # each worker kept one payload
+
+
+def _imported(names):
+    return [n in sys.modules for n in names]
+
+
+def test_pool_workers_import_what_the_caller_names():
+    # a generic pool (the bottom layer): its workers import the modules the caller names,
+    # nothing of the layers above unless named
+    names = ("tmaplan.evaluation.closed_loop", "tmaplan.estimators.particle_filter")
+    with process_pool(1) as pool:
+        assert pool.submit(_imported, names).result() == [False, False]
+    with process_pool(1, warm_up=names[:1]) as pool:  # what it imports comes with it
+        assert pool.submit(_imported, names).result() == [True, True]
 
 
 def test_process_pool_rejects_bad_worker_counts():

@@ -15,11 +15,11 @@ from tmaplan.estimators import (
     PFConfig,
     fit_rmp,
     initialise_from_bearings,
-    monte_carlo,
     run,
     systematic_resample,
 )
 from tmaplan.estimators.init_bearings import bearing_regression, sample_ellipsoid
+from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem
 from tmaplan.simulate import simulate

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from tmaplan.estimators import Measurement, ParticleFilter, PFConfig
-from tmaplan.estimators import _pf_numba as nb
-from tmaplan.estimators._pf_kernels import _frequency_update, _measurement_ll, _systematic
-from tmaplan.estimators._pf_math import _abs_atan2, _exp, _log, _log32, _philox, _sincos_turn32
+from tmaplan.estimators import pf_numba as nb
+from tmaplan.estimators.pf_kernels import frequency_update, measurement_ll, systematic_indices
+from tmaplan.estimators.pf_math import _log32, _sincos_turn32, abs_atan2, fast_exp, fast_log, philox
 
 U = np.uint64
 
@@ -63,16 +63,16 @@ def _cloud(n: int, seed: int = 0) -> np.ndarray:
 def test_philox_known_answers(ctr: tuple[int, ...], key: tuple[int, ...],
                               out: tuple[int, ...]) -> None:
     # Random123's kat_vectors for Philox4x32-10 (Salmon et al. 2011)
-    assert tuple(int(v) for v in _philox(*(U(c) for c in ctr), *(U(k) for k in key))) == out
+    assert tuple(int(v) for v in philox(*(U(c) for c in ctr), *(U(k) for k in key))) == out
 
 
 def test_elementary_functions_match_numpy() -> None:
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.random(300), 10.0 ** rng.uniform(-300, 300, 300), [1.0, 2.0, 0.5]])
-    np.testing.assert_allclose([_log(v) for v in x], np.log(x), rtol=4e-16, atol=1e-300)
+    np.testing.assert_allclose([fast_log(v) for v in x], np.log(x), rtol=4e-16, atol=1e-300)
     e = np.concatenate([-rng.random(300) * 700, -rng.random(100), [0.0, -1e-20]])
-    np.testing.assert_allclose([_exp(v) for v in e], np.exp(e), rtol=4e-16)
-    assert _exp(-np.inf) == 0.0 and _exp(-800.0) == 0.0
+    np.testing.assert_allclose([fast_exp(v) for v in e], np.exp(e), rtol=4e-16)
+    assert fast_exp(-np.inf) == 0.0 and fast_exp(-800.0) == 0.0
     # the float32 functions of the normals: within 2 ulp of float32 of the float64 values
     u = np.concatenate([rng.random(300), 2.0 ** -rng.uniform(0, 25, 300)]).astype(np.float32)
     u = u[u > 0]
@@ -84,9 +84,9 @@ def test_elementary_functions_match_numpy() -> None:
     np.testing.assert_allclose(sc, np.column_stack([np.sin(phi), np.cos(phi)]), rtol=0,
                                atol=1.2e-7)
     s, c = rng.standard_normal((2, 500)) * 10.0 ** rng.uniform(-5, 5, (2, 500))
-    got = [_abs_atan2(a, b) for a, b in zip(s, c)]
+    got = [abs_atan2(a, b) for a, b in zip(s, c)]
     np.testing.assert_allclose(got, np.abs(np.arctan2(s, c)), rtol=4e-16, atol=1e-300)
-    assert _abs_atan2(0.0, 0.0) == 0.0 and _abs_atan2(0.0, -1.0) == np.pi
+    assert abs_atan2(0.0, 0.0) == 0.0 and abs_atan2(0.0, -1.0) == np.pi
 
 
 def test_philox_normals_are_standard_and_independent() -> None:
@@ -135,8 +135,8 @@ def test_log_weights_match_the_numpy_likelihoods(clutter: float) -> None:
     cfg = pf.config
     ms = _measurements()
     lw, mx, fm, fv, ll, parts = nb.log_weights(st, ms, cfg, move=True)
-    ref = sum(_measurement_ll(X, m, clutter) for m in ms[:4])
-    cf, fm_ref, fv_ref = _frequency_update(X, ms[4], None, None)
+    ref = sum(measurement_ll(X, m, clutter) for m in ms[:4])
+    cf, fm_ref, fv_ref = frequency_update(X, ms[4], None, None)
     ref = ref + cf
     assert ll is not None
     np.testing.assert_allclose(ll, ref, rtol=1e-12, atol=1e-9)
@@ -157,7 +157,7 @@ def test_log_weights_match_the_numpy_likelihoods(clutter: float) -> None:
     X[7, :2] = 0.0
     st = pf.from_particles(X)
     lw, *_ = nb.log_weights(st, ms[:2], cfg, move=False)
-    ref = sum(_measurement_ll(X, m, clutter) for m in ms[:2]) + st.log_weights
+    ref = sum(measurement_ll(X, m, clutter) for m in ms[:2]) + st.log_weights
     np.testing.assert_allclose(lw, ref, rtol=1e-12, atol=1e-9)
 
 
@@ -183,7 +183,7 @@ def test_systematic_indices_equal_the_numpy_kernel(n: int) -> None:
             w[rng.integers(0, n, n // 3)] = 0.0  # zero weights: particles never drawn
         w /= w.sum()
         seed = 100 * n + trial
-        ref = _systematic(w, np.random.default_rng(seed))
+        ref = systematic_indices(w, np.random.default_rng(seed))
         assert np.array_equal(nb.systematic(w, np.random.default_rng(seed).random()), ref)
 
 
@@ -277,7 +277,7 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch: pytest.MonkeyPat
 
 def test_missing_numba_is_reported_plainly() -> None:
     code = ("import sys; sys.modules['numba'] = None\n"
-            "try:\n    import tmaplan.estimators._pf_numba\n"
+            "try:\n    import tmaplan.estimators.pf_numba\n"
             "except ImportError as e:\n    print(e)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120).stdout
@@ -373,7 +373,7 @@ def test_compiled_kernels_are_cached_in_numba_cache_dir(tmp_path: Any) -> None:
 
     code = ("import numpy as np\n"
             "from tmaplan.estimators import ParticleFilter, PFConfig, Measurement\n"
-            "from tmaplan.estimators import _pf_numba as nb\n"
+            "from tmaplan.estimators import pf_numba as nb\n"
             "pf = ParticleFilter(PFConfig(n_particles=500, dt=1.0, q=1e-3, kernel='numba'))\n"
             "rng = np.random.default_rng(0)\n"
             "st = pf.from_particles(rng.normal(size=(500, 4)) * 100 + 1000)\n"

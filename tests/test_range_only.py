@@ -14,10 +14,10 @@ from tmaplan.estimators import (
     gvm2_from_gaussian,
     moments_grid,
     moments_series,
-    monte_carlo,
     range_only_update,
     reduce_mixture,
 )
+from tmaplan.evaluation.tracking import monte_carlo
 
 # sharma2024 §VII.A: ŷ = [−11, 20], V = [[50, −10], [−10, 50]], r = √521 (docs/errata.mda).
 YHAT = np.array([-11.0, 20.0])

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.report import BOUND_NAME, efficiency, rmse_figure, write_report
 from tmaplan.scenario import load_problem

@@ -21,7 +21,7 @@ from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.ranking_report import candidate_label
 from tmaplan.report import comparison_figures, rmse_figure, write_report
 from tmaplan.report_tables import baseline_parameters, differences_html, sample_warning
-from tmaplan.scenario import list_problems, load_problem, loads
+from tmaplan.scenario import list_problems, load_problem, loads, to_dict
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
@@ -115,17 +115,18 @@ def test_small_sample_warnings(one_run, three_runs):
 def test_scenario_text_round_trips_for_every_problem():
     for p in list_problems():
         sc = load_problem(p["name"])
-        text = scenario_text(sc)
+        text = scenario_text(to_dict(sc))
         back = loads(text, source="display")
         assert back.name == sc.name
         a, b = np.asarray(sc.times), np.asarray(back.times)
         np.testing.assert_allclose(a, b, rtol=1e-5)
-        t0, t1 = sc.target, back.target
-        for f in ("speed", "course", "omega", "radius", "q"):
-            x, y = getattr(t0, f, None), getattr(t1, f, None)
-            assert (x is None) == (y is None), f
-            if x is not None:
-                assert y == pytest.approx(x, rel=1e-5, abs=1e-12), (p["name"], f)
+        for c0, c1 in zip(sc.contacts, back.contacts, strict=True):  # each contact's target
+            t0, t1 = c0.target, c1.target
+            for f in ("speed", "course", "omega", "radius", "q"):
+                x, y = getattr(t0, f, None), getattr(t1, f, None)
+                assert (x is None) == (y is None), f
+                if x is not None:
+                    assert y == pytest.approx(x, rel=1e-5, abs=1e-12), (p["name"], f)
         assert not re.search(r"\d\.\d{7,}", text), p["name"]
 
 

@@ -30,7 +30,8 @@ DESIGN_PROBLEMS = {
     "ristic-bot-high", "gordon1993-bot", "default",
 }
 #: Our own planning problems (not from a paper): each says what it exercises.
-OUR_PROBLEMS = {"default", "bow-closing", "contact-astern"}
+OUR_PROBLEMS = {"default", "bow-closing", "contact-astern", "two-contacts-crossing",
+                "three-contacts-screen"}
 
 
 def test_every_design_problem_is_built_in():

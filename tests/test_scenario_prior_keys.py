@@ -111,22 +111,31 @@ def _changed(name, value):
     return 1.7 * value + 3.0 if value is not None else 3456.0
 
 
-WITH_PRIOR = [p["name"] for p in list_problems() if load_problem(p["name"]).prior is not None]
+# every contact's prior of every built-in problem: "problem" or "problem:contact"
+WITH_PRIOR = [p["name"] if len(sc.contacts) == 1 else f"{p['name']}:{c.name}"
+              for p in list_problems() for sc in [load_problem(p["name"])]
+              for c in sc.contacts if c.prior is not None]
+
+
+def _view(problem):
+    name, _, contact = problem.partition(":")
+    sc = load_problem(name)
+    return sc.contact_view(contact) if contact else sc
 
 
 @pytest.mark.parametrize("problem", WITH_PRIOR)
 def test_a_prior_key_reported_as_ignored_does_not_change_the_draws(problem):
     """Cross-check of the key check's table against the sampler it describes: changing any
-    key that ``_ignored_prior_keys`` reports as ignored leaves ``sample_prior``'s draws bit for
+    key that ``ignored_prior_keys`` reports as ignored leaves ``sample_prior``'s draws bit for
     bit unchanged (if the sampler starts reading one, the table must change too)."""
     import copy
     import dataclasses
 
-    from tmaplan._scenario_checks import _ignored_prior_keys
     from tmaplan.models.prior import sample_prior
+    from tmaplan.scenario.prior_checks import ignored_prior_keys
 
-    sc = load_problem(problem)
-    ignored = _ignored_prior_keys(sc.prior)
+    sc = _view(problem)
+    ignored = ignored_prior_keys(sc.prior)
     base = sample_prior(sc, 64, np.random.default_rng(5))
     assert ignored, "every built-in prior leaves some key unused"
     for name in ignored:
@@ -142,7 +151,7 @@ def test_run_prior_drops_the_truth_opt_in(name):
     # a prior whose every mean is given refuses centred_on_truth = true (it would do
     # nothing, tests/data/invalid/71_*); run_prior gives every mean from the truth, so its
     # scenario drops the opt-in
-    sc = load_problem(name)
+    sc = _view(name)
     drawn = run_prior(sc, np.random.default_rng(5)).prior
     assert not drawn.centred_on_truth
     assert drawn.truth_fields in ((), ("course_mode",)) and drawn.truth_means == ()

@@ -14,12 +14,9 @@ import pytest
 from scipy import stats
 
 from tmaplan.errors import ScenarioError
-from tmaplan.models.prior import (
-    MIN_TRUNCATED_MASS,
-    sample_prior,
-    truncated_normal_log_mass,
-)
+from tmaplan.models.prior import sample_prior
 from tmaplan.scenario import dump, from_dict, load_problem, loads, measurement_steps, problems_dir
+from tmaplan.scenario.prior_checks import MIN_TRUNCATED_MASS, truncated_normal_log_mass
 
 
 def _data(problem: str) -> dict:

@@ -2,4 +2,6 @@
 
 from __future__ import annotations
 
-__version__ = "0.3.0"
+from tmaplan.version import __version__
+
+__all__ = ["__version__"]

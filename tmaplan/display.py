@@ -3,7 +3,8 @@
 Everything inside tmaplan is SI (:mod:`tmaplan.units`); what a person reads (the HTML reports,
 console summaries, ``repr`` of a result) uses the units of the scenario files' examples:
 distances in km (m below 1 km), speeds in knots, angles in degrees, times in minutes.
-:func:`scenario_text` writes a scenario as TOML in those units (a valid scenario file);
+:func:`scenario_text` writes a scenario (its plain-dict form, :func:`tmaplan.scenario.to_dict`:
+this module sits below the scenario package) as TOML in those units (a valid scenario file);
 :func:`short_repr` is the ``__repr__`` of the result dataclasses: scalars, array shapes and
 nested results by name, never the arrays themselves.
 """
@@ -12,14 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
+import tomli_w
 
 from tmaplan.units import KNOT
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = ["angle", "distance", "minute_list", "minutes", "rate", "scenario_text",
            "seconds_text", "short_repr", "speed", "timespan"]
@@ -163,16 +163,22 @@ def _display(data: Any) -> Any:
     return out
 
 
-def scenario_text(scenario: Scenario) -> str:
-    """The scenario as TOML in display units: km (m below 1 km), kn, deg, deg/s, min (s when
-    not whole minutes), Hz. The text is a valid scenario file: loading it gives the scenario
-    back to the 6 significant digits printed.
+def scenario_text(data: Mapping[str, Any]) -> str:
+    """A scenario as TOML in display units: km (m below 1 km), kn, deg, deg/s, min (s when
+    not whole minutes), Hz.
+
+    Parameters
+    ----------
+    data : mapping
+        The scenario's plain-dict form, SI (:func:`tmaplan.scenario.to_dict`).
+
+    Returns
+    -------
+    str
+        A valid scenario file: loading it gives the scenario back to the 6 significant digits
+        printed.
     """
-    import tomli_w
-
-    from tmaplan.scenario import to_dict
-
-    return tomli_w.dumps(_display(to_dict(scenario)))
+    return tomli_w.dumps(_display(dict(data)))
 
 
 # --------------------------------------------------------------------------------------------

@@ -10,7 +10,10 @@ from __future__ import annotations
 import functools
 import math
 import pickle
+import warnings
 from typing import Any
+
+import numpy as np
 
 __all__ = [
     "ArgumentError",
@@ -101,8 +104,6 @@ def warn_field(field: str, text: str, *, source: str | None = None, stacklevel: 
                ) -> None:
     """Issue a :class:`ScenarioWarning` ``"<source>: field '<field>': <text>"``: the one form
     of the warnings on a field's value (a refusal would be a :class:`ScenarioError`)."""
-    import warnings
-
     where = f"{source}: " if source else ""
     warnings.warn(f"{where}field '{field}': {text}", ScenarioWarning, stacklevel=stacklevel + 1)
 
@@ -196,8 +197,6 @@ def is_integer(value: Any, minimum: int) -> bool:
     """Whether ``value`` is an integer (Python or numpy, not a bool) >= ``minimum``: the one
     test behind the integer checks of user input (the caller raises its own error, naming
     the field)."""
-    import numpy as np
-
     return bool(not isinstance(value, bool) and isinstance(value, (int, np.integer))
                 and value >= minimum)
 
@@ -221,8 +220,6 @@ def as_real(value: Any) -> float:
     conversion behind the real-valued checks of user input, so that the callers' finiteness
     tests refuse what ``float()`` would have accepted (``float("0.1")``, ``float(True)``) or
     raised on."""
-    import numpy as np
-
     if isinstance(value, bool | np.bool_ | str | bytes):
         return math.nan
     try:

@@ -26,15 +26,13 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.evaluation.metrics import PairedDifference, paired_difference
-
-if TYPE_CHECKING:
-    from tmaplan.experiments import CampaignResult
+from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
+from tmaplan.experiments import CampaignResult
 
 __all__ = ["KEY_DIFFERENCES", "STORED_FILE", "Comparison", "StoredResult", "difference_of",
            "key_json", "key_lines", "key_table_html", "live_html", "live_lines", "load_stored",
@@ -152,8 +150,6 @@ class Comparison:
     def from_campaign(cls, result: CampaignResult, *, command: str, commit: str = "",
                       first_runs: int = 0) -> Comparison:
         """From a campaign's result (:func:`tmaplan.experiments.run_campaign`)."""
-        from tmaplan.evaluation.metrics import censor_time
-
         s, spec = result.summary, result.spec
         return cls.from_values(
             command=command, seed=spec.seed, commit=commit, first_runs=first_runs,

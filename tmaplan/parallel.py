@@ -4,8 +4,9 @@ A job such as ``tmaplan demo`` or ``tmaplan compare`` first solves the offline p
 multi-start on worker processes, then runs the Monte Carlo campaign on worker processes.
 Spawning a worker costs about 2 s (Python, numpy, scipy, casadi and tmaplan imported), so
 :func:`process_pool` starts the workers once, at the beginning of the job, and sets them
-importing at once (they do so while the main process parses, plans and resolves), and both
-steps use the same pool.
+importing the modules of their tasks at once (they do so while the main process parses, plans
+and resolves), and both steps use the same pool. This module is generic (it sits at the bottom
+layer): the caller names the modules to import (``warm_up``), usually its own.
 
 Large inputs shared by every task of a step (a campaign's resolved policies: offline plans,
 schedules, Hessian models) are shipped to each worker once: :class:`SharedPayload` writes
@@ -21,11 +22,12 @@ once (:meth:`WorkerPool.stop`: their running tasks are lost, never returned as r
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import pickle
 import signal
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from multiprocessing import get_context
 from typing import Any
@@ -99,17 +101,15 @@ def close_pool(pool: Executor | None, *, interrupted: bool) -> None:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _warm_up() -> None:
-    """Import what a worker's tasks need (run once per worker, at the pool's start)."""
-    import casadi  # noqa: F401
-
-    import tmaplan.evaluation.closed_loop
-    import tmaplan.planning.heading
-    import tmaplan.policies  # noqa: F401
+def _warm_up(modules: tuple[str, ...]) -> None:
+    """Import ``modules``, what a worker's tasks need (run once per worker, at the pool's
+    start)."""
+    for name in modules:
+        importlib.import_module(name)
 
 
-def process_pool(workers: int) -> WorkerPool:
-    """A pool of ``workers`` spawned processes, already importing tmaplan when returned.
+def process_pool(workers: int, *, warm_up: Sequence[str] = ()) -> WorkerPool:
+    """A pool of ``workers`` spawned processes, already importing ``warm_up`` when returned.
 
     The workers ignore SIGINT from their start; an interrupt of the main process stops them
     (:meth:`WorkerPool.stop`, :func:`close_pool`).
@@ -118,6 +118,9 @@ def process_pool(workers: int) -> WorkerPool:
     ----------
     workers : int
         Worker processes (>= 1).
+    warm_up : sequence of str
+        Modules each worker imports at once (those of its tasks, e.g. the caller's
+        ``__name__``: what they import comes with them).
 
     Returns
     -------
@@ -131,7 +134,7 @@ def process_pool(workers: int) -> WorkerPool:
         pool = WorkerPool(max_workers=workers, mp_context=get_context("spawn"),
                           initializer=worker_signals)
         for _ in range(workers):  # one task per worker: the pool spawns them all now
-            pool.submit(_warm_up)
+            pool.submit(_warm_up, tuple(warm_up))
     return pool
 
 

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-if TYPE_CHECKING:
-    from tmaplan.simulate import Simulation
+from tmaplan.geometry import bearing_of
+from tmaplan.planning import PingEvaluator
+from tmaplan.simulate import Simulation
 
-__all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_geometry", "plot_plan",
-           "plot_schedule", "save_figure"]
+__all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_bearings", "plot_geometry",
+           "plot_plan", "plot_schedule", "save_figure"]
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
@@ -104,6 +105,44 @@ OBJECTIVE_UNITS: dict[str, str] = {
     "expected-time-to-accuracy": "s",
     "turn-penalty": "–",
 }
+
+
+def plot_bearings(sim: Simulation, path: str | Path) -> Path | None:
+    """What an operator watches: the bearings (measured dots, true line) [°] and the true
+    bearing rate [°/min] against time [min]; None when the run has no bearing sensor.
+
+    Parameters
+    ----------
+    sim : Simulation
+    path : str or Path
+        PNG.
+    """
+
+    meas = [m for m in sim.measurements if m.kind == "bearing" and m.steps.size]
+    if not meas:
+        return None
+    fig, ax = new_figure(2, 1, size=(7.0, 5.0), sharex=True)
+    t = sim.times / 60.0
+    beta = np.unwrap(np.asarray(bearing_of(sim.relative), float))
+    shift = 360.0 * np.floor(np.degrees(beta.min()) / 360.0)
+    ax[0, 0].plot(t, np.degrees(beta) - shift, "k-", lw=1, label="true")
+    for m in meas:
+        z = np.degrees(np.asarray(m.values, float)) - shift
+        ref = np.degrees(beta[m.steps]) - shift
+        z = z + 360.0 * np.round((ref - z) / 360.0)  # on the true curve's branch
+        ax[0, 0].plot(m.times / 60.0, z, ".", ms=3, label=f"measured (sensors[{m.sensor}])")
+    ax[0, 0].set_ylabel("bearing [°]")
+    ax[0, 0].legend(loc="best", fontsize=8)
+    rel = sim.relative
+    rate = (rel[:, 1] * rel[:, 2] - rel[:, 0] * rel[:, 3]) / np.sum(rel[:, :2] ** 2, axis=1)
+    ax[1, 0].plot(t, np.degrees(rate) * 60.0, "k-", lw=1)
+    ax[1, 0].axhline(0.0, color="0.6", lw=0.8)
+    ax[1, 0].set_ylabel("bearing rate [°/min]")
+    ax[1, 0].set_xlabel("time [min]")
+    for a in ax[:, 0]:
+        a.grid(True, alpha=0.3)
+    ax[0, 0].set_title(f"{sim.scenario.name}: bearing and bearing rate")
+    return save_figure(fig, path)
 
 
 def objective_label(name: str) -> str:
@@ -204,8 +243,6 @@ def plot_schedule(scenario: Any, obs: Any, belief: Any, res: Any, path: str | Pa
     path : path
         PNG file.
     """
-    from tmaplan.planning import PingEvaluator
-
     ev = PingEvaluator(scenario, obs, belief, res.objective_name)
     curves = ev.per_step(ev.schedules([[], res.uniform_steps.tolist()]))
     fig, axes = new_figure(1, 1, size=(8.0, 5.0))

@@ -6,17 +6,13 @@ import base64
 import html
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.figure import Figure
 
+from tmaplan.evaluation.cost_ranking import CostRankingResult
 from tmaplan.plotting import new_figure, objective_label, save_figure
 from tmaplan.report_tables import sample_warning
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
-    from tmaplan.evaluation.cost_ranking import CostRankingResult
 
 __all__ = ["candidate_label", "cost_label", "plot_cost_ranking", "write_ranking_report"]
 

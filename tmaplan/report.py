@@ -5,11 +5,13 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from tmaplan.display import scenario_text
+from tmaplan.experiments import CampaignResult
 from tmaplan.plotting import new_figure, save_figure
 from tmaplan.report_tables import (
     differences_html,
@@ -17,11 +19,7 @@ from tmaplan.report_tables import (
     results_table,
     sample_warning,
 )
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
-    from tmaplan.experiments import CampaignResult
+from tmaplan.scenario import to_dict
 
 __all__ = ["BOUND_NAME", "comparison_figures", "efficiency", "line_style", "outside_legend",
            "rmse_figure", "write_report"]
@@ -37,7 +35,7 @@ def efficiency(result: CampaignResult) -> dict[str, dict[str, float]]:
 
     The bound is the truth-conditioned PCRB along every run's own truth, own-ship track and
     pings, covariance averaged over the runs (``summary[name]["bound_position"]`` /
-    ``["bound_range"]``, :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`,
+    ``["bound_range"]``, :func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`,
     ristic2004, ch. 6): the quantity an RMSE over the same runs is compared with. (The
     prior-averaged PCRB is far more optimistic while the geometry is weakly observable; the
     closed-form LPC bound more so in range, docs/findings.md.) A ratio of 1 is an efficient
@@ -240,7 +238,7 @@ every policy in a run (paired comparison). Localised = relative range error belo
 {''.join(imgs)}
 <h2>Scenario</h2>
 <p>The scenario file of this report, in display units (a valid scenario file).</p>
-<pre>{html.escape(scenario_text(spec.scenario))}</pre>
+<pre>{html.escape(scenario_text(to_dict(spec.scenario)))}</pre>
 </body></html>
 """
     path = out / "report.html"

@@ -9,16 +9,14 @@ from __future__ import annotations
 
 import html
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from tmaplan.display import angle, minutes, speed
-
-if TYPE_CHECKING:
-    from tmaplan.evaluation.metrics import PairedDifference
-    from tmaplan.evaluation.replans import ReplanCounts
-    from tmaplan.experiments import CampaignResult
+from tmaplan.evaluation.metrics import PairedDifference
+from tmaplan.evaluation.replans import NOT_CONVERGED_WARNING, ReplanCounts
+from tmaplan.experiments import CampaignResult
 
 __all__ = ["FEW_RUNS", "baseline_parameters", "differences_html", "replan_warning",
            "results_table", "sample_warning"]
@@ -96,7 +94,6 @@ def replan_warning(result: CampaignResult) -> str:
     :data:`~tmaplan.evaluation.replans.NOT_CONVERGED_WARNING` of their re-plans not
     converged ("" if none), as the campaign's :class:`~tmaplan.evaluation.replans.
     ReplanWarning`."""
-    from tmaplan.evaluation.replans import NOT_CONVERGED_WARNING
 
     over = [(n, c) for n in result.policies if (c := result.summary[n].get("replans"))
             is not None and c.not_converged_share > NOT_CONVERGED_WARNING]

@@ -19,6 +19,7 @@ from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
 from tmaplan.models.faults import apply_manoeuvres, corrupt_bearings, dropped
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.prior import sample_prior, true_initial_state
 from tmaplan.models.sensors import doppler_frequency
 from tmaplan.models.target import ncv_matrices, target_track
 from tmaplan.scenario import (
@@ -31,6 +32,7 @@ from tmaplan.scenario import (
 
 __all__ = [
     "CommonNoise",
+    "ContactsSimulation",
     "Measurement",
     "MeasurementSet",
     "Simulation",
@@ -43,6 +45,7 @@ __all__ = [
     "ping_sensors",
     "reading",
     "simulate",
+    "simulate_contacts",
 ]
 
 
@@ -101,6 +104,8 @@ class MeasurementSet:
         Bearings relative to own heading [rad] (bearing sensors only), in (−π, π].
     sigma : ndarray, shape () or (P,)
         Noise std per component.
+    contact : str
+        The contact measured (association known; ``"contact"`` for a one-contact scenario).
     """
 
     sensor: int
@@ -111,6 +116,7 @@ class MeasurementSet:
     truth: np.ndarray
     relative: np.ndarray | None
     sigma: np.ndarray
+    contact: str = "contact"
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -233,7 +239,18 @@ def measure(scenario: Scenario, target: np.ndarray, obs: ObserverTrack,
                                   sigma=np.asarray(sensor.sigma)))
     if scenario.faults is not None:
         out = [_with_faults(scenario, ms, obs, rng) for ms in out]
-    return tuple(out)
+    return tuple(_in_reach(scenario, ms) for ms in out)
+
+
+def _in_reach(scenario: Scenario, ms: MeasurementSet) -> MeasurementSet:
+    """``ms`` without the ranges beyond its range sensor's ``max_range`` (true range; the draws
+    are made for every step, so the reach changes no other value)."""
+    reach = getattr(scenario.sensors[ms.sensor], "max_range", None)
+    if reach is None:
+        return ms
+    keep = ms.truth <= reach
+    return dataclasses.replace(ms, steps=ms.steps[keep], times=ms.times[keep],
+                               values=ms.values[keep], truth=ms.truth[keep])
 
 
 def _with_faults(scenario: Scenario, ms: MeasurementSet, obs: ObserverTrack,
@@ -290,6 +307,83 @@ def simulate(scenario: Scenario, rng: np.random.Generator | None, *,
                       relative=tgt - obs.state, measurements=meas)
 
 
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactsSimulation:
+    """One simulated run of a scenario with one or several contacts: one own-ship track, one
+    truth per contact, measurements tagged by contact (association known).
+
+    Attributes
+    ----------
+    scenario : Scenario
+    times : ndarray, shape (K + 1,)
+        [s].
+    observer : ObserverTrack
+    runs : dict of str to Simulation
+        Per contact name, in file order: its run on its view
+        (:meth:`tmaplan.scenario.Scenario.contact_view`) with this own-ship track; each
+        :class:`MeasurementSet` carries the contact's name.
+    """
+
+    __repr__ = short_repr
+
+    scenario: Scenario
+    times: np.ndarray
+    observer: ObserverTrack
+    runs: dict[str, Simulation]
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dict, SI units: the own ship's ``times, observer, observer_heading`` and
+        ``contacts: {name: {target, relative, measurements}}`` (each measurement with its
+        ``contact``); a one-contact scenario gives :meth:`Simulation.to_json`'s shape."""
+        if len(self.runs) == 1:
+            return next(iter(self.runs.values())).to_json()
+        out: dict[str, Any] = {"problem": self.scenario.name}
+        contacts: dict[str, Any] = {}
+        for name, run in self.runs.items():
+            one = run.to_json()
+            for key in ("problem", "times", "observer", "observer_heading"):
+                out.setdefault(key, one.pop(key))
+            contacts[name] = {**one, "measurements": [{**m, "contact": name}
+                                                      for m in one["measurements"]]}
+        out["contacts"] = contacts
+        return out
+
+
+def simulate_contacts(scenario: Scenario, rng: np.random.Generator | None, *,
+                      observer: ObserverTrack | None = None) -> ContactsSimulation:
+    """Simulate the truth of every contact and its measurements.
+
+    Bearing sensors measure every contact at their steps; a range reading (a ping) returns the
+    range of every contact whose true range is within the sensor's ``max_range``. The draws
+    come in a fixed order: each contact's target process noise (file order), then each
+    contact's measurements as :func:`simulate` draws them; for one contact exactly
+    :func:`simulate`'s draws (``runs["contact"]`` is bit for bit ``simulate(scenario, rng)``).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    rng : numpy.random.Generator or None
+        ``None``: noise-free truths and measurements.
+    observer : ObserverTrack, optional
+        Override the scenario's scripted observer (closed loop).
+
+    Returns
+    -------
+    ContactsSimulation
+    """
+    obs = observer if observer is not None else observer_track(scenario.observer, scenario.time)
+    views = scenario.contact_views()
+    tracks = {name: apply_manoeuvres(scenario.faults, target_track(view.target, scenario.time,
+                                                                   rng), scenario.times)
+              for name, view in views.items()}
+    runs = {}
+    for name, view in views.items():
+        run = simulate(view, rng, observer=obs, target=tracks[name])
+        meas = tuple(dataclasses.replace(m, contact=name) for m in run.measurements)
+        runs[name] = dataclasses.replace(run, measurements=meas)
+    return ContactsSimulation(scenario=scenario, times=scenario.times, observer=obs, runs=runs)
+
+
 def check_truth_source(scenario: Scenario, from_prior: bool) -> None:
     """Whether :func:`draw_truth` can draw this scenario's truths (``from_prior``: from its
     prior), else :class:`ScenarioError`: a constant-turn target's circle (centre, radius,
@@ -321,8 +415,6 @@ def draw_truth(scenario: Scenario, rng: np.random.Generator, *, from_prior: bool
         ``from_prior`` with a prior and a constant-turn target: its circle (centre, radius,
         phase, ω) is given, not an initial state a prior could replace.
     """
-    from tmaplan.models.prior import sample_prior, true_initial_state
-
     check_truth_source(scenario, from_prior)
     prior = from_prior and scenario.prior is not None
     model = scenario.target.model
@@ -404,10 +496,16 @@ def _measurement(sensor: Any, value: Any, offset: np.ndarray | None = None,
                        velocity_offset=offset)
 
 
+def _reaches(sensor: RangeSensor, X: np.ndarray) -> bool:
+    """Whether range sensor ``sensor`` reaches the contact at relative state ``X`` (1, 4)."""
+    return sensor.max_range is None or float(range_of(X)[0]) <= sensor.max_range
+
+
 def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, *,
                  ping: bool = False) -> list[Measurement]:
     """Measurements of step ``k`` in a closed loop: bearings, passive ranges and, if ``ping``,
-    an active ping (first active range sensor; ``Measurement.ping`` set). Frequency sensors
+    an active ping (first active range sensor; ``Measurement.ping`` set); a range only within
+    its sensor's ``max_range`` (the true range at ``k``). Frequency sensors
     are not simulated in the closed loop. The scenario's sensor faults apply (a missed or
     faded ping's echo is simply absent).
 
@@ -434,11 +532,12 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
             out.append(_measurement(s, value[0]))
     out += [_measurement(s, reading(s, X, noise.range[k, j:j + 1])[1][0])
             for j, s in enumerate(rs)
-            if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "range")]
+            if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "range")
+            and _reaches(s, X)]
     echo = not dropped(faults, t, "range") and not (
         faults is not None and noise.fault is not None
         and noise.fault[k, -1, 0] < faults.missed_ping_probability)
-    if ping and ps and echo:
+    if ping and ps and echo and _reaches(ps[0], X):
         out.append(_measurement(ps[0], reading(ps[0], X, noise.ping[k:k + 1])[1][0], ping=True))
     return out
 

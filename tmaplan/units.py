@@ -25,10 +25,12 @@ from collections.abc import Iterable, Mapping
 from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING, Any, Final, cast
 
+from pydantic import BeforeValidator
+
 from tmaplan.errors import UnitError
 
 if TYPE_CHECKING:
-    import pint
+    import pint  # annotations only: imported on first use (_registry)
 
 __all__ = [
     "DEG",
@@ -56,7 +58,7 @@ DEG: Final[float] = math.pi / 180.0
 def _registry() -> pint.UnitRegistry:
     """The unit registry, made on first use: building it takes about 0.5 s, which a process
     that never parses a unit string (a campaign's worker) need not pay."""
-    import pint
+    import pint  # deferred: pint takes about half a second to import
 
     reg: pint.UnitRegistry = pint.UnitRegistry()
     # Recent pint versions define all of these; keep the definitions for older ones.
@@ -330,8 +332,6 @@ def si_validator(dimension: str) -> Any:
     -------
     pydantic.BeforeValidator
     """
-    from pydantic import BeforeValidator
-
     _check_dimension(dimension)
 
     def convert(value: Any, info: Any) -> Any:

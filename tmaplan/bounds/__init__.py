@@ -13,6 +13,9 @@ bound does not pay for the others):
   observability conditions.
 * :mod:`tmaplan.bounds.pcrb` — posterior CRB by Tichavský's recursion with Monte Carlo
   D-terms (Cartesian or log-polar coordinates).
+* :mod:`tmaplan.bounds.truth_bound` — the Cartesian PCRB conditioned on true trajectories
+  (ristic2004, ch. 6): the bound of ``tmaplan track``, ``tmaplan bound --over truth`` and the
+  campaigns' RMSE figures; its Tichavský step is :func:`tmaplan.bounds.pcrb.predicted_information`.
 * :mod:`tmaplan.bounds.closed_form` — the closed-form PCRB in log-polar coordinates of
   Bréhard & Le Cadre (brehard2005, corrected), numeric, batched over ping schedules and casadi.
 """

@@ -23,12 +23,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from tmaplan.errors import ArgumentError, finite_real
 from tmaplan.geometry import bearing_of, range_of, wrap_angle, wrap_half_angle
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import circle_parameters, initial_velocity
 from tmaplan.models.tracks import (
     ModelKind,
@@ -40,12 +41,8 @@ from tmaplan.models.tracks import (
     range_rate_rows,
     range_rows,
 )
-from tmaplan.scenario import BearingSensor, FrequencySensor
-
-if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.scenario import Scenario
-    from tmaplan.simulate import MeasurementSet
+from tmaplan.scenario import BearingSensor, FrequencySensor, Scenario
+from tmaplan.simulate import MeasurementSet
 
 __all__ = [
     "BearingData",

@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from scipy import special
@@ -24,10 +24,8 @@ from tmaplan.bounds.pcrb import PCRBResult, SideAssumptionWarning
 from tmaplan.display import seconds_text
 from tmaplan.errors import ObservabilityError, ScenarioError, finite_real
 from tmaplan.memory import check_steps
-
-if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.scenario import Scenario
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.scenario import Scenario
 
 __all__ = [
     "ClosedFormEngine",

@@ -10,8 +10,8 @@ over schedules, or the numpy reference loop), gives the casadi graph with symbol
 (:func:`lpc_pcrb_graph`, for the planners' parametric NLPs), and the per-step
 information-form matrices (:meth:`~ClosedFormEngine.information_terms`, for convex
 relaxations). The planner, the ping scheduler and ``tmaplan bound`` all use it. The maths is
-written once on explicit entries in :mod:`tmaplan.bounds._lpc_terms` (compiled by
-:mod:`tmaplan.bounds._jit`); the tests check every path against the others to 1e-10.
+written once on explicit entries in :mod:`tmaplan.bounds.lpc_terms` (compiled by
+:mod:`tmaplan.bounds.lpc_codegen`); the tests check every path against the others to 1e-10.
 
 Corrections to brehard2005 (docs/errata.md): information (not its inverse) in the Tichavský bracket
 (Prop. 5); the true Jacobian ∂X/∂Y instead of the printed F (eq. 31); the constant
@@ -27,8 +27,8 @@ from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 
-from tmaplan.bounds._jit import compiled_step_functions, schedule_kernel
-from tmaplan.bounds._lpc_terms import (
+from tmaplan.bounds.lpc_codegen import compiled_step_functions, schedule_kernel
+from tmaplan.bounds.lpc_terms import (
     SYM_INDEX,
     aux_to_dterms,
     basis,
@@ -39,12 +39,11 @@ from tmaplan.bounds._lpc_terms import (
     unpack_sym,
 )
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError, finite_real
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import ncv_matrices
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # typing_extensions: for the annotation only, not a dependency
     from typing_extensions import Buffer
-
-    from tmaplan.models.observer import ObserverTrack
 
 __all__ = [
     "BeliefMoments",
@@ -291,7 +290,7 @@ class ClosedFormEngine:
                            quantity: str = "range", backend: str = "auto") -> np.ndarray:
         """Bound [m] of ping schedules ``u`` (S, K + 1), batched over schedules.
 
-        :func:`tmaplan.bounds._lpc_terms.tichavsky_step` on entries of shape (S,): with numpy
+        :func:`tmaplan.bounds.lpc_terms.tichavsky_step` on entries of shape (S,): with numpy
         (``backend="numpy"``), or as the C kernel emitted from its ``SX`` graph, SIMD over
         schedules (``"compiled"``: an error without a compiler; ``"auto"``: when available).
         ``quantity``: "range", eq. 58's ``sqrt(E r_k²·[J_k⁻¹]_{ln r})``, or "position",
@@ -406,7 +405,7 @@ class ClosedFormEngine:
 
         Returns the dict of :func:`lpc_pcrb_graph` (moments and D-terms numeric constants).
         """
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import
 
         g = _information_graph(self.A, self.Q, j0=ca.DM(pack_symmetric(self.prior_information)),
                                aux=ca.DM(self.aux), er2=ca.DM(self.er2),
@@ -422,7 +421,7 @@ class ClosedFormEngine:
         only their increments enter; the moments of X₀ and J₀ are the engine's. ``var`` is the
         diagonal of J_k⁻¹; ``range_bound`` is eq. 58's [m]. Exact derivatives by casadi AD.
         """
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import
 
         K = self.n_steps
         v = ca.MX.sym("v_obs", K + 1, 2)
@@ -439,7 +438,7 @@ class ClosedFormEngine:
 def _information_graph(A: np.ndarray, Q: np.ndarray, *, j0: Any, aux: Any, er2: Any,
                        bearing: Any, ping: Any, ping_scale: float) -> dict[str, Any]:
     """Tichavský recursion over the horizon on casadi inputs (see :func:`lpc_pcrb_graph`)."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import
 
     K = aux.shape[1]
     _, riccati_fn = step_functions(A, Q)
@@ -468,7 +467,7 @@ def lpc_pcrb_graph(A: np.ndarray, Q: np.ndarray, dt: float, *, v_obs: Any, x0: A
     Returns a dict: ``range_bound`` (K+1)×1 [m], ``var`` (K+1)×4 diagonal of J_k⁻¹, ``J``
     10×(K+1) packed information, ``X`` 14×(K+1) moments, ``er2`` (K+1)×1 [m²].
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import
 
     K = v_obs.shape[0] - 1
     moment_fn, _ = step_functions(A, Q)
@@ -491,7 +490,7 @@ def lpc_position_bound_graph(graph: dict[str, Any]) -> Any:
     ``tr E[J_X J⁻¹ J_Xᵀ]_pos = Σ_kl S[k,l] tr(E_k J⁻¹ E_lᵀ)_pos`` (the symbolic counterpart of
     :meth:`ClosedFormEngine.position_weights`).
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import
 
     if "f" not in _POSVAR:
         j, x = ca.SX.sym("j", 10), ca.SX.sym("x", 14)

@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import linalg
@@ -40,15 +39,21 @@ from tmaplan.errors import (
     is_integer,
 )
 from tmaplan.geometry import range_of
+from tmaplan.models.observer import observer_track
+from tmaplan.models.target import target_track
 from tmaplan.models.tracks import (
     TrackModel,
     constant_turn_model,
     cv_model,
     multi_leg_model,
 )
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import (
+    BearingSensor,
+    FrequencySensor,
+    RangeSensor,
+    Scenario,
+    measurement_steps,
+)
 
 __all__ = [
     "BearingData",
@@ -410,14 +415,6 @@ def scenario_data(
     model, theta, data, notes
         ``data`` holds keyword arguments for :func:`crlb_from_data`.
     """
-    from tmaplan.models.observer import observer_track
-    from tmaplan.scenario import (
-        BearingSensor,
-        FrequencySensor,
-        RangeSensor,
-        measurement_steps,
-    )
-
     if frequencies is not None and not is_integer(frequencies, 0):
         raise ArgumentError("frequencies", "an integer >= 0 or None (all lines)", frequencies,
                             source=scenario.name)
@@ -448,6 +445,14 @@ def scenario_data(
             bearings.append(BearingData(times=times[steps], observer_position=obs.position[steps],
                                         sigma=sen.sigma))
         elif isinstance(sen, RangeSensor):
+            if sen.max_range is not None and steps.size:  # the true range decides the reach
+
+                rel = target_track(tgt, grid, None)[steps, :2] - obs.position[steps]
+                reached = np.hypot(rel[:, 0], rel[:, 1]) <= sen.max_range
+                if not reached.all():
+                    notes.append(f"{int((~reached).sum())} range reading(s) beyond the range "
+                                 f"sensor's max_range = {sen.max_range:g} m left out (no echo)")
+                steps = steps[reached]
             if steps.size:
                 ranges.append(RangeData(times=times[steps],
                                         observer_position=obs.position[steps],

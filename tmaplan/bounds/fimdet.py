@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.bounds._lpc_terms import ldl
+from tmaplan.bounds.lpc_terms import ldl
 from tmaplan.errors import ArgumentError, ObservabilityError, finite_real, is_integer
 
 __all__ = [
@@ -243,7 +243,7 @@ def fim_bearings_generic(rx: Any, ry: Any, tau: Any, information: Any, *,
     cas = _is_casadi(rx) or _is_casadi(ry) or _is_casadi(tau)
     r2 = rx * rx + ry * ry
     if cas:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import
 
         total = ca.sum1 if total is None else total
         r2 = ca.fmax(r2, min_range**2) if min_range > 0.0 else r2
@@ -260,7 +260,7 @@ def logdet_generic(F: list[list[Any]]) -> Any:
     for numpy arrays or casadi symbols (:func:`fim_bearings_generic`)."""
     _, d = ldl(F)
     if any(_is_casadi(x) for x in d):
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import
 
         return ca.log(d[0]) + ca.log(d[1]) + ca.log(d[2]) + ca.log(d[3])
     return np.log(d[0]) + np.log(d[1]) + np.log(d[2]) + np.log(d[3])

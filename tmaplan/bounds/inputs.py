@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -30,19 +30,17 @@ from tmaplan.models.prior import (
     relative_prior_covariance,
     relative_prior_samples,
     true_initial_state,
-    zero_prior_stds,
 )
 from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import (
     BearingSensor,
     FrequencySensor,
     RangeSensor,
+    Scenario,
     TimeGrid,
     measurement_steps,
 )
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario.prior_checks import zero_prior_stds
 
 __all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "check_ping_steps", "information_rates",
            "lpc_prior_information", "prepare", "resolve_ping_steps"]

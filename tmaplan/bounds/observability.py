@@ -27,17 +27,17 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from tmaplan.bounds.batch_fim import BearingData, FrequencyData, batch_data, fisher_information
 from tmaplan.errors import ArgumentError, ScenarioError, as_real, is_integer
 from tmaplan.geometry import bearing_of
-from tmaplan.models.target import circle_parameters
+from tmaplan.models.observer import observer_track
+from tmaplan.models.target import circle_parameters, target_track
 from tmaplan.models.tracks import constant_turn_model
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import BearingSensor, FrequencySensor, Scenario, measurement_steps
 
 __all__ = [
     "ObservabilityResult",
@@ -343,13 +343,6 @@ def ct_observability(times: Any, observer_position: Any, observer_velocity: Any,
     ObservabilityResult
         ``expected_rank = 5 + P``.
     """
-    from tmaplan.bounds.batch_fim import (
-        BearingData,
-        FrequencyData,
-        batch_data,
-        fisher_information,
-    )
-
     t = np.asarray(times, dtype=float).reshape(-1)
     pos = np.asarray(observer_position, dtype=float)
     vel = np.asarray(observer_velocity, dtype=float)
@@ -477,10 +470,6 @@ def observability(scenario: Scenario, *, frequencies: int | None = None,
     -------
     ObservabilityResult
     """
-    from tmaplan.models.observer import observer_track
-    from tmaplan.models.target import target_track
-    from tmaplan.scenario import BearingSensor, FrequencySensor, measurement_steps
-
     grid = scenario.time
     bsens = [s for s in scenario.sensors if isinstance(s, BearingSensor)]
     if not bsens:

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -46,11 +46,9 @@ from tmaplan.geometry import (
     wrap_angle,
     wrap_half_angle,
 )
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.prior import relative_prior_samples
-
-if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import Scenario
 
 __all__ = [
     "PCRBResult",
@@ -62,6 +60,7 @@ __all__ = [
     "lpc_transition_scores",
     "measurement_information",
     "monte_carlo_pcrb",
+    "predicted_information",
     "range_score",
 ]
 
@@ -119,7 +118,7 @@ class PCRBResult:
     over : {"prior", "truth"}
         What the bound is averaged over: the prior (the Bayesian PCRB of brehard2005, this
         module and the closed form) or realisations of the scenario's true track
-        (:func:`tmaplan.estimators.truth_bound.truth_conditioned_pcrb`, ristic2004, ch. 6).
+        (:func:`tmaplan.bounds.truth_bound.truth_conditioned_pcrb`, ristic2004, ch. 6).
     """
 
     __repr__ = short_repr
@@ -336,6 +335,56 @@ def _inv_pd(J: np.ndarray, what: str, step: int) -> np.ndarray:
     return Li.T @ Li
 
 
+def predicted_information(A: np.ndarray, Q: np.ndarray, *,
+                          information: np.ndarray | None = None,
+                          covariance: np.ndarray | None = None, step: int = 0) -> np.ndarray:
+    """Tichavský's prediction step for linear-Gaussian dynamics ``X' = A X + c + w``,
+    ``w ~ N(0, Q)``: ``J⁻_{k+1} = (Q + A J_k⁻¹ Aᵀ)⁻¹`` (the D-terms in closed form; ristic2004,
+    ch. 4; brehard2005 eq. 29 with Gaussian transitions).
+
+    The one implementation of the step of the Cartesian PCRBs: :func:`monte_carlo_pcrb` (one
+    information matrix, prior-averaged) and :func:`tmaplan.bounds.truth_bound.truth_covariance`
+    (one per run, along the true trajectories). Each keeps the numerical form it has always
+    had, so that its results stay bit-identical: given ``covariance`` (``J_k⁻¹``, already
+    formed), the Cholesky inverse of ``Q + A P Aᵀ``; given ``information``, ``(Q + A
+    solve(J, Aᵀ))⁻¹``, or ``A⁻ᵀ J A⁻¹`` without process noise (``Q = 0``). The two forms agree
+    to rounding (tests/test_tichavsky.py, with a plain loop as the cross-check).
+
+    Parameters
+    ----------
+    A : ndarray, shape (4, 4)
+        Transition matrix (NCV: :func:`tmaplan.models.target.ncv_matrices`).
+    Q : ndarray, shape (4, 4)
+        Process-noise covariance [m², m²/s, m²/s²].
+    information : ndarray, shape (..., 4, 4), optional
+        ``J_k`` (batched over leading axes).
+    covariance : ndarray, shape (4, 4), optional
+        ``J_k⁻¹`` (exactly one of ``information`` and ``covariance``).
+    step : int
+        Index k + 1 of the predicted step, named in the error.
+
+    Returns
+    -------
+    ndarray
+        ``J⁻_{k+1}``, the shape of the input.
+
+    Raises
+    ------
+    ObservabilityError
+        With ``covariance``: the predicted covariance is not positive definite.
+    """
+    if (information is None) == (covariance is None):
+        raise ArgumentError("information", "exactly one of information and covariance",
+                            "both" if information is not None else "neither")
+    if covariance is not None:
+        return _inv_pd(Q + A @ covariance @ A.T, "predicted covariance", step)
+    J = np.asarray(information)
+    if np.any(Q):
+        return np.linalg.inv(Q + A @ np.linalg.solve(J, np.broadcast_to(A.T, J.shape)))
+    Ai = np.linalg.inv(A)
+    return Ai.T @ J @ Ai
+
+
 def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generator,
                      coords: Coords = "cartesian", ping_steps: Sequence[int] | None = None,
                      observer: ObserverTrack | None = None,
@@ -432,7 +481,7 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
             except np.linalg.LinAlgError as exc:  # the same solve, reported as documented
                 raise ObservabilityError(f"J + D11 is singular at step {t + 1}") from exc
         else:
-            J = _inv_pd(Q + A @ cov[t] @ A.T, "predicted covariance", t + 1)
+            J = predicted_information(A, Q, covariance=cov[t], step=t + 1)
         J = J + measurement_information(Xn, t + 1, inp, coords)
         J = 0.5 * (J + J.T)
         X = Xn

@@ -2,12 +2,12 @@
 
 Each verb lives in its own module ``tmaplan.cli.<verb>`` defining ``HELP`` (one line),
 ``add_arguments(parser)``, ``run(args) -> dict | None``, optionally ``FINITE`` (payload
-quantities that must not be NaN, :mod:`tmaplan.cli._finite`: a NaN there is an error, never exit
+quantities that must not be NaN, :mod:`tmaplan.cli.finite`: a NaN there is an error, never exit
 0) and, for a verb without a problem argument that works on a fixed problem, ``PROBLEM`` (its
 name); the returned dict is written as JSON
 to ``--json PATH`` (``-`` for stdout); a dict payload always carries the ``problem`` key.
 Argument types, limits and the up-front checks that need the scenario live in
-:mod:`tmaplan.cli._args`, shared by every verb. Every error, a bad flag value included, exits 1
+:mod:`tmaplan.cli.args`, shared by every verb. Every error, a bad flag value included, exits 1
 with one line on stderr (a traceback only with ``--debug``).
 """
 
@@ -25,13 +25,21 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan import __version__
-from tmaplan.cli._args import OneLineParser, UsageError, json_path, preflight
-from tmaplan.cli._finite import require_finite
-from tmaplan.cli._paths import check_outputs
+from tmaplan.cli.args import OneLineParser, UsageError, json_path
+from tmaplan.cli.contacts import (
+    per_contact,
+    preflight_per_contact,
+    refuse_several,
+    run_per_contact,
+)
+from tmaplan.cli.finite import require_finite
+from tmaplan.cli.paths import check_outputs
+from tmaplan.cli.preflight import preflight
 from tmaplan.errors import ArgumentError
 from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
+from tmaplan.models.checks import check_scenario
 from tmaplan.scenario import load, load_problem
+from tmaplan.version import __version__
 
 __all__ = ["VERBS", "main", "write_json"]
 
@@ -47,6 +55,7 @@ VERBS: dict[str, str] = {
     "compare": "compare",
     "rank-costs": "rank_costs",
     "demo": "demo",
+    "advise": "advise",
 }
 
 
@@ -178,13 +187,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             if getattr(args, "problem", None) is not None or fixed is not None:
                 scenario = load(args.problem) if fixed is None else load_problem(fixed)
                 problem = scenario.name
-                preflight(args, scenario)
+                # the rules that need the motion model (tmaplan.scenario is below the models)
+                check_scenario(scenario, source=args.problem if fixed is None else None)
+                # a verb that cannot handle several contacts says so (tmaplan.cli.contacts)
+                refuse_several(args.verb, modules[args.verb], scenario, modules)
+                several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
+                if len(scenario.contacts) > 1:
+                    preflight_per_contact(args, scenario, preflight)
+                else:
+                    preflight(args, scenario)
             else:  # (preflight checks them with the problem)
+                several = False
                 check_outputs(args)
-            payload = modules[args.verb].run(args)
+            finite = tuple(getattr(modules[args.verb], "FINITE", ()))
+            if several:  # each contact's view through the one-contact verb
+                payload = run_per_contact(modules[args.verb], args, scenario)
+                finite = tuple(f"contacts.*.{p}" for p in finite)
+            else:
+                payload = modules[args.verb].run(args)
             checkpoint()  # an interrupt that Python ignored on the way is still one
-            require_finite(payload, getattr(modules[args.verb], "FINITE", ()),
-                           source=problem)
+            require_finite(payload, finite, source=problem)
             if isinstance(payload, dict) and problem is not None:
                 payload.setdefault("problem", problem)
             if args.json is not None and payload is not None:

@@ -1,7 +1,7 @@
 """``tmaplan bound``: posterior CRB over time (Monte Carlo, or closed form in LPC).
 
 The default is the Monte Carlo Cartesian PCRB **conditioned on the problem's true track**
-(``--method monte-carlo --over truth``, :func:`tmaplan.estimators.truth_bound.
+(``--method monte-carlo --over truth``, :func:`tmaplan.bounds.truth_bound.
 truth_conditioned_pcrb`): the PCRB along realisations of the true target track with the
 prior's covariance as ``P_0``, the bound the Ristic benchmark prescribes (ristic2004, ch. 6)
 and the one a filter run on that truth can approach (``tmaplan track`` compares with it). It
@@ -27,9 +27,13 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.bounds.closed_form import closed_form_pcrb
+from tmaplan.bounds.pcrb import monte_carlo_pcrb
+from tmaplan.bounds.truth_bound import truth_conditioned_pcrb
+from tmaplan.cli.args import (
     MAX_SAMPLES,
     add_figure_arguments,
     add_problem_argument,
@@ -38,14 +42,18 @@ from tmaplan.cli._args import (
     integer,
     step_list,
 )
+from tmaplan.cli.contacts import scenario_of
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError, ScenarioError
-from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
+from tmaplan.scenario import RangeSensor, Scenario, measurement_steps
 
 HELP = ("posterior Cramér-Rao bound over time (default: Monte Carlo, conditioned on the "
         "true track; or the closed form in LPC)")
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "per-contact"
+
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("range_std[-1]", "position_std[-1]")
 
 _LPC_LABELS = ("β [rad]", "ln r [-]", "β̇ [rad/s]", "ṙ/r [1/s]")
@@ -184,10 +192,6 @@ def bound_caveat(coords: str, over: str) -> str | None:
 
 def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: int,
              pings: list[int] | None, over: str = "prior") -> Any:
-    from tmaplan.bounds.closed_form import closed_form_pcrb
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-    from tmaplan.estimators.truth_bound import truth_conditioned_pcrb
-
     if method == "closed-form":
         if coords != "lpc":
             raise ArgumentError("--coords", "lpc for the closed form (docs/cli.md)", coords)
@@ -200,10 +204,8 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
 
 
 def _figure(results: list[Any], path: Path, title: str) -> None:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 
     coords = results[0].coords
     labels = _LPC_LABELS if coords == "lpc" else _CART_LABELS
@@ -251,7 +253,7 @@ def _samples(samples: int | None, method: str, overlay: bool) -> int:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Compute the bound, write the figure, return the docs/cli.md JSON fields."""
-    scenario = load(args.problem)
+    scenario = scenario_of(args)
     coords = args.coords or ("lpc" if args.method == "closed-form" else "cartesian")
     overlay = not args.no_figure and not args.no_overlay
     samples = _samples(args.samples, args.method, overlay)

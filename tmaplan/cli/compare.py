@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
@@ -24,7 +24,7 @@ from tmaplan.cli._args import (
     integer,
     open_fraction,
 )
-from tmaplan.cli._finite import require_finite
+from tmaplan.cli.finite import require_finite
 from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.policies.combine import MANOEUVRES, PINGS
@@ -33,7 +33,7 @@ from tmaplan.scenario import load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 

@@ -18,16 +18,25 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
+from matplotlib.patches import Ellipse
 
 from tmaplan.bounds.crlb import CRLBResult, crlb
-from tmaplan.cli._args import add_figure_arguments, add_problem_argument, frequency_lines
+from tmaplan.bounds.observability import observability
+from tmaplan.cli.args import add_figure_arguments, add_problem_argument, frequency_lines
+from tmaplan.cli.contacts import scenario_of
 from tmaplan.display import timespan
-from tmaplan.scenario import Scenario, load
+from tmaplan.plotting import plot_geometry
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import simulate
 
 HELP = "CRLB of the batch (deterministic-track) estimate"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "per-contact"
+
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("final_range_std",)
 
 
@@ -44,14 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _figure(scenario: Scenario, res: CRLBResult, path: Path) -> None:
     """Truth geometry (km) with the 2σ CRLB ellipse of the target position at t_N."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Ellipse
-
-    from tmaplan.plotting import plot_geometry
-    from tmaplan.simulate import simulate
+    import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 
     fig = plot_geometry(simulate(scenario, None))
     ax = fig.axes[0]
@@ -80,9 +83,7 @@ def _display(name: str, unit: str, value: float) -> tuple[float, str]:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Compute the CRLB, print a table (unless ``--json -``) and return the JSON payload."""
-    from tmaplan.bounds.observability import observability
-
-    scenario = load(args.problem)
+    scenario = scenario_of(args)
     res = crlb(scenario, frequencies=args.frequencies)
     n_tones = sum(1 for p in res.parameters if p.startswith("f0["))
     units = res.units

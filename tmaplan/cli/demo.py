@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
@@ -49,6 +49,7 @@ from tmaplan.headline import (
     stored_lines,
     stored_payload,
 )
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.parallel import closing_pool, process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.plotting import plot_plan, plot_schedule
@@ -61,7 +62,7 @@ from tmaplan.scenario import load_problem
 
 HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 #: The problem the demo works on.
@@ -108,8 +109,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     # one pool of workers for the whole demo, importing while the main process starts: the
-    # offline plan's multi-start and the campaign run on it
-    pool = process_pool(args.workers) if args.workers > 1 else None
+    # offline plan's multi-start and the campaign run on it (campaigns imports plan_starts)
+    pool = (process_pool(args.workers, warm_up=(run_campaign.__module__,))
+            if args.workers > 1 else None)
     with closing_pool(pool):  # (stopped at once by an interrupt)
         return _run(args, out, pool, t0)
 
@@ -136,7 +138,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
 
     if pool is not None:  # receding-realtime's Hessian model on a worker while we schedule
         prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
-    budget = scenario.planning.ping_budget if scenario.planning else 0
+    budget = default_ping_budget(scenario)
     _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
     sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,
                            belief=belief)

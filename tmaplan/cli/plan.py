@@ -14,7 +14,9 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from tmaplan.cli._args import (
+import numpy as np
+
+from tmaplan.cli.args import (
     MAX_STARTS,
     PLAN_STARTS,
     add_figure_arguments,
@@ -22,7 +24,10 @@ from tmaplan.cli._args import (
     duration,
     integer,
 )
+from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, parse_start
 from tmaplan.display import minute_list
+from tmaplan.io import LocalFrame
+from tmaplan.io.plans import legs_from_track, legs_table, write_plan
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
@@ -36,7 +41,7 @@ from tmaplan.scenario import load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
 
 
@@ -125,6 +130,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
               f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))
+    payload.update(_navigator_plan(plan, scenario, Path(args.out), figure_name(
+        scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
+        control_interval=args.control_interval, transcription=args.transcription,
+        starts=_starts(args), joint=args.joint, ping_stride=args.ping_stride)[:-4],
+        quiet=args.json == "-"))
     if not args.no_figure:
         path = Path(args.out) / figure_name(
             scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
@@ -135,6 +145,28 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.json != "-":
             print(f"wrote {path}")
     return payload
+
+
+def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,
+                    quiet: bool) -> dict[str, Any]:
+    """The plan as a navigator uses it (docs/recordings.md): its leg table, printed and
+    written (``<stem>_legs.csv``), and its track as GPX and CSV, the own ship starting at
+    ``simulate --export``'s default origin and time (the scenario's plane shifted there)."""
+
+    legs = legs_from_track(plan.times - plan.times[0], plan.heading,
+                           turn_rates=plan.turn_rate)
+    obs = plan.observer
+    p0 = np.asarray(scenario.observer.position, float)
+    t0 = float(scenario.time.t0)
+    files = write_plan(out, stem, legs, obs.times - t0, obs.position[:, 0] - p0[0],
+                       obs.position[:, 1] - p0[1], start=parse_start(DEFAULT_START),
+                       frame=LocalFrame(lat0=DEFAULT_ORIGIN[0], lon0=DEFAULT_ORIGIN[1]))
+    if not quiet:
+        print(legs_table(legs))
+        print(f"wrote {', '.join(files.values())}")
+    return {"legs": [{"start": leg.start, "course": leg.course, "turn": leg.turn,
+                      "rate": leg.rate, "duration": leg.duration} for leg in legs],
+            "exports": files}
 
 
 def figure_name(problem: str, objective: str, pings: int = 0, *,
@@ -163,7 +195,7 @@ def figure_name(problem: str, objective: str, pings: int = 0, *,
 
 def _starts(args: argparse.Namespace) -> int:
     """``--starts`` (default :data:`STARTS`); the preflight refused it where it has no effect
-    (:func:`tmaplan.cli._args.preflight`), so a figure named ``_<N>starts`` was started from
+    (:func:`tmaplan.cli.preflight.preflight`), so a figure named ``_<N>starts`` was started from
     N guesses."""
     return STARTS if args.starts is None else int(args.starts)
 

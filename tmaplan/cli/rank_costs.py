@@ -6,9 +6,10 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from pathlib import Path
 from typing import Any
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_SAMPLES,
@@ -24,6 +25,7 @@ from tmaplan.cli._args import (
 from tmaplan.errors import ArgumentError
 from tmaplan.experiments import rank_costs
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
+from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
 from tmaplan.scenario import load
 
 HELP = ("rank every cost functional against closed-loop Monte Carlo over a family of candidate "
@@ -79,8 +81,6 @@ def _plans(text: str) -> tuple[str, ...] | None:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run (or resume) the ranking; write the figure and ``<problem>_rank-costs.html``."""
-    from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
-
     scenario = load(args.problem)
     quiet = args.json == "-"
     res = rank_costs(scenario, candidates=args.candidates, runs=args.runs, seed=args.seed,
@@ -100,8 +100,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                        f"--particles {args.particles} --accuracy {args.accuracy} --plans "
                        f"{shlex.quote(args.plans)} --cost-samples {args.cost_samples} "
                        f"--resamples {args.resamples}")
-    from pathlib import Path
-
     report = write_ranking_report(res, args.out, command=cmd, figure=None if args.no_figure
                                   else Path(payload["figure"]))
     payload["report"] = str(report)

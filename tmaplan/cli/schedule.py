@@ -13,18 +13,20 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_WORKERS,
     add_figure_arguments,
     add_problem_argument,
     duration,
     integer,
 )
-from tmaplan.display import minute_list
+from tmaplan.display import minute_list, seconds_text
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import course_speed
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.models.target import initial_velocity
+from tmaplan.planning import max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
 from tmaplan.plotting import plot_schedule
@@ -32,7 +34,7 @@ from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
 
 #: Defaults of ``--method``, ``--objective`` and ``--time-limit`` [s].
@@ -171,8 +173,6 @@ def check_options(args: argparse.Namespace, scenario: Scenario) -> None:
     for flag, (name, where, applies) in _METHOD_OPTIONS.items():
         value = getattr(args, name, None)
         if value is not None and not applies(args.method, args.objective):
-            from tmaplan.cli._args import seconds_text
-
             shown = seconds_text(value) if flag == "--time-limit" else value
             raise ArgumentError(flag, f"{where}; it is not used by --method {args.method} "
                                 f"--objective {args.objective}", shown, source=scenario.name)
@@ -185,11 +185,7 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
     ``--min-spacing`` or ``planning.ping_min_spacing`` (a spacing that lets too few pings
     fit), else ``--budget`` / ``planning.ping_budget`` (too few steps outside
     ``planning.ping_forbidden``)."""
-    from tmaplan.cli._args import seconds_text
-    from tmaplan.planning import max_pings, ping_candidates
-
-    pl = scenario.planning
-    budget = args.budget if args.budget is not None else (pl.ping_budget if pl else 0)
+    budget = args.budget if args.budget is not None else default_ping_budget(scenario)
     if budget == 0:
         return
     times = track.times if track is not None else np.asarray(scenario.time.times, float)
@@ -214,9 +210,7 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Schedule, write ``<out>/<problem>_schedule.png`` and return the payload."""
     scenario = load(args.problem)
-    budget = args.budget
-    if budget is None:
-        budget = scenario.planning.ping_budget if scenario.planning is not None else 0
+    budget = args.budget if args.budget is not None else default_ping_budget(scenario)
     belief = Belief.from_prior(scenario)
     if args.observer_plan is not None:
         obs = read_observer_plan(args.observer_plan, scenario)

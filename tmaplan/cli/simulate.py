@@ -10,19 +10,23 @@ from typing import Any
 
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
     out_dir,
 )
+from tmaplan.cli.observer_plan import with_observer_plan
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
-from tmaplan.plotting import plot_geometry
+from tmaplan.plotting import plot_bearings, plot_geometry
 from tmaplan.scenario import load
-from tmaplan.simulate import Simulation, simulate
+from tmaplan.simulate import ContactsSimulation, Simulation, simulate, simulate_contacts
 
 HELP = "simulate one truth and measurement run of a problem and plot its geometry"
+
+#: Several contacts: one run of them all (:func:`tmaplan.simulate.simulate_contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Default ``--origin``: the own ship's start (latitude, longitude) [deg] in the Bay of Biscay.
 DEFAULT_ORIGIN = (45.0, -5.0)
@@ -45,9 +49,9 @@ def _origin(text: str) -> tuple[float, float]:
     return lat, lon
 
 
-def _start(text: str) -> dt.datetime:
+def parse_start(text: str) -> dt.datetime:
     """Type of ``--start``: an ISO 8601 time with a zone."""
-    from tmaplan.io.times import parse_utc  # pyproj and co. only when exporting
+    from tmaplan.io.times import parse_utc  # deferred: tmaplan.io loads pyproj, pynmea2, gpxpy
 
     t = parse_utc(text)
     if t is None:
@@ -72,7 +76,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
              "scenario's shifted so that the own ship starts at its origin; a southern "
              "latitude with '=': --origin=-33.5,151.5")
     parser.add_argument(
-        "--start", type=_start, default=None, metavar="TIME",
+        "--observer-plan", default=None, metavar="FILE",
+        help="fly this plan: a `tmaplan plan P --json` file or a legs CSV (docs/recordings.md)")
+    parser.add_argument(
+        "--start", type=parse_start, default=None, metavar="TIME",
         help=f"with --export: UTC time of the run's first step (default {DEFAULT_START})")
 
 
@@ -108,7 +115,7 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     ArgumentError
         (``--export``) The run has no bearing, or the directory cannot be written.
     """
-    from tmaplan.io import (  # pyproj, pynmea2, gpxpy: only when exporting
+    from tmaplan.io import (  # deferred: pyproj, pynmea2, gpxpy only when exporting
         LocalFrame,
         write_bearings,
         write_gpx,
@@ -166,20 +173,18 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             if getattr(args, flag, None) is not None:
                 raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
                                     source=scenario.name)
+    if getattr(args, "observer_plan", None) is not None:
+        scenario = with_observer_plan(scenario, args.observer_plan)
+    if len(scenario.contacts) > 1:
+        return _run_several(args, scenario)
     sim = simulate(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
     if args.json != "-":
-        counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
-                           for m in sim.measurements)
-        r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
-        print(f"{scenario.name}: seed {args.seed}, {scenario.n_steps} steps of "
-              f"{scenario.time.dt:g} s over {timespan(scenario.time.horizon)}; range "
-              f"{r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km (min {r.min() / 1e3:.2f} km); "
-              f"measurements: {counts or 'none'}")
+        print(_summary(scenario.name, sim, args.seed))
     if args.export is not None:
         files = export(sim, args.export, origin=args.origin or DEFAULT_ORIGIN,
-                       start=args.start or _start(DEFAULT_START), seed=args.seed)
+                       start=args.start or parse_start(DEFAULT_START), seed=args.seed)
         payload["export"] = files
         if args.json != "-":
             print(f"wrote {', '.join(files.values())}")
@@ -187,6 +192,48 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         path = Path(args.out) / f"{scenario.name}_geometry.png"
         plot_geometry(sim, path)
         payload["figure"] = str(path)
+        bearings = plot_bearings(sim, Path(args.out) / f"{scenario.name}_bearings.png")
+        if bearings is not None:
+            payload["bearings_figure"] = str(bearings)
         if args.json != "-":
-            print(f"wrote {path}")
+            print(f"wrote {path}" + (f", {bearings}" if bearings is not None else ""))
+    return payload
+
+
+def _summary(name: str, sim: Simulation, seed: int) -> str:
+    """The console line of one contact's run."""
+    sc = sim.scenario
+    counts = ", ".join(f"{m.steps.size} {m.kind} (sensors[{m.sensor}])"
+                       for m in sim.measurements)
+    r = np.hypot(sim.relative[:, 0], sim.relative[:, 1])
+    return (f"{name}: seed {seed}, {sc.n_steps} steps of {sc.time.dt:g} s over "
+            f"{timespan(sc.time.horizon)}; range {r[0] / 1e3:.2f} km -> {r[-1] / 1e3:.2f} km "
+            f"(min {r.min() / 1e3:.2f} km); measurements: {counts or 'none'}")
+
+
+def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
+    """``simulate`` of a several-contact scenario: one run of every contact
+    (:class:`ContactsSimulation`), a console line and a geometry figure per contact
+    (``<out>/<problem>-<contact>_geometry.png``). ``--export`` writes one contact's bearings
+    and is refused here."""
+    if args.export is not None:
+        raise ArgumentError("--export", "a one-contact problem (the export of several "
+                            "contacts is not written yet)", list(scenario.contact_names),
+                            source=scenario.name)
+    for flag in ("origin", "start"):
+        if getattr(args, flag, None) is not None:
+            raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
+                                source=scenario.name)
+    sim: ContactsSimulation = simulate_contacts(scenario, np.random.default_rng(args.seed))
+    payload = sim.to_json()
+    payload["seed"] = args.seed
+    for name, run in sim.runs.items():
+        if args.json != "-":
+            print(_summary(f"{scenario.name} contact {name}", run, args.seed))
+        if not args.no_figure:
+            path = Path(args.out) / f"{scenario.name}-{name}_geometry.png"
+            plot_geometry(run, path)
+            payload["contacts"][name]["figure"] = str(path)
+            if args.json != "-":
+                print(f"wrote {path}")
     return payload

@@ -9,9 +9,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
 
-from tmaplan.cli._args import (
+from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     add_figure_arguments,
@@ -20,18 +21,23 @@ from tmaplan.cli._args import (
     frequency_lines,
     integer,
 )
-from tmaplan.cli._finite import require_finite
+from tmaplan.cli.contacts import scenario_of
+from tmaplan.cli.finite import require_finite
+from tmaplan.cli.observer_plan import with_observer_plan
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.mle import MLEConfig
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import ESTIMATORS
 from tmaplan.evaluation.tracking import monte_carlo
-from tmaplan.scenario import Scenario, load
+from tmaplan.scenario import Scenario
 
 HELP = "run an estimator over Monte Carlo runs against its bound"
 
-#: Results that must be numbers (:mod:`tmaplan.cli._finite`).
+#: Several contacts: each contact's view in turn (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "per-contact"
+
+#: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("rmse_position[-1]", "rmse_range[-1]", "bound_position[-1]", "bound_range[-1]")
 
 
@@ -63,6 +69,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         choices=("auto", "either", "clockwise", "anticlockwise"),
                         help="mle, constant-turn source: sense of turn searched (default auto: "
                              "the problem's [estimation] section, else either)")
+    parser.add_argument("--observer-plan", default=None, metavar="FILE",
+                        help="fly this plan: a `tmaplan plan P --json` file or a legs CSV "
+                             "(docs/recordings.md)")
     add_figure_arguments(parser)
 
 
@@ -83,10 +92,8 @@ def _with_lines(scenario: Scenario, n: int | None) -> Scenario:
 
 
 def _figure(res: Any, path: Path) -> None:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 
     fig, ax = plt.subplots(figsize=(7, 4))
     t = res.times / 60.0
@@ -132,7 +139,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     particles = 10_000 if getattr(args, "particles", None) is None else args.particles
     if particles < 2:
         raise ArgumentError("--particles", ">= 2", particles)
-    scenario = _with_lines(load(args.problem), getattr(args, "frequencies", 0))
+    scenario = _with_lines(scenario_of(args), getattr(args, "frequencies", 0))
+    if getattr(args, "observer_plan", None) is not None:
+        scenario = with_observer_plan(scenario, args.observer_plan)
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
 

@@ -1,13 +1,12 @@
 """Estimators: particle filter (+ bearings-only initialisation), batch ML, range-only filter.
 
 Interfaces: :class:`Filter` (recursive filters, driven by the one loop :func:`drive`) and
-:class:`Estimator` (what :func:`run` runs). Entry points: :func:`run` (one estimator on one
-run → :class:`Track`) and :func:`monte_carlo` (:mod:`tmaplan.evaluation.tracking`).
+:class:`Estimator` (what :func:`run` runs). Entry point: :func:`run` (one estimator on one run
+→ :class:`Track`); an estimator over Monte Carlo runs against its bound is
+:func:`tmaplan.evaluation.tracking.monte_carlo`, in the evaluation layer above.
 """
 
 from __future__ import annotations
-
-from typing import Any
 
 from tmaplan.estimators.applicability import (
     APPLICABILITY,
@@ -72,16 +71,6 @@ from tmaplan.estimators.runner import (
 )
 from tmaplan.simulate import measurement_batches
 
-
-def __getattr__(name: str) -> Any:
-    # The Monte Carlo evaluation sits in the evaluation layer above (it imports this package).
-    if name in ("monte_carlo", "MonteCarloResult"):
-        from tmaplan.evaluation import tracking
-
-        return getattr(tracking, name)
-    raise AttributeError(f"module 'tmaplan.estimators' has no attribute {name!r}")
-
-
 __all__ = [
     "APPLICABILITY",
     "ESTIMATORS",
@@ -98,7 +87,6 @@ __all__ = [
     "MLEEstimator",
     "MLEResult",
     "Measurement",
-    "MonteCarloResult",
     "PFConfig",
     "PFState",
     "ParticleFilter",
@@ -123,7 +111,6 @@ __all__ = [
     "mle",
     "moments_grid",
     "moments_series",
-    "monte_carlo",
     "predict",
     "range_only_predict",
     "range_only_update",

@@ -15,15 +15,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
+from tmaplan.scenario import Scenario, measurement_steps
+from tmaplan.simulate import simulate
 
 __all__ = ["APPLICABILITY", "MLE_DRIFT_RATIO_MAX", "Applicability", "applicable_estimators",
            "check_applicable"]
@@ -101,17 +100,12 @@ _PREFERENCE = ("range-only", "pf", "pf-bearings", "mle")
 
 
 def _count(scenario: Scenario, kinds: frozenset[str]) -> int:
-    from tmaplan.scenario import measurement_steps
-
     return sum(int(measurement_steps(s, scenario.time).size) for s in scenario.sensors
                if s.kind in kinds)
 
 
 def _resolution(scenario: Scenario) -> tuple[float, str]:
     """Finest measurement noise of the scenario in metres along its truth, and its name."""
-    from tmaplan.scenario import measurement_steps
-    from tmaplan.simulate import simulate
-
     rel = simulate(scenario, None).relative
     r = np.hypot(rel[:, 0], rel[:, 1])
     best = (math.inf, "")

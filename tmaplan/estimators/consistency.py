@@ -54,11 +54,10 @@ old cloud by many orders of likelihood, hands over to them. Each recovery is log
 (:attr:`MonitoredState.log`) and counted (:attr:`MonitoredState.recoveries`); the closed loop
 reports it per run.
 
-:class:`FilterOptions` bundles the robust measurement models of the particle filter
-(:class:`tmaplan.estimators.particle_filter.PFConfig` ``bearing_clutter`` and ``ping_gate``)
-with the monitor; :meth:`FilterOptions.plain`, :meth:`FilterOptions.monitored`,
-:meth:`FilterOptions.robust` and :meth:`FilterOptions.glr` are presets the fault matrix
-compares (``benchmarks/faults.py``).
+The closed loop's :class:`tmaplan.evaluation.filter_options.FilterOptions` bundles the robust
+measurement models of the particle filter (:class:`tmaplan.estimators.particle_filter.PFConfig`
+``bearing_clutter`` and ``ping_gate``) with this monitor and the closed loop's answer to its
+alarms.
 """
 
 from __future__ import annotations
@@ -67,23 +66,20 @@ import dataclasses
 import functools
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy import optimize, stats
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
-from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.geometry import wrap_angle, wrap_half_angle
-
-if TYPE_CHECKING:
-    from tmaplan.policies.alarms import AlarmResponse
-    from tmaplan.scenario import Scenario
-    from tmaplan.simulate import Measurement
+from tmaplan.models.target import initial_velocity
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import Measurement
 
 __all__ = [
-    "FilterOptions",
     "MonitorConfig",
     "MonitoredFilter",
     "MonitoredState",
@@ -368,8 +364,6 @@ class MonitoredFilter:
 
     def init(self, scenario: Scenario, rng: np.random.Generator) -> MonitoredState:
         """The inner filter's initial state, the observer's initial velocity."""
-        from tmaplan.models.target import initial_velocity
-
         return MonitoredState(inner=self.inner.init(scenario, rng), prior=scenario.prior,
                               velocity=np.asarray(initial_velocity(scenario.observer), float))
 
@@ -521,80 +515,3 @@ class MonitoredFilter:
             inner = self._boosted.update(inner, meas, rng)
         return dataclasses.replace(state, inner=inner, nis=(), cusum=(0.0, 0.0), age=(0, 0),
                                    streak=0, history=(), quiet=self.config.holdoff)
-
-
-@dataclasses.dataclass(frozen=True, kw_only=True)
-class FilterOptions:
-    """Closed-loop filter options: robust measurement models and the monitor.
-
-    Attributes
-    ----------
-    bearing_clutter : float
-        :attr:`PFConfig.bearing_clutter` (0: Gaussian bearings).
-    ping_gate : float, optional
-        :attr:`PFConfig.ping_gate` [σ].
-    monitor : MonitorConfig, optional
-        None: no monitoring.
-    alarm_response : AlarmResponse, optional
-        The closed loop's answer to the monitor's alarms
-        (:class:`tmaplan.policies.AlarmResponse`; None: none, or no monitor).
-    """
-
-    bearing_clutter: float = 0.0
-    ping_gate: float | None = None
-    monitor: MonitorConfig | None = dataclasses.field(default_factory=MonitorConfig)
-    alarm_response: AlarmResponse | None = None
-
-    @classmethod
-    def plain(cls) -> FilterOptions:
-        """Gaussian bearings, every ping, no monitor (the filter of earlier releases)."""
-        return cls(monitor=None)
-
-    @classmethod
-    def monitored(cls) -> FilterOptions:
-        """Gaussian bearings with the monitor and its recovery (the closed-loop default); no
-        alarm pings, so a run never uses more pings than the scenario's budget."""
-        return cls()
-
-    @classmethod
-    def robust(cls) -> FilterOptions:
-        """5 % clutter bearings, pings gated at 10 σ, the monitor; no alarm pings."""
-        return cls(bearing_clutter=0.05, ping_gate=10.0)
-
-    @classmethod
-    def responsive(cls) -> FilterOptions:
-        """:meth:`monitored` plus alarm pings: each alarm is answered with pings from the
-        allowance :attr:`tmaplan.policies.AlarmResponse.extra_pings` *on top of* the
-        scenario's ping budget. Opt-in, because those pings reveal the own ship beyond the
-        budget the user set."""
-        return cls(alarm_response=_default_response())
-
-    @classmethod
-    def glr(cls) -> FilterOptions:
-        """:meth:`monitored` plus the velocity-jump GLR test over 40 steps."""
-        return cls(monitor=MonitorConfig(glr_window=40))
-
-    def label(self) -> str:
-        """Short name: "plain", "monitored", "robust", "responsive", "glr" or the field
-        values."""
-        for name in ("plain", "monitored", "robust", "responsive", "glr"):
-            if self == getattr(FilterOptions, name)():
-                return name
-        return (f"clutter={self.bearing_clutter},gate={self.ping_gate},"
-                f"monitor={self.monitor is not None},"
-                f"alarm_pings={self.alarm_response is not None}")
-
-    def build(self, config: PFConfig) -> Any:
-        """The filter: a :class:`ParticleFilter` with these likelihood options, monitored if
-        asked."""
-        pf = ParticleFilter(dataclasses.replace(config, bearing_clutter=self.bearing_clutter,
-                                                ping_gate=self.ping_gate))
-        return pf if self.monitor is None else MonitoredFilter(pf, self.monitor)
-
-
-def _default_response() -> AlarmResponse:
-    """The alarm response of the monitored presets (a run-time import: policies sit above the
-    estimators)."""
-    from tmaplan.policies.alarms import AlarmResponse
-
-    return AlarmResponse()

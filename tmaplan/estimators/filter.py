@@ -19,15 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeVar, runtime_checkable
+from typing import Any, ClassVar, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
 from tmaplan.interrupts import checkpoint
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
-    from tmaplan.simulate import Measurement
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import Measurement
 
 __all__ = ["Filter", "FilterRun", "FilterState", "drive"]
 

@@ -34,7 +34,7 @@ Metropolis–Hastings moves given each particle's ancestor; suited to ring-shape
 posteriors, where the global-covariance kernel throws particles off the ring: on
 ``sharma2024-range-only`` it ends at ≈ 1050 m against ≈ 1900–2100 m for the default, 100 runs).
 Speed: the cloud is stored column-major and the batched kernels live in
-:mod:`tmaplan.estimators._pf_kernels` (O(N) systematic resampling, float32 Box–Muller noise).
+:mod:`tmaplan.estimators.pf_kernels` (O(N) systematic resampling, float32 Box–Muller noise).
 
 Degeneracy: when the effective sample size (ESS) falls below ``degeneracy_ess`` particles, or
 every weight becomes non-finite, a :class:`DegeneracyWarning` is issued and the filter recovers
@@ -50,32 +50,31 @@ import dataclasses
 import functools
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from scipy.special import logsumexp
 
 from tmaplan.errors import ArgumentError, finite_real, is_integer
-from tmaplan.estimators._pf_kernels import (
-    _check_measurement,
-    _dynamics,
-    _ess,
-    _frequency_update,
-    _gated,
-    _measurement_ll,
-    _mh_move,
-    _normals_f32,
-    _rows,
-    _safe_cholesky,
-    _systematic,
-    _weighted_cov,
+from tmaplan.estimators.pf_kernels import (
+    check_measurement,
+    effective_sample_size,
+    frequency_update,
+    gated,
+    measurement_ll,
+    mh_move,
+    ncv_noise_factor,
+    normals_f32,
+    particle_rows,
+    safe_cholesky,
+    systematic_indices,
     systematic_resample,
+    weighted_cov,
 )
 from tmaplan.geometry import range_of
+from tmaplan.models.prior import relative_prior_samples
+from tmaplan.scenario import Scenario
 from tmaplan.simulate import Measurement
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = [
     "DEFAULT_KERNEL",
@@ -90,7 +89,7 @@ __all__ = [
 ]
 
 # Kernels re-exported for tests and callers of the pre-split module.
-_KERNELS = (_normals_f32, _systematic)
+_KERNELS = (normals_f32, systematic_indices)
 
 
 class DegeneracyWarning(RuntimeWarning):
@@ -139,7 +138,7 @@ class PFConfig:
         Resample-move: random-walk step in units of the process-noise Cholesky factor.
     kernel : {"numba", "numpy"}
         Default :data:`DEFAULT_KERNEL`. "numba": the compiled kernels of
-        :mod:`tmaplan.estimators._pf_numba`
+        :mod:`tmaplan.estimators.pf_numba`
         (multi-threaded over fixed blocks of particles, bit-identical for any thread count;
         process and jitter noise from Philox4x32-10 keyed by the injected Generator, Box–Muller
         in float64). "numpy" (the default for now: stored campaigns and the demo's stored result
@@ -268,7 +267,7 @@ class PFState:
     @functools.cached_property
     def _moments(self) -> tuple[np.ndarray, np.ndarray]:
         """Mean and covariance in one pass of the numba kernel."""
-        return _fast().moments(_rows(self.particles), self.weights)
+        return _fast().moments(particle_rows(self.particles), self.weights)
 
     @property
     def n(self) -> int:
@@ -283,9 +282,9 @@ def _read_only(a: np.ndarray) -> np.ndarray:
 
 def _fast() -> Any:
     """The numba kernels (imported on first use: numba loads in about a second)."""
-    from tmaplan.estimators import _pf_numba
+    from tmaplan.estimators import pf_numba  # deferred: numba takes about a second to import
 
-    return _pf_numba
+    return pf_numba
 
 
 def _with_weights(state: PFState, w: np.ndarray) -> PFState:
@@ -321,9 +320,9 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
     PFState
         At ``state.step + 1``, same weights.
     """
-    l11, l21, l22 = _dynamics(float(config.dt), float(config.q))
+    l11, l21, l22 = ncv_noise_factor(float(config.dt), float(config.q))
     dt = float(config.dt)
-    A = _rows(state.particles)
+    A = particle_rows(state.particles)
     d = np.zeros(2) if dv is None else np.asarray(dv, float)
     if d.size != 2 or not np.isfinite(d).all():
         raise ArgumentError("dv", "a finite observer velocity increment of shape (2,) [m/s]",
@@ -342,7 +341,7 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
             # w_pos = l11 z1, w_vel = l21 z1 + l22 z2, rows of Z = [z1x, z1y, z2x, z2y].
             Z = np.empty((4, A.shape[1]))
             if config.noise == "float32":
-                _normals_f32(rng, Z)
+                normals_f32(rng, Z)
             else:
                 rng.standard_normal(out=Z)
             np.multiply(Z[:2], l21, out=vel)
@@ -391,10 +390,10 @@ def update(state: PFState, measurements: Sequence[Measurement], rng: np.random.G
         tell what happened (in the last stage).
     """
     for m in measurements:
-        _check_measurement(m)
+        check_measurement(m)
     state = _assimilate(state, [m for m in measurements if not m.ping], rng, config)
     for m in measurements:
-        if m.ping and not _gated(state, m, config.ping_gate):
+        if m.ping and not gated(state, m, config.ping_gate):
             r = range_of(state.particles)
             # spread of the cloud about the measurement (a confident but wrong cloud is wide)
             spread = float(np.sqrt(max(float(state.weights @ (r - float(m.value)) ** 2), 0.0)))
@@ -428,11 +427,11 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         lw, mx, fm, fv, ll_keep, parts = _fast().log_weights(state, measurements, config,
                                                              move)
     else:
-        for m in measurements:  # validated by update (_check_measurement)
+        for m in measurements:  # validated by update (check_measurement)
             if m.kind in ("bearing", "range"):
-                c = _measurement_ll(X, m, config.bearing_clutter)
+                c = measurement_ll(X, m, config.bearing_clutter)
             elif m.kind == "frequency":
-                c, fm, fv = _frequency_update(X, m, fm, fv)
+                c, fm, fv = frequency_update(X, m, fm, fv)
             else:
                 raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'",
                                     m.kind)
@@ -469,9 +468,9 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
             f"particle filter degenerate at step {state.step} (ESS = {ess:.2f}); "
             "recovering by resampling and roughening", DegeneracyWarning, stacklevel=2)
         # Roughening with the spread of the *predicted* cloud (before weighting).
-        A = _rows(X)
+        A = particle_rows(X)
         spread = np.std(A, axis=1)
-        idx = _systematic(w, rng)
+        idx = systematic_indices(w, rng)
         A = np.take(A, idx, axis=1)
         A += rng.standard_normal(A.shape) * (config.roughening * spread)[:, None]
         X = A.T
@@ -480,15 +479,15 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         lw = np.full(n, -np.log(n))
         resampled = True
     elif ess < config.ess_threshold * n or config.ess_threshold >= 1.0:
-        A = _rows(X)
-        idx = _fast().systematic(w, rng.random()) if fast else _systematic(w, rng)
+        A = particle_rows(X)
+        idx = _fast().systematic(w, rng.random()) if fast else systematic_indices(w, rng)
         if config.variant == "regularised":
             d = A.shape[0]
             h = config.bandwidth_scale * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4))
             if fast:  # gather and jitter in one pass (Philox normals)
-                A = _fast().gather(A, idx, h * _safe_cholesky(_fast().moments(A, w)[1]), rng)
+                A = _fast().gather(A, idx, h * safe_cholesky(_fast().moments(A, w)[1]), rng)
             else:
-                Lc = h * _safe_cholesky(_weighted_cov(A, w))
+                Lc = h * safe_cholesky(weighted_cov(A, w))
                 A = np.take(A, idx, axis=1)
                 # A += Lc Z row by row (Lc lower triangular; no thin BLAS product).
                 Z = rng.standard_normal(A.shape)
@@ -501,7 +500,7 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         else:
             A = _fast().gather(A, idx, None, None) if fast else np.take(A, idx, axis=1)
             if move and ll_keep is not None and state.parent is not None:
-                A = _mh_move(A, np.take(_rows(state.parent), idx, axis=1), state.parent_dv,
+                A = mh_move(A, np.take(particle_rows(state.parent), idx, axis=1), state.parent_dv,
                              ll_keep[idx], measurements, rng, config)
         X = A.T
         if fm is not None and fv is not None:
@@ -561,7 +560,7 @@ class ParticleFilter:
                 raise ArgumentError("log_weights", f"shape ({n},), no NaN or +inf, not all "
                                     "-inf", lw.shape if lw.shape != (n,) else lw)
             lw = lw - logsumexp(lw)
-        return PFState(step=step, particles=X, log_weights=lw, ess=_ess(lw),
+        return PFState(step=step, particles=X, log_weights=lw, ess=effective_sample_size(lw),
                        kernel=self.config.kernel)
 
     def from_prior(self, scenario: Scenario, rng: np.random.Generator, *,
@@ -571,8 +570,6 @@ class ParticleFilter:
         Uses :func:`tmaplan.models.prior.relative_prior_samples`; never the true state
         (beyond what the prior itself is defined from).
         """
-        from tmaplan.models.prior import relative_prior_samples
-
         X = relative_prior_samples(scenario, self.config.n_particles, rng, observer_state0)
         return self.from_particles(X, step=0)
 
@@ -584,7 +581,7 @@ class ParticleFilter:
             raise ArgumentError("mean", "a finite relative state of shape (4,)", mean)
         if C.shape != (4, 4) or not np.isfinite(C).all() or (np.diag(C) < 0).any():
             raise ArgumentError("cov", "a finite (4, 4) covariance", cov)
-        L = _safe_cholesky(C)
+        L = safe_cholesky(C)
         Z = rng.standard_normal((4, self.config.n_particles))
         A = m[:, None] + L @ Z
         return self.from_particles(A.T, step=step)

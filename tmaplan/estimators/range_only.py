@@ -64,7 +64,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from scipy.special import logsumexp
@@ -77,11 +77,10 @@ from tmaplan.estimators.gvm_moments import (
     moments_grid,
     moments_series,
 )
+from tmaplan.models.prior import prior_relative_moments
 from tmaplan.models.target import ncv_matrices
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
-    from tmaplan.simulate import Measurement
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import Measurement
 
 __all__ = [
     "RangeOnlyConfig",
@@ -556,8 +555,6 @@ class RangeOnlyFilter:
 
     def init(self, scenario: Scenario, rng: np.random.Generator) -> RangeOnlyState:
         """One Gaussian with the prior's relative mean and covariance."""
-        from tmaplan.models.prior import prior_relative_moments
-
         return from_gaussian(*prior_relative_moments(scenario, 20_000, rng))
 
     def predict(self, state: RangeOnlyState, dv: np.ndarray | None,

@@ -23,7 +23,6 @@ import time as _time
 import warnings
 from collections.abc import Callable, Sequence
 from typing import (
-    TYPE_CHECKING,
     Any,
     ClassVar,
     Literal,
@@ -45,10 +44,9 @@ from tmaplan.estimators.particle_filter import DegeneracyWarning, ParticleFilter
 from tmaplan.estimators.range_only import RangeOnlyConfig, RangeOnlyFilter
 from tmaplan.geometry import bearing_of, range_of
 from tmaplan.models.observer import ObserverTrack, observer_track
+from tmaplan.models.prior import true_initial_state
+from tmaplan.scenario import Scenario
 from tmaplan.simulate import Measurement, MeasurementSet, Simulation, measurement_batches
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = [
     "ESTIMATORS",
@@ -128,8 +126,6 @@ def run_prior(scenario: Scenario, rng: np.random.Generator,
     Gaussian priors with ``mean = None`` get ``mean = truth + std·N(0, 1)``. Every mean being
     given then, the drawn prior has ``centred_on_truth`` off (a prior refuses it then).
     """
-    from tmaplan.models.prior import true_initial_state
-
     p = scenario.prior
     if p is None:
         raise ScenarioError("prior", "a [prior] table for this estimator", None,

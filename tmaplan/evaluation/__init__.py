@@ -2,8 +2,9 @@
 metrics.
 
 :mod:`~tmaplan.evaluation.closed_loop` (one run of a policy against a truth, the particle filter
-driven by :func:`tmaplan.estimators.filter.drive`), :mod:`~tmaplan.evaluation.tracking` (an
-estimator over Monte Carlo runs against its bound, ``tmaplan.estimators.monte_carlo``),
+driven by :func:`tmaplan.estimators.filter.drive`; its filter options in
+:mod:`~tmaplan.evaluation.filter_options`), :mod:`~tmaplan.evaluation.tracking` (an estimator
+over Monte Carlo runs against its bound, :func:`~tmaplan.evaluation.tracking.monte_carlo`),
 :mod:`~tmaplan.evaluation.campaigns` (paired, resumable policy comparisons; public as
 :mod:`tmaplan.experiments`), :mod:`~tmaplan.evaluation.records` (typed run records, scenario
 hash) and :mod:`~tmaplan.evaluation.metrics`. Truth and measurements come from

@@ -1,7 +1,8 @@
 """Monte Carlo comparison of policies with common random numbers.
 
 A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
-its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter),
+its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter:
+:func:`tmaplan.evaluation.seeding.run_streams`),
 and every policy re-creates them from the same seeds, so differences between policies are
 paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
 run, so serial, process-pool and Dask backends with any worker count give bit-identical
@@ -29,17 +30,13 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
 from tmaplan.display import short_repr
-from tmaplan.errors import PlanningError
-from tmaplan.estimators.consistency import FilterOptions
+from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
-from tmaplan.evaluation.closed_loop import run_closed_loop
-from tmaplan.evaluation.metrics import (
-    PairedDifference,
-    censor_time,
-    paired_difference,
-    run_metrics,
-)
+from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.filter_options import FilterOptions
+from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -50,9 +47,10 @@ from tmaplan.evaluation.records import (
 from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
 from tmaplan.interrupts import Interrupted, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
-from tmaplan.policies import Policy, parse_policy
+from tmaplan.policies import Planned, Policy, Receding, parse_policy
+from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario, dump
-from tmaplan.simulate import draw_truth
+from tmaplan.version import __version__
 
 __all__ = [
     "CampaignResult",
@@ -117,8 +115,6 @@ class CampaignSpec:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def _meta(self, policies: Mapping[str, Policy] | None = None) -> dict[str, Any]:
-        from tmaplan import __version__
-
         meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
@@ -177,9 +173,6 @@ def _parse(scenario: Scenario, specs: Sequence[str]) -> dict[str, Any]:
 
 def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
              pool: Executor | None) -> dict[str, Policy]:
-    from tmaplan.policies import Planned, Receding
-    from tmaplan.policies.manoeuvres import offline_plan
-
     if workers > 1 or pool is not None:  # the offline plans first, their starts on workers
         for pol in parsed.values():
             m = pol.manoeuvre
@@ -189,37 +182,23 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
-def _run_seeds(seed: int, run: int) -> list[np.random.SeedSequence]:
-    return np.random.SeedSequence(seed, spawn_key=(run,)).spawn(3)
-
-
 def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
-    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all)."""
-    from threadpoolctl import threadpool_limits
-
-    scenario = spec.scenario
-    s_truth, s_noise, s_filter = _run_seeds(spec.seed, run)
+    """Run every policy on Monte Carlo run ``run`` (same truth and noise for all:
+    :func:`tmaplan.evaluation.closed_loop.paired_run`)."""
     out: dict[str, PolicyRun] = {}
-    with threadpool_limits(limits=1):
-        target = draw_truth(scenario, np.random.default_rng(s_truth),
-                            from_prior=spec.truth == "prior")
-        for name, pol in policies.items():
-            res = run_closed_loop(scenario, pol, target,
-                                  noise_rng=np.random.default_rng(s_noise),
-                                  filter_rng=np.random.default_rng(s_filter),
-                                  n_particles=spec.n_particles, options=spec.filter_options)
-            converged, fell_back, infeasible = replan_flags(res.replans)
-            out[name] = PolicyRun(
-                metrics=run_metrics(res.times, res.truth, res.estimate,
-                                    res.observer.mean_velocity, accuracy=spec.accuracy,
-                                    n_pings=len(res.ping_steps)),
-                observer=res.observer.position, target=res.target[:, :2],
-                estimate=res.estimate[:, :2] + res.observer.position,
-                ping_steps=res.ping_steps,
-                replan_seconds=np.array([e["seconds"] for e in res.replans]),
-                replan_converged=converged, replan_fell_back=fell_back,
-                replan_infeasible=infeasible,
-                recoveries=res.recoveries)
+    for name, res in paired_run(spec.scenario, policies, seed=spec.seed, run=run,
+                                n_particles=spec.n_particles, options=spec.filter_options,
+                                from_prior=spec.truth == "prior"):
+        converged, fell_back, infeasible = replan_flags(res.replans)
+        out[name] = PolicyRun(
+            metrics=res.metrics(spec.accuracy),
+            observer=res.observer.position, target=res.target[:, :2],
+            estimate=res.estimate[:, :2] + res.observer.position,
+            ping_steps=res.ping_steps,
+            replan_seconds=np.array([e["seconds"] for e in res.replans]),
+            replan_converged=converged, replan_fell_back=fell_back,
+            replan_infeasible=infeasible,
+            recoveries=res.recoveries)
     return RunRecord(run=run, policies=out)
 
 
@@ -236,7 +215,7 @@ class CampaignResult:
     summary : dict
         Per policy: ``bound_position (K+1,)`` and ``bound_range (K+1,)`` [m], the
         truth-conditioned PCRB over the runs' truths, own-ship tracks and pings (ristic2004,
-        ch. 6; :func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`), the bound the
+        ch. 6; :func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`), the bound the
         filter's RMSE can approach;
         ``rmse_position (K+1,)`` [m], ``rmse_range (K+1,)`` [m],
         ``rmse_course (K+1,)`` [rad] and ``rmse_speed (K+1,)`` [m/s] of the target's velocity,
@@ -383,8 +362,8 @@ def _iter_backend(backend: Backend, workers: int, scheduler: str | None,
             for f in as_completed(futs):
                 yield futs[f], f.result()
     elif backend == "dask":
-        from dask.distributed import Client, LocalCluster
-        from dask.distributed import as_completed as d_as_completed
+        from dask.distributed import Client, LocalCluster  # deferred: dask, optional and slow
+        from dask.distributed import as_completed as d_as_completed  # deferred: dask
 
         cluster = None
         if scheduler is None:
@@ -435,7 +414,7 @@ def _compute(backend: Backend, workers: int, scheduler: str | None, spec: Campai
     finishes, its index appended to ``computed``). An interrupted run is never stored."""
     bar = None
     if progress:
-        from rich.progress import Progress
+        from rich.progress import Progress  # deferred: rich, for a progress bar only
 
         bar = Progress(transient=True)
         bar.start()
@@ -462,8 +441,6 @@ def _check_arguments(spec: CampaignSpec, workers: int, backend: str | None,
     source other than the two (read as "scenario"), a misspelt backend (found only after the
     policies are resolved), a negative ``max_new_runs`` (a slice from the end), ``policies``
     whose names are not the spec's (extra ones flown and left out of the results)."""
-    from tmaplan.errors import ArgumentError, as_real, is_integer
-
     if isinstance(spec.policies, str) or not spec.policies:
         raise ArgumentError("policies", "a non-empty tuple of policy specs", spec.policies)
     for name, v, least in (("runs", spec.runs, 1), ("n_particles", spec.n_particles, 2),
@@ -546,7 +523,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                 todo = todo[:max_new_runs]
             if backend == "processes" and pool is None and todo:
                 # started before the policies are resolved: the workers import meanwhile
-                pool = own_pool = process_pool(workers)
+                pool = own_pool = process_pool(workers, warm_up=(__name__,))
             pols: Mapping[str, Policy] = policies if policies is not None else {}
             if parsed is not None and todo:  # nothing to resolve when every run is stored
                 pols = _resolve(scenario, parsed, workers if backend == "processes" else 1,
@@ -581,11 +558,8 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
 def _truth_bound(scenario: Scenario, runs: list[PolicyRun]) -> dict[str, np.ndarray]:
     """``bound_position`` and ``bound_range`` of a policy's runs: the truth-conditioned PCRB
     over their truths, tracks and pings
-    (:func:`tmaplan.estimators.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
+    (:func:`tmaplan.bounds.truth_bound.closed_loop_truth_bounds`); NaN where it cannot be
     formed (e.g. a prior that is not positive definite)."""
-    from tmaplan.errors import ArgumentError
-    from tmaplan.estimators.truth_bound import closed_loop_truth_bounds
-
     try:
         pos, rng = closed_loop_truth_bounds(scenario, np.stack([r.observer for r in runs]),
                                             np.stack([r.target for r in runs]),

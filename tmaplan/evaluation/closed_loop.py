@@ -14,22 +14,26 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError, finite_real
-from tmaplan.estimators.consistency import FilterOptions
 from tmaplan.estimators.filter import drive
 from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.evaluation.filter_options import FilterOptions
+from tmaplan.evaluation.metrics import RunMetrics, run_metrics
+from tmaplan.evaluation.seeding import RunStreams, run_streams
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.models.observer import ObserverTrack, arc_displacement
 from tmaplan.models.target import initial_velocity
 from tmaplan.policies import BeliefView, Policy
 from tmaplan.scenario import Scenario
-from tmaplan.simulate import Measurement, draw_common_noise, measure_step
+from tmaplan.simulate import Measurement, draw_common_noise, draw_truth, measure_step
 
-__all__ = ["ClosedLoopRun", "run_closed_loop"]
+__all__ = ["ClosedLoopRun", "fly", "paired_run", "run_closed_loop"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -82,6 +86,12 @@ class ClosedLoopRun:
     recoveries: int = 0
     alarms: tuple[dict[str, Any], ...] = ()
     alarm_pings: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, int))
+
+    def metrics(self, accuracy: float = 0.1) -> RunMetrics:
+        """The run's error metrics (:func:`tmaplan.evaluation.metrics.run_metrics`) with
+        ``accuracy`` the relative range error that counts as localised."""
+        return run_metrics(self.times, self.truth, self.estimate, self.observer.mean_velocity,
+                           accuracy=accuracy, n_pings=len(self.ping_steps))
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
@@ -197,3 +207,69 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                          recoveries=int(getattr(fr.state, "recoveries", 0)),
                          alarms=tuple(getattr(fr.state, "log", ())),
                          alarm_pings=np.asarray(getattr(ctrl, "alarm_pings", []), dtype=int))
+
+
+def fly(scenario: Scenario, policy: Policy, target: np.ndarray, streams: RunStreams, *,
+        n_particles: int = 5000, options: FilterOptions | None = None) -> ClosedLoopRun:
+    """``policy`` against ``target`` with a run's noise and filter streams
+    (:func:`tmaplan.evaluation.seeding.run_streams`), each a new generator, so that every policy
+    flown on the run sees the same noise and filter draws (common random numbers).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    policy : Policy
+    target : ndarray, shape (K + 1, 4)
+        True absolute target track [m, m/s].
+    streams : RunStreams
+    n_particles : int
+    options : FilterOptions, optional
+        As for :func:`run_closed_loop`.
+
+    Returns
+    -------
+    ClosedLoopRun
+    """
+    return run_closed_loop(scenario, policy, target,
+                           noise_rng=np.random.default_rng(streams.noise),
+                           filter_rng=np.random.default_rng(streams.filter),
+                           n_particles=n_particles, options=options)
+
+
+def paired_run(scenario: Scenario, policies: Mapping[str, Policy], *, seed: int, run: int,
+               n_particles: int = 5000, options: FilterOptions | None = None,
+               from_prior: bool = True) -> Iterator[tuple[str, ClosedLoopRun]]:
+    """Monte Carlo run ``run`` of root ``seed``: its truth, then every policy flown on it.
+
+    The one per-run loop of the closed-loop Monte Carlo (the campaigns' runs,
+    :func:`tmaplan.evaluation.campaigns.run_one`, and the benchmarks): the truth from the run's
+    truth stream (:func:`tmaplan.simulate.draw_truth`), each policy by :func:`fly`, with BLAS
+    on one thread while the run lasts (also while the caller handles a yielded result), so
+    that a run's result depends only on ``(scenario, policies, seed, run)``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    policies : mapping
+        Name -> policy, flown in this order.
+    seed : int
+        Root seed (:mod:`tmaplan.evaluation.seeding`).
+    run : int
+        Run index.
+    n_particles : int
+    options : FilterOptions, optional
+    from_prior : bool
+        Draw the target's initial state from the prior (else the scenario's).
+
+    Yields
+    ------
+    name : str
+    result : ClosedLoopRun
+    """
+    streams = run_streams(seed, run)
+    with threadpool_limits(limits=1):
+        target = draw_truth(scenario, np.random.default_rng(streams.truth),
+                            from_prior=from_prior)
+        for name, pol in policies.items():
+            yield name, fly(scenario, pol, target, streams, n_particles=n_particles,
+                            options=options)

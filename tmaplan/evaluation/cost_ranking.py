@@ -12,7 +12,7 @@ contact sooner in closed loop. :func:`rank_costs` measures that:
    as soon as it is registered), the prior-averaged Cartesian PCRB
    (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`: the bound of the *averaged* information) and
    the expected CRLB (the average over prior draws of each draw's *own* bound,
-   :func:`tmaplan.estimators.truth_bound.truth_bounds`), each terminal and averaged over the
+   :func:`tmaplan.bounds.truth_bound.truth_bounds`), each terminal and averaged over the
    horizon;
 3. every candidate flown in closed loop with common random numbers, truths from the prior (the
    paired, resumable campaign of :func:`tmaplan.evaluation.campaigns.run_campaign`);
@@ -37,11 +37,22 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from tmaplan.bounds.pcrb import monte_carlo_pcrb
+from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.evaluation.campaigns import CampaignResult, CampaignSpec, run_campaign
 from tmaplan.evaluation.metrics import censor_time
+from tmaplan.evaluation.seeding import root_rng, run_seeds
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
+from tmaplan.planning import HeadingPlanner
+from tmaplan.planning.baselines import SINGLE_TURN_ANGLES, SINGLE_TURN_FRACTIONS, ZIGZAG_GRID
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.objectives import (
+    OBJECTIVE_NAMES,
+    ObjectiveEvaluator,
+    make_objective,
+)
 from tmaplan.policies import (
     CLOSED_LOOP_OBJECTIVE,
     Combined,
@@ -53,7 +64,9 @@ from tmaplan.policies import (
     Straight,
     Zigzag,
 )
+from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario
+from tmaplan.simulate import draw_truth
 
 __all__ = ["Candidate", "CostCorrelation", "CostRankingResult", "candidate_manoeuvres",
            "cost_functionals", "default_objective", "evaluate_costs", "rank_correlations",
@@ -86,18 +99,10 @@ class Candidate:
 def default_objective(scenario: Scenario) -> str:
     """Name of the objective that ``tmaplan plan`` optimises by default on ``scenario`` (read
     from :class:`tmaplan.planning.HeadingPlanner`, never restated here)."""
-    from tmaplan.planning import HeadingPlanner
-
     return str(HeadingPlanner(scenario).objective.name)
 
 
 def _grid(scenario: Scenario) -> list[Candidate]:
-    from tmaplan.planning.baselines import (
-        SINGLE_TURN_ANGLES,
-        SINGLE_TURN_FRACTIONS,
-        ZIGZAG_GRID,
-    )
-
     t0, H = scenario.time.t0, scenario.time.horizon
     out = []
     for f in SINGLE_TURN_FRACTIONS:
@@ -133,9 +138,6 @@ def candidate_manoeuvres(scenario: Scenario, n: int = 40, *,
     skipped : dict
         Objective name -> why its plan is not a candidate (solver failure, alias).
     """
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES, make_objective
-    from tmaplan.policies.manoeuvres import offline_plan
-
     if not is_integer(n, 3):
         raise ArgumentError("candidates", "an integer >= 3 (a rank correlation needs three)", n)
     fixed = [Candidate(name="straight", family="straight", policy=Straight()),
@@ -212,7 +214,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
       propagated draws), terminal / mean over the horizon [m];
     * ``expected-crlb-range`` / ``mean-expected-crlb-range``: the expected CRLB, the average
       over ``samples // 10`` prior draws of each draw's own (truth-conditioned) range bound,
-      ``sqrt(mean_draws uᵀ[J_k⁻¹]u)`` (:func:`tmaplan.estimators.truth_bound.truth_bounds`),
+      ``sqrt(mean_draws uᵀ[J_k⁻¹]u)`` (:func:`tmaplan.bounds.truth_bound.truth_bounds`),
       terminal / mean [m].
 
     The random draws come from ``seed`` and are the same for every track (common random
@@ -225,12 +227,6 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
     skipped : dict
         Name -> why it cannot be evaluated on ``scenario``.
     """
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-    from tmaplan.estimators.truth_bound import truth_bounds
-    from tmaplan.planning.belief import Belief
-    from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
-    from tmaplan.simulate import draw_truth
-
     costs: dict[str, CostFn] = {}
     skipped: dict[str, str] = {}
     belief = Belief.from_prior(scenario)
@@ -248,7 +244,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
         key = _track_key(tr)
         if key not in pcrb_cache:
             pcrb_cache[key] = monte_carlo_pcrb(
-                scenario, samples=int(samples), rng=np.random.default_rng(seed),
+                scenario, samples=int(samples), rng=root_rng(seed),
                 coords="cartesian", observer=tr).range_std
         return pcrb_cache[key]
 
@@ -256,7 +252,7 @@ def cost_functionals(scenario: Scenario, *, samples: int = 1000, seed: int = 0
     costs["mean-pcrb-cartesian-range"] = lambda tr: float(np.mean(pcrb(tr)))
     n_draws = max(int(samples) // 10, 2)
     targets = np.stack([draw_truth(scenario, np.random.default_rng(s), from_prior=True)
-                        for s in np.random.SeedSequence(seed).spawn(n_draws)])
+                        for s in run_seeds(seed, n_draws)])
     ecrlb_cache: dict[bytes, np.ndarray] = {}
 
     def ecrlb(tr: ObserverTrack) -> np.ndarray:
@@ -432,7 +428,7 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
                 bs = stats.bootstrap((np.arange(R), ok), stat, paired=False,
                                      vectorized=False, n_resamples=int(n_resamples),
                                      confidence_level=level, method="percentile",
-                                     random_state=np.random.default_rng(seed))
+                                     random_state=root_rng(seed))
             a = 100.0 * (1.0 - level) / 2.0  # percentiles of the resamples where defined
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # all NaN: interval NaN

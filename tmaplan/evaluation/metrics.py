@@ -65,6 +65,18 @@ class RunMetrics:
     final_range_error: float
     final_rel_range_error: float
 
+    def to_json(self) -> dict[str, float | int | bool | None]:
+        """The run's scalar metrics, JSON-ready (SI units; a time or error that is not finite,
+        e.g. an accuracy never reached, is ``None``): the record a benchmark writes per run."""
+        def num(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None
+
+        return {"time_to_accuracy": num(self.time_to_accuracy),
+                "final_range_error": num(self.final_range_error),
+                "final_position_error": num(self.final_position_error),
+                "final_rel_range_error": num(self.final_rel_range_error),
+                "pings_used": int(self.pings_used), "diverged": bool(self.diverged)}
+
 
 def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float) -> float:
     """First time after which the relative error stays below ``threshold``.

@@ -42,6 +42,7 @@ from tmaplan.policies import (
     Straight,
     best_single_turn,
 )
+from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.scenario import Scenario
 
 __all__ = ["PLAN_BASELINES", "TUNE_ANGLES", "TUNE_FRACTIONS", "plan_campaign",
@@ -174,8 +175,6 @@ def plan_campaign(scenario: Scenario, *, runs: int = 100, seed: int = 0,
     those only: every policy re-creates run ``i``'s generators from the same seeds, so its
     runs are those of the full campaign.
     """
-    from tmaplan.policies.manoeuvres import offline_plan
-
     if not is_integer(runs, 1):  # before the offline plan, which takes seconds
         raise ArgumentError("runs", "an integer >= 1", runs)
     make: dict[str, Callable[[], Any]] = {

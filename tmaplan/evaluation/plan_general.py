@@ -30,6 +30,7 @@ import numpy as np
 from tmaplan.errors import ArgumentError, as_real, finite_real, is_integer
 from tmaplan.evaluation.metrics import PairedDifference
 from tmaplan.evaluation.plan_check import plan_campaign, planned_differences, tune_single_turn
+from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.scenario import Scenario
 from tmaplan.units import DEG, KNOT
 
@@ -200,7 +201,8 @@ def random_problems(base: Scenario, count: int, *, seed: int = 0,
                     family: ProblemFamily | None = None) -> tuple[Scenario, ...]:
     """``count`` random planning problems from ``base`` (:func:`random_problem`).
 
-    Problem ``i`` is drawn by ``default_rng(SeedSequence(seed, spawn_key=(i,)))`` and named
+    Problem ``i`` is drawn by ``default_rng(SeedSequence(seed, spawn_key=(i,)))`` (the seed of
+    run ``i``, :func:`tmaplan.evaluation.seeding.run_seed`) and named
     ``<base>-s<seed>-<i>``, so it depends on ``(seed, i)`` only, not on ``count``.
 
     Parameters
@@ -220,9 +222,9 @@ def random_problems(base: Scenario, count: int, *, seed: int = 0,
         raise ArgumentError("count", "an integer >= 1", count)
     if not is_integer(seed, 0):
         raise ArgumentError("seed", "an integer >= 0", seed)
-    return tuple(random_problem(base, np.random.default_rng(
-        np.random.SeedSequence(int(seed), spawn_key=(i,))), family=family,
-        name=f"{base.name}-s{seed}-{i}") for i in range(int(count)))
+    return tuple(random_problem(base, np.random.default_rng(s), family=family,
+                                name=f"{base.name}-s{seed}-{i}")
+                 for i, s in enumerate(run_seeds(seed, int(count))))
 
 
 #: The issue's inequalities: name -> (baseline X, bound on the paired interval of

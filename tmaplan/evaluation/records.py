@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.evaluation.metrics import RunMetrics
+from tmaplan.scenario import Scenario
 
 __all__ = ["FORMAT", "PolicyRun", "RunRecord", "policy_fingerprint", "run_file_digest",
            "scenario_hash", "without_timings"]
@@ -77,8 +78,6 @@ def policy_fingerprint(policy: Any) -> str:
     policy : Policy
         Any frozen-dataclass policy (:mod:`tmaplan.policies`), possibly holding plans.
     """
-    from tmaplan.scenario import Scenario
-
     h = hashlib.sha256()
 
     def plain(x: Any) -> Any:

@@ -1,10 +1,11 @@
 """Monte Carlo evaluation of an estimator against its bound (the `track` verb).
 
 ``monte_carlo(scenario, estimator, runs=..., seed=...)`` repeats :func:`tmaplan.estimators.run`
-over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run) and compares
+over runs seeded from one ``numpy.random.SeedSequence(seed)`` (one child per run,
+:func:`tmaplan.evaluation.seeding.run_seeds`) and compares
 the RMSE with the estimator's bound (:attr:`tmaplan.estimators.runner.Estimator.bound`): for the
 filters the PCRB along the runs' true trajectories, averaged over the runs
-(:func:`tmaplan.estimators.truth_bound.truth_pcrb`, ristic2004, ch. 6; option
+(:func:`tmaplan.bounds.truth_bound.truth_pcrb`, ristic2004, ch. 6; option
 ``bound="prior"``: the prior-averaged PCRB of ``tmaplan.bounds.pcrb.monte_carlo_pcrb``, see
 :func:`_pcrb_position`), the CRLB of the batch estimate for the MLE (:func:`_crlb_bounds`).
 """
@@ -15,12 +16,14 @@ import dataclasses
 import time as _time
 import warnings
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from tmaplan.bounds.batch_fim import tma_data, true_parameters
 from tmaplan.bounds.crlb import information_covariance
+from tmaplan.bounds.pcrb import monte_carlo_pcrb
+from tmaplan.bounds.truth_bound import truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, is_integer
 from tmaplan.estimators.applicability import check_applicable
@@ -28,12 +31,10 @@ from tmaplan.estimators.mle import MLEConfig, state_track
 from tmaplan.estimators.particle_filter import PFConfig
 from tmaplan.estimators.range_only import RangeOnlyConfig
 from tmaplan.estimators.runner import Estimator, EstimatorName, estimator_for, run
-from tmaplan.estimators.truth_bound import truth_bounds
+from tmaplan.evaluation.seeding import run_seeds
 from tmaplan.geometry import range_of
+from tmaplan.scenario import Scenario
 from tmaplan.simulate import simulate
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Scenario
 
 __all__ = ["MonteCarloResult", "monte_carlo"]
 
@@ -45,8 +46,6 @@ __all__ = ["MonteCarloResult", "monte_carlo"]
 
 def _pcrb_position(scenario: Scenario, rng: np.random.Generator, samples: int) -> np.ndarray:
     """Prior-averaged Cartesian PCRB position std (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`)."""
-    from tmaplan.bounds.pcrb import monte_carlo_pcrb
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # side-assumption notes concern the LPC bound only
         res = monte_carlo_pcrb(scenario, samples=samples, rng=rng, coords="cartesian")
@@ -208,7 +207,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
     statuses = []
     ambiguous = 0
     truths = np.zeros((runs, K + 1, 4))
-    children = np.random.SeedSequence(seed).spawn(runs + 1)
+    children = run_seeds(seed, runs + 1)  # the last one: the bound's draws
     for i in range(runs):
         rng = np.random.default_rng(children[i])
         sim = simulate(scenario, rng)

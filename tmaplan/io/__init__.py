@@ -8,7 +8,8 @@ latitude/longitude in degrees, named ``lat``/``lon``). Faults in a file raise a 
 
 Modules: :mod:`~tmaplan.io.bearings` (bearings CSV), :mod:`~tmaplan.io.nav` (own-ship CSV and
 the checks shared by the navigation readers), :mod:`~tmaplan.io.nmea` (NMEA 0183, pynmea2),
-:mod:`~tmaplan.io.gpx` (GPX, gpxpy), :mod:`~tmaplan.io.frame` (the azimuthal equidistant
+:mod:`~tmaplan.io.gpx` (GPX, gpxpy), :mod:`~tmaplan.io.navigation` (a navigation file of any of
+the three kinds), :mod:`~tmaplan.io.frame` (the azimuthal equidistant
 plane, pyproj), :mod:`~tmaplan.io.recording` (bearings and navigation on one clock and plane),
 :mod:`~tmaplan.io.plans` (leg table and track), :mod:`~tmaplan.io.truth` (``truth.json``).
 """
@@ -17,7 +18,8 @@ from tmaplan.io.bearings import BearingLog, ContactBearings, read_bearings, writ
 from tmaplan.io.faults import DataWarning
 from tmaplan.io.frame import LocalFrame
 from tmaplan.io.gpx import read_gpx, write_gpx
-from tmaplan.io.nav import NavTrack, read_nav, read_nav_csv, write_ownship_csv
+from tmaplan.io.nav import NavTrack, read_nav_csv, write_ownship_csv
+from tmaplan.io.navigation import read_nav
 from tmaplan.io.nmea import read_nmea, write_nmea
 from tmaplan.io.plans import Leg, legs_from_track, read_legs_csv, write_legs_csv, write_track
 from tmaplan.io.recording import (

@@ -29,8 +29,8 @@ from numpy.typing import ArrayLike
 
 from tmaplan.errors import DataError
 from tmaplan.geometry import wrap_angle
-from tmaplan.io._table import Table, csv_text, read_table, write_csv
 from tmaplan.io.faults import check_not_backwards, warn, warn_gaps, warn_if_radians
+from tmaplan.io.table import Table, csv_text, read_table, write_csv
 from tmaplan.io.times import format_time, parse_stamps, time_text
 
 __all__ = ["BearingLog", "ContactBearings", "read_bearings", "write_bearings"]

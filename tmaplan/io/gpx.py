@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import ArgumentError, DataError
-from tmaplan.io._table import read_text
 from tmaplan.io.nav import NavTrack, check_latlon, finish_nav
+from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC
 
 __all__ = ["read_gpx", "write_gpx"]

@@ -3,7 +3,8 @@
 * CSV: ``time,lat_deg,lon_deg`` (WGS84 degrees) or ``time,east_m,north_m`` (metres in a local
   frame, x = East, y = North); ``time`` as in the bearings file (ISO 8601 with a zone, or plain
   seconds). With both pairs, latitude/longitude are read and east/north ignored (warned).
-* NMEA 0183 (``RMC``, ``GGA``): :mod:`tmaplan.io.nmea`; GPX 1.1 tracks: :mod:`tmaplan.io.gpx`.
+* NMEA 0183 (``RMC``, ``GGA``): :mod:`tmaplan.io.nmea`; GPX 1.1 tracks: :mod:`tmaplan.io.gpx`;
+  a file of any of the three kinds, told by its content: :func:`tmaplan.io.navigation.read_nav`.
 
 Every reader then applies the same checks (:func:`finish_nav`): a time going backwards is an
 error naming its line; a fix at the time of the fix before it is dropped (the first is kept)
@@ -21,12 +22,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import DataError
-from tmaplan.io._table import read_table, read_text, write_csv
 from tmaplan.io.faults import check_not_backwards, warn, warn_gaps
+from tmaplan.io.table import read_table, write_csv
 from tmaplan.io.times import format_time, parse_stamps, time_text
 
-__all__ = ["NavTrack", "check_latlon", "finish_nav", "read_nav", "read_nav_csv",
-           "write_ownship_csv"]
+__all__ = ["NavTrack", "check_latlon", "finish_nav", "read_nav_csv", "write_ownship_csv"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -189,47 +189,6 @@ def read_nav_csv(path: str | Path, *, gap: float | None = None) -> NavTrack:
     else:
         nav = dataclasses.replace(nav, east=t.numbers("east_m"), north=t.numbers("north_m"))
     return finish_nav(nav, gap=gap)
-
-
-def _kind(path: str | Path) -> str:
-    """``"gpx"``, ``"nmea"`` or ``"csv"``: the file's kind from its first character that is
-    not blank (``<``: GPX; ``$`` or ``!``: NMEA; else CSV)."""
-    text = read_text(path).lstrip()
-    if text.startswith("<"):
-        return "gpx"
-    if text[:1] in ("$", "!"):
-        return "nmea"
-    return "csv"
-
-
-def read_nav(path: str | Path, *, gap: float | None = None,
-             date: dt.date | None = None) -> NavTrack:
-    """Read own-ship navigation of any supported kind, told by its content: a file starting
-    with ``<`` is GPX, with ``$`` (or ``!``) NMEA 0183, anything else CSV.
-
-    Parameters
-    ----------
-    path : str or Path
-    gap : float, optional
-        Gap threshold [s] (:func:`finish_nav`).
-    date : datetime.date, optional
-        NMEA only: the UTC date of the first fix when the file has no RMC sentence
-        (:func:`tmaplan.io.nmea.read_nmea`).
-
-    Returns
-    -------
-    NavTrack
-    """
-    kind = _kind(path)
-    if kind == "gpx":
-        from tmaplan.io.gpx import read_gpx
-
-        return read_gpx(path, gap=gap)
-    if kind == "nmea":
-        from tmaplan.io.nmea import read_nmea
-
-        return read_nmea(path, gap=gap, date=date)
-    return read_nav_csv(path, gap=gap)
 
 
 def write_ownship_csv(path: str | Path, times: ArrayLike, lat: ArrayLike, lon: ArrayLike, *,

@@ -32,9 +32,9 @@ import pynmea2
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import ArgumentError, DataError
-from tmaplan.io._table import read_text
 from tmaplan.io.faults import warn
 from tmaplan.io.nav import NavTrack, check_latlon, finish_nav
+from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC
 
 __all__ = ["KNOT", "read_nmea", "write_nmea"]

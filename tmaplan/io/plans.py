@@ -29,14 +29,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import ArgumentError, DataError
-from tmaplan.io._table import read_table, write_csv
 from tmaplan.io.frame import LocalFrame
 from tmaplan.io.gpx import write_gpx
 from tmaplan.io.nav import write_ownship_csv
+from tmaplan.io.table import read_table, write_csv
 from tmaplan.io.times import parse_utc, time_text
 
-__all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "read_legs_csv", "write_legs_csv",
-           "write_track"]
+__all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "legs_table", "read_legs_csv",
+           "step_turn_rates", "write_legs_csv", "write_plan", "write_track"]
 
 #: Turn rates [rad/s] closer than this are one leg; smaller in magnitude, a straight leg.
 RATE_TOL = 1e-6
@@ -110,7 +110,7 @@ def legs_from_track(times: ArrayLike, courses: ArrayLike, *,
         j = i + 1
         while j < u.size and abs(u[j] - u[i]) <= tol:
             j += 1
-        rate = float(np.mean(u[i:j]))
+        rate = float(np.median(u[i:j]))  # within the run's range: never above a limit
         turn: Turn = (
             "straight" if abs(rate) <= tol else "starboard" if rate > 0 else "port")
         legs.append(Leg(start=float(t[i] - t[0]), course=float(np.mod(c[i], 2 * np.pi)),
@@ -237,3 +237,77 @@ def write_track(path: str | Path, times: ArrayLike, *, start: dt.datetime,
     if Path(path).suffix.lower() == ".gpx":
         return write_gpx(path, times, lat, lon, start=start, name=name)
     return write_ownship_csv(path, times, lat, lon, start=start)
+
+
+def legs_table(legs: Sequence[Leg]) -> str:
+    """The leg table as text (what ``plan`` and ``advise`` print): start [min], course [°],
+    turn, rate [°/s], duration [min], one row per leg."""
+    rows = ["  start min  course °  turn        rate °/s  duration min"]
+    for leg in legs:
+        rows.append(f"  {leg.start / 60:9.1f}  {float(np.rad2deg(leg.course)) % 360:8.1f}  "
+                    f"{leg.turn:<10}  {float(np.rad2deg(leg.rate)):8.3f}  "
+                    f"{leg.duration / 60:12.1f}")
+    return "\n".join(rows)
+
+
+def step_turn_rates(legs: Sequence[Leg], dt: float, n_steps: int) -> np.ndarray:
+    """The mean turn rate over each step ``[k·dt, (k+1)·dt]`` of a grid starting at the
+    plan's start (``observer.turn_rates``; a step across a leg boundary gets its mean; after
+    the last leg, straight).
+
+    Parameters
+    ----------
+    legs : sequence of Leg
+    dt : float
+        [s], > 0.
+    n_steps : int
+        Steps K.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        [rad/s], positive to starboard; never above the legs' largest rate.
+    """
+    starts = np.array([leg.start for leg in legs] + [legs[-1].start + legs[-1].duration])
+    rates = np.array([leg.signed_rate for leg in legs])
+    # the course change up to each leg boundary, then linear within a leg
+    turned = np.concatenate([[0.0], np.cumsum(rates * np.diff(starts))])
+    t = dt * np.arange(n_steps + 1) + starts[0]
+    psi = np.interp(t, starts, turned)  # constant after the last leg: straight
+    top = float(np.max(np.abs(rates))) if rates.size else 0.0
+    return np.clip(np.diff(psi) / dt, -top, top)
+
+
+def write_plan(directory: str | Path, stem: str, legs: Sequence[Leg], times: ArrayLike,
+               east: ArrayLike, north: ArrayLike, *, start: dt.datetime | None,
+               frame: LocalFrame | None) -> dict[str, str]:
+    """Write a plan as a navigator uses it: ``<stem>_legs.csv`` and, with a start time and a
+    geographic frame, ``<stem>_track.gpx`` and ``<stem>_track.csv``.
+
+    Parameters
+    ----------
+    directory : str or Path
+    stem : str
+        File names' start.
+    legs : sequence of Leg
+    times : array_like, shape (m,)
+        The track's times [s after ``start``].
+    east, north : array_like, shape (m,)
+        [m] in ``frame``.
+    start : datetime.datetime or None
+        Aware time of ``times == 0``.
+    frame : LocalFrame or None
+
+    Returns
+    -------
+    dict of str to str
+        ``legs``, ``track_gpx``, ``track_csv`` to paths.
+    """
+    d = Path(directory)
+    files = {"legs": str(write_legs_csv(d / f"{stem}_legs.csv", legs, start=start))}
+    if start is not None and frame is not None:
+        for suffix in ("gpx", "csv"):
+            files[f"track_{suffix}"] = str(write_track(
+                d / f"{stem}_track.{suffix}", times, start=start, east=east, north=north,
+                frame=frame, name=stem))
+    return files

@@ -36,7 +36,8 @@ from tmaplan.geometry import course_speed
 from tmaplan.io.bearings import BearingLog, ContactBearings, read_bearings
 from tmaplan.io.faults import warn
 from tmaplan.io.frame import LocalFrame
-from tmaplan.io.nav import NavTrack, read_nav
+from tmaplan.io.nav import NavTrack
+from tmaplan.io.navigation import read_nav
 from tmaplan.io.times import format_time
 
 __all__ = ["Contact", "OwnshipState", "Recording", "align", "ownship_at", "read_recording"]

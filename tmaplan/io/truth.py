@@ -27,8 +27,8 @@ from numpy.typing import ArrayLike
 
 from tmaplan.errors import DataError
 from tmaplan.geometry import course_speed
-from tmaplan.io._table import read_text
 from tmaplan.io.frame import LocalFrame
+from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC, format_time, parse_utc
 
 __all__ = ["Truth", "read_truth", "write_truth"]

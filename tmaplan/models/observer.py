@@ -11,7 +11,6 @@ and heading are kept too (for Doppler and plots).
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,9 +19,7 @@ from tmaplan.display import short_repr
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.target import initial_velocity
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Observer, TimeGrid
+from tmaplan.scenario import Observer, TimeGrid
 
 __all__ = ["ObserverTrack", "arc_displacement", "observer_track", "turn_rate_track"]
 

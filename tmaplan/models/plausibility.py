@@ -3,8 +3,8 @@
 The truth (the target's true initial state, :func:`tmaplan.models.prior.true_initial_state`)
 against the own ship and against the scenario's own prior; each rule gives a
 :class:`tmaplan.errors.ScenarioWarning` naming the field (:func:`warn_suspicious`; the
-command line runs it before every verb, :func:`tmaplan.cli._args.preflight`). The rules
-that read a field alone are :mod:`tmaplan._scenario_plausible`'s, at load.
+command line runs it before every verb, :func:`tmaplan.cli.preflight.preflight`). The rules
+that read a field alone are :mod:`tmaplan.scenario.plausible`'s, at load.
 
 * The contact on the own ship: a true initial range below :data:`MIN_RANGE` (100 m, less
   than a ship's length): its bearing is undefined at zero range, and every bound's
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,9 +29,7 @@ from tmaplan.display import angle, distance, speed
 from tmaplan.errors import warn_field
 from tmaplan.geometry import angle_diff, bearing_of, course_speed, range_of
 from tmaplan.models.prior import true_initial_state
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Prior, Scenario
+from tmaplan.scenario import Prior, Scenario
 
 __all__ = ["MIN_RANGE", "SIGMAS", "suspicious", "warn_suspicious"]
 

@@ -8,27 +8,17 @@ N(true bearing, σ_θ²) has the same distribution over runs.
 
 from __future__ import annotations
 
-import math
-from typing import TYPE_CHECKING
-
 import numpy as np
 from scipy import stats
-from scipy.special import log_ndtr
 
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
 from tmaplan.models.target import circle_state, initial_velocity
+from tmaplan.scenario import Prior, Scenario
+from tmaplan.scenario.prior_checks import check_truncated_normal
 
-if TYPE_CHECKING:
-    from tmaplan.scenario import Prior, Scenario
-
-__all__ = ["MIN_TRUNCATED_MASS", "check_truncated_normal", "prior_relative_moments",
-           "relative_prior_covariance", "relative_prior_samples", "sample_prior",
-           "true_initial_state", "truncated_normal_log_mass", "zero_prior_stds"]
-
-#: least probability mass that a normal range or speed prior must keep within its truncation
-#: [min, max]: with less, every draw sits at the nearer bound (a degenerate prior)
-MIN_TRUNCATED_MASS = 1e-6
+__all__ = ["prior_relative_moments", "relative_prior_covariance", "relative_prior_samples",
+           "sample_prior", "true_initial_state"]
 
 
 def true_initial_state(scenario: Scenario) -> np.ndarray:
@@ -37,39 +27,6 @@ def true_initial_state(scenario: Scenario) -> np.ndarray:
     if t.model == "constant-turn":
         return circle_state(t, np.array([scenario.time.t0]))[0]
     return np.concatenate([np.asarray(t.position, float), initial_velocity(t)])
-
-
-def truncated_normal_log_mass(mean: float, std: float, lo: float, hi: float) -> float:
-    """Natural log of the probability mass of N(mean, std²) within [lo, hi] (``hi`` may be
-    inf; ``std`` > 0), accurate far in either tail (``scipy.special.log_ndtr``): -inf only
-    when the mass underflows even as a logarithm."""
-    a, b = (lo - mean) / std, (hi - mean) / std
-    if a > 0:  # both bounds in the upper tail: the mirror image lies in the accurate lower one
-        a, b = -b, -a
-    la, lb = float(log_ndtr(a)), float(log_ndtr(b))
-    return lb + math.log1p(-math.exp(la - lb)) if la < lb else -math.inf
-
-
-def check_truncated_normal(name: str, mean: float, std: float, lo: float, hi: float,
-                           unit: str, source: str | None, *, truth: bool = False) -> None:
-    """Refuse a normal ``name`` prior ("range" or "speed", ``std`` > 0) whose truncation to
-    [lo, hi] keeps less than :data:`MIN_TRUNCATED_MASS` of N(mean, std²) (every draw would
-    sit at the nearer bound), naming ``prior.<name>_mean``, the interval and the mass;
-    ``truth``: the mean is the target's true value (``centred_on_truth``)."""
-    if not std > 0:
-        return
-    log_mass = truncated_normal_log_mass(mean, std, lo, hi)
-    if log_mass >= math.log(MIN_TRUNCATED_MASS):
-        return
-    mass = math.exp(log_mass)
-    kept = f"{mass:.3g}" if mass > 0 else f"10^{log_mass / math.log(10):.4g}"
-    raise ScenarioError(
-        f"prior.{name}_mean", f"a value leaving at least {MIN_TRUNCATED_MASS:g} of "
-        f"N({name}_mean, {name}_std²) within [{name}_min, {name}_max] = [{lo:g}, {hi:g}] "
-        f"{unit}: with {name}_std = {std:g} {unit} it keeps {kept} of its mass (every draw "
-        "would sit at the nearer bound)" + (f"; the key is left out, so the mean is the "
-                                            f"target's true initial {name}" if truth else ""),
-        mean, source=source)
 
 
 def _truncnorm(mean: float, std: float, lo: float, hi: float, n: int,
@@ -159,47 +116,6 @@ def sample_prior(scenario: Scenario, n: int, rng: np.random.Generator) -> np.nda
             course = c_mean + p.course_std * rng.standard_normal(n)
         vel = speed[:, None] * np.stack([np.sin(course), np.cos(course)], axis=-1)
     return np.hstack([pos, vel])
-
-
-def zero_prior_stds(prior: Prior, *, point_masses: bool = True) -> tuple[str, ...]:
-    """The std fields of ``prior`` that :func:`sample_prior` uses and that are zero.
-
-    Each makes the prior degenerate (no density in that component): the prior information
-    ``J0 = P0⁻¹`` of the closed-form bound (brehard2005, eq. 56) does not exist.
-
-    Parameters
-    ----------
-    prior : Prior
-    point_masses : bool
-        Include the zeros a scenario may keep (False: the scenario's load check, which
-        refuses the others): ``range_std`` / ``speed_std`` of a normal range or speed (a
-        point mass at the mean) and ``course_std`` with ``course_mode = "reciprocal-bearing"``
-        (the course follows the bearing's spread). The closed-form bound refuses them too.
-
-    Returns
-    -------
-    tuple of str
-        Dotted field names (``"prior.bearing_std"``, ``"prior.std[2]"``, …) in file order;
-        empty if every sampled component has a positive std.
-    """
-    p = prior
-    if p.kind == "gaussian":
-        return tuple(f"prior.std[{i}]" for i, v in enumerate(p.std or ()) if v == 0)
-    out = []
-    if p.bearing_std == 0:
-        out.append("prior.bearing_std")
-    if point_masses and p.range_distribution == "normal" and not p.range_std:
-        out.append("prior.range_std")
-    if p.velocity_distribution == "normal":
-        if p.velocity_std == 0:
-            out.append("prior.velocity_std")
-    else:
-        if point_masses and p.speed_distribution == "normal" and p.speed_std == 0:
-            out.append("prior.speed_std")
-        kept = ("uniform",) if point_masses else ("uniform", "reciprocal-bearing")
-        if p.course_mode not in kept and p.course_std == 0:
-            out.append("prior.course_std")
-    return tuple(out)
 
 
 def relative_prior_samples(scenario: Scenario, n: int, rng: np.random.Generator,

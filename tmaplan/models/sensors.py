@@ -3,6 +3,9 @@
 All functions take relative states ``X = target − observer`` of shape (..., 4)
 (``[r_x, r_y, v_x, v_y]``, SI) and broadcast over the leading dimensions. The noise-free
 bearing and range are :func:`tmaplan.geometry.bearing_of` and :func:`tmaplan.geometry.range_of`.
+
+:func:`default_ping_budget` is the one place where the number of active pings a scenario lets a
+schedule spend is read (``planning.ping_budget``; 0 without a ``[planning]`` table).
 """
 
 from __future__ import annotations
@@ -10,9 +13,11 @@ from __future__ import annotations
 import numpy as np
 
 from tmaplan.geometry import Ambiguity, angle_diff, bearing_of, range_of, wrap_half_angle
+from tmaplan.scenario import Scenario
 
 __all__ = [
     "bearing_loglik",
+    "default_ping_budget",
     "doppler_frequency",
     "range_loglik",
     "range_rate",
@@ -87,3 +92,22 @@ def range_loglik(z: float | np.ndarray, X: np.ndarray, sigma: float) -> np.ndarr
     """Gaussian log-likelihood of a range ``z`` [m] (noise after the norm), shape (...)."""
     r = np.asarray(z) - range_of(X)
     return -0.5 * (r / sigma) ** 2 - _LOG_SQRT_2PI - np.log(sigma)
+
+
+def default_ping_budget(scenario: Scenario) -> int:
+    """The scenario's ping budget: ``planning.ping_budget``, 0 without a ``[planning]`` table.
+
+    The one place the default is resolved: the ping policies, the alarm response's cap, the
+    joint planners, ``tmaplan schedule`` and the demo call it when no budget is given.
+
+    Parameters
+    ----------
+    scenario : Scenario
+
+    Returns
+    -------
+    int
+        Number of active pings, >= 0.
+    """
+    pl = scenario.planning
+    return int(pl.ping_budget) if pl is not None else 0

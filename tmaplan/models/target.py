@@ -5,16 +5,12 @@ State order everywhere: ``[x, y, v_x, v_y]`` (x East, y North), SI units.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import ArrayLike
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import velocity_from_course
-
-if TYPE_CHECKING:
-    from tmaplan.scenario import Target, TimeGrid
+from tmaplan.scenario import Target, TimeGrid
 
 __all__ = [
     "circle_parameters",

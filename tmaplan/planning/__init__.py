@@ -3,7 +3,9 @@
 See :mod:`tmaplan.planning.heading`, :mod:`tmaplan.planning.pings`,
 :mod:`tmaplan.planning.joint`, :mod:`tmaplan.planning.joint_ocp`,
 :mod:`tmaplan.planning.baselines`,
-:mod:`tmaplan.planning.objectives` and :mod:`tmaplan.planning.belief`.
+:mod:`tmaplan.planning.objectives` and :mod:`tmaplan.planning.belief`; several contacts:
+:mod:`tmaplan.planning.contacts`, :mod:`tmaplan.planning.multi_objectives`,
+:mod:`tmaplan.planning.ping_contacts`.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from tmaplan.planning.baselines import (
     zigzag_track,
 )
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner, plan_contacts
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner, plan_heading
 from tmaplan.planning.joint import JointPlan, plan_joint
 from tmaplan.planning.joint_ocp import JointOCPResult, plan_joint_ocp
@@ -33,6 +36,7 @@ from tmaplan.planning.objectives import (
     range_bound,
     turn_penalty,
 )
+from tmaplan.planning.ping_contacts import ContactsPingSchedule, schedule_contact_pings
 from tmaplan.planning.pings import (
     PingEvaluator,
     PingSchedule,
@@ -48,6 +52,10 @@ __all__ = [
     "Baseline",
     "BearingRatePlan",
     "Belief",
+    "ContactSet",
+    "ContactsPingSchedule",
+    "ContactsPlan",
+    "ContactsPlanner",
     "HeadingPlan",
     "HeadingPlanner",
     "JointOCPResult",
@@ -63,11 +71,13 @@ __all__ = [
     "make_objective",
     "max_pings",
     "ping_candidates",
+    "plan_contacts",
     "plan_heading",
     "plan_joint",
     "plan_joint_ocp",
     "position_bound",
     "range_bound",
+    "schedule_contact_pings",
     "schedule_pings",
     "single_turn_track",
     "straight_track",

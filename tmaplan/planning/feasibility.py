@@ -4,7 +4,7 @@ Each rule refuses in one line naming the field (:class:`tmaplan.errors.ScenarioE
 milliseconds, what the solver used to find after minutes ("no start converged",
 ``std::bad_alloc``). :class:`tmaplan.planning.HeadingPlanner` and the offline plan from the
 prior (:func:`tmaplan.policies.plan_starts.plan_candidates`) check them, and the command
-line before any verb that plans (:func:`tmaplan.cli._args.preflight`).
+line before any verb that plans (:func:`tmaplan.cli.preflight.preflight`).
 
 Planning horizon (:func:`check_planning_horizon`)
     ``planning.horizon`` (default ``time.horizon``) is a whole number (>= 1) of control

@@ -47,7 +47,6 @@ from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
     ObjectiveEvaluator,
-    ParamLayout,
     PlanContext,
     belief_bearing_information,
     closed_form_graph,
@@ -168,7 +167,7 @@ class HeadingPlanner:
             float(lim[0]), float(lim[1]))
         self.n_arcs = max(1, int(n_arcs))
         A, Q = ncv_matrices(dt, float(scenario.target.q))
-        self.layout = ParamLayout(n_steps=self.K, n_samples=self.objective.layout_samples)
+        self.layout = self.objective.param_layout(self.K)
         sig = ping_sigma(scenario)
         self._ping_scale = 0.0 if sig is None else 1.0 / sig**2
         self.times = dt * np.arange(self.K + 1)
@@ -191,6 +190,16 @@ class HeadingPlanner:
                           turn_rate=urate, p=p_obj, layout=self.layout,
                           ping_scale=self._ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)
+        # a min-max objective (Objective.epigraph_terms): an epigraph variable t = scale·τ,
+        # τ last in the NLP's variables (O(1), as the constraints g_c/scale − τ <= 0)
+        epi, self._n_w = self.objective.epigraph_terms(ctx), w.shape[0]
+        if epi:
+            gc, tau = ca.vertcat(*epi) / scale, ca.MX.sym("epigraph")
+            self._epi_guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
+            w, f = ca.vertcat(w, tau), f + scale * tau
+            lbw, ubw = np.append(lbw, -np.inf), np.append(ubw, np.inf)
+            g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
+                *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
         # keep-out from the target estimate: E X_0 propagated at constant velocity
         if self.keep_out > 0:
@@ -332,7 +341,6 @@ class HeadingPlanner:
 
     def _guesses(self, heading0: float, speed0: float) -> list[tuple[np.ndarray, float]]:
         """Initial guesses (w, sign) for the multi-start."""
-        n = self.n
         if self.transcription == "bang-bang":
             na = self.n_arcs
             eq = np.full(na, 1.0 / na)
@@ -340,12 +348,17 @@ class HeadingPlanner:
             front = front / front.sum()
             out = [(eq, 1.0), (eq, -1.0), (front, 1.0), (front, -1.0)]
             return out[: self.n_starts]
-        j = np.arange(n)
-        pats = [np.zeros(n), np.where(j < n / 3, 1.0, -1.0), np.where(j < n / 3, -1.0, 1.0),
+        return [(self._direct_w(u, heading0, speed0), 1.0)
+                for u in self.start_programs()[: self.n_starts]]
+
+    def start_programs(self) -> list[np.ndarray]:
+        """The direct transcription's built-in starts, turn-rate programs ``u_j/u_max`` (n,)
+        in [−1, 1] in the order a cold solve tries them (:data:`BUILT_IN_STARTS`)."""
+        n, j = self.n, np.arange(self.n)
+        return [np.zeros(n), np.where(j < n / 3, 1.0, -1.0), np.where(j < n / 3, -1.0, 1.0),
                 np.where((j // max(1, n // 6)) % 2 == 0, 0.7, -0.7),
                 np.where((j // max(1, n // 6)) % 2 == 0, -0.7, 0.7),
                 np.where(j < n / 4, 1.0, 0.0), np.where(j < n / 4, -1.0, 0.0)]
-        return [(self._direct_w(u, heading0, speed0), 1.0) for u in pats[: self.n_starts]]
 
     def _direct_w(self, u: np.ndarray, heading0: float, speed0: float) -> np.ndarray:
         from tmaplan.models.observer import turn_rate_track
@@ -369,7 +382,7 @@ class HeadingPlanner:
             return warm["x"], warm
         if self.transcription == "bang-bang":
             if same:
-                tau = np.asarray(warm["x"]) * self.K * self.dt
+                tau = np.asarray(warm["x"])[: self._n_w] * self.K * self.dt
                 cut = (t - plan.times[0])
                 T = np.concatenate([[0.0], np.cumsum(tau)])
                 new = np.clip(T[1:], cut, None) - np.clip(T[:-1], cut, None)
@@ -443,12 +456,13 @@ class HeadingPlanner:
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = self._f_eval(guesses[0][0], P0)[0].item()
+        f0 = self._f_eval(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
         for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
+            x0 = self._with_epigraph(x0, P)
             use_warm = duals is not None
             solver = self._solver(use_warm, tol)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,
@@ -489,6 +503,13 @@ class HeadingPlanner:
         return self._make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
                                belief.t, p0, speed0, status, success, iters, seconds, warm,
                                ", ".join(statuses))
+
+    def _with_epigraph(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """A start ``x`` of the transcription's variables with the epigraph variable appended
+        at its tightest value (max of the terms), when the objective has one."""
+        if x.size != self._n_w or not hasattr(self, "_epi_guess"):
+            return x
+        return np.append(x, float(self._epi_guess(x, P)))
 
     def _start_state(self, heading0: float | None, speed0: float | None,
                      position0: np.ndarray | None) -> tuple[float, float, np.ndarray]:
@@ -541,9 +562,12 @@ class HeadingPlanner:
                    warm: dict[str, Any], message: str,
                    evaluated: Sequence[Any] | None = None) -> HeadingPlan:
         outs = self._f_eval(x, P) if evaluated is None else evaluated
+        x = x[: self._n_w]  # without an epigraph variable
         f, rb, pos, vbar, head = (np.asarray(o) for o in outs[:5])
         head, times = head.reshape(-1), t0 + self.times
-        tr = np.diff(nodes := head[:: self.m]) / self.Tc
+        # the solver meets the bound to its tolerance (~1e-8 rad/s over): clipped here, so
+        # a plan's rates pass observer.turn_rates' check (issue 41)
+        tr = np.clip(np.diff(nodes := head[:: self.m]) / self.Tc, -self.u_max, self.u_max)
         spd = x[-self.n:] if self.speed_choice else np.full(self.n, speed0)
         spd_steps = np.concatenate([[speed0], np.repeat(spd, self.m)])
         track = ObserverTrack(times=times, position=p0 + pos, velocity=velocity_from_course(

@@ -15,6 +15,7 @@ import time
 from typing import TYPE_CHECKING, Any, Literal
 
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.pings import PingSchedule, schedule_pings
@@ -85,8 +86,7 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
         raise ArgumentError("budget", "an integer >= 0 (None: planning.ping_budget)", budget)
     if not is_integer(max_rounds, 1):  # 0 rounds left no schedule to return
         raise ArgumentError("max_rounds", "an integer >= 1", max_rounds)
-    pl = scenario.planning
-    budget = int(budget if budget is not None else (pl.ping_budget if pl is not None else 0))
+    budget = int(budget if budget is not None else default_ping_budget(scenario))
     bel = belief if belief is not None else Belief.from_prior(scenario)
     planner = HeadingPlanner(scenario, objective=objective, **planner_kw)
     plan = planner.solve(bel)

@@ -74,6 +74,7 @@ import numpy as np
 from tmaplan.errors import PlanningError, is_integer
 from tmaplan.geometry import course_speed
 from tmaplan.interrupts import solver_call
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning._ping_search import _round, _spacing_ok, max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
@@ -381,9 +382,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     if nlp_solver not in JOINT_NLP_SOLVERS:
         raise PlanningError(f"nlp_solver: expected one of {JOINT_NLP_SOLVERS}, received "
                             f"{nlp_solver!r}")
-    pl = scenario.planning
     if budget is None:
-        budget = pl.ping_budget if pl is not None else 0
+        budget = default_ping_budget(scenario)
     K = _check_int("budget", budget, 1)
     stride = _check_int("ping_stride", ping_stride, 1)
     rounds = _check_int("polish_rounds", polish_rounds, 1)

@@ -47,6 +47,7 @@ from tmaplan.planning._objective_graphs import (
     position_bound_graph,
     relative_range_crlb_graph,
 )
+from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES, ObjectiveName
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -64,9 +65,12 @@ __all__ = [
     "PingObjectiveName",
     "PlanContext",
     "belief_bearing_information",
+    "expected_time_of",
     "expected_time_to_accuracy",
+    "horizon_turn_penalty",
     "logdet",
     "make_objective",
+    "not_localised_graph",
     "plan_bearing_information",
     "position_bound",
     "range_bound",
@@ -77,22 +81,10 @@ __all__ = [
     "until_end_weights",
 ]
 
-#: Names accepted by :func:`make_objective` (heading objectives; the scenario's
-#: ``planning.objective`` and ``tmaplan plan --objective``).
-ObjectiveName = Literal["logdet", "range-bound", "position-bound", "mean-range-bound",
-                        "terminal-range-bound", "mean-position-bound", "terminal-position-bound",
-                        "relative-range-bound", "mean-relative-range-bound",
-                        "relative-range-crlb", "mean-relative-range-crlb", "time-to-accuracy",
-                        "expected-time-to-accuracy"]
-OBJECTIVE_NAMES: tuple[str, ...] = get_args(ObjectiveName)
 #: Objectives of the ping scheduler (:func:`tmaplan.planning.schedule_pings`,
 #: ``tmaplan schedule --objective``): closed-form bounds of a fixed track.
 PingObjectiveName = Literal["mean-range-bound", "terminal-range-bound", "mean-position-bound"]
 PING_OBJECTIVES: tuple[str, ...] = get_args(PingObjectiveName)
-#: Default heading objective (``tmaplan plan``, ``planning.objective``, the closed-loop
-#: ``planned``/``receding`` policies): the one whose ranking of manoeuvres agrees best with the
-#: Monte Carlo time to accuracy of the filter (``tmaplan rank-costs``, docs/findings.md).
-DEFAULT_OBJECTIVE = "expected-time-to-accuracy"
 
 
 def plan_bearing_information(scenario: Scenario, t_start: float, n_steps: int, *,
@@ -191,6 +183,18 @@ class Objective:
         for w, f in self.terms:
             tot = tot + w * f(ctx)
         return tot
+
+    def param_layout(self, n_steps: int) -> ParamLayout:
+        """Layout of the parameter vector of a plan of ``n_steps`` steps (the planner's and
+        :class:`ObjectiveEvaluator`'s): one belief block of :attr:`layout_samples` samples;
+        an objective over several contacts has one block per contact
+        (:class:`tmaplan.planning.multi_objectives.ContactsObjective`)."""
+        return ParamLayout(n_steps=n_steps, n_samples=self.layout_samples)
+
+    def epigraph_terms(self, ctx: PlanContext) -> list[Any]:
+        """casadi scalars g_c of a min-max objective: the planner adds an epigraph variable t,
+        minimises ``expression + t`` subject to ``g_c ≤ t`` (empty: none, the default)."""
+        return []
 
 
 def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanContext], Any],
@@ -294,25 +298,44 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
     tau = float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        rel = relative_range_crlb_graph(ctx)
-        z = (rel - tau) / (width * tau)
-        sig = 0.5 * (1.0 + ca.tanh(0.5 * z))
-        span = float(ctx.times[-1]) + ctx.dt  # (K + 1)·dt
-        w = ctx.param("weight")  # step weights (ParamLayout): 0 for steps that do not count
-        return span * ca.sum1(w * ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
-
-    def penalty(ctx: PlanContext) -> Any:
-        import casadi as ca
-
-        u = ctx.turn_rate / ctx.turn_rate_max
-        return (float(ctx.times[-1]) + ctx.dt) * ca.sum1(u * u) / u.shape[0]
+        return expected_time_of(ctx, not_localised_graph(ctx, tau, width))
 
     terms: tuple[tuple[float, Term], ...] = ((1.0, term),)
     if turn_weight > 0:
-        terms += ((float(turn_weight), penalty),)
+        terms += ((float(turn_weight), horizon_turn_penalty),)
     return Objective("expected-time-to-accuracy", terms, int(samples))
+
+
+def not_localised_graph(ctx: PlanContext, accuracy: float, width: float) -> Any:
+    """Smooth "not yet localised" indicator ``s_ks = σ((ρ_ks − τ)/(w τ))`` (K+1, n_samples)
+    of :func:`expected_time_to_accuracy`: ρ_ks = σ_r/r of draw s at step k
+    (:func:`relative_range_crlb_graph`, lecadre1997 eq. 64–65), τ = ``accuracy`` (relative
+    range accuracy, dimensionless), σ the logistic function of relative width ``width``."""
+    import casadi as ca
+
+    rel = relative_range_crlb_graph(ctx)
+    z = (rel - accuracy) / (width * accuracy)
+    return 0.5 * (1.0 + ca.tanh(0.5 * z))
+
+
+def expected_time_of(ctx: PlanContext, sig: Any) -> Any:
+    """``dt·Σ_k w_k mean_s sig_ks`` [s]: the expected time of a "not yet localised" indicator
+    ``sig`` (K+1, n_samples) (:func:`not_localised_graph`), step k counted with its step weight
+    w_k (:class:`ParamLayout`); a draw never localised counts the horizon + dt."""
+    import casadi as ca
+
+    span = float(ctx.times[-1]) + ctx.dt  # (K + 1)·dt
+    w = ctx.param("weight")  # step weights (ParamLayout): 0 for steps that do not count
+    return span * ca.sum1(w * ca.sum2(sig)) / (sig.shape[0] * sig.shape[1])
+
+
+def horizon_turn_penalty(ctx: PlanContext) -> Any:
+    """``(K+1)·dt·mean_k (u_k/u_max)²`` [s]: the turn penalty of
+    :func:`expected_time_to_accuracy` (weighted there by ``turn_weight``)."""
+    import casadi as ca
+
+    u = ctx.turn_rate / ctx.turn_rate_max
+    return (float(ctx.times[-1]) + ctx.dt) * ca.sum1(u * u) / u.shape[0]
 
 
 def position_bound(reduce: str = "terminal") -> Objective:
@@ -418,7 +441,7 @@ class ObjectiveEvaluator:
         self.n_steps = K
         dt = float(scenario.time.dt)
         A, Q = ncv_matrices(dt, float(scenario.target.q))
-        self.layout = ParamLayout(n_steps=K, n_samples=self.objective.layout_samples)
+        self.layout = self.objective.param_layout(K)
         v = ca.MX.sym("v_obs", K + 1, 2)
         dsp = ca.MX.sym("disp", K + 1, 2)
         ur = ca.MX.sym("turn_rate", K, 1)
@@ -431,6 +454,9 @@ class ObjectiveEvaluator:
                           ping_scale=0.0 if sig is None else 1.0 / sig**2,
                           turn_rate_max=float(umax))
         val = self.objective.expression(ctx)
+        epi = self.objective.epigraph_terms(ctx)
+        if epi:  # a min-max objective: its value is expression + max of the terms
+            val = val + ca.mmax(ca.vertcat(*epi))
         rb = closed_form_graph(ctx)["range_bound"]
         self._fn = ca.Function("plan_objective", [v, dsp, ur, p], [val, rb])
         self._bearing = belief_bearing_information(scenario, self.belief, K)

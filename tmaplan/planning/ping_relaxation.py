@@ -66,8 +66,8 @@ from tmaplan.interrupts import Interrupted, solver_call
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
 
-__all__ = ["InformationMatrices", "Relaxation", "RelaxationResult", "duality_gap_allowance",
-           "information_matrices", "objective_vectors", "relaxation_bound",
+__all__ = ["InformationMatrices", "Relaxation", "RelaxationResult", "contact_program",
+           "duality_gap_allowance", "information_matrices", "objective_vectors", "relaxation_bound",
            "schedule_kernel_of"]
 
 #: Relative agreement required between the solver's optimum and the evaluator at the relaxed
@@ -197,6 +197,74 @@ class RelaxationResult:
         object.__setattr__(self, "u", u)
 
 
+def contact_program(ev: PingEvaluator, cand: np.ndarray, u: Any,
+                    seen: np.ndarray) -> tuple[list[Any], Any]:
+    """One contact's part of the relaxation (see the module docstring): the step LMIs and the
+    objective ``Σ_t c_t γ_t^{-1/2}`` (unscaled, [m]) in the shared candidate weights ``u``
+    (cvxpy, (n,)), a candidate's ping informing the contact only where ``seen`` (n,) bool."""
+    import cvxpy as cp
+
+    im = information_matrices(ev)
+    K = ev.K
+    c, w = objective_vectors(ev)
+    # reference trajectory for the diagonal scaling: evenly spread fractional pings
+    n = cand.size
+    uref = np.zeros(K + 1)
+    uref[cand] = min(1.0, max(1, n // 20) / max(n, 1))
+    Jref = _trajectory(im, uref)
+    s = np.sqrt(np.maximum(np.einsum("tii->ti", Jref), 1e-300))  # (K+1, 4)
+    e = np.array([0.0, 1.0, 0.0, 0.0])
+    Jh = [cp.Variable((4, 4), symmetric=True, name=f"J{t}") for t in range(K + 1)]
+    uk: list[Any] = [0.0] * (K + 1)  # ping weight expression per step
+    for i, st in enumerate(cand):
+        if seen[i]:
+            uk[int(st)] = u[i]
+    cons: list[Any] = []
+    # step 0: Ĵ_0 ⪯ S0⁻¹(J0 + u_0 p_0 e eᵀ)S0⁻¹
+    Si = 1.0 / s[0]
+    C0 = im.J0 * np.outer(Si, Si)
+    E0 = np.outer(e, e) * im.ping[0] * Si[1] ** 2
+    cons.append(_sym(C0 + uk[0] * E0 - Jh[0]) >> 0)
+    I4 = np.eye(4)
+    for t in range(K):
+        D11, D12, D22 = im.D11[t], im.D12[t], im.D22[t]
+        D11i = np.linalg.inv(0.5 * (D11 + D11.T))
+        Phi = -D11i @ D12
+        Delta = D22 - D12.T @ D11i @ D12
+        Delta = 0.5 * (Delta + Delta.T)
+        L = np.linalg.cholesky(0.5 * (D11i + D11i.T))
+        S, Sn = s[t], s[t + 1]
+        Lh = S[:, None] * L                       # S L
+        Ph = S[:, None] * Phi / Sn[None, :]       # S Φ S'⁻¹
+        G = np.hstack([Lh, Ph])                   # (4, 8)
+        Dh = Delta / np.outer(Sn, Sn)
+        Dh[0, 0] += im.bearing[t + 1] / Sn[0] ** 2
+        Pe = np.outer(e, e) * im.ping[t + 1] / Sn[1] ** 2
+        lower = Dh + uk[t + 1] * Pe - Jh[t + 1]
+        M = G.T @ Jh[t] @ G + cp.bmat([[I4, np.zeros((4, 4))],
+                                      [np.zeros((4, 4)), lower]])
+        cons.append(_sym(M) >> 0)
+    terms = []
+    for t in range(K + 1):
+        if c[t] == 0.0:
+            continue
+        parts = []
+        for wv in w[t]:
+            wh = wv / s[t]
+            a = float(np.linalg.norm(wh))
+            if a == 0.0:
+                continue
+            om = wh / a
+            g = cp.Variable(nonneg=True)
+            cons.append(Jh[t] - g * np.outer(om, om) >> 0)
+            parts.append(a * cp.power(g, -0.5))
+        if not parts:
+            continue
+        term = parts[0] if len(parts) == 1 else cp.norm(cp.hstack(parts), 2)
+        terms.append(c[t] * term)
+    return cons, cp.sum(cp.hstack(terms))
+
+
 class Relaxation:
     """The SDP relaxation of one scheduling problem, built once and re-solved.
 
@@ -214,21 +282,9 @@ class Relaxation:
 
         t0 = time.perf_counter()
         self.ev, self.cand, self.gap = ev, np.asarray(cand, int), int(gap)
-        im = information_matrices(ev)
         K, n = ev.K, self.cand.size
-        c, w = objective_vectors(ev)
-        # reference trajectory for the diagonal scaling: evenly spread fractional pings
-        uref = np.zeros(K + 1)
-        uref[self.cand] = min(1.0, max(1, n // 20) / max(n, 1))
-        Jref = _trajectory(im, uref)
-        s = np.sqrt(np.maximum(np.einsum("tii->ti", Jref), 1e-300))  # (K+1, 4)
-        e = np.array([0.0, 1.0, 0.0, 0.0])
         self.u = cp.Variable(n, name="u")
         self.budget = cp.Parameter(nonneg=True, name="budget")
-        Jh = [cp.Variable((4, 4), symmetric=True, name=f"J{t}") for t in range(K + 1)]
-        uk: list[Any] = [0.0] * (K + 1)  # ping weight expression per step
-        for i, st in enumerate(self.cand):
-            uk[int(st)] = self.u[i]
         cons = [self.u >= 0, self.u <= 1, cp.sum(self.u) <= self.budget]
         if self.gap > 1 and n > 1:
             rows = []
@@ -241,53 +297,19 @@ class Relaxation:
                 for r, win in enumerate(rows):
                     A[r, win] = 1.0
                 cons.append(A @ self.u <= 1.0)
-        # step 0: Ĵ_0 ⪯ S0⁻¹(J0 + u_0 p_0 e eᵀ)S0⁻¹
-        Si = 1.0 / s[0]
-        C0 = im.J0 * np.outer(Si, Si)
-        E0 = np.outer(e, e) * im.ping[0] * Si[1] ** 2
-        cons.append(_sym(C0 + uk[0] * E0 - Jh[0]) >> 0)
-        I4 = np.eye(4)
-        for t in range(K):
-            D11, D12, D22 = im.D11[t], im.D12[t], im.D22[t]
-            D11i = np.linalg.inv(0.5 * (D11 + D11.T))
-            Phi = -D11i @ D12
-            Delta = D22 - D12.T @ D11i @ D12
-            Delta = 0.5 * (Delta + Delta.T)
-            L = np.linalg.cholesky(0.5 * (D11i + D11i.T))
-            S, Sn = s[t], s[t + 1]
-            Lh = S[:, None] * L                       # S L
-            Ph = S[:, None] * Phi / Sn[None, :]       # S Φ S'⁻¹
-            G = np.hstack([Lh, Ph])                   # (4, 8)
-            Dh = Delta / np.outer(Sn, Sn)
-            Dh[0, 0] += im.bearing[t + 1] / Sn[0] ** 2
-            Pe = np.outer(e, e) * im.ping[t + 1] / Sn[1] ** 2
-            lower = Dh + uk[t + 1] * Pe - Jh[t + 1]
-            M = G.T @ Jh[t] @ G + cp.bmat([[I4, np.zeros((4, 4))],
-                                          [np.zeros((4, 4)), lower]])
-            cons.append(_sym(M) >> 0)
-        terms = []
-        scale = 0.0
-        for t in range(K + 1):
-            if c[t] == 0.0:
-                continue
-            parts = []
-            for wv in w[t]:
-                wh = wv / s[t]
-                a = float(np.linalg.norm(wh))
-                if a == 0.0:
-                    continue
-                om = wh / a
-                g = cp.Variable(nonneg=True)
-                cons.append(Jh[t] - g * np.outer(om, om) >> 0)
-                parts.append(a * cp.power(g, -0.5))
-            if not parts:
-                continue
-            term = parts[0] if len(parts) == 1 else cp.norm(cp.hstack(parts), 2)
-            terms.append(c[t] * term)
+        # several contacts (tmaplan.planning.ping_contacts): a sum of per-contact convex
+        # programs in the shared weights u, each contact seeing the pings in its reach
+        parts = getattr(ev, "parts", None) or ((ev, 1.0, None),)
+        total: Any = 0.0
+        for part, weight, reach in parts:
+            seen = np.ones(n, bool) if reach is None else np.asarray(reach, bool)[self.cand]
+            c_cons, term = contact_program(part, self.cand, self.u, seen)
+            cons += c_cons
+            total = term if len(parts) == 1 else total + float(weight) * term
         # normalise the objective to O(1) by the no-ping objective
         scale = float(ev.evaluate(np.zeros((1, K + 1)))[0])
         self.scale = scale if np.isfinite(scale) and scale > 0 else 1.0
-        self.problem = cp.Problem(cp.Minimize(cp.sum(cp.hstack(terms)) / self.scale), cons)
+        self.problem = cp.Problem(cp.Minimize(total / self.scale), cons)
         assert cast(Any, self.problem).is_dcp(dpp=True)  # cvxpy's decorator hides `dpp`
         self.build_seconds = time.perf_counter() - t0
         self._results: dict[float, RelaxationResult] = {}
@@ -382,10 +404,13 @@ def relaxation_for(ev: PingEvaluator, cand: np.ndarray, gap: int) -> Relaxation:
     import hashlib
 
     h = hashlib.sha256()
-    eng = ev.engine
-    for a in (eng.prior_information, eng.aux, eng.moments, eng.bearing_info,
-              eng.ping_scale * eng.er2, np.asarray(cand, int)):
-        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    for part, weight, reach in getattr(ev, "parts", None) or ((ev, 1.0, None),):
+        eng = part.engine
+        for a in (eng.prior_information, eng.aux, eng.moments, eng.bearing_info,
+                  eng.ping_scale * eng.er2, np.asarray(cand, int)):
+            h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+        if reach is not None:  # a contact of several (tmaplan.planning.ping_contacts)
+            h.update(np.ascontiguousarray([weight, *np.asarray(reach, float)]).tobytes())
     h.update(f"{ev.objective}|{int(gap)}".encode())
     key = h.digest()
     if key not in _CACHE:

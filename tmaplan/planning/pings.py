@@ -59,8 +59,8 @@ from tmaplan.planning.objectives import (
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "ping_candidates",
-           "schedule_pings", "uniform_ping_steps"]
+__all__ = ["PING_OBJECTIVES", "PingEvaluator", "PingSchedule", "certified_schedule",
+           "ping_candidates", "schedule_pings", "uniform_ping_steps"]
 
 #: Certified relative gap below which a schedule is reported "optimal".
 OPTIMAL_GAP = 1e-3
@@ -266,9 +266,6 @@ def schedule_pings(scenario: Scenario, *, budget: int,
         ``time.horizon`` with more steps than fit in the memory available
         (:func:`tmaplan.memory.check_steps`), before anything is built.
     """
-    from tmaplan.planning.ping_exact import tree_search
-    from tmaplan.planning.ping_relaxation import relaxation_bound
-
     t_start = time.perf_counter()
     if not is_integer(budget, 0):
         raise ArgumentError("budget", "an integer >= 0 (pings)", budget)
@@ -301,6 +298,31 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     if budget > max_pings(cand, gap):
         raise PlanningError(f"budget K = {budget} pings cannot be met with min_spacing "
                             f"{spacing:g} s: at most {max_pings(cand, gap)} fit")
+    return certified_schedule(ev, cand, gap, budget, method=method, objective=objective,
+                              gap_reference=gap_reference, max_enumerate=max_enumerate,
+                              time_limit=time_limit, workers=workers, t_start=t_start)
+
+
+def certified_schedule(ev: Any, cand: np.ndarray, gap: int, budget: int, *, method: str,
+                       objective: str, gap_reference: str, max_enumerate: int,
+                       time_limit: float, workers: int | None,
+                       t_start: float) -> PingSchedule:
+    """The search and certificate of :func:`schedule_pings` on an evaluator ``ev``
+    (:class:`PingEvaluator`, or several contacts' evaluator of
+    :mod:`tmaplan.planning.ping_contacts`, which has ``parts``), candidate steps ``cand``,
+    spacing ``gap`` [steps] and ``budget`` (checked by the caller); ``t_start`` is the
+    caller's start time (``time.perf_counter()``) for ``seconds``.
+
+    Several contacts: ``exact`` enumerates with :func:`_exact` (plain enumeration, or
+    best-first branch and bound with the all-remaining-pinged bound: monotone for a sum of
+    contacts) and solves the relaxation only when the enumeration stopped at its time limit
+    (the stronger bound is kept); ``gap_reference="exact"`` enumerates only when the
+    relaxation has not already certified a gap ≤ 1e-3.
+    """
+    from tmaplan.planning.ping_exact import tree_search
+    from tmaplan.planning.ping_relaxation import relaxation_bound
+
+    several = getattr(ev, "parts", None) is not None
     no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
     uni = uniform_ping_steps(ev.times, budget, candidates=cand, gap=gap)
     uniform = float(ev.value(uni))
@@ -310,8 +332,11 @@ def schedule_pings(scenario: Scenario, *, budget: int,
     if budget == 0:
         steps, val, lb, ref = [], no_ping, no_ping, "enumeration"
     else:
+        # several contacts, exact: the enumeration certifies; the relaxation (a large cvxpy
+        # build) only strengthens the bound of an enumeration stopped by the time limit
+        late = several and method == "exact"
         certify = gap_reference != "none" or method == "exact"
-        if certify:
+        if certify and not late:
             rr = relaxation_bound(ev, cand, budget, gap)
             lb, ref, bound_s, u_rel = rr.lower_bound, _source(rr.status), rr.seconds, rr.u
         # greedy + local swaps: the greedy method, and a start of the others
@@ -329,9 +354,11 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                                       radius=whole)
                 if v2 < val:
                     steps, val = s2, v2
-        if method == "exact" or gap_reference == "exact":
+        done_relaxed = several and np.isfinite(lb) and val > 0 and \
+            (val - lb) / val <= OPTIMAL_GAP
+        if (method == "exact" or gap_reference == "exact") and not done_relaxed:
             t0 = time.perf_counter()
-            if objective == "mean-position-bound":
+            if objective == "mean-position-bound" or several:
                 st, v, elb, status_e = _exact(ev, cand, budget, gap, steps, val,
                                               max_enumerate, time_limit)
                 done = status_e == "optimal"
@@ -347,6 +374,10 @@ def schedule_pings(scenario: Scenario, *, budget: int,
                 lb, ref = val, "enumeration"
             elif not (elb <= lb):  # the stronger of two valid bounds (nan-safe)
                 lb, ref = elb, "enumeration (time limit)"
+            if late and not done:
+                rr = relaxation_bound(ev, cand, budget, gap)
+                if rr.lower_bound > lb:
+                    lb, ref, u_rel = rr.lower_bound, _source(rr.status), rr.u
             bound_s += time.perf_counter() - t0
     if np.isfinite(lb) and val < lb <= val * (1 + _TIGHT):
         lb = val  # tight relaxation (integral optimum): equal up to the solver's tolerance

@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError, ScenarioError, as_real, finite_real
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
@@ -127,7 +128,7 @@ class AlarmResponder:
         self.dt = float(scenario.time.dt)
         self.min_spacing = float(pl.ping_min_spacing) if pl is not None else 0.0
         self.forbidden = tuple(pl.ping_forbidden) if pl is not None else ()
-        self.cap = (int(pl.ping_budget) if pl is not None else 0) + response.extra_pings
+        self.cap = default_ping_budget(scenario) + response.extra_pings
         self.spacing = max(response.spacing if response.spacing is not None
                            else self.min_spacing, self.dt)
         self.per_alarm = response.pings

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -195,7 +196,7 @@ def check_policy(spec: str, scenario: Scenario) -> tuple[str, str | None]:
                             "ping with (add a [[sensors]] kind = 'range' with active = true, "
                             f"or fly {parts[0]} without +{ping})", spec, source=scenario.name)
     pl = scenario.planning
-    if pl is None or pl.ping_budget == 0:
+    if default_ping_budget(scenario) == 0:
         raise ArgumentError("policy", "no ping policy (+PING): the problem has no pings to "
                             "spend (planning.ping_budget is "
                             f"{'0' if pl is not None else 'not set: no [planning] table'}; "

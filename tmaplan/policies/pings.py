@@ -9,6 +9,7 @@ import numpy as np
 
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, as_real, is_integer
+from tmaplan.models.sensors import default_ping_budget
 from tmaplan.policies._base import Action, BeliefView, Controller
 
 if TYPE_CHECKING:
@@ -181,7 +182,6 @@ def _budget(scenario: Scenario, budget: int | None) -> int:
             raise ArgumentError("pings.budget", "an integer >= 0 (None: the scenario's)",
                                 budget)
         return int(budget)
-    pl = scenario.planning
-    return int(pl.ping_budget) if pl is not None else 0
+    return default_ping_budget(scenario)
 
 

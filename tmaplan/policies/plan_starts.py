@@ -161,7 +161,7 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
         own = None
         if pool is None:
-            pool = own = process_pool(min(int(workers), len(starts)))
+            pool = own = process_pool(min(int(workers), len(starts)), warm_up=(__name__,))
         with closing_pool(own):  # (stopped at once by an interrupt)
             # the planner's inputs travel with each start (a few kB); each worker builds the
             # planner once per multi-start (the token; _solve_in_worker's cache)

@@ -1,0 +1,357 @@
+"""Several contacts (issue 40): the ``[[contacts]]`` form, its validation, the contact views
+and the verbs that run per contact (crlb, bound, track) or refuse several contacts."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.errors import ScenarioError
+from tmaplan.scenario import Contact, dump, from_dict, load_problem, loads, problems_dir, to_dict
+from tmaplan.scenario.names import DEFAULT_REQUIRED_ACCURACY
+
+CORPUS = Path(__file__).parent / "data" / "invalid"
+
+
+def _default_dict():
+    return tomllib.loads((problems_dir() / "default.toml").read_text(encoding="utf-8"))
+
+
+def _two(**bravo):
+    """``default`` with a second contact "bravo" on the port bow (``bravo``: its extra keys)."""
+    d = _default_dict()
+    target, prior = d.pop("target"), d.pop("prior")
+    other = {**target, "position": ["-9.9 km", "9.9 km"], "course": "110 deg"}
+    d["contacts"] = [{"name": "alpha", "target": target, "prior": prior},
+                     {"name": "bravo", "target": other,
+                      "prior": {**prior, "bearing_mean": "315 deg"}, **bravo}]
+    return d
+
+
+def test_a_one_contact_file_is_the_contact_named_contact():
+    s = load_problem("default")
+    assert s.contact_names == ("contact",)
+    c = s.contacts[0]
+    assert (c.target, c.prior, c.weight, c.required_accuracy) == (s.target, s.prior, 1.0, None)
+    assert s.contact_view("contact") is s
+    assert s.required_accuracy == DEFAULT_REQUIRED_ACCURACY == 0.1
+    # dumped as a one-contact file: no [[contacts]]
+    text = dump(s)
+    assert "[target]" in text and "[prior]" in text and "contacts" not in text
+    assert list(to_dict(s))[:4] == ["name", "description", "time", "target"]
+
+
+def test_several_contacts_round_trip_and_keep_their_order():
+    s = from_dict(_two(weight=2.5, required_accuracy=0.05))
+    assert s.contact_names == ("alpha", "bravo")
+    assert [c.weight for c in s.contacts] == [1.0, 2.5]
+    text = dump(s)
+    assert "[[contacts]]" in text and "[target]" not in text
+    assert loads(text) == s
+    assert loads(dump(loads(text))) == s
+
+
+@pytest.mark.parametrize("name", ["alpha", "contact"])
+def test_one_contact_in_the_contacts_form(name):
+    # a one-contact [[contacts]] file dumps as [[contacts]] unless it is the default contact
+    d = _two()
+    d["contacts"] = d["contacts"][:1]
+    d["contacts"][0]["name"] = name
+    s = from_dict(d)
+    assert loads(dump(s)) == s
+    assert ("[[contacts]]" in dump(s)) == (name != "contact")
+    assert s.target == s.contacts[0].target  # one contact: .target works
+
+
+def test_several_contacts_have_no_single_target_or_prior():
+    s = from_dict(_two())
+    for attr in ("target", "prior"):
+        with pytest.raises(ScenarioError, match="several contacts: use scenario.contacts or "
+                                                r"scenario.contact_view\(name\)"):
+            getattr(s, attr)
+    with pytest.raises(ScenarioError, match="several contacts"):
+        s.replace(prior=None)
+
+
+def test_a_contact_view_is_a_one_contact_scenario():
+    s = from_dict(_two(required_accuracy=0.05))
+    a, b = s.contact_view("alpha"), s.contact_view("bravo")
+    for view, c in ((a, s.contacts[0]), (b, s.contacts[1])):
+        assert view.contact_names == ("contact",)
+        assert (view.target, view.prior) == (c.target, c.prior)
+        assert (view.observer, view.sensors, view.time) == (s.observer, s.sensors, s.time)
+        assert loads(dump(view)) == view and "[target]" in dump(view)
+    assert a.required_accuracy == DEFAULT_REQUIRED_ACCURACY
+    assert b.required_accuracy == 0.05 and b.planning.required_accuracy == 0.05
+    assert b.planning.ping_budget == s.planning.ping_budget  # the rest is shared
+    assert list(s.contact_views()) == ["alpha", "bravo"]
+    with pytest.raises(ScenarioError, match=r"field 'contact'.*'alpha', 'bravo'.*'charlie'"):
+        s.contact_view("charlie")
+
+
+def test_planning_required_accuracy_is_the_scenario_default():
+    d = _default_dict()
+    d["planning"]["required_accuracy"] = 0.2
+    s = from_dict(d)
+    assert s.required_accuracy == 0.2 and loads(dump(s)) == s
+
+
+@pytest.mark.parametrize(("change", "field", "text"), [
+    ({"weight": 0.0}, "contacts[1].weight", "greater than 0 (contact 'bravo')"),
+    ({"weight": -1.0}, "contacts[1].weight", "(contact 'bravo')"),
+    ({"weight": float("nan")}, "contacts[1].weight", "(contact 'bravo')"),
+    ({"required_accuracy": 0.0}, "contacts[1].required_accuracy", "(contact 'bravo')"),
+    ({"required_accuracy": 1.0}, "contacts[1].required_accuracy", "less than 1"),
+    ({"required_accuracy": 1.5}, "contacts[1].required_accuracy", "(contact 'bravo')"),
+    ({"name": "alpha"}, "contacts[1].name", "a name not used by another contact"),
+    ({"name": ""}, "contacts[1].name", "a non-empty name"),
+    ({"name": "a/b"}, "contacts[1].name", "without '/'"),
+    ({"colour": "red"}, "contacts[1].colour", "no such key"),
+])
+def test_bad_contact_fields_name_the_contact_and_the_field(change, field, text):
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(_two(**change))
+    msg = str(exc.value)
+    assert exc.value.field == field and text in msg and "\n" not in msg, msg
+
+
+def test_a_contact_field_error_names_its_table_and_contact():
+    d = _two()
+    d["contacts"][1]["prior"]["range_max"] = "1 km"  # below range_min
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(d)
+    assert exc.value.field == "contacts[1].prior.range_max"
+    assert "(contact 'bravo')" in str(exc.value)
+    d = _two()
+    del d["contacts"][0]["target"]["position"]
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(d)
+    assert exc.value.field == "contacts[0].target.position"
+    # a bare angle in a contact's table is refused as in [target]
+    d = _two()
+    d["contacts"][1]["target"]["course"] = 200
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(d)
+    assert exc.value.field == "contacts[1].target.course" and "deg" in str(exc.value)
+
+
+def test_a_one_contact_file_keeps_its_messages():
+    d = _default_dict()
+    d["prior"]["range_max"] = "1 km"
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(d)
+    assert exc.value.field == "prior.range_max" and "contact" not in exc.value.expected
+    d = _default_dict()
+    del d["target"]
+    with pytest.raises(ScenarioError) as exc:
+        from_dict(d)
+    assert exc.value.field == "target" and "required" in str(exc.value)
+
+
+def test_both_forms_at_once_are_refused():
+    d = _two()
+    d["prior"] = d["contacts"][0]["prior"]
+    with pytest.raises(ScenarioError, match="either \\[\\[contacts\\]\\] tables or a bare"):
+        from_dict(d)
+    d = _two()
+    d["contacts"] = []
+    with pytest.raises(ScenarioError, match="at least one contact"):
+        from_dict(d)
+
+
+def test_warnings_name_the_contact_once_per_field():
+    d = _two()
+    d["contacts"][1]["prior"]["bearing_std"] = "70 deg"
+    d["sensors"][0]["sigma"] = "15 deg"
+    with pytest.warns(UserWarning) as rec:
+        from_dict(d)
+    fields = [str(w.message).split("'")[1] for w in rec]
+    assert "contacts[1].prior.bearing_std" in fields
+    assert fields.count("sensors[0].sigma") == 1  # shared: once
+
+
+def test_max_range_round_trips_and_is_positive():
+    d = _default_dict()
+    d["sensors"][1]["max_range"] = "20 km"
+    s = from_dict(d)
+    assert s.sensors[1].max_range == 20e3 and loads(dump(s)) == s
+    assert load_problem("default").sensors[1].max_range is None
+
+
+def test_contact_is_frozen_and_keyword_only():
+    c = load_problem("default").contacts[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        c.weight = 2.0  # type: ignore[misc]
+    with pytest.raises((TypeError, ValueError)):
+        Contact("x", c.target)  # type: ignore[misc]
+
+
+# ---------------------------------------------------------------------- the command line
+
+
+@pytest.fixture(scope="module")
+def two_file(tmp_path_factory):
+    """Two contacts seen from an own ship that turns to starboard at 15 min (observable)."""
+    d = _two()
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path_factory.mktemp("two") / "two.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    return path
+
+
+def _run(argv, tmp_path):
+    out = tmp_path / "out.json"
+    assert main([*argv, "--json", str(out), "--out", str(tmp_path)]) == 0
+    return json.loads(out.read_text(encoding="utf-8"))
+
+
+def _one_contact_payload(argv, two_file, tmp_path, contact):
+    """The payload of ``argv`` on the one-contact file of ``contact``'s view."""
+    view = loads(two_file.read_text(encoding="utf-8")).contact_view(contact)
+    path = tmp_path / f"{contact}.toml"
+    path.write_text(dump(dataclasses.replace(view, name=view.name)), encoding="utf-8")
+    return _run([argv[0], str(path), *argv[1:]], tmp_path)
+
+
+@pytest.mark.parametrize("argv", [
+    ["crlb", "--no-figure"],
+    ["bound", "--method", "closed-form", "--no-figure"],
+    ["track", "--particles", "300", "--runs", "2", "--no-figure"],
+])
+def test_per_contact_json_is_each_contacts_one_contact_payload(argv, two_file, tmp_path,
+                                                               capsys):
+    got = _run([argv[0], str(two_file), *argv[1:]], tmp_path)
+    assert set(got) == {"problem", "contacts"} and list(got["contacts"]) == ["alpha", "bravo"]
+    printed = capsys.readouterr().out
+    assert "contact alpha (1 of 2)" in printed and "contact bravo (2 of 2)" in printed
+    for name in ("alpha", "bravo"):
+        one = _one_contact_payload(argv, two_file, tmp_path, name)
+        one.pop("problem")
+        mine = got["contacts"][name]
+        for payload in (one, mine):
+            payload.pop("seconds", None)
+            payload.pop("replan_seconds", None)
+        assert mine.keys() == one.keys()
+        # the view runs as "<problem>-<contact>" (its figures' and messages' name)
+        mine = json.loads(json.dumps(mine).replace(f"default-{name}", "default"))
+        for key in mine:
+            assert mine[key] == one[key], (name, key)
+
+
+def test_per_contact_figures_are_named_after_the_contact(two_file, tmp_path):
+    got = _run(["crlb", str(two_file)], tmp_path)
+    names = [Path(got["contacts"][c]["figure"]).name for c in ("alpha", "bravo")]
+    assert names == ["crlb_default-alpha.png", "crlb_default-bravo.png"]
+
+
+@pytest.mark.parametrize("verb", ["plan", "schedule", "compare", "rank-costs"])
+def test_verbs_not_yet_for_several_contacts_refuse_them(verb, two_file, tmp_path, capsys):
+    argv = [verb, str(two_file)] + (["--budget", "2"] if verb == "schedule" else []) + (
+        ["--policies", "straight", "--runs", "2"] if verb == "compare" else [])
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"tmaplan {verb} does not handle several contacts yet" in err[0]
+    assert "field 'contacts'" in err[0] and "['alpha', 'bravo']" in err[0]
+
+
+def test_the_refusal_lives_in_one_place():
+    import importlib
+
+    from tmaplan.cli import VERBS
+    from tmaplan.cli.contacts import takes_several
+
+    able = {v for v, m in VERBS.items()
+            if takes_several(importlib.import_module(f"tmaplan.cli.{m}"))}
+    assert {"crlb", "bound", "track"} <= able
+    assert not able & {"plan", "schedule", "compare", "rank-costs", "demo"}
+
+
+def test_corpus_has_the_several_contact_errors():
+    stems = {p.stem for p in CORPUS.glob("*.toml")}
+    for part in ("duplicate_name", "weight_zero", "required_accuracy", "contacts_and_target",
+                 "max_range_zero"):
+        assert any(part in s for s in stems), part
+
+
+# ------------------------------------------------------------------ the built-in problems
+
+
+@pytest.mark.parametrize(("name", "bearings"), [
+    ("two-contacts-crossing", {"alpha": 45.0, "bravo": 315.0}),
+    ("three-contacts-screen", {"alpha": 30.0, "bravo": 330.0, "charlie": 90.0})])
+def test_the_several_contact_problems_have_their_geometry(name, bearings):
+    """Each contact's prior (never the truth) puts it where the comment says, its truth lies
+    inside its prior, a ping reaches 20 km; three-contacts-screen's fast contact closes and
+    weighs most."""
+
+    from tmaplan.geometry import wrap_angle
+    from tmaplan.planning.belief import Belief
+
+    s = load_problem(name)
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    assert text.startswith("# tmaplan's planning case") and "What it exercises:" in text
+    assert s.contact_names == tuple(bearings)
+    assert s.sensors_of("range")[0].max_range == 20e3
+    for c in s.contacts:
+        view = s.contact_view(c.name)
+        assert not c.prior.centred_on_truth
+        m = Belief.from_prior(view).mean
+        bearing = np.degrees(float(wrap_angle(np.arctan2(m[0], m[1]))))
+        assert abs(wrap_angle(np.radians(bearing - bearings[c.name]))) < np.radians(1.0)
+        r0 = np.hypot(*c.target.position)
+        assert c.prior.range_min <= r0 <= c.prior.range_max
+    if name == "three-contacts-screen":
+        fast = s.contact("charlie")
+        assert fast.weight == max(c.weight for c in s.contacts) == 3.0
+        assert fast.target.speed == max(c.target.speed for c in s.contacts)
+        pos, vel = np.asarray(fast.target.position), fast.target.speed * np.array(
+            [np.sin(fast.target.course), np.cos(fast.target.course)])
+        assert pos @ vel < 0  # closing
+        assert s.contact_view("charlie").required_accuracy == 0.05
+
+
+def test_two_contacts_crossing_the_best_turn_for_one_is_poor_for_the_other():
+    """A turn to starboard onto 090° at 15 min (towards alpha's side) localises alpha (batch
+    CRLB range RSD at 45 min of a few %) but leaves bravo far worse; the mirror turn the other
+    way round (cross-check by symmetry of the geometry)."""
+    from tmaplan.bounds.crlb import crlb
+    from tmaplan.scenario import ObserverLeg
+
+    s = load_problem("two-contacts-crossing")
+    rsd = {}
+    for course in (90.0, 270.0):
+        leg = ObserverLeg(start=900.0, course=float(np.radians(course)),
+                          turn_rate=s.observer.turn_rate_max)
+        turned = s.replace(observer=dataclasses.replace(s.observer, legs=(leg,)))
+        rsd[course] = {c: crlb(turned.contact_view(c), frequencies=0).final_range_rsd
+                       for c in s.contact_names}
+    assert rsd[90.0]["alpha"] < 0.05 < rsd[90.0]["bravo"]
+    assert rsd[90.0]["bravo"] > 5 * rsd[90.0]["alpha"]
+    assert rsd[270.0]["bravo"] < rsd[90.0]["bravo"] and rsd[270.0]["alpha"] > rsd[90.0]["alpha"]
+
+
+def test_a_failed_per_contact_computation_names_the_contact(capsys, tmp_path):
+    # the own ship of the built-in problem flies straight: no contact is observable
+    assert main(["crlb", "two-contacts-crossing", "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two-contacts-crossing: contact 'alpha': the Fisher" in err[0]
+
+
+def test_a_contact_without_prior_is_named_where_the_verb_needs_one(capsys, tmp_path):
+    d = _two()
+    del d["contacts"][1]["prior"]
+    path = tmp_path / "np.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["track", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field '--estimator'" in err and "no [prior] table" in err, err
+    assert "(contact 'bravo')" in err, err
+    assert main(["bound", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "field 'contacts[1].prior'" in err and "(contact 'bravo')" in err, err

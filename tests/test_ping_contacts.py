@@ -1,0 +1,121 @@
+"""Pings shared by several contacts (issue 40): one budget, reach by max_range, certified.
+
+Two contacts (``default``'s at 045° and ``contact-astern``'s at 185°) share one own ship on a
+short horizon, so every schedule can be enumerated by brute force here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.planning import schedule_pings
+from tmaplan.planning.contacts import ContactSet
+from tmaplan.planning.ping_contacts import ContactsPingEvaluator, schedule_contact_pings
+from tmaplan.scenario import load_problem
+
+
+@pytest.fixture(scope="module")
+def pair():
+    d = load_problem("default")
+    d = d.replace(time=dataclasses.replace(d.time, horizon=300.0),
+                  planning=dataclasses.replace(d.planning, horizon=300.0,
+                                               ping_min_spacing=0.0))
+    a = load_problem("contact-astern")
+    astern = d.replace(name="astern", target=a.target, prior=a.prior)
+    return d, astern
+
+
+def _brute(cs, budget, max_range, gap=1):
+    """Every schedule of exactly ``budget`` pings on steps 1..K (more pings never hurt)."""
+    d = cs.views[0]
+    from tmaplan.models.observer import observer_track
+
+    ev = ContactsPingEvaluator(cs, observer_track(d.observer, d.time), cs.beliefs(),
+                               max_range=max_range)
+    sets = [c for c in itertools.combinations(range(1, ev.K + 1), budget)
+            if all(b - a >= gap for a, b in itertools.pairwise(c))]
+    vals = ev.evaluate(ev.schedules(sets))
+    return float(vals.min()), ev
+
+
+def _partial_reach(cs):
+    """A max_range between the contacts' predicted ranges (one in reach, one not)."""
+    d = cs.views[0]
+    from tmaplan.models.observer import observer_track
+
+    ev = ContactsPingEvaluator(cs, observer_track(d.observer, d.time), cs.beliefs())
+    r = [np.sqrt(p[0].engine.er2) for p in ev.parts]
+    return float(np.median(np.concatenate(r)))
+
+
+@pytest.mark.parametrize("budget", [1, 2, 3])
+@pytest.mark.parametrize("reach", ["unlimited", "partial"])
+def test_exact_matches_brute_force_and_bounds_hold(pair, budget, reach):
+    cs = ContactSet(views=pair, names=("d", "a"), weights=(2.0, 1.0))
+    mr = None if reach == "unlimited" else _partial_reach(cs)
+    best, _ = _brute(cs, budget, mr)
+    ex = schedule_contact_pings(cs, budget=budget, method="exact", max_range=mr)
+    s = ex.schedule
+    assert s.objective == pytest.approx(best, rel=1e-9)
+    assert s.lower_bound <= s.objective * (1 + 1e-9)
+    assert s.lower_bound <= best * (1 + 1e-9)
+    assert s.status == "optimal" and s.gap <= 1e-3
+    rel = schedule_contact_pings(cs, budget=budget, method="relaxed", max_range=mr).schedule
+    assert rel.lower_bound <= best * (1 + 1e-9) and rel.objective >= best * (1 - 1e-12)
+    # the objective is the contacts' weighted mean
+    w = np.array(cs.weights) / sum(cs.weights)
+    assert s.objective == pytest.approx(w @ [ex.objectives[n] for n in cs.names], rel=1e-12)
+
+
+def test_ping_out_of_reach_does_not_inform(pair):
+    cs = ContactSet(views=pair, names=("d", "a"))
+    mr = _partial_reach(cs)
+    r = schedule_contact_pings(cs, budget=2, method="greedy", max_range=mr)
+    for n in cs.names:
+        if r.pings_in_reach[n] == 0:
+            assert r.objectives[n] == r.no_ping_objectives[n]
+        assert np.array_equal(r.reach[n], r.reach[n].astype(bool))
+    # the median range reaches one contact and not the other
+    assert sorted(bool(r.reach[n].any()) for n in cs.names) == [False, True]
+    far = schedule_contact_pings(cs, budget=2, method="greedy", max_range=1.0)
+    assert far.objectives == far.no_ping_objectives
+    js = r.contacts_json()
+    assert set(js) == set(cs.names)
+    assert {k: v["pings_in_reach"] for k, v in js.items()} == r.pings_in_reach
+
+
+def test_invariant_to_contact_order(pair):
+    a = schedule_contact_pings(ContactSet(views=pair, names=("d", "a"), weights=(2.0, 1.0)),
+                               budget=2, method="exact").schedule
+    b = schedule_contact_pings(ContactSet(views=pair[::-1], names=("a", "d"),
+                                          weights=(1.0, 2.0)),
+                               budget=2, method="exact").schedule
+    assert b.objective == pytest.approx(a.objective, rel=1e-12)
+    np.testing.assert_array_equal(a.steps, b.steps)
+
+
+def test_one_contact_is_todays_schedule(pair):
+    d = pair[0]
+    cs = ContactSet(views=(d,), names=("contact",))
+    ref = schedule_pings(d, budget=2, method="exact")
+    got = schedule_contact_pings(cs, budget=2, method="exact", max_range=None).schedule
+    assert got.objective == ref.objective and np.array_equal(got.steps, ref.steps)
+    # the several-contacts path (a reach covering everything) finds the same optimum
+    other = schedule_contact_pings(cs, budget=2, method="exact", max_range=1e9).schedule
+    assert other.objective == pytest.approx(ref.objective, rel=1e-9)
+    assert other.lower_bound <= other.objective * (1 + 1e-9)
+
+
+def test_bad_input(pair):
+    cs = ContactSet(views=pair, names=("d", "a"))
+    with pytest.raises(ArgumentError, match="max_range"):
+        schedule_contact_pings(cs, budget=1, max_range=-5.0)
+    with pytest.raises(ArgumentError, match="budget"):
+        schedule_contact_pings(cs, budget=1.5)  # type: ignore[arg-type]
+    with pytest.raises(PlanningError, match="budget"):
+        schedule_contact_pings(cs, budget=10_000)

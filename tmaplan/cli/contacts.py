@@ -1,0 +1,104 @@
+"""Several contacts on the command line: the one place that says which verbs take them.
+
+A verb module that handles a several-contact scenario declares ``SEVERAL_CONTACTS``:
+``"per-contact"`` (``crlb``, ``bound``, ``track``: the single-contact machinery runs on each
+contact's view, :meth:`tmaplan.scenario.Scenario.contact_view`, through
+:func:`run_per_contact`; the JSON holds ``contacts: {name: {...the one-contact keys...}}`` and
+the console prints each contact's block; each contact's runs use the same seeds, common random
+numbers) or ``"joint"`` (``simulate``: its ``run`` takes the whole scenario).
+:func:`refuse_several` refuses the other verbs with one line (never running them silently on
+the first contact), so a verb is lifted by setting its flag. A one-contact scenario runs
+exactly as before.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from collections.abc import Callable
+from typing import Any
+
+from tmaplan.errors import ArgumentError, ScenarioError, TmaplanError
+from tmaplan.scenario import Scenario, load
+from tmaplan.scenario.contacts import in_contact
+
+__all__ = ["per_contact", "preflight_per_contact", "refuse_several", "run_per_contact",
+           "scenario_of", "takes_several"]
+
+
+def takes_several(module: Any) -> bool:
+    """Whether the verb ``module`` handles several contacts (its ``SEVERAL_CONTACTS``)."""
+    return getattr(module, "SEVERAL_CONTACTS", None) in ("per-contact", "joint")
+
+
+def per_contact(module: Any) -> bool:
+    """Whether the verb ``module`` runs per contact (``SEVERAL_CONTACTS = "per-contact"``)."""
+    return getattr(module, "SEVERAL_CONTACTS", None) == "per-contact"
+
+
+def refuse_several(verb: str, module: Any, scenario: Scenario,
+                   verbs: dict[str, Any] | None = None) -> None:
+    """Raise :class:`ScenarioError` when ``scenario`` has several contacts and the verb does
+    not handle them (``verbs``: name -> module of every verb, to list those that do)."""
+    if len(scenario.contacts) < 2 or takes_several(module):
+        return
+    able = sorted(v for v, m in (verbs or {}).items() if takes_several(m))
+    also = f" ({', '.join(able)} do)" if able else ""
+    raise ScenarioError("contacts", f"one contact: tmaplan {verb} does not handle several "
+                        f"contacts yet{also}", list(scenario.contact_names),
+                        source=scenario.name)
+
+
+def scenario_of(args: argparse.Namespace) -> Scenario:
+    """The scenario a verb's ``run`` works on: the contact's view when :func:`run_per_contact`
+    runs it, else the problem ``args.problem`` (loaded)."""
+    view = getattr(args, "contact_view", None)
+    return view if view is not None else load(args.problem)
+
+
+def _view(scenario: Scenario, name: str) -> Scenario:
+    """Contact ``name``'s view, named ``<problem>-<contact>`` (its figures' file names)."""
+    return dataclasses.replace(scenario.contact_view(name), name=f"{scenario.name}-{name}")
+
+
+def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
+                          preflight: Callable[[argparse.Namespace, Any], None]) -> None:
+    """``preflight(args, view)`` of each contact's view; a scenario error on a contact field
+    names the contact (:func:`tmaplan.scenario.contacts.in_contact`), e.g. a contact without
+    the prior that the verb needs: ``field 'contacts[1].prior': expected a [prior] table: ...
+    (contact 'bravo')``."""
+    for i, c in enumerate(scenario.contacts):
+        try:
+            with in_contact(scenario, i):
+                preflight(args, scenario.contact_view(c.name))
+        except ArgumentError as exc:  # a flag that does not suit this contact says whose
+            if exc.field.startswith("contacts") or not exc.field.startswith("-"):
+                raise
+            raise ArgumentError(exc.field, f"{exc.expected} (contact '{c.name}')",
+                                exc.received, source=exc.source) from None
+
+
+def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario
+                    ) -> dict[str, Any]:
+    """Run the verb ``module`` on each contact's view: ``{problem, contacts: {name:
+    payload}}``; on the console a header line per contact before its output."""
+    out: dict[str, Any] = {}
+    for i, c in enumerate(scenario.contacts):
+        if args.json != "-":
+            print(f"== {scenario.name}: contact {c.name} ({i + 1} of "
+                  f"{len(scenario.contacts)}) ==", file=sys.stdout)
+        sub = argparse.Namespace(**vars(args), contact_view=_view(scenario, c.name))
+        try:
+            with in_contact(scenario, i, source=scenario.name):
+                payload = module.run(sub)
+        except TmaplanError as exc:  # a failed computation says whose
+            if isinstance(exc, ArgumentError) or not exc.args or not isinstance(exc.args[0],
+                                                                                  str):
+                raise
+            exc.args = (f"contact '{c.name}': {exc.args[0]}", *exc.args[1:])
+            raise
+        if isinstance(payload, dict):
+            payload.pop("problem", None)
+        out[c.name] = payload
+    return {"problem": scenario.name, "contacts": out}

@@ -1,0 +1,547 @@
+"""Numba kernels of the particle filter (``PFConfig.kernel = "numba"``, the default).
+
+Private helpers of :mod:`tmaplan.estimators.particle_filter`; the numpy kernels of
+:mod:`tmaplan.estimators.pf_kernels` stay the reference (``kernel="numpy"``).
+
+Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
+
+* **Blocks of fixed size.** Every kernel loops over blocks of :data:`BLOCK` particles in a
+  ``prange`` and over the particles of a block in a plain inner loop that LLVM vectorises;
+  reductions (maximum, sums, moments) are kept per block and combined in block order by one
+  thread. The arithmetic done for a particle, and the order of every sum, depend only on N,
+  never on the number of threads or their schedule: results are bit-identical for any
+  ``numba.set_num_threads`` (and between the parallel and the serial build).
+* **Counter-based random numbers.** The noise of particle i is Philox4x32-10 (Salmon et al.
+  2011, "Parallel random numbers: as easy as 1, 2, 3"; Random123's known-answer vectors are
+  tested) at counter ``(i, 0, s0, s1)`` under key ``(k0, k1)``, where (k0, k1, s0, s1) are four
+  32-bit words drawn from the injected ``numpy.random.Generator`` once per kernel call. So the
+  draws are a function of that Generator alone (deterministic, any thread count), at no
+  serial cost: drawing 4 normals per particle with the Generator itself costs more than the
+  whole fused step (``benchmarks/particle_filter.py`` reports it). The normals are Box–Muller
+  on the 32-bit words, computed in float32 like the numpy kernel's default noise (radius at
+  most 5.89: the Gaussian mass beyond, 3·10⁻⁸ per pair, is not drawn); the particles stay
+  float64.
+* **Branch-free elementary functions** (float64 ``log``, ``atan``, ``exp``; float32 ``log``
+  and ``sin``/``cos`` of a turn fraction) from fdlibm / Cephes polynomials, accurate to about
+  1 ulp (tested against numpy), so that the loops vectorise without a vector math library:
+  the same code, hence the same bits, whatever the SIMD width (the moments' sums excepted,
+  below).
+* ``fastmath=False`` (IEEE, no reassociation or contraction; the block sums alone are
+  reassociated), ``error_model="numpy"`` (no division check in the loops),
+  ``cache=True`` (compiled once per machine, then loaded).
+* **Threads.** From :data:`PARALLEL_MIN` particles on, the parallel build runs on numba's
+  threads (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``); below, the serial build. OpenMP
+  threads wait passively between kernels (``OMP_WAIT_POLICY=PASSIVE`` unless set): spinning
+  threads take the cores from the one with work when other processes load the machine (a
+  launch then waits ~20 ms instead of ~0.1 ms at load 11 on 2 cores). numba reads it when it
+  starts its threads, at the first parallel kernel or ``numba.get_num_threads()``: a program
+  that calls these before it imports this module keeps OpenMP's default.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import types
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from tmaplan.estimators.pf_kernels import (
+    clutter_floor,
+    frequency_update,
+    measurement_ll,
+    particle_rows,
+)
+from tmaplan.estimators.pf_math import (
+    MASK32,
+    SH32,
+    U64,
+    abs_atan2,
+    box_muller_f32,
+    fast_exp,
+    fast_log,
+    njit,
+    numba,
+    philox,
+    prange,
+)
+
+__all__ = ["BLOCK"]
+
+#: Particles per block: the unit of work of a thread and of every partial sum.
+BLOCK = 2048
+#: From this many particles on, the parallel build runs (with numba's thread count); below,
+#: the serial build (a parallel launch costs more than it saves, and campaign workers would
+#: oversubscribe the cores). Both give the same bits.
+PARALLEL_MIN = 8 * BLOCK
+_FLAGS: dict[str, Any] = {"cache": True, "fastmath": False, "error_model": "numpy",
+                          "nogil": True}
+
+
+class _Kernel:
+    """A parallel and a serial build of one kernel, called as ``kernel(n, *args)``: the
+    parallel one from :data:`PARALLEL_MIN` particles on when numba has more than one thread."""
+
+    def __init__(self, fn: Any, flags: dict[str, Any]) -> None:
+        serial = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial",
+                                    fn.__defaults__, fn.__closure__)
+        serial.__qualname__ = fn.__qualname__ + "_serial"  # its own cache file
+        self.par = njit(parallel=True, **flags)(fn)
+        self.ser = njit(**flags)(serial)
+        self.__doc__ = fn.__doc__
+
+    def __call__(self, n: int, *args: Any) -> None:
+        par = n >= PARALLEL_MIN and numba.get_num_threads() > 1
+        (self.par if par else self.ser)(*args)
+
+
+def _kernel(**flags: Any) -> Any:
+    """Decorator: :class:`_Kernel` with :data:`_FLAGS` updated by ``flags``."""
+    return lambda fn: _Kernel(fn, _FLAGS | flags)
+
+# --------------------------------------------------------------------------------------------
+# Kernels (blocks in a prange; see the module docstring)
+# --------------------------------------------------------------------------------------------
+
+
+def _n_blocks(n: int) -> int:
+    return (n + BLOCK - 1) // BLOCK
+
+
+# Each kernel: ``for blk in prange(nb)`` over blocks; the loops inside run over 1-D views of
+# the block (``x = A[0, lo:lo + m]``, index j from 0): the form that LLVM vectorises.
+
+
+@njit(fastmath={"reassoc"}, error_model="numpy", nogil=True)
+def _block_sums(v: np.ndarray) -> tuple[float, float]:
+    """(Σv, Σv²) of one block, reassociated so that LLVM vectorises them: the order is then
+    fixed by the compiled code and the block's length, not by the threads."""
+    a = 0.0
+    b = 0.0
+    for j in range(v.shape[0]):
+        a += v[j]
+        b += v[j] * v[j]
+    return a, b
+
+
+@njit(inline="always")
+def _max_bad(o: np.ndarray) -> tuple[float, int]:
+    """(maximum, number of NaN or +inf values) of one block; the maximum in 8 interleaved
+    lanes, a NaN never selected (−inf for a block of NaN or −inf only)."""
+    m = o.shape[0]
+    m8 = m - m % 8
+    l0 = l1 = l2 = l3 = l4 = l5 = l6 = l7 = -np.inf
+    for j in range(0, m8, 8):
+        v0, v1, v2, v3 = o[j], o[j + 1], o[j + 2], o[j + 3]
+        v4, v5, v6, v7 = o[j + 4], o[j + 5], o[j + 6], o[j + 7]
+        l0, l1 = (v0 if v0 > l0 else l0), (v1 if v1 > l1 else l1)
+        l2, l3 = (v2 if v2 > l2 else l2), (v3 if v3 > l3 else l3)
+        l4, l5 = (v4 if v4 > l4 else l4), (v5 if v5 > l5 else l5)
+        l6, l7 = (v6 if v6 > l6 else l6), (v7 if v7 > l7 else l7)
+    mx = max(max(max(l0, l1), max(l2, l3)), max(max(l4, l5), max(l6, l7)))
+    for j in range(m8, m):
+        mx = o[j] if o[j] > mx else mx
+    bad = 0
+    for j in range(m):
+        bad += 0 if o[j] < np.inf else 1
+    return mx, bad
+
+
+@_kernel()
+def _predict_kernel(A: np.ndarray, out: np.ndarray, dt: float, l11: float, l21: float,
+                    l22: float, dvx: float, dvy: float, key: np.ndarray) -> None:
+    """``out = F A − H Δv + w`` on (4, N) rows, w the NCV noise from 4 Philox normals."""
+    n = A.shape[1]
+    nb = (n + BLOCK - 1) // BLOCK
+    k0, k1, s0, s1 = key[0], key[1], key[2], key[3]
+    pdx, pdy = dt * dvx, dt * dvy
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        x, y, vx, vy = A[0, lo:lo + m], A[1, lo:lo + m], A[2, lo:lo + m], A[3, lo:lo + m]
+        ox, oy = out[0, lo:lo + m], out[1, lo:lo + m]
+        ovx, ovy = out[2, lo:lo + m], out[3, lo:lo + m]
+        for j in range(m):
+            r0, r1, r2, r3 = philox(U64(lo + j), U64(0), s0, s1, k0, k1)
+            z1x, z1y = box_muller_f32(r0, r1)
+            z2x, z2y = box_muller_f32(r2, r3)
+            ox[j] = ((x[j] + dt * vx[j]) + l11 * z1x) - pdx
+            oy[j] = ((y[j] + dt * vy[j]) + l11 * z1y) - pdy
+            ovx[j] = (vx[j] + (l21 * z1x + l22 * z2x)) - dvx
+            ovy[j] = (vy[j] + (l21 * z1y + l22 * z2y)) - dvy
+
+
+@_kernel()
+def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.ndarray,
+                   extra: np.ndarray, out: np.ndarray, w: np.ndarray,
+                   part: np.ndarray) -> None:
+    """``out = lw + Σ log-likelihoods`` (up to constants) and, per block b, its maximum m_b
+    over the finite values, the number of NaN or +inf values, and (when there is none and
+    m_b is finite) ``w = exp(out − m_b)`` with Σw and Σw²: ``part[b]`` = (m_b, #bad, Σw, Σw²).
+
+    ``bear`` rows (sin z, cos z, 1/(√2 σ), |wrap z|, clutter floor or −inf): Gaussian in the
+    wrapped residual ``|d| = |atan2(sin(z − β), cos(z − β))|``, optionally mixed with clutter;
+    ``rng_`` rows (z, 1/(√2 σ)): Gaussian range; ``extra`` (N,) or (0,): added as is.
+    """
+    n = A.shape[1]
+    nb = (n + BLOCK - 1) // BLOCK
+    has_extra = extra.shape[0] == n
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        x, y, o, p = A[0, lo:lo + m], A[1, lo:lo + m], out[lo:lo + m], lw[lo:lo + m]
+        if has_extra:
+            e = extra[lo:lo + m]
+            for j in range(m):
+                o[j] = p[j] + e[j]
+        else:
+            for j in range(m):
+                o[j] = p[j]
+        for k in range(bear.shape[0]):
+            sz, cz, g, d0, fl = bear[k, 0], bear[k, 1], bear[k, 2], bear[k, 3], bear[k, 4]
+            if fl == -np.inf:
+                for j in range(m):
+                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
+                    d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
+                    o[j] = o[j] - d * d
+            else:  # log(e^ll + e^fl) = max + log(1 + e^(min − max))
+                for j in range(m):
+                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
+                    d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
+                    ll = -(d * d)
+                    hi = max(ll, fl)
+                    o[j] = o[j] + (hi + fast_log(1.0 + fast_exp(min(ll, fl) - hi)))
+        for k in range(rng_.shape[0]):
+            z, g = rng_[k, 0], rng_[k, 1]
+            for j in range(m):
+                d = (z - math.sqrt(x[j] * x[j] + y[j] * y[j])) * g
+                o[j] = o[j] - d * d
+        mx, bad = _max_bad(o)
+        part[blk, 0] = mx
+        part[blk, 1] = bad
+        wb = w[lo:lo + m]
+        if bad == 0 and mx > -np.inf:
+            for j in range(m):
+                wb[j] = fast_exp(o[j] - mx)
+            part[blk, 2], part[blk, 3] = _block_sums(wb)
+        else:
+            for j in range(m):
+                wb[j] = 0.0
+            part[blk, 2], part[blk, 3] = 0.0, 0.0
+
+
+@_kernel()
+def _scale_kernel(lw: np.ndarray, w: np.ndarray, shift: float, scale: np.ndarray) -> None:
+    """``lw −= shift``, ``w *= scale[b]`` in block b (normalisation)."""
+    n = lw.shape[0]
+    nb = (n + BLOCK - 1) // BLOCK
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        p, o, f = lw[lo:lo + m], w[lo:lo + m], scale[blk]
+        for j in range(m):
+            p[j] = p[j] - shift
+            o[j] = o[j] * f
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _cumsum_kernel(w: np.ndarray, c: np.ndarray) -> None:
+    """``c = cumsum(w)`` in numpy's order (sequential): the resampling CDF bit for bit."""
+    t = 0.0
+    for i in range(w.shape[0]):
+        t += w[i]
+        c[i] = t
+
+
+@_kernel()
+def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
+    """Systematic resampling indices from the CDF ``c`` of normalised weights and one uniform
+    u: the arithmetic of :func:`tmaplan.estimators.pf_kernels.systematic_indices`, so the same
+    indices bit for bit. With ``c'_i = max(⌈(N / c_{N−1}) c_i − u⌉, 0)`` (``c'_{N−1} = N``),
+    non-decreasing, output position j takes ``#{i : c'_i ≤ j}``. Block b owns the positions
+    ``[c'_{lo−1}, c'_{hi−1})``; each of its particles marks ``t = c'_i`` with i + 1 (the last
+    one wins), and a running maximum over the marks gives the count: no branch per particle.
+    """
+    n = c.shape[0]
+    nb = (n + BLOCK - 1) // BLOCK
+    scale = n / c[n - 1]
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        hi = min(lo + BLOCK, n)
+        p0 = 0 if lo == 0 else max(math.ceil(c[lo - 1] * scale - u), 0)
+        p1 = n if hi == n else max(math.ceil(c[hi - 1] * scale - u), 0)
+        if p1 > p0:
+            mark = np.zeros(p1 - p0 + 1, dtype=np.intp)  # the last slot takes c'_i ≥ p1
+            for i in range(lo, hi):
+                ci = n if i == n - 1 else max(math.ceil(c[i] * scale - u), 0)
+                mark[min(ci, p1) - p0] = i + 1
+            run = lo
+            out = idx[p0:p1]
+            for t in range(p1 - p0):
+                run = max(run, mark[t])
+                out[t] = run
+
+
+@_kernel()
+def _gather_kernel(A: np.ndarray, idx: np.ndarray, L: np.ndarray, key: np.ndarray,
+                   jitter: bool, out: np.ndarray) -> None:
+    """``out[:, j] = A[:, idx[j]] (+ L z_j)``, z_j 4 Philox normals, L lower triangular."""
+    n = idx.shape[0]
+    nb = (n + BLOCK - 1) // BLOCK
+    k0, k1, s0, s1 = key[0], key[1], key[2], key[3]
+    a0, a1, a2, a3 = A[0], A[1], A[2], A[3]
+    l00, l10, l11, l20, l21, l22 = L[0, 0], L[1, 0], L[1, 1], L[2, 0], L[2, 1], L[2, 2]
+    l30, l31, l32, l33 = L[3, 0], L[3, 1], L[3, 2], L[3, 3]
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        ix = idx[lo:lo + m]
+        o0, o1, o2, o3 = out[0, lo:lo + m], out[1, lo:lo + m], out[2, lo:lo + m], out[3, lo:lo + m]
+        for j in range(m):
+            o0[j], o1[j], o2[j], o3[j] = a0[ix[j]], a1[ix[j]], a2[ix[j]], a3[ix[j]]
+        if jitter:
+            for j in range(m):
+                r0, r1, r2, r3 = philox(U64(lo + j), U64(0), s0, s1, k0, k1)
+                z0, z1 = box_muller_f32(r0, r1)
+                z2, z3 = box_muller_f32(r2, r3)
+                o0[j] = o0[j] + l00 * z0  # the numpy kernel's order (row by row)
+                o1[j] = (o1[j] + l10 * z0) + l11 * z1
+                o2[j] = ((o2[j] + l20 * z0) + l21 * z1) + l22 * z2
+                o3[j] = (((o3[j] + l30 * z0) + l31 * z1) + l32 * z2) + l33 * z3
+
+
+@_kernel(fastmath={"reassoc"})
+def _moments_kernel(A: np.ndarray, w: np.ndarray, part: np.ndarray) -> None:
+    """Per-block Σw, Σw·d and Σw·d dᵀ (upper triangle, row by row) of d = x − x₀ (x₀ =
+    particle 0, a shift against cancellation): ``part`` (n_blocks, 15).
+
+    The one kernel compiled with reassociation (``fastmath={"reassoc"}``), so that LLVM
+    vectorises its sums: their order is then fixed by the compiled code and the block, still
+    independent of the threads.
+    """
+    n = A.shape[1]
+    nb = (n + BLOCK - 1) // BLOCK
+    o0, o1, o2, o3 = A[0, 0], A[1, 0], A[2, 0], A[3, 0]
+    for blk in prange(nb):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        x0, x1, x2, x3 = A[0, lo:lo + m], A[1, lo:lo + m], A[2, lo:lo + m], A[3, lo:lo + m]
+        wb = w[lo:lo + m]
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = s9 = s10 = s11 = s12 = s13 = s14 = 0.0
+        for j in range(m):
+            wi = wb[j]
+            d0, d1, d2, d3 = x0[j] - o0, x1[j] - o1, x2[j] - o2, x3[j] - o3
+            e0, e1, e2, e3 = wi * d0, wi * d1, wi * d2, wi * d3
+            s0 += wi
+            s1 += e0
+            s2 += e1
+            s3 += e2
+            s4 += e3
+            s5 += e0 * d0
+            s6 += e0 * d1
+            s7 += e0 * d2
+            s8 += e0 * d3
+            s9 += e1 * d1
+            s10 += e1 * d2
+            s11 += e1 * d3
+            s12 += e2 * d2
+            s13 += e2 * d3
+            s14 += e3 * d3
+        sums = (s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, s12, s13, s14)
+        for q in range(15):
+            part[blk, q] = sums[q]
+
+
+# --------------------------------------------------------------------------------------------
+# Python entry points
+# --------------------------------------------------------------------------------------------
+
+# Before numba starts its OpenMP threads (at the first parallel kernel); the user's choice wins.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+_LOCK = threading.Lock()  # one launch at a time (numba's workqueue layer needs it)
+
+
+def _key(rng: np.random.Generator) -> np.ndarray:
+    """Four 32-bit words (key k0, k1; counter words s0, s1): two raw 64-bit draws of the
+    injected Generator's bit generator (a tenth of the cost of ``integers``)."""
+    r = np.asarray(rng.bit_generator.random_raw(2), dtype=np.uint64)
+    return np.array([r[0] & MASK32, r[0] >> SH32, r[1] & MASK32, r[1] >> SH32],
+                    dtype=np.uint64)
+
+
+def predict_rows(A: np.ndarray, dt: float, chol: tuple[float, float, float], dv: np.ndarray,
+                 rng: np.random.Generator | np.ndarray) -> np.ndarray:
+    """The predicted (4, N) cloud (see :func:`_predict_kernel`); ``rng`` may be a key."""
+    out = np.empty_like(A)
+    l11, l21, l22 = chol
+    key = np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray) else _key(rng)
+    with _LOCK:
+        _predict_kernel(A.shape[1], A, out, float(dt), float(l11), float(l21), float(l22),
+                        float(dv[0]), float(dv[1]), key)
+    return out
+
+
+def normals(key: np.ndarray, n: int) -> np.ndarray:
+    """The (4, n) standard normals (rows z1x, z1y, z2x, z2y) that :func:`_predict_kernel` and
+    :func:`_gather_kernel` draw under ``key`` (four uint64 < 2³²), exactly: a prediction of
+    the zero cloud with dt = 0 and a unit Cholesky factor."""
+    return predict_rows(np.zeros((4, n)), 0.0, (1.0, 0.0, 1.0), np.zeros(2), np.asarray(key))
+
+
+def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
+                ) -> tuple[np.ndarray, float, Any, Any, np.ndarray | None, Any]:
+    """The unnormalised updated log-weights ``log w + Σ log p(z | x)`` of ``state`` (a
+    :class:`~tmaplan.estimators.particle_filter.PFState`), as the numpy kernel computes them.
+
+    Plain and clutter-mixture bearings and ranges go through :func:`_loglik_kernel`;
+    π-ambiguous bearings and frequency lines through their numpy kernels.
+
+    Returns
+    -------
+    lw : ndarray, shape (N,)
+    mx : float
+        max(lw), NaN when some lw is NaN or +inf.
+    freq_mean, freq_var : ndarray, shape (N, P), or None
+        Updated by the frequency lines.
+    ll : ndarray, shape (N,), or None
+        Σ log p(z | x) alone (when ``move``).
+    parts : tuple
+        What :func:`normalise` needs of this pass (when mx is finite).
+    """
+    X = state.particles
+    A = particle_rows(X)
+    clutter = float(config.bearing_clutter)
+    bear: list[tuple[float, ...]] = []
+    ranges: list[tuple[float, float]] = []
+    extra: np.ndarray | None = None
+    fm, fv = state.freq_mean, state.freq_var
+    for m in measurements:
+        if m.kind == "bearing" and m.ambiguity == "none":
+            z, sigma = float(m.value), float(m.sigma)
+            fl = clutter_floor(sigma, clutter, 2.0 * math.pi) if clutter > 0.0 else -np.inf
+            bear.append((math.sin(z), math.cos(z), math.sqrt(0.5) / sigma,
+                         abs(z - 2.0 * math.pi * round(z / (2.0 * math.pi))), fl))
+        elif m.kind == "range":
+            ranges.append((float(m.value), math.sqrt(0.5) / float(m.sigma)))
+        else:
+            if m.kind == "frequency":
+                c, fm, fv = frequency_update(X, m, fm, fv)
+            else:
+                c = measurement_ll(X, m, clutter)
+            extra = c if extra is None else extra + c
+    B = np.array(bear, dtype=float).reshape(-1, 5)
+    R = np.array(ranges, dtype=float).reshape(-1, 2)
+    lw, parts = _weigh(A, state.log_weights, B, R, extra)
+    ll = _weigh(A, np.zeros(A.shape[1]), B, R, extra)[0] if move else None
+    mx = math.nan if parts[1][:, 1].any() else float(parts[1][:, 0].max())
+    return lw, mx, fm, fv, ll, parts
+
+
+def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
+           extra: np.ndarray | None) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """``lw`` plus the log-likelihoods, and the parts (w, per-block table) of
+    :func:`_loglik_kernel`."""
+    n = lw.shape[0]
+    out, w = np.empty(n), np.empty(n)
+    part = np.zeros((_n_blocks(n), 4))
+    ex = np.empty(0) if extra is None else np.ascontiguousarray(extra, dtype=float)
+    with _LOCK:
+        _loglik_kernel(n, A, np.ascontiguousarray(lw, dtype=float), bear, ranges, ex, out, w,
+                       part)
+    return out, (w, part)
+
+
+_NO_ROWS = (np.zeros((0, 5)), np.zeros((0, 2)))
+
+
+def normalise(lw: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, float]:
+    """Normalise log-weights ``lw`` (finite maximum; NaN, +inf excluded) in place: the
+    weights and the ESS ``(Σw)²/Σw²``; ``parts`` from :func:`log_weights` if at hand.
+
+    With the block maxima m_b and M = max m_b, block b's weights ``exp(lw − m_b)`` are scaled
+    by ``e^(m_b − M)/Σw``, and ``lw`` shifted by ``M + log Σw``.
+    """
+    if parts is None:
+        _, parts = _weigh(np.zeros((2, lw.shape[0])), lw, *_NO_ROWS, None)
+    w, part = parts
+    shift, f, ess = _weights_finish(part)
+    with _LOCK:
+        _scale_kernel(lw.shape[0], lw, w, shift, f)
+    return w, ess
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _weights_finish(part: np.ndarray) -> tuple[float, np.ndarray, float]:
+    """From the per-block (m_b, #bad, Σw, Σw²) of :func:`_loglik_kernel`: the log-weight shift
+    ``M + log Σw``, the block factors ``e^(m_b − M)/Σw`` and the ESS (sums in block order)."""
+    nb = part.shape[0]
+    M = -np.inf
+    for b in range(nb):
+        M = max(M, part[b, 0])
+    f = np.empty(nb)
+    tot = 0.0
+    ssq = 0.0
+    for b in range(nb):
+        f[b] = math.exp(part[b, 0] - M)  # 0 for a block of −inf only
+        tot += part[b, 2] * f[b]
+        ssq += part[b, 3] * (f[b] * f[b])
+    for b in range(nb):
+        f[b] = f[b] / tot
+    return M + math.log(tot), f, tot * tot / ssq
+
+
+def systematic(w: np.ndarray, u: float) -> np.ndarray:
+    """Systematic resampling indices from normalised weights and one uniform (the indices of
+    :func:`tmaplan.estimators.pf_kernels.systematic_indices` for the same u, bit for bit)."""
+    n = w.shape[0]
+    c = np.empty(n)
+    idx = np.empty(n, dtype=np.intp)
+    with _LOCK:
+        _cumsum_kernel(w, c)
+        _systematic_kernel(n, c, float(u), idx)
+    return idx
+
+
+def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,
+           rng: np.random.Generator | np.ndarray | None) -> np.ndarray:
+    """``A[:, idx]``, plus ``L z`` per particle (4 Philox normals; ``rng`` a Generator or a
+    key) when L is given."""
+    out = np.empty((4, idx.shape[0]))
+    jitter = L is not None and rng is not None
+    Lm = np.ascontiguousarray(L, dtype=float) if jitter else np.zeros((4, 4))
+    key = (np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray)
+           else _key(rng) if rng is not None and jitter else np.zeros(4, dtype=np.uint64))
+    with _LOCK:
+        _gather_kernel(idx.shape[0], A, np.ascontiguousarray(idx, dtype=np.intp), Lm, key,
+                       jitter, out)
+    return out
+
+
+def moments(A: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean (4,) and covariance (4, 4) of a (4, N) cloud with normalised weights w."""
+    part = np.empty((_n_blocks(A.shape[1]), 15))
+    with _LOCK:
+        _moments_kernel(A.shape[1], A, w, part)
+    return _moments_finish(part, A[:, 0].copy())
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _moments_finish(part: np.ndarray, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and covariance from the per-block sums of :func:`_moments_kernel` (block order)."""
+    s = np.zeros(15)
+    for b in range(part.shape[0]):
+        for q in range(15):
+            s[q] += part[b, q]
+    m = s[1:5] / s[0]
+    C = np.empty((4, 4))
+    k = 5
+    for r in range(4):
+        for t in range(r, 4):
+            C[r, t] = s[k] / s[0] - m[r] * m[t]
+            C[t, r] = C[r, t]
+            k += 1
+    return x0 + m, C

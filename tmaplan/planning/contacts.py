@@ -1,0 +1,365 @@
+"""One own-ship heading plan for several contacts (issue 40, DESIGN.md §6).
+
+Role: the planner's side of several contacts. Its input is a :class:`ContactSet`: one
+one-contact scenario ("view") per contact — the same own ship, sensors, time grid and
+planning settings, each with its contact's target and prior — plus each contact's name,
+weight and required accuracy. Every single-contact machine runs per contact on its view;
+:class:`ContactsPlanner` builds ONE heading NLP
+(:class:`tmaplan.planning.HeadingPlanner`) with the own ship's controls shared and one belief
+block per contact (:mod:`tmaplan.planning.multi_objectives`), built once and re-solved.
+
+Multi-start: the plan of each contact alone (``expected-time-to-accuracy`` at its required
+accuracy, its own planner) and the straight course are the starts of the joint NLP; the
+best converged solution is kept. With one contact the plan is today's
+``expected-time-to-accuracy`` plan (the same planner, bit for bit).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+
+from tmaplan.display import short_repr
+from tmaplan.errors import ArgumentError, SolverError, is_integer
+from tmaplan.models.observer import turn_rate_track
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.heading import HeadingPlanner
+from tmaplan.planning.multi_objectives import (
+    CONTACTS_OBJECTIVE_NAMES,
+    DEFAULT_CONTACTS_OBJECTIVE,
+    DEFAULT_REQUIRED_ACCURACY,
+    ContactBeliefs,
+    contacts_objective,
+)
+from tmaplan.planning.objectives import ObjectiveEvaluator, expected_time_to_accuracy
+
+if TYPE_CHECKING:
+    from tmaplan.planning.heading_plan import HeadingPlan
+    from tmaplan.scenario import Scenario
+
+__all__ = ["WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan", "ContactsPlanner",
+           "plan_contacts"]
+
+#: IPOPT options of the ``worst-contact`` joint NLP (under the caller's ``solver_options``).
+WORST_CONTACT_IPOPT: dict[str, Any] = {"acceptable_tol": 1e-4, "acceptable_iter": 5}
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactSet:
+    """Several contacts seen from one own ship: the planners' input for N contacts.
+
+    Attributes
+    ----------
+    views : tuple of Scenario
+        One one-contact scenario per contact (``scenario.contact_view(name)``): its target and
+        prior; the observer, sensors, time grid and planning settings shared (checked).
+    names : tuple of str
+        Unique, non-empty contact names.
+    weights : tuple of float
+        Contact weights > 0 (dimensionless; default 1 each).
+    required_accuracies : tuple of float
+        Relative range accuracy each contact must reach, in (0, 1) (default
+        :data:`tmaplan.planning.multi_objectives.DEFAULT_REQUIRED_ACCURACY`, 10 %).
+
+    Notes
+    -----
+    Build it from a several-contact scenario with :meth:`from_scenario`, or directly from
+    one-contact scenarios sharing one own ship.
+    """
+
+    __repr__ = short_repr
+
+    views: tuple[Scenario, ...]
+    names: tuple[str, ...]
+    weights: tuple[float, ...] = ()
+    required_accuracies: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        n = len(self.views)
+        if n < 1 or len(self.names) != n:
+            raise ArgumentError("contacts", "one name per view (at least one contact)",
+                                (n, len(self.names)))
+        if not self.weights:
+            object.__setattr__(self, "weights", (1.0,) * n)
+        if not self.required_accuracies:
+            object.__setattr__(self, "required_accuracies", (DEFAULT_REQUIRED_ACCURACY,) * n)
+        object.__setattr__(self, "views", tuple(self.views))
+        object.__setattr__(self, "names", tuple(str(v) for v in self.names))
+        object.__setattr__(self, "weights", tuple(float(w) for w in self.weights))
+        object.__setattr__(self, "required_accuracies",
+                           tuple(float(a) for a in self.required_accuracies))
+        seen: set[str] = set()
+        for name in self.names:
+            if not name or name in seen:
+                raise ArgumentError("contacts.name", "unique non-empty names", name)
+            seen.add(name)
+        for name, w, a in zip(self.names, self.weights, self.required_accuracies,
+                              strict=False):
+            if not (math.isfinite(w) and w > 0):
+                raise ArgumentError(f"contacts[{name}].weight", "a finite weight > 0", w)
+            if not 0 < a < 1:
+                raise ArgumentError(f"contacts[{name}].required_accuracy", "in (0, 1)", a)
+        if len(self.weights) != n or len(self.required_accuracies) != n:
+            raise ArgumentError("contacts", "one weight and one required accuracy per contact",
+                                (len(self.weights), len(self.required_accuracies)))
+        v0 = self.views[0]
+        for name, v in zip(self.names[1:], self.views[1:], strict=True):
+            for field in ("time", "observer", "sensors", "planning"):
+                if getattr(v, field) != getattr(v0, field):
+                    raise ArgumentError(f"contacts[{name}].{field}", f"the {field} of the "
+                                        f"other contacts (one own ship)", getattr(v, field))
+
+    def __len__(self) -> int:
+        return len(self.views)
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> ContactSet:
+        """The contacts of a scenario: ``scenario.contacts`` with their one-contact views
+        (``scenario.contact_view(name)``), weights and required accuracies (a contact's own,
+        else the scenario's)."""
+        views = tuple(scenario.contact_view(c.name) for c in scenario.contacts)
+        return cls(views=views, names=scenario.contact_names,
+                   weights=tuple(float(c.weight) for c in scenario.contacts),
+                   required_accuracies=tuple(float(v.required_accuracy) for v in views))
+
+    def beliefs(self, given: ContactBeliefs | Sequence[Belief] | None = None,
+                ) -> ContactBeliefs:
+        """The contacts' beliefs: ``given`` (one per contact, in order; checked), default
+        each contact's prior (:meth:`tmaplan.planning.Belief.from_prior` of its view)."""
+        if given is None:
+            return ContactBeliefs(beliefs=tuple(Belief.from_prior(v) for v in self.views),
+                                  names=self.names)
+        bel = given if isinstance(given, ContactBeliefs) else ContactBeliefs(
+            beliefs=tuple(given), names=self.names)
+        if bel.names != self.names:
+            raise ArgumentError("beliefs", f"beliefs of the contacts {list(self.names)}",
+                                list(bel.names))
+        return bel
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactsPlan:
+    """A heading plan for several contacts.
+
+    Attributes
+    ----------
+    plan : HeadingPlan
+        The joint plan (its ``objective`` the combined objective [s]; its ``range_bound``
+        the first contact's).
+    objective_name : str
+    names : tuple of str
+    expected_times : dict of str to float
+        Each contact's expected time to its required accuracy on the joint plan [s]
+        (``expected-time-to-accuracy`` without the turn penalty).
+    alone : dict of str to HeadingPlan
+        Each contact's own plan (a start of the joint NLP; empty for one contact).
+    alone_times : dict of str to float
+        Each contact's expected time on its own plan [s].
+    start : str
+        The start the kept solution came from: ``"alone:<name>"``, ``"straight"`` or
+        ``"built-in"``.
+    seconds : float
+        Wall time of the whole plan, the contacts' own plans included [s].
+    """
+
+    __repr__ = short_repr
+
+    plan: HeadingPlan
+    objective_name: str
+    names: tuple[str, ...]
+    expected_times: dict[str, float]
+    alone: dict[str, HeadingPlan]
+    alone_times: dict[str, float]
+    start: str
+    seconds: float
+
+    @property
+    def objective(self) -> float:
+        """The joint plan's objective [s]."""
+        return float(self.plan.objective)
+
+    def contacts_json(self) -> dict[str, dict[str, float]]:
+        """The per-contact values of ``tmaplan plan --json`` (DESIGN.md §6, ``contacts:
+        {name: {...}}``): ``expected_time_to_accuracy`` on the joint plan [s], and
+        ``alone_expected_time_to_accuracy`` / ``alone_objective`` of the contact's own plan
+        [s] (absent for one contact)."""
+        out: dict[str, dict[str, float]] = {}
+        for name in self.names:
+            d = {"expected_time_to_accuracy": float(self.expected_times[name])}
+            if name in self.alone:
+                d["alone_expected_time_to_accuracy"] = float(self.alone_times[name])
+                d["alone_objective"] = float(self.alone[name].objective)
+            out[name] = d
+        return out
+
+
+class ContactsPlanner:
+    """One heading NLP for the contacts of a :class:`ContactSet`, built once, re-solved.
+
+    Parameters
+    ----------
+    contacts : ContactSet
+    objective : str, optional
+        One of :data:`CONTACTS_OBJECTIVE_NAMES` (default ``all-contacts-time-to-accuracy``).
+    samples : int
+        Belief draws per contact (128, as ``expected-time-to-accuracy``).
+    alone_starts : int
+        Starts of each contact's own plan: the built-in turn-rate programs
+        (:meth:`HeadingPlanner.start_programs`) of lowest value of the contact's objective.
+    joint_starts : int
+        Starts of the joint NLP: of the contacts' own plans and the built-in programs, the
+        ones of lowest joint objective (each evaluated once; the multi-start adds the plan of
+        each contact alone to the candidates).
+    **planner_kw
+        :class:`HeadingPlanner` options shared by the joint and the contacts' own planners
+        (``horizon``, ``control_interval``, ``transcription``, ``n_starts``, ...); the
+        ``worst-contact`` joint NLP adds :data:`WORST_CONTACT_IPOPT` under the caller's
+        ``solver_options``.
+
+    Notes
+    -----
+    The keep-out range is enforced from the first contact's estimate only (the heading
+    planner's constraint reads one block); ping steps given to :meth:`solve` inform every
+    contact (the reach of a ping, ``RangeSensor.max_range``, is modelled by the ping
+    scheduler, :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
+    """
+
+    def __init__(self, contacts: ContactSet, *, objective: str | None = None,
+                 samples: int = 128, alone_starts: int = 1, joint_starts: int = 2,
+                 **planner_kw: Any) -> None:
+        name = DEFAULT_CONTACTS_OBJECTIVE if objective is None else objective
+        if name not in CONTACTS_OBJECTIVE_NAMES:
+            raise ArgumentError("objective", f"one of {', '.join(CONTACTS_OBJECTIVE_NAMES)}",
+                                name)
+        self.contacts, self.objective_name = contacts, name
+        acc = contacts.required_accuracies
+        self.single = len(contacts) == 1
+        if self.single:  # today's expected-time-to-accuracy planner, unchanged
+            obj: Any = expected_time_to_accuracy(acc[0], samples)
+        else:
+            obj = contacts_objective(name, q=[v.target.q for v in contacts.views],
+                                     accuracies=acc, weights=contacts.weights, samples=samples)
+        joint_kw = dict(planner_kw)
+        if name == "worst-contact" and not self.single:
+            # the min-max's dual residual stalls where the worst contact changes (300 IPOPT
+            # iterations for 0.1 % on three contacts): accept 1e-4 after 5 such iterations
+            joint_kw["solver_options"] = {**WORST_CONTACT_IPOPT,
+                                          **(planner_kw.get("solver_options") or {})}
+        self.joint = HeadingPlanner(contacts.views[0], objective=obj, **joint_kw)
+        alone_kw = {**planner_kw, "n_starts": alone_starts}
+        self.alone = () if self.single else tuple(
+            HeadingPlanner(v, objective=expected_time_to_accuracy(a, samples), **alone_kw)
+            for v, a in zip(contacts.views, acc, strict=True))
+        self._samples = int(samples)
+        if not (is_integer(alone_starts, 1) and is_integer(joint_starts, 1)):
+            raise ArgumentError("alone_starts/joint_starts", "integers >= 1",
+                                (alone_starts, joint_starts))
+        self.alone_starts, self.joint_starts = int(alone_starts), int(joint_starts)
+
+    @staticmethod
+    def _screen(planner: HeadingPlanner, ev: ObjectiveEvaluator, programs: list[np.ndarray],
+                n: int, kw: dict[str, Any]) -> list[np.ndarray]:
+        """The ``n`` turn-rate programs (u/u_max, (n_intervals,)) of lowest objective ``ev``
+        on their tracks from the start state (cheap: one evaluation each, no solve)."""
+        hd0, spd0, p0 = planner._start_state(kw["heading0"], kw["speed0"], kw["position0"])
+        vals = []
+        for u in programs:
+            om = np.repeat(np.asarray(u, float) * planner.u_max, planner.m)
+            val = ev(turn_rate_track(p0, hd0, spd0, om, planner.dt))[0]
+            vals.append(val if np.isfinite(val) else np.inf)
+        order = np.argsort(vals, kind="stable")[: max(1, int(n))]
+        return [programs[i] for i in order]
+
+    def expected_times(self, beliefs: ContactBeliefs,
+                       plans: Sequence[HeadingPlan]) -> list[dict[str, float]]:
+        """Each contact's expected time to its required accuracy [s] on each plan's track
+        (``expected-time-to-accuracy`` without the turn penalty)."""
+        j = self.joint
+        out: list[dict[str, float]] = [{} for _ in plans]
+        for v, b, name, a in zip(self.contacts.views, beliefs.beliefs, self.contacts.names,
+                                 self.contacts.required_accuracies, strict=True):
+            ev = ObjectiveEvaluator(v, expected_time_to_accuracy(a, self._samples,
+                                                                 turn_weight=0.0),
+                                    n_steps=j.K, belief=b, turn_rate_max=j.u_max,
+                                    until_end=j.until_end)
+            for o, plan in zip(out, plans, strict=True):
+                o[name] = ev(plan.observer)[0]
+        return out
+
+    def solve(self, beliefs: ContactBeliefs | Sequence[Belief] | None = None, *,
+              heading0: float | None = None, position0: np.ndarray | None = None,
+              speed0: float | None = None, tol: float | None = None,
+              raise_on_failure: bool = True) -> ContactsPlan:
+        """Plan for the contacts' beliefs (default their priors).
+
+        Parameters
+        ----------
+        beliefs : ContactBeliefs or sequence of Belief, optional
+            One belief per contact, in the order of the :class:`ContactSet`.
+        heading0, position0, speed0, tol, raise_on_failure
+            As :meth:`HeadingPlanner.solve`.
+
+        Raises
+        ------
+        SolverError
+            The joint NLP did not converge from any start (unless ``raise_on_failure`` is
+            False: then returned with ``plan.success`` False).
+        """
+        t0 = time.perf_counter()
+        cs = self.contacts
+        bel = cs.beliefs(beliefs)
+        kw: dict[str, Any] = {"heading0": heading0, "position0": position0, "speed0": speed0,
+                              "tol": tol}
+        if self.single:
+            plan = self.joint.solve(bel.beliefs[0], raise_on_failure=raise_on_failure, **kw)
+            return ContactsPlan(plan=plan, objective_name=self.objective_name, names=cs.names,
+                                expected_times=self.expected_times(bel, [plan])[0], alone={},
+                                alone_times={}, start="built-in",
+                                seconds=time.perf_counter() - t0)
+        j = self.joint
+        if j.transcription != "direct":  # starts are turn-rate programs: built-in ones only
+            alone: dict[str, HeadingPlan] = {}
+            best = j.solve(cast(Any, bel), raise_on_failure=False, **kw)
+            start = "built-in"
+        else:
+            alone = {name: p.solve(b, raise_on_failure=False, starts=self._screen(
+                p, p.evaluator(b), p.start_programs(), self.alone_starts, kw), **kw)
+                for name, p, b in zip(cs.names, self.alone, bel.beliefs, strict=True)}
+            cands = {f"alone:{n}": np.clip(p.turn_rate / max(j.u_max, 1e-12), -1, 1)
+                     for n, p in alone.items() if p.success}
+            cands.update({"straight" if i == 0 else f"built-in {i}": u
+                          for i, u in enumerate(j.start_programs())})
+            # the planner reads the beliefs' t, assimilated, mean and mean_range(), and its
+            # layout (ContactsLayout) packs one block per contact
+            keep = self._screen(j, j.evaluator(cast(Any, bel)), list(cands.values()),
+                                self.joint_starts, kw)
+            labels = {id(u): lab for lab, u in cands.items()}
+            best, start = None, "built-in"
+            for u in keep:
+                p = j.solve(cast(Any, bel), starts=[u], raise_on_failure=False, **kw)
+                if best is None or (p.success, -p.objective) > (best.success, -best.objective):
+                    best, start = p, labels[id(u)]
+        assert best is not None
+        if not best.success and raise_on_failure:
+            raise SolverError("ipopt", best.status, f"heading plan for {len(cs)} contacts "
+                              f"({self.objective_name}) did not converge from any start")
+        times = self.expected_times(bel, [best, *alone.values()])
+        return ContactsPlan(plan=best, objective_name=self.objective_name, names=cs.names,
+                            expected_times=times[0], alone=alone,
+                            alone_times={n: t[n] for n, t in zip(alone, times[1:], strict=True)},
+                            start=start, seconds=time.perf_counter() - t0)
+
+
+def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Belief] | None
+                  = None, objective: str | None = None, **kw: Any) -> ContactsPlan:
+    """Plan for several contacts with a fresh :class:`ContactsPlanner` (keyword arguments:
+    its options and :class:`HeadingPlanner`'s; ``heading0``, ``position0``, ``speed0``,
+    ``tol``, ``raise_on_failure`` go to :meth:`ContactsPlanner.solve`)."""
+    solve_kw = {k: kw.pop(k) for k in ("heading0", "position0", "speed0", "tol",
+                                       "raise_on_failure") if k in kw}
+    return ContactsPlanner(contacts, objective=objective, **kw).solve(beliefs, **solve_kw)

@@ -148,6 +148,7 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "receding-realtime": lambda sc: Receding(solver="real-time", name="receding-realtime"),
     "receding-rti": lambda sc: Receding(solver="real-time", full_above=float("inf"),
                                         name="receding-rti"),
+    "receding-sqp": lambda sc: Receding(solver="sqp", name="receding-sqp"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }
@@ -212,7 +213,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     plan), receding-realtime (real-time iteration, a full IPOPT re-solve when the optimum
     moved far: 5–12 times faster, the default before), receding-rti (real-time-iteration
     steps only: no full re-solve when the optimum moves far; a rejected step still falls
-    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), leg-turn-leg,
+    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), receding-sqp
+    (re-plans solved to IPOPT's tolerance by a condensed quasi-Newton SQP), leg-turn-leg,
     lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.

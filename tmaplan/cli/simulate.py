@@ -230,7 +230,7 @@ def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
     payload["seed"] = args.seed
     if args.export is not None:
         payload["export"] = export(sim, args.export, origin=args.origin or DEFAULT_ORIGIN,
-                                   start=args.start or _start(DEFAULT_START), seed=args.seed)
+                                   start=args.start or parse_start(DEFAULT_START), seed=args.seed)
         if args.json != "-":
             print(f"wrote {', '.join(payload['export'].values())}")
     for name, run in sim.runs.items():

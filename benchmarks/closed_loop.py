@@ -30,13 +30,23 @@ import json
 import time
 from collections import defaultdict
 
+import casadi as ca
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.metrics import censor_time, paired_difference
-from tmaplan.policies import Combined, Receding, parse_policy
+from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
+from tmaplan.policies import (
+    CLOSED_LOOP_OBJECTIVE,
+    Combined,
+    Receding,
+    manoeuvres,
+    parse_policy,
+    receding,
+)
 from tmaplan.scenario import load_problem
 
 _FILTER_SECONDS = [0.0]
@@ -64,8 +74,6 @@ def _policies(scenario, names, path):
 
     The offline-plan cache is emptied first, so that the second path's setup is not timed
     on the plans the first one solved."""
-    from tmaplan.policies import manoeuvres
-
     manoeuvres._PLAN_CACHE.clear()
     t = time.perf_counter()
     pols = {}
@@ -180,9 +188,6 @@ def gaps(runs, particles, seed=1000, problem="default"):
     """How far the optimum moves between re-plans: per re-plan index, the objective of the
     shifted previous plan (the real-time iteration's start) minus the IPOPT optimum from it,
     along the new path's runs (tuning seeds, default 1000: not the evaluation seeds)."""
-    from tmaplan.planning import Belief
-    from tmaplan.policies import receding
-
     sc = load_problem(problem)
     pol = parse_policy("receding-realtime", sc).resolve(sc)
     out = defaultdict(list)
@@ -218,12 +223,6 @@ def gaps(runs, particles, seed=1000, problem="default"):
 
 def step_profile(problem="default"):
     """Where the time of one re-plan goes (one RTI step against the IPOPT re-solve)."""
-    import casadi as ca
-
-    from tmaplan.planning import Belief, HeadingPlanner
-    from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
-    from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
-
     sc = load_problem(problem)
     prior = Belief.from_prior(sc)
     planner = HeadingPlanner(sc, objective=CLOSED_LOOP_OBJECTIVE)

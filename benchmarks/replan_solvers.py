@@ -10,8 +10,13 @@ Default: re-solve every recorded re-plan with each candidate, interleaved in one
 IPOPT on the same re-plan, the share converged and the objective's relative difference to
 IPOPT's optimum.
 
+``--pair``: the paired ``receding-sqp − receding`` time to accuracy (censored at the horizon
+plus one step) of a ``tmaplan compare PROBLEM --policies receding,receding-sqp`` campaign
+directory, and the ratio of their re-plan seconds.
+
 Run: OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py --harvest --problem default --runs 4
      OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py [--candidates a,b] [--repeat 1]
+     python benchmarks/replan_solvers.py --pair out/campaign-... --problem bow-closing
 """
 
 from __future__ import annotations
@@ -218,6 +223,41 @@ def _table(res, names):
                   f"{max(r['du'] for r in rows):>8.3f}")
 
 
+def pair(campaign: str, problem: str, old: str, new: str) -> None:
+    """Paired ``new − old`` time to accuracy and re-plan time of a ``tmaplan compare``
+    campaign directory (its stored runs)."""
+    import glob
+
+    from tmaplan.evaluation.metrics import censor_time, paired_difference
+
+    sc = load_problem(problem)
+    files = sorted(glob.glob(os.path.join(campaign, "runs", "run_*.npz")))
+    tta = {old: [], new: []}
+    sec = {old: [], new: []}
+    flags = {old: np.zeros(3, int), new: np.zeros(3, int)}
+    for fn in files:
+        z = np.load(fn, allow_pickle=False)
+        for p in (old, new):
+            tta[p].append(float(z[f"{p}/time_to_accuracy"]))
+            sec[p].append(z[f"{p}/replan_seconds"])
+            flags[p] += [z[f"{p}/replan_seconds"].size, int(z[f"{p}/replan_converged"].sum()),
+                         int(z[f"{p}/replan_fell_back"].sum())]
+    d = paired_difference({p: np.array(v) for p, v in tta.items()}, new, old,
+                          "time to accuracy", censor=censor_time(sc.times))
+    print(f"{problem}: {len(files)} paired runs ({campaign})")
+    print(f"  {new} - {old} time to accuracy: {d.mean / 60:+.2f} [{d.ci_low / 60:+.2f}, "
+          f"{d.ci_high / 60:+.2f}] min")
+    for p in (old, new):
+        allsec = np.concatenate(sec[p])
+        n, conv, fell = flags[p]
+        mean = np.mean(np.minimum(tta[p], censor_time(sc.times))) / 60
+        print(f"  {p}: mean time to accuracy {mean:.2f} min, "
+              f"re-plans {n}, converged {conv} ({conv / n:.1%}), fell back {fell}; re-plan "
+              f"median {1000 * np.median(allsec):.0f} ms, total {allsec.sum():.0f} s")
+    ratio = np.concatenate(sec[new]).sum() / np.concatenate(sec[old]).sum()
+    print(f"  re-plan seconds {new}/{old}: {ratio:.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--harvest", action="store_true")
@@ -228,8 +268,12 @@ def main() -> None:
     ap.add_argument("--store", default=STORE)
     ap.add_argument("--candidates", default="sqp-daqp,sqpmethod-daqp,ipopt-ma")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--pair", metavar="CAMPAIGN_DIR",
+                    help="paired receding-sqp - receding of a compare campaign directory")
     args = ap.parse_args()
-    if args.harvest:
+    if args.pair:
+        pair(args.pair, args.problem, "receding", "receding-sqp")
+    elif args.harvest:
         harvest(args.problem, args.runs, args.seed, args.first_run, args.store)
     else:
         with threadpool_limits(limits=1):

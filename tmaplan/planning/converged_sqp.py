@@ -74,7 +74,7 @@ class ConvergedSQP:
     def __init__(self, planner: HeadingPlanner, model: RTIModel, *, qpsol: str = "daqp",
                  max_iter: int = 50, constraint_tol: float = 1e-6,
                  carry_hessian: bool = True, rti: RealTimeIteration | None = None) -> None:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import
 
         if not is_integer(max_iter, 1):
             raise ArgumentError("max_iter", "an integer >= 1", max_iter)

@@ -22,6 +22,7 @@ from tmaplan.errors import (
     is_whole_count,
     whole_steps_text,
 )
+from tmaplan.planning.converged_sqp import ConvergedSQP
 from tmaplan.policies._base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -332,8 +333,6 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
 
 def _sqp(planner: Any, rti: Any) -> Any:
     """The converged SQP of a planner (casadi functions built once per process)."""
-    from tmaplan.planning.converged_sqp import ConvergedSQP
-
     key = (planner, rti.qpsol)
     if key not in _SQP_CACHE:
         _SQP_CACHE[key] = ConvergedSQP(planner, rti.model, qpsol=rti.qpsol, rti=rti)

@@ -75,14 +75,14 @@ from tmaplan.errors import PlanningError, is_integer
 from tmaplan.geometry import course_speed
 from tmaplan.interrupts import solver_call
 from tmaplan.models.target import initial_velocity
-from tmaplan.planning._ping_search import _round, _spacing_ok, max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
-from tmaplan.planning.joint import _PAIRS
+from tmaplan.planning.joint import JOINT_PING_OBJECTIVE
 from tmaplan.planning.objectives import belief_bearing_information
+from tmaplan.planning.ping_search import max_pings, ping_candidates, round_weights, spacing_ok
 from tmaplan.planning.pings import (
-    _TIGHT,
     OPTIMAL_GAP,
+    TIGHT_BOUND_TOLERANCE,
     PingEvaluator,
     PingSchedule,
     schedule_pings,
@@ -210,7 +210,7 @@ def _with_own_pings(cert: PingSchedule, ev: PingEvaluator, steps: Sequence[int],
         return cert
     own = np.asarray(sorted(steps), int)
     lb = float(cert.lower_bound)
-    if np.isfinite(lb) and v_own < lb <= v_own * (1 + _TIGHT):
+    if np.isfinite(lb) and v_own < lb <= v_own * (1 + TIGHT_BOUND_TOLERANCE):
         lb = v_own  # tight relaxation, equal up to the solver's tolerance
     if np.isfinite(lb) and lb > v_own:
         raise PlanningError(f"lower bound {lb:.6g} above the objective {v_own:.6g} of the "
@@ -371,9 +371,9 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     import casadi as ca
 
     t_start = time.perf_counter()
-    if objective not in _PAIRS:
-        raise PlanningError(f"objective: expected one of {sorted(_PAIRS)}, received "
-                            f"{objective!r}")
+    if objective not in JOINT_PING_OBJECTIVE:
+        raise PlanningError(f"objective: expected one of {sorted(JOINT_PING_OBJECTIVE)}, "
+                            f"received {objective!r}")
     if mode not in JOINT_MODES:
         raise PlanningError(f"mode: expected one of {JOINT_MODES}, received {mode!r}")
     if init not in ("both", "even", "schedule"):
@@ -403,7 +403,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                             f"pings on the {cand.size} candidate steps of ping_stride {stride} "
                             f"(min_spacing {spacing:g} s), received {K}")
 
-    pair = _PAIRS[objective]
+    pair = JOINT_PING_OBJECTIVE[objective]
     # ------------------------------------------------------------------ the joint NLP
     # The heading OCP's NLP (x: headings/positions/turn rates; p: belief, sensors, heading0,
     # speed0, objective scale, sign) with its ping slice replaced by the weights S·w.
@@ -464,8 +464,8 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         u = np.clip(x[nh:], 0.0, 1.0)
         # round: bonmin's binaries, else the largest weights respecting the spacing
         rounded = sorted(int(c) for c in cand[u > 0.5]) if mode == "bonmin" else []
-        if len(rounded) != K or not _spacing_ok(rounded, gap):
-            rounded = _round(u, cand, K, gap)[0]
+        if len(rounded) != K or not spacing_ok(rounded, gap):
+            rounded = round_weights(u, cand, K, gap)[0]
         # the NLP's headings with the rounded pings: the point polishing starts from
         P_fix = P.copy()
         P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)

@@ -38,7 +38,7 @@ from tmaplan.models.target import ncv_matrices
 
 # The parameter layout, the plan context and the shared casadi graphs live in their own
 # module; re-exported here (the public home of the API).
-from tmaplan.planning._objective_graphs import (
+from tmaplan.planning.objective_graphs import (
     ParamLayout,
     PlanContext,
     closed_form_graph,

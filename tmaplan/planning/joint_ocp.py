@@ -257,7 +257,7 @@ def _quiet_stdout(on: bool) -> Iterator[None]:
 
 def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_cand: int,
                 options: dict[str, Any]) -> Any:
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     if mode == "bonmin":
         opts: dict[str, Any] = {
@@ -368,7 +368,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         ``objective``; more pings than the strided candidates or the spacing allow; no range
         sensor.
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     t_start = time.perf_counter()
     if objective not in JOINT_PING_OBJECTIVE:
@@ -391,7 +391,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         raise PlanningError("mode: 'bonmin' is not available in this casadi build")
     bel = belief if belief is not None else Belief.from_prior(scenario)
     planner = HeadingPlanner(scenario, objective=objective, **planner_kw)
-    if planner._ping_scale == 0.0:
+    if planner.ping_scale == 0.0:
         raise PlanningError(f"{scenario.name}: no range sensor to ping with (add a "
                             "[[sensors]] kind = 'range' or planning.ping_sigma)")
     times = bel.t + planner.times
@@ -407,7 +407,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     # ------------------------------------------------------------------ the joint NLP
     # The heading OCP's NLP (x: headings/positions/turn rates; p: belief, sensors, heading0,
     # speed0, objective scale, sign) with its ping slice replaced by the weights S·w.
-    nlp_h = planner._nlp
+    nlp_h = planner.nlp
     xh, Ph = nlp_h["x"], nlp_h["p"]
     nh, ng = int(xh.size1()), int(nlp_h["g"].size1())
     sl = planner.layout.slices()["ping"]
@@ -427,9 +427,9 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     obs = scenario.observer
     heading0 = float(course_speed(initial_velocity(obs))[0])
     speed0 = planner.speed0
-    planner._precheck(bel, heading0, speed0)
+    planner.check_start(bel, heading0, speed0)
     pvec = planner.layout.vector(bel, belief_bearing_information(scenario, bel, planner.K))
-    lbh, ubh, lbgh, ubgh = planner._bounds(heading0)
+    lbh, ubh, lbgh, ubgh = planner.bounds(heading0)
     bounds = {"lbx": np.concatenate([lbh, np.zeros(cand.size)]),
               "ubx": np.concatenate([ubh, np.ones(cand.size)]),
               "lbg": np.concatenate([lbgh, [K], np.full(A.shape[0], -np.inf)]),
@@ -471,9 +471,9 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)
         warm = {"x": x[:nh], "lam_x": run["lam_x"][:nh], "lam_g": run["lam_g"][:ng],
                 "sign": sgn, "shape": (planner.transcription, planner.n, planner.n_arcs)}
-        plan = planner._make_plan(x[:nh], np.concatenate([P_fix[:-2], [1.0, sgn]]), bel.t,
-                                  np.asarray(obs.position, float), speed0, run["status"],
-                                  run["ok"], run["iters"], nlp_seconds, warm, run["status"])
+        plan = planner.make_plan(x[:nh], np.concatenate([P_fix[:-2], [1.0, sgn]]), bel.t,
+                                 np.asarray(obs.position, float), speed0, run["status"],
+                                 run["ok"], run["iters"], nlp_seconds, warm, run["status"])
         r_obj = PingEvaluator(scenario, plan.observer, bel, pair).value(rounded)
         # (a failed NLP's point may violate the heading constraints: any polished pair wins)
         best: tuple[float, HeadingPlan, list[int]] = (

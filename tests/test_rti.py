@@ -319,7 +319,7 @@ def test_receding_plans_against_a_posterior_that_holds_the_bearing_at_t(small):
     so a bearing at t is not counted a second time at plan step 0 (a plan from the prior
     counts it, Belief.from_prior)."""
     from tmaplan.policies import Receding
-    from tmaplan.policies._base import BeliefView
+    from tmaplan.policies.base import BeliefView
 
     sc, prior = small[0], small[1]
     ctrl = Receding(objective="mean-range-bound", horizon=900.0, solver="ipopt").controller(sc)

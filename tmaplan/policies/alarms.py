@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError, ScenarioError, as_real, finite_real
-from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
+from tmaplan.policies.base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario

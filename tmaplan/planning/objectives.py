@@ -35,6 +35,7 @@ import numpy as np
 from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import ArgumentError, PlanningError, finite_real
 from tmaplan.models.target import ncv_matrices
+from tmaplan.planning.belief import Belief
 
 # The parameter layout, the plan context and the shared casadi graphs live in their own
 # module; re-exported here (the public home of the API).
@@ -50,7 +51,6 @@ from tmaplan.planning.objective_graphs import (
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [
@@ -202,7 +202,7 @@ def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanCon
         raise ArgumentError("reduce", "'terminal' or 'mean'", reduce)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         x = per_step(ctx)
         if reduce == "terminal":
@@ -226,7 +226,7 @@ def relative_range_bound(reduce: str = "mean") -> Objective:
     own sake, so it tracks the *relative* range accuracy that a time-to-accuracy metric
     measures. ``reduce`` "mean" (over the horizon: rewards early localisation) or "terminal".
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     return _over_steps(reduce, ("relative-range-bound", "mean-relative-range-bound"),
                        lambda ctx: ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0)))
@@ -255,7 +255,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
     tau = 0.5 * float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         rel = relative_range_crlb_graph(ctx)
         z = (rel - tau) / (width * tau)
@@ -294,7 +294,7 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
     tau = float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         rel = relative_range_crlb_graph(ctx)
         z = (rel - tau) / (width * tau)
@@ -304,7 +304,7 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
         return span * ca.sum1(w * ca.sum2(sig)) / (rel.shape[0] * rel.shape[1])
 
     def penalty(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         u = ctx.turn_rate / ctx.turn_rate_max
         return (float(ctx.times[-1]) + ctx.dt) * ca.sum1(u * u) / u.shape[0]
@@ -339,7 +339,7 @@ def logdet(samples: int = 1) -> Objective:
 def turn_penalty(weight: float = 1.0) -> Objective:
     """``weight·mean_k (u_k/u_max)²``: discourages needless turning (dimensionless)."""
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         u = ctx.turn_rate / ctx.turn_rate_max
         return ca.sum1(u * u) / u.shape[0]
@@ -405,9 +405,7 @@ class ObjectiveEvaluator:
                  n_steps: int | None = None, belief: Belief | None = None,
                  turn_rate_max: float | None = None, samples: int = 1,
                  until_end: bool = False) -> None:
-        import casadi as ca
-
-        from tmaplan.planning.belief import Belief
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         if turn_rate_max is not None:
             finite_real("turn_rate_max", turn_rate_max, "a finite value >= 0 rad/s", lower=0.0)

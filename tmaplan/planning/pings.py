@@ -42,6 +42,8 @@ from tmaplan.planning.objectives import (
     belief_bearing_information,
     ping_sigma,
 )
+from tmaplan.planning.ping_exact import tree_search
+from tmaplan.planning.ping_relaxation import relaxation_bound
 from tmaplan.planning.ping_search import (
     exact_search,
     greedy_schedule,
@@ -199,7 +201,7 @@ class PingEvaluator:
         For ``terminal-range-bound`` it is ``[J_K⁻¹]_{ln r}·E r_K²`` (the square of the range
         bound: same minimiser, and convex in u).
         """
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         g = self.engine.schedule_graph(u)
         if self.objective == "terminal-range-bound":
@@ -263,9 +265,6 @@ def schedule_pings(scenario: Scenario, *, budget: int,
         ``time.horizon`` with more steps than fit in the memory available
         (:func:`tmaplan.memory.check_steps`), before anything is built.
     """
-    from tmaplan.planning.ping_exact import tree_search
-    from tmaplan.planning.ping_relaxation import relaxation_bound
-
     t_start = time.perf_counter()
     if not is_integer(budget, 0):
         raise ArgumentError("budget", "an integer >= 0 (pings)", budget)

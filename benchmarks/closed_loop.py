@@ -199,10 +199,10 @@ def gaps(runs, particles, seed=1000, problem="default"):
         pl = self.planner
         prev = self.plan or self.first
         opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)
-        h0, s0, _ = pl._start_state(belief.heading, None, None)
-        x0, _ = pl._shift_warm(prev, t, h0, s0)
-        P = np.concatenate([pl._parameters(b, ()), [h0, s0, 1.0, 1.0]])
-        out[len(self.log)].append(pl._f_eval(x0, P)[0].item() - opt.objective)
+        h0, s0, _ = pl.start_state(belief.heading, None, None)
+        x0, _ = pl.shifted_start(prev, t, h0, s0)
+        P = np.concatenate([pl.parameter_vector(b, ()), [h0, s0, 1.0, 1.0]])
+        out[len(self.log)].append(pl.plan_function(x0, P)[0].item() - opt.objective)
         return replan(self, belief, t)
 
     receding._RecedingController._replan = recorded
@@ -244,13 +244,13 @@ def step_profile(problem="default"):
         print(f"one re-plan on {problem} ({CLOSED_LOOP_OBJECTIVE}, {planner.n} intervals, "
               f"{planner.K} steps), best of 5 [ms]:")
         rti = RealTimeIteration(planner, model)
-        P = np.concatenate([planner._parameters(later, ()), [0.0, planner.speed0, model.scale,
+        P = np.concatenate([planner.parameter_vector(later, ()), [0.0, planner.speed0, model.scale,
                                                              1.0]])
         x0 = plan.warm["x"]
-        lbw, ubw, lbg, ubg = planner._bounds(0.0)
+        lbw, ubw, lbg, ubg = planner.bounds(0.0)
         t_ev, _ = best(lambda: rti._eval(x0, P))
         t_cd, (_, _, qp) = best(lambda: rti._condensed(x0, P, lbw, ubw, lbg, ubg))
-        nlp = planner._nlp
+        nlp = planner.nlp
         lam = ca.MX.sym("lam", nlp["g"].shape[0])
         hfn = ca.Function("h", [nlp["x"], nlp["p"], lam],
                           [ca.hessian(nlp["f"] + ca.dot(lam, nlp["g"]), nlp["x"])[0]])

@@ -267,7 +267,7 @@ class ContactsPlanner:
                 n: int, kw: dict[str, Any]) -> list[np.ndarray]:
         """The ``n`` turn-rate programs (u/u_max, (n_intervals,)) of lowest objective ``ev``
         on their tracks from the start state (cheap: one evaluation each, no solve)."""
-        hd0, spd0, p0 = planner._start_state(kw["heading0"], kw["speed0"], kw["position0"])
+        hd0, spd0, p0 = planner.start_state(kw["heading0"], kw["speed0"], kw["position0"])
         vals = []
         for u in programs:
             om = np.repeat(np.asarray(u, float) * planner.u_max, planner.m)

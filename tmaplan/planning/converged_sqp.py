@@ -87,7 +87,7 @@ class ConvergedSQP:
         self.max_iter = int(max_iter)
         self.constraint_tol = float(constraint_tol)
         self.carry_hessian = bool(carry_hessian)
-        nlp = planner._nlp
+        nlp = planner.nlp
         self._merit_eval = NumpyFunction(ca.Function("sqp_merit", [nlp["x"], nlp["p"]],
                                                      [nlp["f"], nlp["g"]]))
 
@@ -139,14 +139,14 @@ class ConvergedSQP:
         t_start = time.perf_counter()
         tol = 1e-7 if tol is None else float(tol)
         prev = warm_start if warm_start is not None else self.model.plan
-        heading0, speed0, p0 = pl._start_state(heading0, speed0, position0)
-        pl._precheck(belief, heading0, speed0)
-        pvec = pl._parameters(belief, ping_steps)
-        lbw, ubw, lbg, ubg = pl._bounds(heading0)
-        iu = self._rti._u
-        x_prev, _ = pl._shift_warm(prev, belief.t, heading0, speed0)
+        heading0, speed0, p0 = pl.start_state(heading0, speed0, position0)
+        pl.check_start(belief, heading0, speed0)
+        pvec = pl.parameter_vector(belief, ping_steps)
+        lbw, ubw, lbg, ubg = pl.bounds(heading0)
+        iu = self._rti.turn_rate_index
+        x_prev, _ = pl.shifted_start(prev, belief.t, heading0, speed0)
         u = np.clip(np.asarray(x_prev)[iu], -1, 1)
-        x = pl._direct_w(u, heading0, speed0)
+        x = pl.decision_vector(u, heading0, speed0)
         P = np.concatenate([pvec, [heading0, speed0, 1.0, 1.0]])
         f_start = self._merit_eval(x, P)[0].item()
         scale = max(abs(f_start), 1e-3) if np.isfinite(f_start) else 1.0
@@ -158,7 +158,7 @@ class ConvergedSQP:
         mu, status, iters, converged = 1.0, "Maximum_Iterations_Exceeded", 0, False
         while iters < self.max_iter:
             iters += 1
-            f0, g0, qp = self._rti._condensed(x, P, lbw, ubw, lbg, ubg)
+            f0, g0, qp = self._rti.condensed(x, P, lbw, ubw, lbg, ubg)
             if not np.isfinite(f0):
                 status = "objective not finite"
                 break
@@ -171,8 +171,8 @@ class ConvergedSQP:
                 B = _bfgs(B, step, qp["g"] + A.T @ lam - grad_l)
             qp["h"] = B
             with solver_call():  # an interrupt raises, never a failed solve
-                sol = self._rti._qp(**qp)
-            stats = self._rti._qp.stats()
+                sol = self._rti.qp(**qp)
+            stats = self._rti.qp.stats()
             if not bool(stats.get("success", False)):
                 status = f"QP: {stats.get('return_status', 'failed')}"
                 break
@@ -188,7 +188,7 @@ class ConvergedSQP:
             alpha, accepted = 1.0, False
             for _ in range(30):
                 u1 = np.clip(u + alpha * d, -1, 1)
-                x1 = pl._direct_w(u1, heading0, speed0)
+                x1 = pl.decision_vector(u1, heading0, speed0)
                 f1, g1 = self._merit_eval(x1, P)
                 phi1 = f1.item() + mu * _violation(g1.reshape(-1), lbg, ubg)
                 if np.isfinite(phi1) and phi1 <= phi0 + 1e-4 * alpha * min(slope, 0.0):
@@ -207,7 +207,7 @@ class ConvergedSQP:
         warm = {"x": x, "lam_x": np.zeros_like(x), "lam_g": np.zeros(lbg.size), "sign": 1.0,
                 "shape": ("direct", pl.n, pl.n_arcs), "scale": scale,
                 "hessian": B, "hessian_scale": scale}
-        plan = pl._make_plan(x, P, belief.t, p0, speed0, status, converged, iters, seconds,
+        plan = pl.make_plan(x, P, belief.t, p0, speed0, status, converged, iters, seconds,
                              warm, status)
         return dataclasses.replace(plan, solver=f"sqp-{self.qpsol}")
 

@@ -22,16 +22,18 @@ from tmaplan.errors import (
     is_whole_count,
     whole_steps_text,
 )
+from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.converged_sqp import ConvergedSQP
-from tmaplan.policies._base import (
+from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
     BeliefView,
     Controller,
-    _turn_limits,
     log,
+    turn_limits,
 )
-from tmaplan.policies.manoeuvres import _PLAN_CACHE, _TurnRatePlayback, offline_plan
+from tmaplan.policies.manoeuvres import TurnRatePlayback, offline_plan, remember_offline_plan
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -233,8 +235,6 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
              until_end: bool = False) -> Any:
     key = (scenario, objective, horizon, until_end)
     if key not in _PLANNER_CACHE:
-        from tmaplan.planning import HeadingPlanner
-
         kw: dict[str, Any] = {"until_end": until_end}
         if objective is not None:
             kw["objective"] = objective
@@ -256,9 +256,6 @@ def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
     """The real-time iteration's model at the offline plan from the prior (cached)."""
     key = (scenario, objective, horizon, until_end)
     if key not in _RTI_MODEL_CACHE:
-        from tmaplan.planning import Belief
-        from tmaplan.planning.rti import reference_model
-
         planner = _planner(scenario, objective, horizon, until_end)
         plan = _first_plan(scenario, objective, horizon, until_end)
         _RTI_MODEL_CACHE[key] = reference_model(planner, plan, Belief.from_prior(scenario))
@@ -285,8 +282,6 @@ def _first_plan(scenario: Scenario, objective: str | None, horizon: float | None
         return offline_plan(scenario, objective)
     key = (scenario, objective, horizon, until_end)
     if key not in _FIRST_PLAN_CACHE:
-        from tmaplan.planning import Belief
-
         _FIRST_PLAN_CACHE[key] = _planner(scenario, objective, horizon, until_end).solve(
             Belief.from_prior(scenario))
     return _FIRST_PLAN_CACHE[key]
@@ -312,14 +307,12 @@ def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Exe
 
 
 def _rti_model_on_worker(scenario: Scenario, objective: str | None, plan: Any) -> Any:
-    _PLAN_CACHE[(scenario, objective)] = plan
+    remember_offline_plan(scenario, objective, plan)
     return _rti_model(scenario, objective, None)
 
 
 def _rti(policy: Receding, scenario: Scenario) -> Any:
     """The policy's real-time iteration (casadi functions built once per process)."""
-    from tmaplan.planning.rti import RealTimeIteration
-
     model = policy.rti if policy.rti is not None else _rti_model(
         scenario, policy.objective, policy.horizon, policy.until_end)
     key = (scenario, policy.objective, policy.horizon, policy.until_end, policy.qpsol,
@@ -369,9 +362,6 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
         raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
     if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
         raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
-    from tmaplan.planning import HeadingPlanner
-    from tmaplan.planning.rti import QP_SOLVERS
-
     HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
     if policy.solver in _MODEL_SOLVERS and policy.qpsol not in QP_SOLVERS:
         raise ArgumentError("receding.qpsol", f"one of {', '.join(QP_SOLVERS)}", policy.qpsol)
@@ -412,9 +402,9 @@ class _RecedingController:
         else:
             self.first = policy.first_plan if policy.first_plan is not None else _first_plan(
                 scenario, policy.objective, policy.horizon, policy.until_end)
-        self.u_max, self.dt = _turn_limits(scenario)
+        self.u_max, self.dt = turn_limits(scenario)
         self.plan: Any = None
-        self.playback: _TurnRatePlayback | None = None
+        self.playback: TurnRatePlayback | None = None
         self.next_replan = scenario.time.t0
         self.log: list[dict[str, Any]] = []
         self.alarms = 0
@@ -429,8 +419,6 @@ class _RecedingController:
         return Action(turn_rate=rate)
 
     def _replan(self, belief: BeliefView, t: float) -> None:
-        from tmaplan.planning import Belief
-
         t0 = time.perf_counter()
         # the filter's posterior at step k has assimilated the measurements at k (it predicts
         # and updates to k before the controller acts at k; at step 0 it has updated with the
@@ -457,7 +445,7 @@ class _RecedingController:
             entry.update(status=plan.status, success=True, solver=plan.solver,
                          fell_back=fell_back)
             self.plan = plan
-            self.playback = _TurnRatePlayback(plan, self.scenario)
+            self.playback = TurnRatePlayback(plan, self.scenario)
         except PlanningError as exc:  # keep flying the previous plan
             # no plan satisfies the constraints (infeasible), or not converged (the others)
             entry.update(status=str(exc), success=False, fell_back=True,

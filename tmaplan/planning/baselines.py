@@ -26,10 +26,10 @@ from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.interrupts import solver_call
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
+from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import Objective, ObjectiveEvaluator
 
 if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [

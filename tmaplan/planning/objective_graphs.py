@@ -34,10 +34,10 @@ from tmaplan.bounds.closed_form_engine import (
 )
 from tmaplan.bounds.fimdet import fim_bearings_generic, inverse_quadratic_generic, logdet_generic
 from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.planning.belief import Belief
 from tmaplan.scenario import RangeSensor
 
 if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [

@@ -34,6 +34,7 @@ import numpy as np
 
 from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import ArgumentError, PlanningError, finite_real
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import ncv_matrices
 from tmaplan.planning.belief import Belief
 
@@ -51,7 +52,6 @@ from tmaplan.planning.objective_graphs import (
 from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES, ObjectiveName
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = [

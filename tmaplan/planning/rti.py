@@ -46,17 +46,15 @@ import dataclasses
 import os
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, SolverError, is_integer
 from tmaplan.interrupts import solver_call
+from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
-
-if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
-    from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 
 __all__ = ["QP_SOLVERS", "RTIModel", "RealTimeIteration", "hessian_columns",
            "reference_model"]

@@ -11,10 +11,10 @@ import numpy as np
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed, range_of, wrap_angle
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import initial_velocity
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "CourseKeeper",

@@ -17,6 +17,7 @@ from tmaplan.errors import (
     as_real,
     finite_real,
 )
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.planning.baselines import single_turn_track, straight_track, zigzag_track
 from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
@@ -30,7 +31,6 @@ from tmaplan.policies.base import (
 from tmaplan.policies.plan_starts import plan_from_prior
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["Planned", "SingleTurn", "Straight", "TurnRatePlayback", "Zigzag", "offline_plan",

@@ -11,10 +11,10 @@ from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.models.sensors import default_ping_budget
 from tmaplan.planning import ping_candidates, schedule_pings, uniform_ping_steps
+from tmaplan.planning.objectives import PingObjectiveName
 from tmaplan.policies.base import Action, BeliefView, Controller
 
 if TYPE_CHECKING:
-    from tmaplan.planning.objectives import PingObjectiveName
     from tmaplan.scenario import Scenario
 
 __all__ = ["AdaptivePings", "NoPing", "ScheduledPings", "UniformPings", "offline_schedule",

@@ -20,18 +20,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, SolverError, is_integer
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.parallel import closing_pool, process_pool
 from tmaplan.planning.baselines import evaluate_baselines, straight_track
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.feasibility import check_keep_out
-from tmaplan.planning.heading import HeadingPlanner
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
 
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.planning.heading import HeadingPlan
     from tmaplan.scenario import Scenario
 
 __all__ = ["plan_candidates", "plan_from_prior", "start_programs", "turn_program"]

@@ -22,6 +22,7 @@ from tmaplan.errors import (
     is_whole_count,
     whole_steps_text,
 )
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.converged_sqp import ConvergedSQP
 from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
@@ -36,7 +37,6 @@ from tmaplan.policies.base import (
 from tmaplan.policies.manoeuvres import TurnRatePlayback, offline_plan, remember_offline_plan
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["RECEDING_SOLVERS", "Receding", "prefetch_receding_model"]

@@ -21,6 +21,7 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import bearing_of, wrap_angle
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.planning.baselines import course_program_track, single_turn_track, straight_track
 from tmaplan.planning.belief import Belief
 from tmaplan.policies.base import (
@@ -33,7 +34,6 @@ from tmaplan.policies.base import (
 )
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["LeadLag", "LegTurnLeg", "belief_line_of_sight", "doctrine_course",

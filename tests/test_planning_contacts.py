@@ -266,7 +266,7 @@ def test_keep_out_holds_for_every_contact(views):
     from tmaplan.models.target import initial_velocity
 
     d = views[0]
-    ahead = dataclasses.replace(d, name="ahead", prior=dataclasses.replace(
+    ahead = d.replace(name="ahead", prior=dataclasses.replace(
         d.prior, bearing_mean=0.0, range_min=2500.0, range_max=3500.0))
     cs = ContactSet(views=(d, ahead), names=("d", "ahead"))
     b = cs.beliefs().beliefs[1]

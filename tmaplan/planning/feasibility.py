@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.display import distance, seconds_text
-from tmaplan.errors import ScenarioError, is_whole_count, warn_field
+from tmaplan.errors import InfeasibleError, ScenarioError, is_whole_count, warn_field
 from tmaplan.geometry import range_of
 from tmaplan.memory import check_steps
 from tmaplan.models.prior import true_initial_state
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_memory",
-           "check_planning_horizon", "keep_out_share"]
+           "check_planning_horizon", "check_start_keep_out", "keep_out_share"]
 
 KEEP_OUT_REFUSED = 0.5
 """Share of the prior's mass inside the keep-out range from which a plan is refused."""
@@ -185,3 +185,43 @@ def check_plan_memory(scenario: Scenario, n_steps: int, *,
         field, value = "time.horizon", float(scenario.time.horizon)
     check_steps(n_steps, (("heading", copies), *extra), field=field, dt=scenario.time.dt,
                 received=seconds_text(value), source=scenario.name, available=available)
+
+
+def check_start_keep_out(belief: Belief, *, keep_out: float, u_max: float,
+                         speed_choice: bool, times: np.ndarray) -> None:
+    """Refuse a plan's start no plan can satisfy, before any solve
+    (:meth:`tmaplan.planning.heading.HeadingPlanner.check_start`).
+
+    Parameters
+    ----------
+    belief : Belief
+        Relative state at the plan's start (its mean is the target estimate).
+    keep_out : float
+        Keep-out range [m] (0: none).
+    u_max : float
+        Turn-rate limit [rad/s].
+    speed_choice : bool
+        Whether the plan may change speed.
+    times : ndarray, shape (K + 1,)
+        Plan times relative to its start [s].
+
+    Raises
+    ------
+    InfeasibleError
+        The target estimate already inside the keep-out range, or no turn possible
+        (``u_max = 0``, fixed speed) and the straight course passing inside it.
+    """
+    if keep_out <= 0:
+        return
+    r0 = belief.mean_range()
+    if r0 < keep_out:
+        raise InfeasibleError(f"keep_out_range {keep_out:.0f} m: the target estimate "
+                              f"is already inside it (range {r0:.0f} m)")
+    if u_max == 0.0 and not speed_choice:
+        rel = belief.mean[:2] + np.asarray(times)[:, None] * belief.mean[2:]
+        closest = float(np.min(np.hypot(rel[:, 0], rel[:, 1])))
+        if closest < keep_out:
+            raise InfeasibleError(
+                f"infeasible: turn_rate_max = 0 (no turn possible) and the straight course "
+                f"comes within {closest:.0f} m of the target estimate, inside keep_out_range "
+                f"{keep_out:.0f} m")

@@ -33,12 +33,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from tmaplan.bounds.inputs import check_ping_steps
-from tmaplan.errors import (
-    ArgumentError,
-    InfeasibleError,
-    PlanningError,
-    SolverError,
-)
+from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.interrupts import solver_call
 from tmaplan.models.observer import ObserverTrack
@@ -46,16 +41,21 @@ from tmaplan.models.target import initial_velocity, ncv_matrices
 from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
-from tmaplan.planning.feasibility import check_plan_memory, check_planning_horizon
+from tmaplan.planning.feasibility import (
+    check_plan_memory,
+    check_planning_horizon,
+    check_start_keep_out,
+)
 from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.heading_transcription import (
-    arc_pattern,
     bang_bang_guesses,
     bang_bang_transcription,
     direct_decision_vector,
     direct_guesses,
     direct_transcription,
+    plan_switch_times,
     shifted_durations,
+    with_epigraph,
 )
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
@@ -237,16 +237,9 @@ class HeadingPlanner:
                           turn_rate=urate, p=p_obj, layout=self.layout,
                           ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)
-        # a min-max objective (Objective.epigraph_terms): an epigraph variable t = scale·τ,
-        # τ last in the NLP's variables (O(1), as the constraints g_c/scale − τ <= 0)
-        epi, self._n_w = self.objective.epigraph_terms(ctx), w.shape[0]
-        if epi:
-            gc, tau = ca.vertcat(*epi) / scale, ca.MX.sym("epigraph")
-            self._epi_guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
-            w, f = ca.vertcat(w, tau), f + scale * tau
-            lbw, ubw = np.append(lbw, -np.inf), np.append(ubw, np.inf)
-            g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
-                *ubg, np.zeros(len(epi))]
+        self._n_w = w.shape[0]
+        w, f, lbw, ubw, g, lbg, ubg, self._epi_guess = with_epigraph(
+            self.objective.epigraph_terms(ctx), scale, w, P, f, lbw, ubw, g, lbg, ubg)
         rb = closed_form_graph(ctx)["range_bound"]
         # keep-out from each target estimate: E X_0 propagated at constant velocity
         for o in (self.layout.mean_offsets() if self.keep_out > 0 else ()):
@@ -482,7 +475,7 @@ class HeadingPlanner:
     def _with_epigraph(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """A start ``x`` of the transcription's variables with the epigraph variable appended
         at its tightest value (max of the terms), when the objective has one."""
-        if x.size != self._n_w or not hasattr(self, "_epi_guess"):
+        if x.size != self._n_w or self._epi_guess is None:
             return x
         return np.append(x, float(self._epi_guess(x, P)))
 
@@ -541,20 +534,8 @@ class HeadingPlanner:
             turn possible (``u_max = 0``, fixed speed) and the straight course passing
             inside it.
         """
-        if self.keep_out <= 0:
-            return
-        r0 = belief.mean_range()
-        if r0 < self.keep_out:
-            raise InfeasibleError(f"keep_out_range {self.keep_out:.0f} m: the target estimate "
-                                  f"is already inside it (range {r0:.0f} m)")
-        if self.u_max == 0.0 and not self.speed_choice:
-            t = self.times
-            rel = belief.mean[:2] + t[:, None] * belief.mean[2:]
-            if np.min(np.hypot(rel[:, 0], rel[:, 1])) < self.keep_out:
-                raise InfeasibleError(
-                    f"infeasible: turn_rate_max = 0 (no turn possible) and the straight course "
-                    f"comes within {np.min(np.hypot(rel[:, 0], rel[:, 1])):.0f} m of the target "
-                    f"estimate, inside keep_out_range {self.keep_out:.0f} m")
+        check_start_keep_out(belief, keep_out=self.keep_out, u_max=self.u_max,
+                             speed_choice=self.speed_choice, times=self.times)
 
     def make_plan(self, x: np.ndarray, P: np.ndarray, t0: float, p0: np.ndarray,
                   speed0: float, status: str, success: bool, iters: int, seconds: float,
@@ -591,16 +572,9 @@ class HeadingPlanner:
         spd_steps = np.concatenate([[speed0], np.repeat(spd, self.m)])
         track = ObserverTrack(times=times, position=p0 + pos, velocity=velocity_from_course(
             spd_steps, head), mean_velocity=vbar, heading=wrap_angle(head), speed=spd_steps)
-        if self.transcription == "bang-bang":
-            dur = x * self.K * self.dt
-            om = float(P[-1]) * arc_pattern(self.n_arcs)
-            keep = dur > 1e-6 * self.K * self.dt
-            vals, ends = om[keep], np.cumsum(dur)[keep]
-            sw = [t0 + ends[i] for i in range(len(vals) - 1) if vals[i] != vals[i + 1]]
-            switch = np.asarray(sw)
-        else:
-            du = np.abs(np.diff(tr))
-            switch = t0 + self.Tc * (1 + np.flatnonzero(du > 0.01 * max(self.u_max, 1e-12)))
+        switch = plan_switch_times(x, tr, transcription=self.transcription, t0=t0, K=self.K,
+                                   dt=self.dt, Tc=self.Tc, n_arcs=self.n_arcs,
+                                   sign=float(P[-1]), u_max=self.u_max)
         return HeadingPlan(times=t0 + self.Tc * np.arange(self.n + 1), heading=nodes,
                            turn_rate=tr, speed=spd, switch_times=switch, observer=track,
                            objective=float(f.reshape(-1)[0]), range_bound=rb.reshape(-1),

@@ -17,6 +17,7 @@ layout of the NLP's decision vector ``w`` that its starts, warm starts and plans
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -26,7 +27,7 @@ from tmaplan.planning.arcs import arc_displacement_casadi
 
 __all__ = ["arc_pattern", "bang_bang_guesses", "bang_bang_transcription",
            "direct_decision_vector", "direct_guesses", "direct_transcription",
-           "shifted_durations"]
+           "plan_switch_times", "shifted_durations", "with_epigraph"]
 
 
 def arc_pattern(n_arcs: int) -> np.ndarray:
@@ -245,3 +246,46 @@ def shifted_durations(tau: np.ndarray, K: int, dt: float, cut: float) -> np.ndar
     new = np.clip(T[1:], cut, None) - np.clip(T[:-1], cut, None)
     new[-1] += cut
     return new / new.sum()
+
+
+def plan_switch_times(x: np.ndarray, turn_rate: np.ndarray, *, transcription: str, t0: float,
+                      K: int, dt: float, Tc: float, n_arcs: int, sign: float,
+                      u_max: float) -> np.ndarray:
+    """Switch times [s] (absolute) of a plan: where a bang-bang plan's arc rate changes sign
+    or level (``x`` its arc durations, fractions of the horizon ``K·dt``, ``sign`` the first
+    arc's), or where a direct plan's turn rate (``turn_rate`` (n,) [rad/s], one per control
+    interval ``Tc`` [s]) changes by more than 1 % of the limit ``u_max`` [rad/s]."""
+    if transcription == "bang-bang":
+        dur = x * K * dt
+        om = sign * arc_pattern(n_arcs)
+        keep = dur > 1e-6 * K * dt
+        vals, ends = om[keep], np.cumsum(dur)[keep]
+        return np.asarray([t0 + ends[i] for i in range(len(vals) - 1) if vals[i] != vals[i + 1]])
+    du = np.abs(np.diff(turn_rate))
+    return t0 + Tc * (1 + np.flatnonzero(du > 0.01 * max(u_max, 1e-12)))
+
+
+def with_epigraph(terms: Sequence[Any], scale: Any, w: Any, P: Any, f: Any,
+                  lbw: np.ndarray, ubw: np.ndarray, g: list[Any], lbg: list[Any],
+                  ubg: list[Any]) -> tuple[Any, ...]:
+    """A min-max objective's epigraph variable appended to the NLP (issue 40).
+
+    For ``terms`` g_c (``Objective.epigraph_terms``; none: everything returned unchanged and
+    no guess), the variable τ goes last in ``w`` (free), the objective becomes ``f +
+    scale·τ`` and the constraints ``g_c/scale − τ <= 0`` join ``g`` (τ is O(1)).
+
+    Returns
+    -------
+    tuple
+        ``(w, f, lbw, ubw, g, lbg, ubg, guess)``, ``guess`` a casadi Function ``(w, P) ->
+        max_c g_c/scale``, the tightest τ for a start of the original variables (or None).
+    """
+    if not terms:
+        return w, f, lbw, ubw, g, lbg, ubg, None
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
+
+    gc, tau = ca.vertcat(*terms) / scale, ca.MX.sym("epigraph")
+    guess = ca.Function("epigraph_guess", [w, P], [ca.mmax(gc)])
+    return (ca.vertcat(w, tau), f + scale * tau, np.append(lbw, -np.inf),
+            np.append(ubw, np.inf), [*g, gc - tau], [*lbg, np.full(len(terms), -np.inf)],
+            [*ubg, np.zeros(len(terms))], guess)

@@ -35,7 +35,6 @@ import zlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-import casadi as ca
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
@@ -265,6 +264,7 @@ class ContactsObjective(Objective):
     def combined(self, ctx: PlanContext) -> Any:
         """The contacts' term [s] (casadi scalar; 0 for ``worst-contact``, whose value the
         epigraph variable carries)."""
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         if self.kind == "worst-contact":
             return ca.DM(0.0)

@@ -203,7 +203,7 @@ def contact_program(ev: PingEvaluator, cand: np.ndarray, u: Any,
     """One contact's part of the relaxation (see the module docstring): the step LMIs and the
     objective ``Σ_t c_t γ_t^{-1/2}`` (unscaled, [m]) in the shared candidate weights ``u``
     (cvxpy, (n,)), a candidate's ping informing the contact only where ``seen`` (n,) bool."""
-    import cvxpy as cp
+    import cvxpy as cp  # deferred: cvxpy is slow to import (the CLI's start-up)
 
     im = information_matrices(ev)
     K = ev.K

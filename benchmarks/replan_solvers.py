@@ -79,13 +79,13 @@ def _inputs(pl, rec):
     """(x0, P, bounds, duals) of the planner's warm-started solve of a recorded re-plan, as
     :meth:`HeadingPlanner.solve` forms them (the objective scaled by its value at x0)."""
     b = rec["belief"]
-    h0, s0, _ = pl._start_state(rec["heading0"], None, rec["position0"])
-    pvec = pl._parameters(b, ())
-    x0, duals = pl._shift_warm(rec["warm_start"], b.t, h0, s0)
+    h0, s0, _ = pl.start_state(rec["heading0"], None, rec["position0"])
+    pvec = pl.parameter_vector(b, ())
+    x0, duals = pl.shifted_start(rec["warm_start"], b.t, h0, s0)
     P = np.concatenate([pvec, [h0, s0, 1.0, 1.0]])
-    f0 = pl._f_eval(x0, P)[0].item()
+    f0 = pl.plan_function(x0, P)[0].item()
     P[-2] = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
-    return x0, P, pl._bounds(h0), duals
+    return x0, P, pl.bounds(h0), duals
 
 
 def _casadi_nlp(pl, plugin, opts):
@@ -93,7 +93,7 @@ def _casadi_nlp(pl, plugin, opts):
     iterations, u)."""
     import casadi as ca
 
-    solver = ca.nlpsol(f"cand_{plugin}", plugin, pl._nlp, opts)
+    solver = ca.nlpsol(f"cand_{plugin}", plugin, pl.nlp, opts)
     iu = np.arange(3 * (pl.n + 1), 4 * pl.n + 3)
 
     def solve(rec):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,15 +24,22 @@ from tmaplan.cli.args import (
     command_line,
     integer,
     open_fraction,
+    repeated,
 )
+from tmaplan.cli.contacts import preflight_per_contact
 from tmaplan.cli.finite import require_finite
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
-from tmaplan.policies.combine import MANOEUVRES, PINGS
+from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.report import efficiency, write_report
-from tmaplan.scenario import load
+from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
+
+#: Several contacts: the campaign flies all of them at once (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
@@ -63,6 +71,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                    help="local worker processes (default 1)")
     g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
     add_figure_arguments(parser, report=True)
+
+
+def preflight_several(args: argparse.Namespace, scenario: Scenario,
+                      preflight: Callable[[argparse.Namespace, Any], None]) -> None:
+    """``compare``'s checks on a several-contact problem: ``--policies`` against the whole
+    scenario (its policies, :mod:`tmaplan.policies.contacts`), then the other checks on each
+    contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: its prior, its truth
+    source, the turn-rate limit), with a one-contact stand-in for the policies."""
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    if not names or repeated(names) is not None:
+        raise ArgumentError("--policies", "one or more distinct MANOEUVRE[+PING], each once",
+                            args.policies, source=scenario.name)
+    for name in names:
+        try:
+            check_policy(name, scenario)
+        except ArgumentError as exc:  # the policy's rule, on the flag that named it
+            raise ArgumentError("--policies", exc.expected, exc.received,
+                                source=scenario.name) from None
+        except PlanningError as exc:  # an unknown name
+            raise ArgumentError("--policies", f"names MANOEUVRE[+PING] with MANOEUVRE in "
+                                f"{', '.join(CONTACTS_MANOEUVRES)} or planned:NAME and PING "
+                                f"in {', '.join(CONTACTS_PINGS)} (several contacts)", name,
+                                source=scenario.name) from exc
+    turning = any(n.split("+")[0] != "straight" for n in names)
+    stand_in = argparse.Namespace(**{**vars(args),
+                                     "policies": "single-turn" if turning else "straight"})
+    preflight_per_contact(stand_in, scenario, preflight)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:

@@ -34,6 +34,7 @@ from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.report import efficiency, write_report
+from tmaplan.report_contacts import console_lines, contacts_figure, contacts_html
 from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
@@ -115,8 +116,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                        f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
                        f"--particles {args.particles} --accuracy {args.accuracy} "
                        f"--truth {args.truth}")
-    report = write_report(result, Path(args.out) / f"{scenario.name}_compare", command=cmd,
-                          title=f"tmaplan compare: {scenario.name}")
+    out_dir = Path(args.out) / f"{scenario.name}_compare"
+    several = len(scenario.contacts) > 1  # per-contact tables and figure (report_contacts)
+    report = write_report(result, out_dir, command=cmd, title=f"tmaplan compare: "
+                          f"{scenario.name}", extra_html=contacts_html(result) if several
+                          else "", figures={"contacts": contacts_figure(result, out_dir)}
+                          if several and not getattr(args, "no_figure", False) else None)
     payload = result.to_json()
     for name, e in efficiency(result).items():
         payload["policies"][name]["efficiency"] = e
@@ -133,6 +138,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                   f"{s['reached_fraction']:4.0%}  final range RMSE "
                   f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
                   f"recoveries {s['recoveries']:.2f}{replan_cell(s['replans'])}")
+        for line in console_lines(result) if several else []:
+            print(line)
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")
     return payload

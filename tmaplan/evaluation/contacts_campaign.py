@@ -144,7 +144,7 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
         sub = dataclasses.replace(spec, scenario=view, policies=tuple(f"{n}@{c}" for n in names))
         sub_summary, _ = aggregate(sub, runs, times)
         for n in names:
-            per[n][c] = sub_summary[f"{n}@{c}"]
+            per[n][c] = {**sub_summary[f"{n}@{c}"], "example": runs[0].policies[f"{n}@{c}"]}
     first = next(iter(views.values()))
     summary, diffs = aggregate(dataclasses.replace(spec, scenario=first), runs, times)
     censor = censor_time(times)

@@ -30,13 +30,23 @@ import json
 import time
 from collections import defaultdict
 
+import casadi as ca
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.evaluation.closed_loop import paired_run
 from tmaplan.evaluation.metrics import censor_time, paired_difference
-from tmaplan.policies import Combined, Receding, parse_policy
+from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
+from tmaplan.policies import (
+    CLOSED_LOOP_OBJECTIVE,
+    Combined,
+    Receding,
+    manoeuvres,
+    parse_policy,
+    receding,
+)
 from tmaplan.scenario import load_problem
 
 _FILTER_SECONDS = [0.0]
@@ -64,8 +74,6 @@ def _policies(scenario, names, path):
 
     The offline-plan cache is emptied first, so that the second path's setup is not timed
     on the plans the first one solved."""
-    from tmaplan.policies import manoeuvres
-
     manoeuvres._PLAN_CACHE.clear()
     t = time.perf_counter()
     pols = {}
@@ -180,9 +188,6 @@ def gaps(runs, particles, seed=1000, problem="default"):
     """How far the optimum moves between re-plans: per re-plan index, the objective of the
     shifted previous plan (the real-time iteration's start) minus the IPOPT optimum from it,
     along the new path's runs (tuning seeds, default 1000: not the evaluation seeds)."""
-    from tmaplan.planning import Belief
-    from tmaplan.policies import receding
-
     sc = load_problem(problem)
     pol = parse_policy("receding-realtime", sc).resolve(sc)
     out = defaultdict(list)
@@ -194,10 +199,10 @@ def gaps(runs, particles, seed=1000, problem="default"):
         pl = self.planner
         prev = self.plan or self.first
         opt = pl.solve(b, heading0=belief.heading, position0=belief.position, warm_start=prev)
-        h0, s0, _ = pl._start_state(belief.heading, None, None)
-        x0, _ = pl._shift_warm(prev, t, h0, s0)
-        P = np.concatenate([pl._parameters(b, ()), [h0, s0, 1.0, 1.0]])
-        out[len(self.log)].append(pl._f_eval(x0, P)[0].item() - opt.objective)
+        h0, s0, _ = pl.start_state(belief.heading, None, None)
+        x0, _ = pl.shifted_start(prev, t, h0, s0)
+        P = np.concatenate([pl.parameter_vector(b, ()), [h0, s0, 1.0, 1.0]])
+        out[len(self.log)].append(pl.plan_function(x0, P)[0].item() - opt.objective)
         return replan(self, belief, t)
 
     receding._RecedingController._replan = recorded
@@ -218,12 +223,6 @@ def gaps(runs, particles, seed=1000, problem="default"):
 
 def step_profile(problem="default"):
     """Where the time of one re-plan goes (one RTI step against the IPOPT re-solve)."""
-    import casadi as ca
-
-    from tmaplan.planning import Belief, HeadingPlanner
-    from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
-    from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
-
     sc = load_problem(problem)
     prior = Belief.from_prior(sc)
     planner = HeadingPlanner(sc, objective=CLOSED_LOOP_OBJECTIVE)
@@ -245,13 +244,13 @@ def step_profile(problem="default"):
         print(f"one re-plan on {problem} ({CLOSED_LOOP_OBJECTIVE}, {planner.n} intervals, "
               f"{planner.K} steps), best of 5 [ms]:")
         rti = RealTimeIteration(planner, model)
-        P = np.concatenate([planner._parameters(later, ()), [0.0, planner.speed0, model.scale,
+        P = np.concatenate([planner.parameter_vector(later, ()), [0.0, planner.speed0, model.scale,
                                                              1.0]])
         x0 = plan.warm["x"]
-        lbw, ubw, lbg, ubg = planner._bounds(0.0)
+        lbw, ubw, lbg, ubg = planner.bounds(0.0)
         t_ev, _ = best(lambda: rti._eval(x0, P))
         t_cd, (_, _, qp) = best(lambda: rti._condensed(x0, P, lbw, ubw, lbg, ubg))
-        nlp = planner._nlp
+        nlp = planner.nlp
         lam = ca.MX.sym("lam", nlp["g"].shape[0])
         hfn = ca.Function("h", [nlp["x"], nlp["p"], lam],
                           [ca.hessian(nlp["f"] + ca.dot(lam, nlp["g"]), nlp["x"])[0]])

@@ -148,7 +148,7 @@ def paired_z(a: list[float], b: list[float]) -> float:
 def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
     """ns per particle-step of 4 normals: Philox in the kernel, the Generator (float64 and
     float32 ziggurat into a preallocated buffer)."""
-    from tmaplan.estimators import pf_numba as _pf_numba
+    from tmaplan.estimators import pf_numba as _pf_numba  # deferred: numba, compiled on first use
 
     rng = np.random.default_rng(0)
     key = np.arange(4, dtype=np.uint64)
@@ -245,7 +245,7 @@ _WARM: dict[str, float] = {}
 def _warm(sc: Any, sim: Any) -> None:
     """Compile (or load from numba's cache) the numba kernels, serial and parallel builds,
     outside the timed loops; prints the time it took."""
-    from tmaplan.estimators import pf_numba as _pf_numba
+    from tmaplan.estimators import pf_numba as _pf_numba  # deferred: numba, compiled on first use
 
     t0 = time.perf_counter()
     for n in (1000, _pf_numba.PARALLEL_MIN):

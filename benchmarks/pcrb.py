@@ -23,6 +23,7 @@ import tempfile
 import time
 import warnings
 
+import casadi as ca
 import numpy as np
 
 from tmaplan.bounds import lpc_codegen as _jit
@@ -30,6 +31,7 @@ from tmaplan.bounds import lpc_terms as _lpc_terms
 from tmaplan.bounds.closed_form import ClosedFormEngine, closed_form_model, closed_form_pcrb
 from tmaplan.bounds.inputs import prepare
 from tmaplan.bounds.pcrb import SideAssumptionWarning, monte_carlo_pcrb
+from tmaplan.models.target import ncv_matrices
 from tmaplan.scenario import load_problem
 
 
@@ -44,10 +46,6 @@ def median_time(fn, repeat: int) -> float:
 
 def compile_seconds() -> float:
     """Cold JIT: generate + compile both libraries into an empty cache directory."""
-    import casadi as ca
-
-    from tmaplan.models.target import ncv_matrices
-
     A, Q = ncv_matrices(6.0, 0.0025)
     old = os.environ.get("TMAPLAN_CACHE_DIR")
     with tempfile.TemporaryDirectory() as tmp:

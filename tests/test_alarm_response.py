@@ -179,12 +179,12 @@ def _headings_with_alarm(pol, sc, alarm_step, combined=False):
     """Heading history [rad] of ``pol`` (alone, or in a :class:`Combined` with pings) wrapped
     by a 90° alarm turn (no alarm pings), with one alarm raised at ``alarm_step`` (None:
     never)."""
-    from tmaplan.policies._base import _initial_course
+    from tmaplan.policies.base import initial_course
 
     inner = (Combined(manoeuvre=pol, ping=UniformPings()) if combined else pol).controller(sc)
     ctrl = AlarmResponse(pings=0, turn=np.pi / 2).wrap(inner, sc)
     p = np.array([[5000.0, 8000.0, 0.0, -3.0], [5200.0, 8100.0, 0.5, -3.0]])
-    h = _initial_course(sc)
+    h = initial_course(sc)
     out = [h]
     for k in range(sc.n_steps):
         alarms = int(alarm_step is not None and k >= alarm_step)

@@ -56,11 +56,11 @@ def test_planner_plan_function_matches_dm_call():
     sc = load_problem("default")
     pl = HeadingPlanner(sc)
     b = Belief.from_prior(sc)
-    P = np.concatenate([pl._parameters(b, ()), [0.0, pl.speed0, 1.0, 1.0]])
+    P = np.concatenate([pl.parameter_vector(b, ()), [0.0, pl.speed0, 1.0, 1.0]])
     x = pl._guesses(0.0, pl.speed0)[1][0]
-    ref = [np.asarray(o.full()) for o in pl._f_eval.fn(x, P)]
-    got = pl._f_eval(x, P)
-    assert len(ref) == pl._f_eval.fn.n_out() >= 4  # objective, bound, track, constraints
+    ref = [np.asarray(o.full()) for o in pl.plan_function.fn(x, P)]
+    got = pl.plan_function(x, P)
+    assert len(ref) == pl.plan_function.fn.n_out() >= 4  # objective, bound, track, constraints
     for g, r in zip(got, ref, strict=True):
         assert g.shape == r.shape
         np.testing.assert_array_equal(g, r)

@@ -355,3 +355,22 @@ def test_a_contact_without_prior_is_named_where_the_verb_needs_one(capsys, tmp_p
     assert main(["bound", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip()
     assert "field 'contacts[1].prior'" in err and "(contact 'bravo')" in err, err
+
+
+def test_one_contact_dicts_keep_the_order_of_a_one_contact_file():
+    order = ["name", "description", "time", "target", "observer", "sensors", "prior",
+             "planning", "estimation", "faults"]
+    for name in ("default", "brehard2005-s1", "clavard2013-halfturn-cw", "gordon1993-bot"):
+        keys = list(to_dict(load_problem(name)))
+        assert keys == [k for k in order if k in keys], (name, keys)
+
+
+def test_replace_takes_target_and_prior_of_one_contact_only():
+    s = load_problem("default")
+    t = dataclasses.replace(s.target, q=0.0)
+    assert s.replace(target=t).contacts == (dataclasses.replace(s.contacts[0], target=t),)
+    with pytest.raises(ScenarioError, match="either 'contacts' or 'target'/'prior'"):
+        s.replace(target=t, contacts=s.contacts)
+    two = from_dict(_two())
+    moved = two.replace(contacts=tuple(reversed(two.contacts)))
+    assert moved.contact_names == ("bravo", "alpha")

@@ -216,7 +216,7 @@ def test_interrupted_receding_replan_raises_and_logs_no_failure(default, prior):
     from tmaplan.models.prior import sample_prior
     from tmaplan.planning import HeadingPlanner
     from tmaplan.policies import Receding
-    from tmaplan.policies._base import CLOSED_LOOP_OBJECTIVE, BeliefView
+    from tmaplan.policies.base import CLOSED_LOOP_OBJECTIVE, BeliefView
 
     straight = HeadingPlanner(default, objective=CLOSED_LOOP_OBJECTIVE, n_starts=1,
                               solver_options={"max_iter": 0}).solve(prior,

@@ -110,7 +110,7 @@ def test_systematic_resampling_counts() -> None:
 def test_fast_systematic_equals_searchsorted_version() -> None:
     # The O(N) bincount resampler of update() must return exactly the indices of the binary
     # search of systematic_resample() for the same uniform draw (independent formulations).
-    from tmaplan.estimators.particle_filter import _systematic
+    from tmaplan.estimators.pf_kernels import systematic_indices as _systematic
 
     for seed in range(5):
         rng = np.random.default_rng(seed)
@@ -130,7 +130,7 @@ def test_float32_box_muller_normals() -> None:
     # uncorrelated rows (the cos and sin halves of one Box–Muller pair), kurtosis 3.
     from scipy.stats import kstest
 
-    from tmaplan.estimators.particle_filter import _normals_f32
+    from tmaplan.estimators.pf_kernels import normals_f32 as _normals_f32
 
     Z = np.empty((4, 100_000))
     _normals_f32(np.random.default_rng(0), Z)

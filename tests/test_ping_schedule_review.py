@@ -9,7 +9,7 @@ import itertools
 import numpy as np
 import pytest
 
-from tmaplan.planning._ping_search import _exact
+from tmaplan.planning.ping_search import exact_search
 
 
 class _Additive:
@@ -41,7 +41,7 @@ def test_exact_searches_at_most_budget_pings(max_enumerate):
     # "optimal" with the lower bound 8 above the optimum 5 (an invalid certificate).
     ev = _Additive({1: 1.0, 2: 5.0, 3: 1.0}, K=4)
     cand = np.array([1, 2, 3])
-    steps, val, lb, status = _exact(ev, cand, 2, 2, [1, 3], 8.0, max_enumerate, 10.0)
+    steps, val, lb, status = exact_search(ev, cand, 2, 2, [1, 3], 8.0, max_enumerate, 10.0)
     assert status == "optimal"
     assert steps == [2] and val == 5.0 and lb <= 5.0
 
@@ -57,7 +57,7 @@ def test_exact_equals_brute_force_on_random_gains():
                     if all(b - a >= gap for a, b in itertools.pairwise(c))]
             best = float(ev.evaluate(ev.schedules(sets)).min())
             for me in (50_000, 0):
-                _, val, lb, status = _exact(ev, cand, budget, gap, [], 10.0, me, 10.0)
+                _, val, lb, status = exact_search(ev, cand, budget, gap, [], 10.0, me, 10.0)
                 assert status == "optimal"
                 assert val == pytest.approx(best) and lb <= best + 1e-12
 

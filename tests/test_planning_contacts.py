@@ -220,6 +220,11 @@ def test_all_contacts_plan_beats_its_starts(views):
     assert ev(r.plan.observer)[0] == pytest.approx(r.objective, rel=1e-9)
     for p in r.alone.values():
         assert r.objective <= ev(p.observer)[0] + 1e-6 * abs(r.objective)
+    # a re-plan on the same beliefs from the plan stays at its optimum
+    again = planner.solve(warm_start=r)
+    assert again.start == "warm" and again.plan.success
+    span = (planner.joint.K + 1) * planner.joint.dt
+    assert again.objective == pytest.approx(r.objective, abs=1e-3 * span)
     js = r.contacts_json()
     assert set(js) == {"d", "a"}
     assert js["a"]["alone_objective"] == r.alone["a"].objective
@@ -252,3 +257,28 @@ def test_contacts_layout_blocks(views):
     one = ParamLayout(n_steps=10, n_samples=SAMPLES)
     assert lay.size == 3 * one.size and lay.slices() == one.slices()
     assert lay.block(2) == slice(2 * one.size, 3 * one.size)
+
+
+def test_keep_out_holds_for_every_contact(views):
+    """A second contact dead ahead at 2.5–3.5 km: planned with a negligible keep-out the own
+    ship comes within 2.6 km of its estimate; with a keep-out of 2.6 km it stays out (before
+    several contacts, the keep-out read only the first contact's belief)."""
+    from tmaplan.models.target import initial_velocity
+
+    d = views[0]
+    ahead = dataclasses.replace(d, name="ahead", prior=dataclasses.replace(
+        d.prior, bearing_mean=0.0, range_min=2500.0, range_max=3500.0))
+    cs = ContactSet(views=(d, ahead), names=("d", "ahead"))
+    b = cs.beliefs().beliefs[1]
+    keep = 2600.0
+
+    def closest(keep_out):
+        r = ContactsPlanner(cs, samples=SAMPLES, keep_out_range=keep_out).solve()
+        assert r.plan.success
+        trk = r.plan.observer
+        t = trk.times - trk.times[0]
+        est = b.mean[:2] + t[:, None] * (b.mean[2:] + initial_velocity(d.observer))
+        return np.hypot(*(est - (trk.position - trk.position[0])).T)[1:].min()
+
+    assert closest(1.0) < keep
+    assert closest(keep) >= keep * (1 - 1e-3)

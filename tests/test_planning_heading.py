@@ -330,7 +330,7 @@ def test_ping_steps_outside_the_horizon_are_refused(default, prior):
     with pytest.raises(ArgumentError, match="ping_steps"):
         plan_heading(default, belief=prior, objective="mean-range-bound", horizon=900.0,
                      control_interval=300.0, n_starts=1, ping_steps=[K + 1])
-    assert planner._parameters(prior, [0, K])[planner.layout.slices()["ping"]][[0, K]].sum() \
+    assert planner.parameter_vector(prior, [0, K])[planner.layout.slices()["ping"]][[0, K]].sum() \
         == 2.0
 
 

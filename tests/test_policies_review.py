@@ -182,11 +182,11 @@ def test_the_offline_schedule_cache_is_bounded_lru(scenario, monkeypatch):
         calls.append(budget)
         return real(sc, budget=budget, **kw)
 
-    monkeypatch.setattr(tmaplan.planning, "schedule_pings", counted)
+    monkeypatch.setattr(pings, "schedule_pings", counted)
     monkeypatch.setattr(pings, "_SCHEDULE_CACHE", LRUCache(2))
 
     def steps(budget):
-        return pings._offline_schedule(scenario, budget, "greedy", "mean-range-bound")
+        return pings.offline_schedule(scenario, budget, "greedy", "mean-range-bound")
 
     first = steps(1)
     assert np.array_equal(first, real(scenario, budget=1, method="greedy",

@@ -20,7 +20,7 @@ from tmaplan.evaluation.replans import (
 )
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.policies import Receding, Straight
-from tmaplan.policies._base import BeliefView
+from tmaplan.policies.base import BeliefView
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 

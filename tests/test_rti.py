@@ -100,11 +100,11 @@ def test_model_hessian_is_the_exact_lagrangian_hessian(small):
     from tmaplan.planning.rti import hessian_columns
 
     _, prior, planner, plan, _ = small
-    nlp = planner._nlp
+    nlp = planner.nlp
     lam = ca.MX.sym("lam", nlp["g"].shape[0])
     lag = nlp["f"] + ca.dot(lam, nlp["g"])
-    h0, s0, _ = planner._start_state(None, None, None)
-    P = np.concatenate([planner._parameters(prior, ()), [h0, s0, plan.warm["scale"], 1.0]])
+    h0, s0, _ = planner.start_state(None, None, None)
+    P = np.concatenate([planner.parameter_vector(prior, ()), [h0, s0, plan.warm["scale"], 1.0]])
     args = (plan.warm["x"], P, plan.warm["lam_g"])
     symbolic = np.asarray(ca.Function("h", [nlp["x"], nlp["p"], lam],
                                       [ca.hessian(lag, nlp["x"])[0]])(*args))
@@ -319,7 +319,7 @@ def test_receding_plans_against_a_posterior_that_holds_the_bearing_at_t(small):
     so a bearing at t is not counted a second time at plan step 0 (a plan from the prior
     counts it, Belief.from_prior)."""
     from tmaplan.policies import Receding
-    from tmaplan.policies._base import BeliefView
+    from tmaplan.policies.base import BeliefView
 
     sc, prior = small[0], small[1]
     ctrl = Receding(objective="mean-range-bound", horizon=900.0, solver="ipopt").controller(sc)
@@ -353,9 +353,10 @@ def test_a_step_that_leaves_the_keep_out_violated_is_not_a_success(small):
     rti = RealTimeIteration(planner, model)
 
     def violation(p):
-        P = np.concatenate([planner._parameters(b, ()), [h0, planner.speed0, 1.0, 1.0]])
-        g = np.asarray(planner._f_eval(p.warm["x"], P)[-1]).reshape(-1)
-        return max(np.max(planner._lbg - g), np.max(g - planner._ubg), 0.0)
+        P = np.concatenate([planner.parameter_vector(b, ()), [h0, planner.speed0, 1.0, 1.0]])
+        g = np.asarray(planner.plan_function(p.warm["x"], P)[-1]).reshape(-1)
+        lbg, ubg = planner.bounds(h0)[2:]
+        return max(np.max(lbg - g), np.max(g - ubg), 0.0)
 
     with pytest.raises(SolverError, match="keep-out"):
         rti.solve(b, previous=plan, heading0=h0, fallback=False)

@@ -135,8 +135,31 @@ def test_simulate_verb_writes_every_contact(tmp_path, capsys):
         assert (tmp_path / f"default-{name}_geometry.png").is_file()
     printed = capsys.readouterr().out
     assert "default contact alpha:" in printed and "default contact bravo:" in printed
-    assert main(["simulate", str(path), "--export", str(tmp_path / "x")]) == 1
-    assert "field '--export'" in capsys.readouterr().err
+
+
+def test_simulate_exports_every_contact_tagged(tmp_path):
+    from tmaplan.io import read_bearings
+    from tmaplan.io.truth import read_truth
+
+    s = _two()
+    path = tmp_path / "two.toml"
+    path.write_text(dump(s), encoding="utf-8")
+    out = tmp_path / "sim.json"
+    assert main(["simulate", str(path), "--seed", "4", "--export", str(tmp_path / "x"),
+                 "--no-figure", "--json", str(out), "--out", str(tmp_path)]) == 0
+    log = read_bearings(tmp_path / "x" / "bearings.csv")
+    assert log.names == ("alpha", "bravo")
+    sim = simulate_contacts(s, np.random.default_rng(4))
+    for c in log.contacts:
+        m = sim.runs[c.name].measurements[0]
+        diff = np.angle(np.exp(1j * (np.asarray(c.bearing) - m.values)))  # wrapped
+        assert c.bearing.shape == m.values.shape and np.abs(diff).max() < 1e-6
+    truth = read_truth(tmp_path / "x" / "truth.json")
+    assert list(truth.contacts) == ["alpha", "bravo"]
+    p0 = sim.observer.position[0]
+    for name, run in sim.runs.items():
+        np.testing.assert_allclose(truth.contacts[name][:, :2], run.target[:, :2] - p0,
+                                   atol=1e-6)
 
 
 def test_the_batch_crlb_leaves_out_the_ranges_beyond_reach():

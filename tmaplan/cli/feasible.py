@@ -31,7 +31,7 @@ __all__ = ["check_feasible", "check_memory"]
 #: Manoeuvres (``compare --policies``) that build the heading OCP (the offline plan, its
 #: multi-start evaluating the baselines, and the re-plans on every worker).
 _PLANNING = frozenset({"planned", "receding", "receding-multistart", "receding-realtime",
-                       "receding-rti"})
+                       "receding-rti", "receding-sqp"})
 #: Manoeuvres that evaluate the baseline grids' objective.
 _BASELINES = _PLANNING | {"single-turn", "zigzag"}
 #: Ping policies that schedule pings (the ping scheduler's graphs).

@@ -32,8 +32,6 @@ SEVERAL_CONTACTS = "joint"
 DEFAULT_ORIGIN = (45.0, -5.0)
 #: Default ``--start``: the UTC time of the run's first step.
 DEFAULT_START = "2024-06-01T12:00:00Z"
-#: The contact's name in the exported bearings (the scenario's one target).
-EXPORT_CONTACT = "contact"
 
 
 def _origin(text: str) -> tuple[float, float]:
@@ -83,7 +81,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"with --export: UTC time of the run's first step (default {DEFAULT_START})")
 
 
-def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float],
+def export(sim: Simulation | ContactsSimulation, directory: str | Path, *,
+           origin: tuple[float, float],
            start: dt.datetime, seed: int | None = None) -> dict[str, str]:
     """Write a simulated run as recorded data (docs/recordings.md).
 
@@ -91,11 +90,13 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     the azimuthal equidistant plane centred on ``origin``: the plane the readers build
     (centred on the first fix), so reading the files back gives the simulation's positions
     less the own ship's start. Times are ``start`` plus the scenario's time since its first
-    step. The bearings are the bearing sensors' (with their ``sigma_deg``), of one contact.
+    step. The bearings are the bearing sensors' (with their ``sigma_deg``) of every contact,
+    each row naming its contact (one contact: ``"contact"``); ``truth.json`` holds every
+    contact's track.
 
     Parameters
     ----------
-    sim : Simulation
+    sim : Simulation or ContactsSimulation
     directory : str or Path
     origin : (float, float)
         The own ship's start (latitude, longitude) [deg].
@@ -125,7 +126,11 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     )
 
     scenario = sim.scenario
-    bearings = [m for m in sim.measurements if m.kind == "bearing" and m.steps.size]
+    # one contact's run, or each contact's (several contacts: one row per contact and step)
+    runs = (sim.runs if isinstance(sim, ContactsSimulation)
+            else {scenario.contacts[0].name: sim})
+    bearings = [(name, m) for name, run in runs.items() for m in run.measurements
+                if m.kind == "bearing" and m.steps.size]
     if not bearings:
         raise ArgumentError("--export", "a problem whose run has bearings (bearings.csv holds "
                             "the bearing sensors' measurements)", "no bearing",
@@ -138,14 +143,17 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
     frame = LocalFrame(lat0=origin[0], lon0=origin[1])
     local = obs.position - p0
     lat, lon = frame.to_latlon(local[:, 0], local[:, 1])
-    bt = np.concatenate([m.times for m in bearings]) - t0
+    bt = np.concatenate([m.times for _, m in bearings]) - t0
     order = np.argsort(bt, kind="stable")
-    values = np.concatenate([m.values for m in bearings])[order]
-    sigma = np.concatenate([np.full(m.steps.size, float(m.sigma)) for m in bearings])[order]
+    values = np.concatenate([m.values for _, m in bearings])[order]
+    sigma = np.concatenate([np.full(m.steps.size, float(m.sigma)) for _, m in bearings])[order]
+    names = np.concatenate([np.full(m.steps.size, name, dtype=object) for name, m in bearings])
+    contact: str | list[str] = (next(iter(runs)) if len(runs) == 1
+                                else [str(n) for n in names[order]])
     try:  # the writers make the directory
         files = {
             "bearings": write_bearings(d / "bearings.csv", bt[order], values, sigma=sigma,
-                                       contact=EXPORT_CONTACT, start=start),
+                                       contact=contact, start=start),
             "ownship_csv": write_ownship_csv(d / "ownship.csv", t, lat, lon, start=start),
             "ownship_nmea": write_nmea(d / "ownship.nmea", t, lat, lon, start=start,
                                        course=obs.heading, speed=obs.speed),
@@ -153,7 +161,8 @@ def export(sim: Simulation, directory: str | Path, *, origin: tuple[float, float
                                      name=f"{scenario.name} own ship"),
             "truth": write_truth(
                 d / "truth.json", times=t, start=start, frame=frame,
-                contacts={EXPORT_CONTACT: sim.target - np.r_[p0, 0.0, 0.0]}, ownship=local,
+                contacts={name: run.target - np.r_[p0, 0.0, 0.0] for name, run in runs.items()},
+                ownship=local,
                 extra={"problem": scenario.name, "seed": seed,
                        "scenario_offset": [float(p0[0]), float(p0[1])], "scenario_t0": t0}),
         }
@@ -214,19 +223,16 @@ def _summary(name: str, sim: Simulation, seed: int) -> str:
 def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
     """``simulate`` of a several-contact scenario: one run of every contact
     (:class:`ContactsSimulation`), a console line and a geometry figure per contact
-    (``<out>/<problem>-<contact>_geometry.png``). ``--export`` writes one contact's bearings
-    and is refused here."""
-    if args.export is not None:
-        raise ArgumentError("--export", "a one-contact problem (the export of several "
-                            "contacts is not written yet)", list(scenario.contact_names),
-                            source=scenario.name)
-    for flag in ("origin", "start"):
-        if getattr(args, flag, None) is not None:
-            raise ArgumentError(f"--{flag}", "given only with --export", "no --export",
-                                source=scenario.name)
+    (``<out>/<problem>-<contact>_geometry.png``); ``--export`` writes every contact's
+    bearings, each row naming its contact."""
     sim: ContactsSimulation = simulate_contacts(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
+    if args.export is not None:
+        payload["export"] = export(sim, args.export, origin=args.origin or DEFAULT_ORIGIN,
+                                   start=args.start or parse_start(DEFAULT_START), seed=args.seed)
+        if args.json != "-":
+            print(f"wrote {', '.join(payload['export'].values())}")
     for name, run in sim.runs.items():
         if args.json != "-":
             print(_summary(f"{scenario.name} contact {name}", run, args.seed))

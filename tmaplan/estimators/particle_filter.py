@@ -88,9 +88,6 @@ __all__ = [
     "update",
 ]
 
-# Kernels re-exported for tests and callers of the pre-split module.
-_KERNELS = (normals_f32, systematic_indices)
-
 
 class DegeneracyWarning(RuntimeWarning):
     """The particle weights collapsed; the filter recovered by roughening."""

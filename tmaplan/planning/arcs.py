@@ -18,7 +18,7 @@ def safe_sinc(a: Any) -> Any:
     ``sin(a)/a`` evaluated at a point kept away from 0 (both branches stay finite, so
     casadi's ``if_else`` derivatives are clean).
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     small = ca.fabs(a) < 0.1
     a_big = ca.if_else(small, 0.1, a)
@@ -32,7 +32,7 @@ def arc_displacement_casadi(heading: Any, turn_rate: Any, speed: Any, dt: Any) -
 
     ``V·dt·sinc(ω dt/2)·[sin(ψ + ω dt/2), cos(ψ + ω dt/2)]``; returns (dx, dy) [m].
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     half = turn_rate * dt / 2
     scale = speed * dt * safe_sinc(half)

@@ -14,15 +14,22 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError, PlanningError, as_real, finite_real
+from tmaplan.errors import (
+    ArgumentError,
+    PlanningError,
+    SolverError,
+    as_real,
+    finite_real,
+    is_integer,
+)
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.interrupts import solver_call
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.models.target import initial_velocity
+from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import Objective, ObjectiveEvaluator
 
 if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [
@@ -254,7 +261,7 @@ class BearingRatePlan:
 
 def _mgs_logdet(cols: list[Any]) -> Any:
     """``log det(GᵀG) = 2 Σ log‖q_i‖`` by modified Gram–Schmidt (stable for near-singular G)."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     qs: list[Any] = []
     out = 0
@@ -296,9 +303,7 @@ def bearing_rate_plan(n_samples: int, rate_max: float, *, switch: str = "fixed",
         snapped to sample instants, is not a local optimum under one-sided perturbations of
         every switch time, or snapping lost value.
     """
-    import casadi as ca
-
-    from tmaplan.errors import SolverError, is_integer
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     if not is_integer(n_samples, 4):
         raise ArgumentError("n_samples", "an integer >= 4", n_samples)

@@ -27,10 +27,12 @@ from tmaplan.errors import (
     ArgumentError,
     ObservabilityError,
     PlanningError,
+    ScenarioError,
     as_real,
     is_integer,
 )
 from tmaplan.geometry import range_of
+from tmaplan.models.prior import relative_prior_samples
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -206,9 +208,6 @@ class Belief:
         ArgumentError
             ``n`` not an integer >= 5 (a float was truncated, a bool taken as 0 or 1).
         """
-        from tmaplan.errors import ScenarioError
-        from tmaplan.models.prior import relative_prior_samples
-
         if scenario.prior is None:
             raise PlanningError(f"{scenario.name}: the scenario has no [prior]: nothing to "
                                 "plan against")

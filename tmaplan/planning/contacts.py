@@ -161,8 +161,9 @@ class ContactsPlan:
     alone_times : dict of str to float
         Each contact's expected time on its own plan [s].
     start : str
-        The start the kept solution came from: ``"alone:<name>"``, ``"straight"`` or
-        ``"built-in"``.
+        The start the kept solution came from: ``"alone:<name>"``, ``"straight"``,
+        ``"built-in <i>"`` (:meth:`HeadingPlanner.start_programs`), ``"built-in"`` (the
+        planner's own multi-start) or ``"warm"`` (a re-plan).
     seconds : float
         Wall time of the whole plan, the contacts' own plans included [s].
     """
@@ -223,10 +224,10 @@ class ContactsPlanner:
 
     Notes
     -----
-    The keep-out range is enforced from the first contact's estimate only (the heading
-    planner's constraint reads one block); ping steps given to :meth:`solve` inform every
-    contact (the reach of a ping, ``RangeSensor.max_range``, is modelled by the ping
-    scheduler, :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
+    The keep-out range holds from every contact's estimate (its mean propagated at constant
+    velocity); ping steps given to :meth:`solve` inform every contact (the reach of a ping,
+    ``RangeSensor.max_range``, is modelled by the ping scheduler,
+    :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
     """
 
     def __init__(self, contacts: ContactSet, *, objective: str | None = None,
@@ -266,7 +267,7 @@ class ContactsPlanner:
                 n: int, kw: dict[str, Any]) -> list[np.ndarray]:
         """The ``n`` turn-rate programs (u/u_max, (n_intervals,)) of lowest objective ``ev``
         on their tracks from the start state (cheap: one evaluation each, no solve)."""
-        hd0, spd0, p0 = planner._start_state(kw["heading0"], kw["speed0"], kw["position0"])
+        hd0, spd0, p0 = planner.start_state(kw["heading0"], kw["speed0"], kw["position0"])
         vals = []
         for u in programs:
             om = np.repeat(np.asarray(u, float) * planner.u_max, planner.m)
@@ -294,7 +295,8 @@ class ContactsPlanner:
     def solve(self, beliefs: ContactBeliefs | Sequence[Belief] | None = None, *,
               heading0: float | None = None, position0: np.ndarray | None = None,
               speed0: float | None = None, tol: float | None = None,
-              raise_on_failure: bool = True) -> ContactsPlan:
+              raise_on_failure: bool = True,
+              warm_start: ContactsPlan | None = None) -> ContactsPlan:
         """Plan for the contacts' beliefs (default their priors).
 
         Parameters
@@ -303,6 +305,10 @@ class ContactsPlanner:
             One belief per contact, in the order of the :class:`ContactSet`.
         heading0, position0, speed0, tol, raise_on_failure
             As :meth:`HeadingPlanner.solve`.
+        warm_start : ContactsPlan, optional
+            A previous plan of this planner (a receding-horizon re-plan): the joint NLP is
+            solved from it alone (:meth:`HeadingPlanner.solve`'s ``warm_start``), without the
+            contacts' own plans.
 
         Raises
         ------
@@ -316,16 +322,21 @@ class ContactsPlanner:
         kw: dict[str, Any] = {"heading0": heading0, "position0": position0, "speed0": speed0,
                               "tol": tol}
         if self.single:
-            plan = self.joint.solve(bel.beliefs[0], raise_on_failure=raise_on_failure, **kw)
+            plan = self.joint.solve(bel.beliefs[0], raise_on_failure=raise_on_failure,
+                                    warm_start=None if warm_start is None else
+                                    warm_start.plan, **kw)
             return ContactsPlan(plan=plan, objective_name=self.objective_name, names=cs.names,
                                 expected_times=self.expected_times(bel, [plan])[0], alone={},
-                                alone_times={}, start="built-in",
-                                seconds=time.perf_counter() - t0)
+                                alone_times={}, start="built-in" if warm_start is None else
+                                "warm", seconds=time.perf_counter() - t0)
         j = self.joint
-        if j.transcription != "direct":  # starts are turn-rate programs: built-in ones only
+        if warm_start is not None or j.transcription != "direct":
+            # a re-plan from the previous plan; or the bang-bang transcription, whose starts
+            # are not turn-rate programs: its built-in ones only
             alone: dict[str, HeadingPlan] = {}
-            best = j.solve(cast(Any, bel), raise_on_failure=False, **kw)
-            start = "built-in"
+            best = j.solve(cast(Any, bel), raise_on_failure=False, warm_start=None if
+                           warm_start is None else warm_start.plan, **kw)
+            start = "built-in" if warm_start is None else "warm"
         else:
             alone = {name: p.solve(b, raise_on_failure=False, starts=self._screen(
                 p, p.evaluator(b), p.start_programs(), self.alone_starts, kw), **kw)
@@ -361,5 +372,5 @@ def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Be
     its options and :class:`HeadingPlanner`'s; ``heading0``, ``position0``, ``speed0``,
     ``tol``, ``raise_on_failure`` go to :meth:`ContactsPlanner.solve`)."""
     solve_kw = {k: kw.pop(k) for k in ("heading0", "position0", "speed0", "tol",
-                                       "raise_on_failure") if k in kw}
+                                       "raise_on_failure", "warm_start") if k in kw}
     return ContactsPlanner(contacts, objective=objective, **kw).solve(beliefs, **solve_kw)

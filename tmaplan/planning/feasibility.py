@@ -35,9 +35,10 @@ from tmaplan.display import distance, seconds_text
 from tmaplan.errors import ScenarioError, is_whole_count, warn_field
 from tmaplan.geometry import range_of
 from tmaplan.memory import check_steps
+from tmaplan.models.prior import true_initial_state
+from tmaplan.planning.belief import Belief
 
 if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_memory",
@@ -115,9 +116,6 @@ def check_keep_out(scenario: Scenario, *, belief: Belief | None = None,
         ``field 'planning.keep_out_range': expected less than 12 km, the contact's true
         initial range (...), received '20 km: 75 % of the prior's mass lies inside'``.
     """
-    from tmaplan.models.prior import true_initial_state
-    from tmaplan.planning.belief import Belief
-
     pl = scenario.planning
     R = float(keep_out if keep_out is not None else (pl.keep_out_range if pl else 0.0))
     if R <= 0 or (belief is None and scenario.prior is None):

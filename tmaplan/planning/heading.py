@@ -16,7 +16,12 @@ Transcriptions
 
 The NLP is built once; the belief, the initial heading and speed, the bearing and ping
 information and the objective scale are casadi parameters, so :meth:`HeadingPlanner.solve`
-re-solves for a new belief (receding horizon) with a warm start.
+re-solves for a new belief (receding horizon) with a warm start. The graphs and the layout
+of the decision vector are :mod:`tmaplan.planning.heading_transcription`'s. The real-time
+iteration (:mod:`tmaplan.planning.rti`) and the joint OCP (:mod:`tmaplan.planning.joint_ocp`)
+solve the same NLP through the planner's public hooks (``nlp``, ``plan_function``,
+``start_state``, ``check_start``, ``parameter_vector``, ``bounds``, ``shifted_start``,
+``decision_vector``, ``make_plan``).
 """
 
 from __future__ import annotations
@@ -43,6 +48,15 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
 from tmaplan.planning.feasibility import check_plan_memory, check_planning_horizon
 from tmaplan.planning.heading_plan import HeadingPlan
+from tmaplan.planning.heading_transcription import (
+    arc_pattern,
+    bang_bang_guesses,
+    bang_bang_transcription,
+    direct_decision_vector,
+    direct_guesses,
+    direct_transcription,
+    shifted_durations,
+)
 from tmaplan.planning.objectives import (
     DEFAULT_OBJECTIVE,
     Objective,
@@ -62,7 +76,7 @@ __all__ = ["BUILT_IN_STARTS", "HeadingPlan", "HeadingPlanner", "arc_displacement
            "check_planning_horizon", "plan_heading", "safe_sinc"]
 
 #: Built-in initial guesses of a cold solve per transcription: ``n_starts`` takes at most
-#: this many (:meth:`HeadingPlanner._guesses`: the direct transcription's straight, two
+#: this many (the direct transcription's straight, two
 #: turn-reverse, two zig-zag and two turn-early patterns; the bang-bang one's equal and
 #: front-loaded arcs to both sides).
 BUILT_IN_STARTS = {"direct": 7, "bang-bang": 4}
@@ -103,6 +117,35 @@ class HeadingPlanner:
         left, not a full horizon beyond it. The terminal objectives (the value at the
         horizon's last step) do not read the step weights.
 
+    Attributes
+    ----------
+    n, m, K : int
+        Control intervals, grid steps per interval, grid steps of the horizon (K = n m).
+    dt, Tc : float
+        Grid step and control interval [s].
+    times : ndarray, shape (K + 1,)
+        Plan grid relative to the plan's start [s].
+    u_max : float
+        Maximum turn rate [rad/s].
+    speed0 : float
+        The scenario's initial speed [m/s].
+    layout : ParamLayout
+        Layout of the objective's parameters (belief, sensors, step weights).
+    ping_scale : float
+        Information scale 1/σ_r² of a range ping [1/m²]; 0 without a range sensor.
+    nlp : dict
+        The casadi NLP ``{"x": w, "p": P, "f": f/scale, "g": g}``: ``w`` the decision vector
+        (:mod:`tmaplan.planning.heading_transcription`), ``P = [parameter_vector(...),
+        heading0 (rad), speed0 (m/s), scale, sign]`` (scale: the objective's divisor; sign:
+        the bang-bang orientation, 1 for "direct"), ``g`` the constraints
+        (:meth:`bounds`).
+    plan_function : NumpyFunction
+        ``(w, P) -> (f, range_bound, position, mean_velocity, heading, turn_rate, g)`` on
+        numpy arrays: the unscaled objective, the closed-form range bound [m] (K + 1,), the
+        track relative to the start [m] (K + 1, 2), mean velocities [m/s] (K + 1, 2),
+        headings [rad] (K + 1,), turn rates [rad/s] (K,) and the constraints (what
+        :meth:`make_plan` reads).
+
     Raises
     ------
     ScenarioError or ArgumentError
@@ -118,7 +161,7 @@ class HeadingPlanner:
                  turn_rate_max: float | None = None, keep_out_range: float | None = None,
                  speed_choice: bool = False, n_arcs: int = 5, logdet_samples: int = 1,
                  until_end: bool = False) -> None:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         pl = scenario.planning
         obs = scenario.observer
@@ -169,7 +212,7 @@ class HeadingPlanner:
         A, Q = ncv_matrices(dt, float(scenario.target.q))
         self.layout = self.objective.param_layout(self.K)
         sig = ping_sigma(scenario)
-        self._ping_scale = 0.0 if sig is None else 1.0 / sig**2
+        self.ping_scale = 0.0 if sig is None else 1.0 / sig**2
         self.times = dt * np.arange(self.K + 1)
 
         # ---------------------------------------------------------------- parameters
@@ -182,13 +225,17 @@ class HeadingPlanner:
         self._np = self.layout.size
 
         if transcription == "direct":
-            w, lbw, ubw, g, lbg, ubg, traj = self._direct(hd0, spd0)
+            w, lbw, ubw, g, lbg, ubg, traj = direct_transcription(
+                hd0, spd0, n=self.n, m=self.m, dt=dt, u_max=self.u_max,
+                speed_bounds=self.speed_bounds if self.speed_choice else None)
         else:
-            w, lbw, ubw, g, lbg, ubg, traj = self._bang_bang(hd0, spd0, sgn)
+            w, lbw, ubw, g, lbg, ubg, traj = bang_bang_transcription(
+                hd0, spd0, sgn, K=self.K, dt=dt, u_max=self.u_max, n_arcs=self.n_arcs,
+                heading_limits=self.heading_limits is not None)
         pos, vbar, head, urate = traj
         ctx = PlanContext(dt=dt, times=self.times, A=A, Q=Q, v_obs=vbar, disp=pos,
                           turn_rate=urate, p=p_obj, layout=self.layout,
-                          ping_scale=self._ping_scale, turn_rate_max=max(self.u_max, 1e-9))
+                          ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)
         # a min-max objective (Objective.epigraph_terms): an epigraph variable t = scale·τ,
         # τ last in the NLP's variables (O(1), as the constraints g_c/scale − τ <= 0)
@@ -201,9 +248,9 @@ class HeadingPlanner:
             g, lbg, ubg = [*g, gc - tau], [*lbg, np.full(len(epi), -np.inf)], [
                 *ubg, np.zeros(len(epi))]
         rb = closed_form_graph(ctx)["range_bound"]
-        # keep-out from the target estimate: E X_0 propagated at constant velocity
-        if self.keep_out > 0:
-            m0 = p_obj[0:4]
+        # keep-out from each target estimate: E X_0 propagated at constant velocity
+        for o in (self.layout.mean_offsets() if self.keep_out > 0 else ()):
+            m0 = p_obj[o:o + 4]
             t = ca.DM(self.times.reshape(-1, 1))
             v_o0 = vbar[0, :]
             tx = m0[0] + t * (m0[2] + v_o0[0]) - pos[:, 0]
@@ -214,87 +261,13 @@ class HeadingPlanner:
         G = ca.vertcat(*g)
         self._lbg, self._ubg = np.concatenate(lbg), np.concatenate(ubg)
         self._lbw, self._ubw = lbw, ubw
-        self._nlp = {"x": w, "p": P, "f": f / scale, "g": G}
+        self.nlp = {"x": w, "p": P, "f": f / scale, "g": G}
         # the plan's outputs and the constraints (the real-time iteration's trial point is
         # tested and, if accepted, becomes the plan from one evaluation)
-        self._f_eval = NumpyFunction(ca.Function("plan_eval", [w, P],
-                                                 [f, rb, pos, vbar, head, urate, G]))
+        self.plan_function = NumpyFunction(ca.Function("plan_eval", [w, P],
+                                                       [f, rb, pos, vbar, head, urate, G]))
         self._opts = solver_options or {}
         self._solvers: dict[tuple[bool, float | None], Any] = {}
-
-    # ------------------------------------------------------------------ transcriptions
-    def _direct(self, hd0: Any, spd0: Any) -> tuple[Any, ...]:
-        import casadi as ca
-
-        n, m, dt = self.n, self.m, self.dt
-        psi = ca.MX.sym("psi", n + 1)
-        pk = ca.MX.sym("p_km", 2, n + 1)
-        uu = ca.MX.sym("u", n)  # ω / ω_max
-        spd = ca.MX.sym("speed", n) if self.speed_choice else None
-        # one control interval, m exact sub-steps
-        ps, om, vs = ca.SX.sym("ps"), ca.SX.sym("om"), ca.SX.sym("v")
-        heads = ps + om * dt * ca.DM(np.arange(m)).T
-        dx, dy = arc_displacement_casadi(heads, om, vs, dt)
-        interval = ca.Function("interval", [ps, om, vs],
-                               [ca.vertcat(ca.cumsum(dx.T).T, ca.cumsum(dy.T).T),
-                                ca.vertcat(dx, dy) / dt])
-        om_all = uu * self.u_max
-        v_all = spd if spd is not None else spd0 * ca.DM.ones(n)
-        cum, vb = interval.map(n)(psi[:n].T, om_all.T, v_all.T)  # 2 × (n m)
-        start = ca.repmat(pk[:, :n] * 1000.0, 1, 1)
-        rep = ca.kron(start, ca.DM.ones(1, m))
-        pos_steps = rep + cum
-        pos = ca.vertcat(ca.DM.zeros(1, 2), pos_steps.T)  # (K+1) × 2, relative to start
-        vbar = ca.vertcat(spd0 * ca.horzcat(ca.sin(hd0), ca.cos(hd0)), vb.T)
-        urate = ca.kron(om_all, ca.DM.ones(m, 1))
-        head = ca.vertcat(ca.kron(psi[:n], ca.DM.ones(m, 1))
-                          + urate * ca.DM(np.tile(np.arange(m) * dt, n)), psi[n])
-        g = [psi[0] - hd0, pk[:, 0],
-             psi[1:] - psi[:n] - om_all * self.Tc,
-             ca.vec(pk[:, 1:] - pos_steps[:, m - 1::m] / 1000.0)]
-        ng = 1 + 2 + n + 2 * n
-        w = ca.vertcat(psi, ca.vec(pk), uu, *( [spd] if spd is not None else []))
-        lb_psi, ub_psi = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
-        self._psi_limits_index = np.arange(n + 1)
-        lbw = np.concatenate([lb_psi, np.full(2 * (n + 1), -np.inf), -np.ones(n)]
-                             + ([np.full(n, self.speed_bounds[0])] if spd is not None else []))
-        ubw = np.concatenate([ub_psi, np.full(2 * (n + 1), np.inf), np.ones(n)]
-                             + ([np.full(n, self.speed_bounds[1])] if spd is not None else []))
-        return (w, lbw, ubw, g, [np.zeros(ng)], [np.zeros(ng)], (pos, vbar, head, urate))
-
-    def _arc_pattern(self) -> np.ndarray:
-        base = [1.0, 0.0, -1.0, 0.0]
-        return np.array([base[i % 4] for i in range(self.n_arcs)])
-
-    def _bang_bang(self, hd0: Any, spd0: Any, sgn: Any) -> tuple[Any, ...]:
-        import casadi as ca
-
-        H, K, dt = self.K * self.dt, self.K, self.dt
-        na = self.n_arcs
-        tau = ca.MX.sym("tau", na)  # durations / H
-        om = sgn * self.u_max * ca.DM(self._arc_pattern())
-        dur = tau * H
-        T = ca.vertcat(0, ca.cumsum(dur)[:-1])
-        psi_i = hd0 + ca.vertcat(0, ca.cumsum(om * dur)[:-1])
-        t = ca.DM(self.times.reshape(-1, 1))
-        ones_a = ca.DM.ones(1, na)
-        D = ca.fmin(ca.fmax(ca.mtimes(t, ones_a) - ca.repmat(T.T, K + 1, 1), 0),
-                    ca.repmat(dur.T, K + 1, 1))
-        dx, dy = arc_displacement_casadi(ca.repmat(psi_i.T, K + 1, 1),
-                                         ca.repmat(om.T, K + 1, 1), spd0, D)
-        pos = ca.horzcat(ca.sum2(dx), ca.sum2(dy))
-        head = hd0 + ca.mtimes(D, om)
-        vbar = ca.vertcat(spd0 * ca.horzcat(ca.sin(hd0), ca.cos(hd0)),
-                          (pos[1:, :] - pos[:-1, :]) / dt)
-        urate = (head[1:] - head[:-1]) / dt
-        g = [ca.sum1(tau) - 1]
-        lbg, ubg = [np.zeros(1)], [np.zeros(1)]
-        if self.heading_limits is not None:
-            psi_end = ca.vertcat(psi_i, hd0 + ca.sum1(om * dur))
-            g.append(psi_end)
-            lbg.append(np.full(na + 1, -np.inf))
-            ubg.append(np.full(na + 1, np.inf))
-        return (tau, np.zeros(na), np.ones(na), g, lbg, ubg, (pos, vbar, head, urate))
 
     # ------------------------------------------------------------------------- solve
     @staticmethod
@@ -306,7 +279,7 @@ class HeadingPlanner:
             raise ArgumentError(field, "a number in (0, 1) or None", tol)
 
     def _solver(self, warm: bool, tol: float | None = None) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         key = (warm, tol)
         if key not in self._solvers:
@@ -320,12 +293,18 @@ class HeadingPlanner:
             ipopt.update(self._opts)
             if tol is not None:
                 ipopt.update({"tol": float(tol), "acceptable_tol": 10 * float(tol)})
-            self._solvers[key] = ca.nlpsol(f"heading_{len(self._solvers)}", "ipopt", self._nlp,
+            self._solvers[key] = ca.nlpsol(f"heading_{len(self._solvers)}", "ipopt", self.nlp,
                                            {"print_time": False, "ipopt": ipopt})
         return self._solvers[key]
 
-    def _bounds(self, heading0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                 np.ndarray]:
+    def bounds(self, heading0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Bounds ``(lbw, ubw, lbg, ubg)`` of the decision vector and the constraints of
+        :attr:`nlp` for a start at ``heading0`` [rad] (fresh arrays).
+
+        The heading limits, if any, are placed in the 2π turn of ``heading0``; the shooting
+        and duration constraints are equalities (``lbg == ubg``), the keep-out ones
+        inequalities.
+        """
         lbw, ubw = self._lbw.copy(), self._ubw.copy()
         lbg, ubg = self._lbg.copy(), self._ubg.copy()
         if self.heading_limits is not None:
@@ -342,39 +321,38 @@ class HeadingPlanner:
     def _guesses(self, heading0: float, speed0: float) -> list[tuple[np.ndarray, float]]:
         """Initial guesses (w, sign) for the multi-start."""
         if self.transcription == "bang-bang":
-            na = self.n_arcs
-            eq = np.full(na, 1.0 / na)
-            front = np.where(self._arc_pattern() == 0, 0.05, 1.0)
-            front = front / front.sum()
-            out = [(eq, 1.0), (eq, -1.0), (front, 1.0), (front, -1.0)]
-            return out[: self.n_starts]
-        return [(self._direct_w(u, heading0, speed0), 1.0)
+            return bang_bang_guesses(self.n_arcs)[: self.n_starts]
+        return [(self.decision_vector(u, heading0, speed0), 1.0)
                 for u in self.start_programs()[: self.n_starts]]
 
     def start_programs(self) -> list[np.ndarray]:
         """The direct transcription's built-in starts, turn-rate programs ``u_j/u_max`` (n,)
         in [−1, 1] in the order a cold solve tries them (:data:`BUILT_IN_STARTS`)."""
-        n, j = self.n, np.arange(self.n)
-        return [np.zeros(n), np.where(j < n / 3, 1.0, -1.0), np.where(j < n / 3, -1.0, 1.0),
-                np.where((j // max(1, n // 6)) % 2 == 0, 0.7, -0.7),
-                np.where((j // max(1, n // 6)) % 2 == 0, -0.7, 0.7),
-                np.where(j < n / 4, 1.0, 0.0), np.where(j < n / 4, -1.0, 0.0)]
+        return direct_guesses(self.n)
 
-    def _direct_w(self, u: np.ndarray, heading0: float, speed0: float) -> np.ndarray:
-        from tmaplan.models.observer import turn_rate_track
+    def decision_vector(self, u: np.ndarray, heading0: float, speed0: float) -> np.ndarray:
+        """The "direct" decision vector of :attr:`nlp` for a turn-rate program ``u`` (fractions
+        of :attr:`u_max` per control interval, shape (n,)) flown from ``heading0`` [rad] at
+        ``speed0`` [m/s] (:func:`~tmaplan.planning.heading_transcription.direct_decision_vector`:
+        the shooting constraints hold)."""
+        return direct_decision_vector(u, heading0, speed0, m=self.m, dt=self.dt,
+                                      u_max=self.u_max, speed_choice=self.speed_choice)
 
-        om = np.repeat(u * self.u_max, self.m)
-        trk = turn_rate_track(np.zeros(2), heading0, speed0, om, self.dt)
-        psi = heading0 + self.Tc * np.concatenate([[0.0], np.cumsum(u * self.u_max)])
-        pk = trk.position[:: self.m] / 1000.0
-        parts = [psi, pk.reshape(-1), u]
-        if self.speed_choice:
-            parts.append(np.full(self.n, speed0))
-        return np.concatenate(parts)
+    def shifted_start(self, plan: HeadingPlan, t: float, heading0: float,
+                      speed0: float) -> tuple[np.ndarray, dict[str, Any] | None]:
+        """Primal warm start from ``plan`` (its ``warm`` state, or its turn rates) shifted to
+        the time ``t`` [s], flown from ``heading0`` [rad] at ``speed0`` [m/s].
 
-    def _shift_warm(self, plan: HeadingPlan, t: float, heading0: float,
-                    speed0: float) -> tuple[np.ndarray, dict[str, Any] | None]:
-        """Primal warm start from a previous plan shifted to time t (duals if unshifted)."""
+        Returns
+        -------
+        x0 : ndarray
+            Decision vector of :attr:`nlp`: the plan's turn rates shifted by the elapsed
+            control intervals (the last one repeated) and re-simulated from ``heading0``
+            ("direct"), or its arc durations cut at ``t`` ("bang-bang").
+        duals : dict or None
+            The plan's solver state when it is unshifted and of this shape (its
+            ``lam_x``, ``lam_g`` warm-start IPOPT), else None.
+        """
         warm = plan.warm or {}
         k = round((t - plan.times[0]) / self.Tc)
         same = warm.get("shape") == (self.transcription, self.n, self.n_arcs)
@@ -382,18 +360,14 @@ class HeadingPlanner:
             return warm["x"], warm
         if self.transcription == "bang-bang":
             if same:
-                tau = np.asarray(warm["x"])[: self._n_w] * self.K * self.dt
-                cut = (t - plan.times[0])
-                T = np.concatenate([[0.0], np.cumsum(tau)])
-                new = np.clip(T[1:], cut, None) - np.clip(T[:-1], cut, None)
-                new[-1] += cut
-                return new / new.sum(), None
+                return shifted_durations(np.asarray(warm["x"])[: self._n_w], self.K, self.dt,
+                                         t - plan.times[0]), None
             return self._guesses(heading0, speed0)[0][0], None
         u = plan.turn_rate / max(self.u_max, 1e-12)
         u = np.clip(np.concatenate([u[k:], np.full(max(k, 0), u[-1] if u.size else 0.0)]),
                     -1, 1)
         u = np.resize(u, self.n) if u.size != self.n else u
-        return self._direct_w(u, heading0, speed0), None
+        return self.decision_vector(u, heading0, speed0), None
 
     def solve(self, belief: Belief, *, heading0: float | None = None,
               position0: np.ndarray | None = None, speed0: float | None = None,
@@ -437,14 +411,14 @@ class HeadingPlanner:
         """
         t_start = time.perf_counter()
         self.check_tolerance(tol)
-        heading0, speed0, p0 = self._start_state(heading0, speed0, position0)
-        self._precheck(belief, heading0, speed0)
-        pvec = self._parameters(belief, ping_steps)
-        lbw, ubw, lbg, ubg = self._bounds(heading0)
+        heading0, speed0, p0 = self.start_state(heading0, speed0, position0)
+        self.check_start(belief, heading0, speed0)
+        pvec = self.parameter_vector(belief, ping_steps)
+        lbw, ubw, lbg, ubg = self.bounds(heading0)
         guesses: list[tuple[np.ndarray, float]]
         duals: dict[str, Any] | None
         if warm_start is not None:
-            x0, duals = self._shift_warm(warm_start, belief.t, heading0, speed0)
+            x0, duals = self.shifted_start(warm_start, belief.t, heading0, speed0)
             sgn = float(warm_start.warm.get("sign", 1.0)) if warm_start.warm else 1.0
             guesses = [(x0, sgn)]
         elif starts is not None and self.transcription == "direct":
@@ -452,11 +426,12 @@ class HeadingPlanner:
             if not progs or any(u.shape != (self.n,) for u in progs):
                 raise PlanningError(f"starts: expected turn-rate programs of shape "
                                     f"({self.n},), received {[u.shape for u in progs]}")
-            duals, guesses = None, [(self._direct_w(u, heading0, speed0), 1.0) for u in progs]
+            duals, guesses = None, [(self.decision_vector(u, heading0, speed0), 1.0)
+                                    for u in progs]
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = self._f_eval(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
+        f0 = self.plan_function(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
@@ -500,9 +475,9 @@ class HeadingPlanner:
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,
                 "shape": (self.transcription, self.n, self.n_arcs), "scale": scale}
-        return self._make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
-                               belief.t, p0, speed0, status, success, iters, seconds, warm,
-                               ", ".join(statuses))
+        return self.make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
+                              belief.t, p0, speed0, status, success, iters, seconds, warm,
+                              ", ".join(statuses))
 
     def _with_epigraph(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """A start ``x`` of the transcription's variables with the epigraph variable appended
@@ -511,9 +486,10 @@ class HeadingPlanner:
             return x
         return np.append(x, float(self._epi_guess(x, P)))
 
-    def _start_state(self, heading0: float | None, speed0: float | None,
-                     position0: np.ndarray | None) -> tuple[float, float, np.ndarray]:
-        """(heading [rad], speed [m/s], position [m]) with the scenario's defaults."""
+    def start_state(self, heading0: float | None, speed0: float | None,
+                    position0: np.ndarray | None) -> tuple[float, float, np.ndarray]:
+        """The start ``(heading [rad], speed [m/s], position [m] shape (2,))``: the values
+        given, the scenario's initial ones for those that are None."""
         obs = self.scenario.observer
         if heading0 is None:
             heading0 = float(course_speed(initial_velocity(obs))[0])
@@ -521,12 +497,26 @@ class HeadingPlanner:
         p0 = np.asarray(obs.position if position0 is None else position0, float)
         return float(heading0), speed0, p0
 
-    def _parameters(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
-        """The objective's parameter vector (:class:`ParamLayout`) for a belief and pings."""
+    def parameter_vector(self, belief: Belief, ping_steps: Sequence[int]) -> np.ndarray:
+        """The objective's parameters (:attr:`layout`, the head of :attr:`nlp`'s ``P``).
+
+        Parameters
+        ----------
+        belief : Belief
+            Relative state at the plan's start ``belief.t``.
+        ping_steps : sequence of int
+            Plan steps with a range ping, each in [0, K] (others raise
+            :class:`ArgumentError`; any without a range sensor :class:`PlanningError`).
+
+        Returns
+        -------
+        ndarray, shape (layout.size,)
+            The belief, the bearing and ping information per step and the step weights.
+        """
         ping = np.zeros(self.K + 1)
         st = check_ping_steps(ping_steps, self.K, source=self.scenario.name)  # plan steps
         if st.size:
-            if self._ping_scale == 0.0:
+            if self.ping_scale == 0.0:
                 raise PlanningError(f"{self.scenario.name}: ping_steps given but the scenario "
                                     "has no range sensor")
             ping[st] = 1.0
@@ -541,7 +531,16 @@ class HeadingPlanner:
         return ObjectiveEvaluator(self.scenario, self.objective, n_steps=self.K, belief=belief,
                                   turn_rate_max=self.u_max, until_end=self.until_end)
 
-    def _precheck(self, belief: Belief, heading0: float, speed0: float) -> None:
+    def check_start(self, belief: Belief, heading0: float, speed0: float) -> None:
+        """Refuse a start no plan can satisfy, before any solve.
+
+        Raises
+        ------
+        InfeasibleError
+            The target estimate (``belief`` mean) already inside the keep-out range, or no
+            turn possible (``u_max = 0``, fixed speed) and the straight course passing
+            inside it.
+        """
         if self.keep_out <= 0:
             return
         r0 = belief.mean_range()
@@ -557,11 +556,31 @@ class HeadingPlanner:
                     f"comes within {np.min(np.hypot(rel[:, 0], rel[:, 1])):.0f} m of the target "
                     f"estimate, inside keep_out_range {self.keep_out:.0f} m")
 
-    def _make_plan(self, x: np.ndarray, P: np.ndarray, t0: float, p0: np.ndarray,
-                   speed0: float, status: str, success: bool, iters: int, seconds: float,
-                   warm: dict[str, Any], message: str,
-                   evaluated: Sequence[Any] | None = None) -> HeadingPlan:
-        outs = self._f_eval(x, P) if evaluated is None else evaluated
+    def make_plan(self, x: np.ndarray, P: np.ndarray, t0: float, p0: np.ndarray,
+                  speed0: float, status: str, success: bool, iters: int, seconds: float,
+                  warm: dict[str, Any], message: str,
+                  evaluated: Sequence[Any] | None = None) -> HeadingPlan:
+        """The :class:`HeadingPlan` of a decision vector, whoever solved for it.
+
+        Parameters
+        ----------
+        x : ndarray
+            Decision vector of :attr:`nlp`.
+        P : ndarray
+            The NLP's parameters ``x`` belongs to (see :attr:`nlp`).
+        t0 : float
+            Start of the plan [s] (absolute).
+        p0 : ndarray, shape (2,)
+            Start position [m] (places the track).
+        speed0 : float
+            Start speed [m/s].
+        status, success, iters, seconds, warm, message
+            The plan's solver report (:class:`HeadingPlan` fields ``status``, ``success``,
+            ``iterations``, ``seconds`` [s], ``warm``, ``message``).
+        evaluated : sequence, optional
+            :attr:`plan_function` ``(x, P)`` if already computed (not evaluated again).
+        """
+        outs = self.plan_function(x, P) if evaluated is None else evaluated
         x = x[: self._n_w]  # without an epigraph variable
         f, rb, pos, vbar, head = (np.asarray(o) for o in outs[:5])
         head, times = head.reshape(-1), t0 + self.times
@@ -574,7 +593,7 @@ class HeadingPlanner:
             spd_steps, head), mean_velocity=vbar, heading=wrap_angle(head), speed=spd_steps)
         if self.transcription == "bang-bang":
             dur = x * self.K * self.dt
-            om = float(P[-1]) * self._arc_pattern()
+            om = float(P[-1]) * arc_pattern(self.n_arcs)
             keep = dur > 1e-6 * self.K * self.dt
             vals, ends = om[keep], np.cumsum(dur)[keep]
             sw = [t0 + ends[i] for i in range(len(vals) - 1) if vals[i] != vals[i + 1]]

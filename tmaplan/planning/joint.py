@@ -26,10 +26,11 @@ if TYPE_CHECKING:
 __all__ = ["JOINT_OBJECTIVES", "JointPlan", "plan_joint"]
 
 #: Heading objective -> ping-scheduling objective of the same quantity.
-_PAIRS = {"range-bound": "terminal-range-bound", "terminal-range-bound": "terminal-range-bound",
-          "mean-range-bound": "mean-range-bound", "mean-position-bound": "mean-position-bound"}
+JOINT_PING_OBJECTIVE = {
+    "range-bound": "terminal-range-bound", "terminal-range-bound": "terminal-range-bound",
+    "mean-range-bound": "mean-range-bound", "mean-position-bound": "mean-position-bound"}
 
-JOINT_OBJECTIVES: tuple[str, ...] = tuple(sorted(_PAIRS))
+JOINT_OBJECTIVES: tuple[str, ...] = tuple(sorted(JOINT_PING_OBJECTIVE))
 """Heading objectives that :func:`plan_joint` and ``plan_joint_ocp`` plan pings with."""
 
 
@@ -79,9 +80,9 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
         Unsupported objective; infeasible heading or ping requests (see the two planners).
     """
     t0 = time.perf_counter()
-    if objective not in _PAIRS:
-        raise PlanningError(f"joint objective: expected one of {sorted(_PAIRS)}, received "
-                            f"{objective!r}")
+    if objective not in JOINT_PING_OBJECTIVE:
+        raise PlanningError(f"joint objective: expected one of "
+                            f"{sorted(JOINT_PING_OBJECTIVE)}, received {objective!r}")
     if budget is not None and not is_integer(budget, 0):
         raise ArgumentError("budget", "an integer >= 0 (None: planning.ping_budget)", budget)
     if not is_integer(max_rounds, 1):  # 0 rounds left no schedule to return
@@ -98,7 +99,7 @@ def plan_joint(scenario: Scenario, *, budget: int | None = None,
 
     def reschedule() -> PingSchedule:
         return schedule_pings(scenario, budget=budget, method=ping_method,
-                              objective=_PAIRS[objective],  # type: ignore[arg-type]
+                              objective=JOINT_PING_OBJECTIVE[objective],  # type: ignore[arg-type]
                               observer=plan.observer, belief=bel, gap_reference="none")
 
     for rounds in range(1, max_rounds + 1):  # noqa: B007 - rounds is reported

@@ -76,14 +76,14 @@ from tmaplan.geometry import course_speed
 from tmaplan.interrupts import solver_call
 from tmaplan.models.sensors import default_ping_budget
 from tmaplan.models.target import initial_velocity
-from tmaplan.planning._ping_search import _round, _spacing_ok, max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
-from tmaplan.planning.joint import _PAIRS
+from tmaplan.planning.joint import JOINT_PING_OBJECTIVE
 from tmaplan.planning.objectives import belief_bearing_information
+from tmaplan.planning.ping_search import max_pings, ping_candidates, round_weights, spacing_ok
 from tmaplan.planning.pings import (
-    _TIGHT,
     OPTIMAL_GAP,
+    TIGHT_BOUND_TOLERANCE,
     PingEvaluator,
     PingSchedule,
     schedule_pings,
@@ -211,7 +211,7 @@ def _with_own_pings(cert: PingSchedule, ev: PingEvaluator, steps: Sequence[int],
         return cert
     own = np.asarray(sorted(steps), int)
     lb = float(cert.lower_bound)
-    if np.isfinite(lb) and v_own < lb <= v_own * (1 + _TIGHT):
+    if np.isfinite(lb) and v_own < lb <= v_own * (1 + TIGHT_BOUND_TOLERANCE):
         lb = v_own  # tight relaxation, equal up to the solver's tolerance
     if np.isfinite(lb) and lb > v_own:
         raise PlanningError(f"lower bound {lb:.6g} above the objective {v_own:.6g} of the "
@@ -258,7 +258,7 @@ def _quiet_stdout(on: bool) -> Iterator[None]:
 
 def _nlp_solver(name: str, nlp: dict[str, Any], mode: str, n_heading: int, n_cand: int,
                 options: dict[str, Any]) -> Any:
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     if mode == "bonmin":
         opts: dict[str, Any] = {
@@ -369,12 +369,12 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         ``objective``; more pings than the strided candidates or the spacing allow; no range
         sensor.
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     t_start = time.perf_counter()
-    if objective not in _PAIRS:
-        raise PlanningError(f"objective: expected one of {sorted(_PAIRS)}, received "
-                            f"{objective!r}")
+    if objective not in JOINT_PING_OBJECTIVE:
+        raise PlanningError(f"objective: expected one of {sorted(JOINT_PING_OBJECTIVE)}, "
+                            f"received {objective!r}")
     if mode not in JOINT_MODES:
         raise PlanningError(f"mode: expected one of {JOINT_MODES}, received {mode!r}")
     if init not in ("both", "even", "schedule"):
@@ -391,7 +391,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         raise PlanningError("mode: 'bonmin' is not available in this casadi build")
     bel = belief if belief is not None else Belief.from_prior(scenario)
     planner = HeadingPlanner(scenario, objective=objective, **planner_kw)
-    if planner._ping_scale == 0.0:
+    if planner.ping_scale == 0.0:
         raise PlanningError(f"{scenario.name}: no range sensor to ping with (add a "
                             "[[sensors]] kind = 'range' or planning.ping_sigma)")
     times = bel.t + planner.times
@@ -403,11 +403,11 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
                             f"pings on the {cand.size} candidate steps of ping_stride {stride} "
                             f"(min_spacing {spacing:g} s), received {K}")
 
-    pair = _PAIRS[objective]
+    pair = JOINT_PING_OBJECTIVE[objective]
     # ------------------------------------------------------------------ the joint NLP
     # The heading OCP's NLP (x: headings/positions/turn rates; p: belief, sensors, heading0,
     # speed0, objective scale, sign) with its ping slice replaced by the weights S·w.
-    nlp_h = planner._nlp
+    nlp_h = planner.nlp
     xh, Ph = nlp_h["x"], nlp_h["p"]
     nh, ng = int(xh.size1()), int(nlp_h["g"].size1())
     sl = planner.layout.slices()["ping"]
@@ -427,9 +427,9 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     obs = scenario.observer
     heading0 = float(course_speed(initial_velocity(obs))[0])
     speed0 = planner.speed0
-    planner._precheck(bel, heading0, speed0)
+    planner.check_start(bel, heading0, speed0)
     pvec = planner.layout.vector(bel, belief_bearing_information(scenario, bel, planner.K))
-    lbh, ubh, lbgh, ubgh = planner._bounds(heading0)
+    lbh, ubh, lbgh, ubgh = planner.bounds(heading0)
     bounds = {"lbx": np.concatenate([lbh, np.zeros(cand.size)]),
               "ubx": np.concatenate([ubh, np.ones(cand.size)]),
               "lbg": np.concatenate([lbgh, [K], np.full(A.shape[0], -np.inf)]),
@@ -464,16 +464,16 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
         u = np.clip(x[nh:], 0.0, 1.0)
         # round: bonmin's binaries, else the largest weights respecting the spacing
         rounded = sorted(int(c) for c in cand[u > 0.5]) if mode == "bonmin" else []
-        if len(rounded) != K or not _spacing_ok(rounded, gap):
-            rounded = _round(u, cand, K, gap)[0]
+        if len(rounded) != K or not spacing_ok(rounded, gap):
+            rounded = round_weights(u, cand, K, gap)[0]
         # the NLP's headings with the rounded pings: the point polishing starts from
         P_fix = P.copy()
         P_fix[sl] = Sel @ np.isin(cand, rounded).astype(float)
         warm = {"x": x[:nh], "lam_x": run["lam_x"][:nh], "lam_g": run["lam_g"][:ng],
                 "sign": sgn, "shape": (planner.transcription, planner.n, planner.n_arcs)}
-        plan = planner._make_plan(x[:nh], np.concatenate([P_fix[:-2], [1.0, sgn]]), bel.t,
-                                  np.asarray(obs.position, float), speed0, run["status"],
-                                  run["ok"], run["iters"], nlp_seconds, warm, run["status"])
+        plan = planner.make_plan(x[:nh], np.concatenate([P_fix[:-2], [1.0, sgn]]), bel.t,
+                                 np.asarray(obs.position, float), speed0, run["status"],
+                                 run["ok"], run["iters"], nlp_seconds, warm, run["status"])
         r_obj = PingEvaluator(scenario, plan.observer, bel, pair).value(rounded)
         # (a failed NLP's point may violate the heading constraints: any polished pair wins)
         best: tuple[float, HeadingPlan, list[int]] = (

@@ -128,7 +128,8 @@ class ContactsLayout:
     """Parameter vector of N contacts: N one-contact :class:`ParamLayout` blocks, in order.
 
     :meth:`slices` are those of the first block (what a one-contact reader such as the
-    planner's reported range bound sees); :meth:`block` gives contact c's slice.
+    planner's reported range bound sees); :meth:`block` gives contact c's slice and
+    :meth:`mean_offsets` each contact's mean (the planner's keep-out).
     """
 
     n_steps: int
@@ -152,6 +153,11 @@ class ContactsLayout:
     def slices(self) -> dict[str, slice]:
         """Name -> slice of the first contact's block."""
         return self.one.slices()
+
+    def mean_offsets(self) -> tuple[int, ...]:
+        """Offsets in p of each contact's mean relative state ``E X_0`` (the planner keeps
+        out of every contact's estimate)."""
+        return tuple(self.block(c).start for c in range(self.n_contacts))
 
     def block(self, c: int) -> slice:
         """Slice of contact c's block in p."""

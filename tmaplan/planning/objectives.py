@@ -34,11 +34,13 @@ import numpy as np
 
 from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import ArgumentError, PlanningError, finite_real
+from tmaplan.models.observer import ObserverTrack
 from tmaplan.models.target import ncv_matrices
+from tmaplan.planning.belief import Belief
 
 # The parameter layout, the plan context and the shared casadi graphs live in their own
 # module; re-exported here (the public home of the API).
-from tmaplan.planning._objective_graphs import (
+from tmaplan.planning.objective_graphs import (
     ParamLayout,
     PlanContext,
     closed_form_graph,
@@ -50,8 +52,6 @@ from tmaplan.planning._objective_graphs import (
 from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES, ObjectiveName
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [
@@ -206,7 +206,7 @@ def _over_steps(reduce: str, names: tuple[str, str], per_step: Callable[[PlanCon
         raise ArgumentError("reduce", "'terminal' or 'mean'", reduce)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         x = per_step(ctx)
         if reduce == "terminal":
@@ -230,7 +230,7 @@ def relative_range_bound(reduce: str = "mean") -> Objective:
     own sake, so it tracks the *relative* range accuracy that a time-to-accuracy metric
     measures. ``reduce`` "mean" (over the horizon: rewards early localisation) or "terminal".
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     return _over_steps(reduce, ("relative-range-bound", "mean-relative-range-bound"),
                        lambda ctx: ca.sqrt(ca.fmax(closed_form_graph(ctx)["var"][:, 1], 0.0)))
@@ -259,7 +259,7 @@ def time_to_accuracy(accuracy: float = 0.1, samples: int = 16, width: float = 0.
     tau = 0.5 * float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         rel = relative_range_crlb_graph(ctx)
         z = (rel - tau) / (width * tau)
@@ -311,7 +311,7 @@ def not_localised_graph(ctx: PlanContext, accuracy: float, width: float) -> Any:
     of :func:`expected_time_to_accuracy`: ρ_ks = σ_r/r of draw s at step k
     (:func:`relative_range_crlb_graph`, lecadre1997 eq. 64–65), τ = ``accuracy`` (relative
     range accuracy, dimensionless), σ the logistic function of relative width ``width``."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     rel = relative_range_crlb_graph(ctx)
     z = (rel - accuracy) / (width * accuracy)
@@ -322,7 +322,7 @@ def expected_time_of(ctx: PlanContext, sig: Any) -> Any:
     """``dt·Σ_k w_k mean_s sig_ks`` [s]: the expected time of a "not yet localised" indicator
     ``sig`` (K+1, n_samples) (:func:`not_localised_graph`), step k counted with its step weight
     w_k (:class:`ParamLayout`); a draw never localised counts the horizon + dt."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     span = float(ctx.times[-1]) + ctx.dt  # (K + 1)·dt
     w = ctx.param("weight")  # step weights (ParamLayout): 0 for steps that do not count
@@ -332,7 +332,7 @@ def expected_time_of(ctx: PlanContext, sig: Any) -> Any:
 def horizon_turn_penalty(ctx: PlanContext) -> Any:
     """``(K+1)·dt·mean_k (u_k/u_max)²`` [s]: the turn penalty of
     :func:`expected_time_to_accuracy` (weighted there by ``turn_weight``)."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     u = ctx.turn_rate / ctx.turn_rate_max
     return (float(ctx.times[-1]) + ctx.dt) * ca.sum1(u * u) / u.shape[0]
@@ -362,7 +362,7 @@ def logdet(samples: int = 1) -> Objective:
 def turn_penalty(weight: float = 1.0) -> Objective:
     """``weight·mean_k (u_k/u_max)²``: discourages needless turning (dimensionless)."""
     def term(ctx: PlanContext) -> Any:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         u = ctx.turn_rate / ctx.turn_rate_max
         return ca.sum1(u * u) / u.shape[0]
@@ -428,9 +428,7 @@ class ObjectiveEvaluator:
                  n_steps: int | None = None, belief: Belief | None = None,
                  turn_rate_max: float | None = None, samples: int = 1,
                  until_end: bool = False) -> None:
-        import casadi as ca
-
-        from tmaplan.planning.belief import Belief
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         if turn_rate_max is not None:
             finite_real("turn_rate_max", turn_rate_max, "a finite value >= 0 rad/s", lower=0.0)

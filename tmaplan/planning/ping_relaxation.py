@@ -54,6 +54,7 @@ of memory at 1000 — so forbidden steps enter through the candidate set instead
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import signal
 import time
 from typing import TYPE_CHECKING, Any, cast
@@ -278,7 +279,7 @@ class Relaxation:
     """
 
     def __init__(self, ev: PingEvaluator, cand: np.ndarray, gap: int) -> None:
-        import cvxpy as cp
+        import cvxpy as cp  # deferred: cvxpy is slow to import (the CLI's start-up)
 
         t0 = time.perf_counter()
         self.ev, self.cand, self.gap = ev, np.asarray(cand, int), int(gap)
@@ -401,8 +402,6 @@ def relaxation_for(ev: PingEvaluator, cand: np.ndarray, gap: int) -> Relaxation:
     """The :class:`Relaxation` of (ev, cand, gap), built once and cached by content (the
     evaluator's data, candidates, spacing, objective): re-solving for another budget, or for
     the same problem from another call, reuses the compiled cvxpy problem."""
-    import hashlib
-
     h = hashlib.sha256()
     for part, weight, reach in getattr(ev, "parts", None) or ((ev, 1.0, None),):
         eng = part.engine

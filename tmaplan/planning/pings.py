@@ -35,25 +35,24 @@ from tmaplan.display import seconds_text, short_repr
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.memory import check_steps
 from tmaplan.models.observer import ObserverTrack, observer_track
-
-# The search methods (feasibility, exact, relaxed, greedy, local swaps) and the evenly spaced
-# reference schedule live in their own module.
-from tmaplan.planning._ping_search import (
-    _exact,
-    _greedy,
-    _local_swaps,
-    _round,
-    _spacing_ok,
-    max_pings,
-    ping_candidates,
-    uniform_ping_steps,
-)
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.objectives import (
     PING_OBJECTIVES,
     PingObjectiveName,
     belief_bearing_information,
     ping_sigma,
+)
+from tmaplan.planning.ping_exact import tree_search
+from tmaplan.planning.ping_relaxation import relaxation_bound
+from tmaplan.planning.ping_search import (
+    exact_search,
+    greedy_schedule,
+    local_swaps,
+    max_pings,
+    ping_candidates,
+    round_weights,
+    spacing_ok,
+    uniform_ping_steps,
 )
 
 if TYPE_CHECKING:
@@ -67,7 +66,7 @@ OPTIMAL_GAP = 1e-3
 #: A relaxation bound above a schedule's objective by at most this relative amount is the
 #: relaxation being tight (its optimum is integral) up to the conic solver's tolerance
 #: (Clarabel's relative gap tolerance here is 1e-8); anything larger is an error.
-_TIGHT = 1e-6
+TIGHT_BOUND_TOLERANCE = 1e-6
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -202,7 +201,7 @@ class PingEvaluator:
         For ``terminal-range-bound`` it is ``[J_K⁻¹]_{ln r}·E r_K²`` (the square of the range
         bound: same minimiser, and convex in u).
         """
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         g = self.engine.schedule_graph(u)
         if self.objective == "terminal-range-bound":
@@ -319,8 +318,6 @@ def certified_schedule(ev: Any, cand: np.ndarray, gap: int, budget: int, *, meth
     (the stronger bound is kept); ``gap_reference="exact"`` enumerates only when the
     relaxation has not already certified a gap ≤ 1e-3.
     """
-    from tmaplan.planning.ping_exact import tree_search
-    from tmaplan.planning.ping_relaxation import relaxation_bound
 
     several = getattr(ev, "parts", None) is not None
     no_ping = float(ev.evaluate(np.zeros((1, ev.K + 1)))[0])
@@ -340,17 +337,17 @@ def certified_schedule(ev: Any, cand: np.ndarray, gap: int, budget: int, *, meth
             rr = relaxation_bound(ev, cand, budget, gap)
             lb, ref, bound_s, u_rel = rr.lower_bound, _source(rr.status), rr.seconds, rr.u
         # greedy + local swaps: the greedy method, and a start of the others
-        g = _greedy(ev, cand, budget, gap)
-        steps, val = _local_swaps(ev, g, cand, gap)
+        g = greedy_schedule(ev, cand, budget, gap)
+        steps, val = local_swaps(ev, g, cand, gap)
         if method != "greedy":
             starts = [steps, uni]
             if u_rel.size and np.all(np.isfinite(u_rel)):
-                starts += _round(u_rel, cand, budget, gap)
+                starts += round_weights(u_rel, cand, budget, gap)
             whole = range(1, cand.size)  # moves of any ping to any candidate
             for st in starts:
-                if len(st) != budget or not _spacing_ok(st, gap):
+                if len(st) != budget or not spacing_ok(st, gap):
                     continue
-                s2, v2 = _local_swaps(ev, list(st), cand, gap, max_rounds=4 * budget + 4,
+                s2, v2 = local_swaps(ev, list(st), cand, gap, max_rounds=4 * budget + 4,
                                       radius=whole)
                 if v2 < val:
                     steps, val = s2, v2
@@ -359,7 +356,7 @@ def certified_schedule(ev: Any, cand: np.ndarray, gap: int, budget: int, *, meth
         if (method == "exact" or gap_reference == "exact") and not done_relaxed:
             t0 = time.perf_counter()
             if objective == "mean-position-bound" or several:
-                st, v, elb, status_e = _exact(ev, cand, budget, gap, steps, val,
+                st, v, elb, status_e = exact_search(ev, cand, budget, gap, steps, val,
                                               max_enumerate, time_limit)
                 done = status_e == "optimal"
             else:
@@ -379,7 +376,7 @@ def certified_schedule(ev: Any, cand: np.ndarray, gap: int, budget: int, *, meth
                 if rr.lower_bound > lb:
                     lb, ref, u_rel = rr.lower_bound, _source(rr.status), rr.u
             bound_s += time.perf_counter() - t0
-    if np.isfinite(lb) and val < lb <= val * (1 + _TIGHT):
+    if np.isfinite(lb) and val < lb <= val * (1 + TIGHT_BOUND_TOLERANCE):
         lb = val  # tight relaxation (integral optimum): equal up to the solver's tolerance
     rel_gap = (val - lb) / val if np.isfinite(lb) and val > 0 else float("nan")
     if np.isfinite(rel_gap) and rel_gap < 0:

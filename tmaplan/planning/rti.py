@@ -46,17 +46,15 @@ import dataclasses
 import os
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from tmaplan.errors import ArgumentError, PlanningError, is_integer
+from tmaplan.errors import ArgumentError, PlanningError, SolverError, is_integer
 from tmaplan.interrupts import solver_call
+from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
-
-if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
-    from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 
 __all__ = ["QP_SOLVERS", "RTIModel", "RealTimeIteration", "hessian_columns",
            "reference_model"]
@@ -104,7 +102,7 @@ def reference_model(planner: HeadingPlanner, plan: HeadingPlan, belief: Belief, 
         Eigenvalues of the Hessian are replaced by their absolute values, floored at this
         fraction of the largest.
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     _check_planner(planner)
     if plan.warm is None or "scale" not in plan.warm:
@@ -112,10 +110,10 @@ def reference_model(planner: HeadingPlanner, plan: HeadingPlan, belief: Belief, 
                             "plan of this planner)")
     if not 0 < eigen_floor < 1:
         raise ArgumentError("eigen_floor", "in (0, 1)", eigen_floor)
-    h0, s0, _ = planner._start_state(heading0, speed0, None)
+    h0, s0, _ = planner.start_state(heading0, speed0, None)
     scale = float(plan.warm["scale"])
-    P = np.concatenate([planner._parameters(belief, ()), [h0, s0, scale, 1.0]])
-    nlp = planner._nlp
+    P = np.concatenate([planner.parameter_vector(belief, ()), [h0, s0, scale, 1.0]])
+    nlp = planner.nlp
     lam = ca.MX.sym("lam", nlp["g"].shape[0])
     grad = ca.Function("rti_lagrangian_gradient", [nlp["x"], nlp["p"], lam],
                        [ca.gradient(nlp["f"] + ca.dot(lam, nlp["g"]), nlp["x"])])
@@ -202,12 +200,12 @@ class RealTimeIteration:
     def __init__(self, planner: HeadingPlanner, model: RTIModel, *, qpsol: str = "daqp",
                  backtracks: int = 2, constraint_tol: float = 1e-6, steps: int = 1,
                  rescale: bool = False) -> None:
-        import casadi as ca
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         _check_planner(planner)
         if qpsol not in QP_SOLVERS:
             raise ArgumentError("qpsol", f"one of {', '.join(QP_SOLVERS)}", qpsol)
-        nlp = planner._nlp
+        nlp = planner.nlp
         n_w = nlp["x"].shape[0]
         if model.hessian.shape != (n_w, n_w):
             raise ArgumentError("model.hessian", f"shape ({n_w}, {n_w})", model.hessian.shape)
@@ -226,7 +224,8 @@ class RealTimeIteration:
         m = planner.n
         self._u = np.arange(3 * (m + 1), 4 * m + 3)
         self._x = np.arange(3 * (m + 1))
-        self._eq = planner._lbg == planner._ubg
+        lbg, ubg = planner.bounds(0.0)[2:]
+        self._eq = lbg == ubg  # the shooting constraints
         # bounded states (heading limits) become general constraint rows
         self._xb = np.arange(m + 1) if planner.heading_limits is not None else np.arange(0)
         n_rows = int(np.count_nonzero(~self._eq)) + self._xb.size
@@ -250,9 +249,24 @@ class RealTimeIteration:
         out.model = model
         return out
 
-    def _condensed(self, x0: np.ndarray, P: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
-                   lbg: np.ndarray, ubg: np.ndarray) -> tuple[float, np.ndarray, dict[str, Any]]:
+    @property
+    def turn_rate_index(self) -> np.ndarray:
+        """Indices (m,) of the turn-rate controls ``u_j/u_max`` in the NLP's decision vector."""
+        return self._u
+
+    @property
+    def qp(self) -> Any:
+        """The condensed QP's casadi ``conic`` solver (built once; ``qp.stats()`` after a
+        call), called with the dict :meth:`condensed` returns."""
+        return self._qp
+
+    def condensed(self, x0: np.ndarray, P: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
+                  lbg: np.ndarray, ubg: np.ndarray) -> tuple[float, np.ndarray, dict[str, Any]]:
         """Objective and constraints at x0, and the QP over the turn-rate step d_u.
+
+        ``x0`` is the NLP's decision vector, ``P`` its parameters, ``lbw``…``ubg`` its bounds
+        (:meth:`HeadingPlanner.bounds`). Returns ``(f0, g0, qp)``: the objective, the
+        constraints at ``x0`` and the arguments of :attr:`qp`.
 
         Linearised equalities ``J_s d_s + J_u d_u = −g_E`` give ``d = Z d_u + z₀`` with
         ``Z = [−J_s⁻¹ J_u; I]``; the QP has the reduced Hessian ``Zᵀ H Z`` and gradient
@@ -316,18 +330,16 @@ class RealTimeIteration:
         SolverError
             The fallback did not converge, or (``fallback=False``) the step was rejected.
         """
-        from tmaplan.errors import SolverError
-
         t_start = time.perf_counter()
         pl = self.planner
         prev = previous if previous is not None else self.model.plan
-        heading0, speed0, p0 = pl._start_state(heading0, speed0, position0)
-        pl._precheck(belief, heading0, speed0)
-        pvec = pl._parameters(belief, ping_steps)
+        heading0, speed0, p0 = pl.start_state(heading0, speed0, position0)
+        pl.check_start(belief, heading0, speed0)
+        pvec = pl.parameter_vector(belief, ping_steps)
         P = np.concatenate([pvec, [heading0, speed0, self.model.scale, 1.0]])
-        lbw, ubw, lbg, ubg = pl._bounds(heading0)
-        x_prev, _ = pl._shift_warm(prev, belief.t, heading0, speed0)
-        x0 = pl._direct_w(np.clip(np.asarray(x_prev)[self._u], -1, 1), heading0, speed0)
+        lbw, ubw, lbg, ubg = pl.bounds(heading0)
+        x_prev, _ = pl.shifted_start(prev, belief.t, heading0, speed0)
+        x0 = pl.decision_vector(np.clip(np.asarray(x_prev)[self._u], -1, 1), heading0, speed0)
         if self.rescale:
             # the model Hessian belongs to the objective divided by its value at the
             # reference; divide by the value at the start instead (curvature relative to value)
@@ -355,8 +367,8 @@ class RealTimeIteration:
             warm = {"x": x1, "lam_x": np.zeros_like(x1), "lam_g": np.zeros(lbg.size),
                     "sign": 1.0, "shape": ("direct", pl.n, pl.n_arcs),
                     "scale": float(P[-2]), "start_objective": f_start * float(P[-2])}
-            plan = pl._make_plan(x1, P, belief.t, p0, speed0, status, True, 1,
-                                 time.perf_counter() - t_start, warm, status, evaluated)
+            plan = pl.make_plan(x1, P, belief.t, p0, speed0, status, True, 1,
+                                time.perf_counter() - t_start, warm, status, evaluated)
             return dataclasses.replace(plan, solver=f"rti-{self.qpsol}")
         if not fallback:
             raise SolverError(f"rti-{self.qpsol}", reason, "real-time iteration step rejected")
@@ -368,7 +380,7 @@ class RealTimeIteration:
     def _merit(self, x: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarray, Any]:
         """The NLP's objective (divided by the scale ``P[-2]``, as the NLP's) and constraints
         at x, and the planner's plan outputs there (one evaluation of the plan function)."""
-        outs = self.planner._f_eval(x, P)
+        outs = self.planner.plan_function(x, P)
         return outs[0].item() / float(P[-2]), outs[-1].reshape(-1), outs
 
     def _step(self, x0: np.ndarray, P: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
@@ -377,7 +389,7 @@ class RealTimeIteration:
         """One SQP step from x0: ((x, status, plan outputs at x or None), "", f0) if accepted,
         (None, reason, f0) if not; f0 is the scaled objective at x0."""
         pl = self.planner
-        f0, g0, qp = self._condensed(x0, P, lbw, ubw, lbg, ubg)
+        f0, g0, qp = self.condensed(x0, P, lbw, ubw, lbg, ubg)
         if not np.isfinite(f0):
             return None, "objective not finite at the start", f0
         v0 = self._violation(g0, lbg, ubg)
@@ -393,7 +405,7 @@ class RealTimeIteration:
         alpha = 1.0
         for _ in range(self.backtracks + 1):
             u = np.clip(x0[self._u] + alpha * d, -1, 1)
-            x1 = pl._direct_w(u, float(P[-4]), float(P[-3]))
+            x1 = pl.decision_vector(u, float(P[-4]), float(P[-3]))
             f1, g1, outs = self._merit(x1, P)
             v1 = self._violation(g1, lbg, ubg)
             feasible = v1 <= self.constraint_tol or v1 < v0

@@ -19,7 +19,8 @@ posterior every ``replan_interval``); practitioner tactics (:mod:`tmaplan.polici
 
 from __future__ import annotations
 
-from tmaplan.policies._base import (
+from tmaplan.policies.alarms import AlarmResponder, AlarmResponse
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
     BeliefView,
@@ -28,7 +29,6 @@ from tmaplan.policies._base import (
     ManoeuvrePolicy,
     Policy,
 )
-from tmaplan.policies.alarms import AlarmResponder, AlarmResponse
 from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
 from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, Zigzag
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings

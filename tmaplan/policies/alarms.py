@@ -43,7 +43,7 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError, ScenarioError, as_real, finite_real
 from tmaplan.models.sensors import default_ping_budget
-from tmaplan.policies._base import Action, BeliefView, Controller, CourseSteering
+from tmaplan.policies.base import Action, BeliefView, Controller, CourseSteering
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario

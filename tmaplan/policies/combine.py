@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING, Any
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.models.sensors import default_ping_budget
-from tmaplan.policies._base import (
+from tmaplan.planning.baselines import evaluate_baselines
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
     BeliefView,
@@ -30,11 +31,12 @@ from tmaplan.policies.pings import (
     NoPing,
     ScheduledPings,
     UniformPings,
-    _budget,
-    _offline_schedule,
+    offline_schedule,
+    resolve_ping_budget,
 )
 from tmaplan.policies.receding import Receding
 from tmaplan.policies.tactics import LeadLag, LegTurnLeg
+from tmaplan.simulate import ping_sensors
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -77,8 +79,8 @@ class Combined:
         if isinstance(man, Receding):
             man = man.resolve(scenario)
         if isinstance(ping, ScheduledPings) and ping.steps is None:
-            steps = _offline_schedule(scenario, _budget(scenario, ping.budget), ping.method,
-                                      ping.objective, man.nominal_track(scenario))
+            steps = offline_schedule(scenario, resolve_ping_budget(scenario, ping.budget),
+                                     ping.method, ping.objective, man.nominal_track(scenario))
             ping = dataclasses.replace(ping, steps=tuple(int(s) for s in steps))
         return Combined(manoeuvre=man, ping=ping)
 
@@ -108,8 +110,6 @@ _BASELINE_CACHE: LRUCache[Scenario, dict[str, Any]] = LRUCache(32)
 def _best_baselines(scenario: Scenario) -> dict[str, Any]:
     key = scenario
     if key not in _BASELINE_CACHE:
-        from tmaplan.planning.baselines import evaluate_baselines
-
         res = evaluate_baselines(scenario, CLOSED_LOOP_OBJECTIVE)
         _BASELINE_CACHE[key] = {k: v[0].params for k, v in res.items()}
     return _BASELINE_CACHE[key]
@@ -148,6 +148,7 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "receding-realtime": lambda sc: Receding(solver="real-time", name="receding-realtime"),
     "receding-rti": lambda sc: Receding(solver="real-time", full_above=float("inf"),
                                         name="receding-rti"),
+    "receding-sqp": lambda sc: Receding(solver="sqp", name="receding-sqp"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }
@@ -178,8 +179,6 @@ def check_policy(spec: str, scenario: Scenario) -> tuple[str, str | None]:
         the CLI's ping policies spend the scenario's budget). The same refusal for every
         ping policy: a uniform or adaptive policy would silently never ping.
     """
-    from tmaplan.simulate import ping_sensors
-
     if len(scenario.contacts) > 1:  # several contacts: their own policies
         from tmaplan.policies.contacts import check_contacts_policy
 
@@ -217,7 +216,8 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     plan), receding-realtime (real-time iteration, a full IPOPT re-solve when the optimum
     moved far: 5–12 times faster, the default before), receding-rti (real-time-iteration
     steps only: no full re-solve when the optimum moves far; a rejected step still falls
-    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), leg-turn-leg,
+    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), receding-sqp
+    (re-plans solved to IPOPT's tolerance by a condensed quasi-Newton SQP), leg-turn-leg,
     lead-lag. Several contacts: :mod:`tmaplan.policies.contacts` (``planned`` the joint plan,
     ``nearest-contact``, ``heaviest-contact``, ``alternate``, ``single-turn``, ``straight``).
     Pings (:data:`PINGS`): no-ping, uniform,

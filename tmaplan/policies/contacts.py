@@ -32,12 +32,12 @@ from typing import TYPE_CHECKING, Any, cast
 
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, PlanningError, finite_real
-from tmaplan.policies._base import (
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     BeliefView,
     Controller,
-    _initial_course,
-    _turn_limits,
+    initial_course,
+    turn_limits,
 )
 from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, _CourseSchedule
 
@@ -171,7 +171,7 @@ class Alternate:
         for a in self.angles:
             if not (math.isfinite(a) and abs(a) <= math.pi):
                 raise ArgumentError("alternate.angles", "angles in [−π, π] rad", self.angles)
-        c0 = _initial_course(scenario)
+        c0 = initial_course(scenario)
         n = 2 * len(self.angles)
         leg = (end - t) / n
         return [(t0, c0)] + [(t + i * leg, c0 + self.angles[i % len(self.angles)])
@@ -179,7 +179,7 @@ class Alternate:
 
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the alternating course schedule."""
-        u_max, dt = _turn_limits(scenario)
+        u_max, dt = turn_limits(scenario)
         return _CourseSchedule(self._schedule(scenario), u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:

@@ -17,21 +17,24 @@ from tmaplan.errors import (
     as_real,
     finite_real,
 )
-from tmaplan.policies._base import (
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.planning.baselines import single_turn_track, straight_track, zigzag_track
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
     BeliefView,
     Controller,
-    _CourseKeeper,
-    _initial_course,
-    _turn_limits,
+    CourseKeeper,
+    initial_course,
+    turn_limits,
 )
+from tmaplan.policies.plan_starts import plan_from_prior
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["Planned", "SingleTurn", "Straight", "Zigzag", "offline_plan"]
+__all__ = ["Planned", "SingleTurn", "Straight", "TurnRatePlayback", "Zigzag", "offline_plan",
+           "remember_offline_plan"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -51,8 +54,6 @@ class Straight:
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
-        from tmaplan.planning.baselines import straight_track
-
         return straight_track(scenario)
 
 
@@ -93,14 +94,12 @@ class SingleTurn:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller steering to the new course after ``time``."""
         angle, t = self._checked(scenario)
-        u_max, dt = _turn_limits(scenario)
-        c0 = _initial_course(scenario)
+        u_max, dt = turn_limits(scenario)
+        c0 = initial_course(scenario)
         return _CourseSchedule([(scenario.time.t0, c0), (t, c0 + angle)], u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
-        from tmaplan.planning.baselines import single_turn_track
-
         angle, t = self._checked(scenario)
         return single_turn_track(scenario, angle, t - scenario.time.t0)
 
@@ -147,8 +146,8 @@ class Zigzag:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the zig-zag course schedule."""
         t = self._check(scenario)
-        u_max, dt = _turn_limits(scenario)
-        c0 = _initial_course(scenario)
+        u_max, dt = turn_limits(scenario)
+        c0 = initial_course(scenario)
         end = scenario.time.t0 + scenario.time.horizon
         sched = [(scenario.time.t0, c0)]
         sign = 1.0
@@ -160,14 +159,12 @@ class Zigzag:
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
-        from tmaplan.planning.baselines import zigzag_track
-
         if self._check(scenario) != scenario.time.t0:
             raise PlanningError("zigzag.nominal_track: only zig-zags starting at t0")
         return zigzag_track(scenario, float(self.leg_duration), 2.0 * float(self.angle))
 
 
-class _CourseSchedule(_CourseKeeper):
+class _CourseSchedule(CourseKeeper):
     """Course ``c`` [rad, unwrapped, the first one the initial course] from time ``t`` [s],
     for the ``(t, c)`` of ``schedule``."""
 
@@ -200,7 +197,7 @@ class Planned:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller replaying the plan's turn rates."""
         plan = self.plan if self.plan is not None else offline_plan(scenario, self.objective)
-        return _TurnRatePlayback(plan, scenario)
+        return TurnRatePlayback(plan, scenario)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The planned own-ship track (used to schedule pings offline)."""
@@ -219,24 +216,41 @@ def offline_plan(scenario: Scenario, objective: str | None, *, workers: int = 1,
     ``workers`` processes or on ``pool``), cached per scenario and objective."""
     key = (scenario, objective)
     if key not in _PLAN_CACHE:
-        from tmaplan.policies.plan_starts import plan_from_prior
-
         _PLAN_CACHE[key] = plan_from_prior(scenario, objective, workers=workers, pool=pool)
     return _PLAN_CACHE[key]
 
 
-class _TurnRatePlayback:
+def remember_offline_plan(scenario: Scenario, objective: str | None, plan: Any) -> None:
+    """Keep ``plan`` as this process's :func:`offline_plan` of ``(scenario, objective)`` (a
+    worker given the plan its parent computed, so that it is not solved again)."""
+    _PLAN_CACHE[(scenario, objective)] = plan
+
+
+class TurnRatePlayback:
+    """The controller that flies a heading plan's turn rates (``planned``, and the receding
+    policy between re-plans).
+
+    Parameters
+    ----------
+    plan : HeadingPlan
+        Its ``times`` (control nodes [s]) and ``turn_rate`` per interval [rad/s].
+    scenario : Scenario
+        Gives the turn-rate limit the rates are clipped to.
+    """
+
     def __init__(self, plan: Any, scenario: Scenario) -> None:
         self.times = np.asarray(plan.times, float)
         self.rates = np.asarray(plan.turn_rate, float)
-        u_max, _ = _turn_limits(scenario)
+        u_max, _ = turn_limits(scenario)
         self.u_max = u_max
 
     def rate_at(self, t: float) -> float:
+        """The plan's turn rate [rad/s] at time ``t`` [s] (0 outside the plan)."""
         i = int(np.searchsorted(self.times, t + 1e-9, side="right") - 1)
         if i < 0 or i >= len(self.rates):
             return 0.0
         return float(np.clip(self.rates[i], -self.u_max, self.u_max))
 
     def act(self, belief: BeliefView, t: float) -> Action:
+        """Turn at :meth:`rate_at` ``t``."""
         return Action(turn_rate=self.rate_at(t))

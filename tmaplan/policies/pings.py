@@ -10,13 +10,15 @@ import numpy as np
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, as_real, is_integer
 from tmaplan.models.sensors import default_ping_budget
-from tmaplan.policies._base import Action, BeliefView, Controller
+from tmaplan.planning import ping_candidates, schedule_pings, uniform_ping_steps
+from tmaplan.planning.objectives import PingObjectiveName
+from tmaplan.policies.base import Action, BeliefView, Controller
 
 if TYPE_CHECKING:
-    from tmaplan.planning.objectives import PingObjectiveName
     from tmaplan.scenario import Scenario
 
-__all__ = ["AdaptivePings", "NoPing", "ScheduledPings", "UniformPings"]
+__all__ = ["AdaptivePings", "NoPing", "ScheduledPings", "UniformPings", "offline_schedule",
+           "resolve_ping_budget"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -45,12 +47,10 @@ class UniformPings:
 
     def controller(self, scenario: Scenario) -> Controller:
         """Controller pinging at evenly spaced steps."""
-        from tmaplan.planning import ping_candidates, uniform_ping_steps
-
         times = np.asarray(scenario.time.times)
         cand, gap, _ = ping_candidates(scenario, times)
-        steps = uniform_ping_steps(times, _budget(scenario, self.budget), candidates=cand,
-                                   gap=gap)
+        steps = uniform_ping_steps(times, resolve_ping_budget(scenario, self.budget),
+                                   candidates=cand, gap=gap)
         return _StepPings(np.asarray(steps, dtype=int))
 
 
@@ -83,26 +83,40 @@ class ScheduledPings:
                 raise ArgumentError("scheduled.steps", f"integer steps in [1, {K}]",
                                     self.steps)
             return _StepPings(np.asarray(steps, dtype=int))
-        return _StepPings(_offline_schedule(scenario, _budget(scenario, self.budget),
-                                            self.method, self.objective))
+        return _StepPings(offline_schedule(scenario, resolve_ping_budget(scenario, self.budget),
+                                           self.method, self.objective))
 
 
-#: Offline schedules kept by :func:`_offline_schedule`, the 64 most recently used
+#: Offline schedules kept by :func:`offline_schedule`, the 64 most recently used
 #: (:mod:`tmaplan.caching`): a campaign resolves one per scheduled policy (and manoeuvre track).
 _SCHEDULE_CACHE: LRUCache[tuple[Any, ...], np.ndarray] = LRUCache(64)
 
 
-def _offline_schedule(scenario: Scenario, budget: int,
+def offline_schedule(scenario: Scenario, budget: int,
                       method: Literal["exact", "relaxed", "greedy"],
                       objective: PingObjectiveName,
                       track: Any = None) -> np.ndarray:
-    """Offline ping steps from the prior along ``track`` (default: the scripted track), read
-    only; cached (:data:`_SCHEDULE_CACHE`)."""
+    """Offline ping steps from the prior along ``track`` (default: the scripted track).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    budget : int
+        Pings at most.
+    method, objective
+        As :func:`tmaplan.planning.schedule_pings` (no certificate is computed).
+    track : ObserverTrack, optional
+        The own-ship track flown.
+
+    Returns
+    -------
+    ndarray of int, shape (n_pings,)
+        The ping steps, read only (cached, the 64 most recently used, shared by callers).
+    """
     tkey = None if track is None else np.asarray(track.position).tobytes()
     key = (scenario, budget, method, objective, tkey)  # a frozen Scenario hashes its fields
     if key in _SCHEDULE_CACHE:
         return _SCHEDULE_CACHE[key]
-    from tmaplan.planning import schedule_pings
 
     # the policy needs the steps only: no certificate (it costs a conic solve per track)
     sched = schedule_pings(scenario, budget=budget, method=method, objective=objective,
@@ -151,8 +165,8 @@ class AdaptivePings:
         pl = scenario.planning
         spacing = self.min_spacing if self.min_spacing is not None else (
             pl.ping_min_spacing if pl else 0.0)
-        return _Adaptive(self.threshold, _budget(scenario, self.budget), float(spacing),
-                         scenario)
+        return _Adaptive(self.threshold, resolve_ping_budget(scenario, self.budget),
+                         float(spacing), scenario)
 
 
 class _Adaptive:
@@ -175,8 +189,15 @@ class _Adaptive:
         return Action()
 
 
-def _budget(scenario: Scenario, budget: int | None) -> int:
-    """The policy's ping budget, else the scenario's (0 without planning settings)."""
+def resolve_ping_budget(scenario: Scenario, budget: int | None) -> int:
+    """The policy's ping budget ``budget``, else (None) the scenario's
+    ``planning.ping_budget`` (0 without planning settings).
+
+    Raises
+    ------
+    ArgumentError
+        ``budget`` not an integer >= 0 (field ``pings.budget``).
+    """
     if budget is not None:
         if not is_integer(budget, 0):
             raise ArgumentError("pings.budget", "an integer >= 0 (None: the scenario's)",

@@ -13,18 +13,24 @@ manoeuvres (up to the solver's tolerance).
 
 from __future__ import annotations
 
+import dataclasses
 import uuid
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tmaplan.errors import ArgumentError, PlanningError, SolverError, is_integer
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.parallel import closing_pool, process_pool
+from tmaplan.planning.baselines import evaluate_baselines, straight_track
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.feasibility import check_keep_out
+from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
+from tmaplan.policies.tactics import LeadLag, LegTurnLeg
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
 
-    from tmaplan.models.observer import ObserverTrack
-    from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
     from tmaplan.scenario import Scenario
 
 __all__ = ["plan_candidates", "plan_from_prior", "start_programs", "turn_program"]
@@ -51,10 +57,6 @@ def start_programs(scenario: Scenario, planner: HeadingPlanner, *, n_turns: int 
     (:func:`tmaplan.planning.evaluate_baselines`) by the planner's own objective; the
     planner's built-in guesses (``guess:i``).
     """
-    from tmaplan.planning.baselines import evaluate_baselines, straight_track
-    from tmaplan.planning.belief import Belief
-    from tmaplan.policies.tactics import LeadLag, LegTurnLeg
-
     out: dict[str, np.ndarray] = {"straight": turn_program(straight_track(scenario), planner)}
     for tactic in (LegTurnLeg(), LeadLag()):
         try:
@@ -112,8 +114,6 @@ def plan_from_prior(scenario: Scenario, objective: Any = None, *, n_turns: int =
     SolverError
         If IPOPT converged from none of the starts.
     """
-    import dataclasses
-
     plans = plan_candidates(scenario, objective, n_turns=n_turns, planner=planner,
                             workers=workers, pool=pool, **planner_kw)
     name = min(plans, key=lambda k: plans[k].objective)
@@ -140,9 +140,6 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
     SolverError
         If IPOPT converged from none of the starts.
     """
-    from tmaplan.planning.belief import Belief
-    from tmaplan.planning.feasibility import check_keep_out
-
     if not is_integer(workers, 1):
         raise ArgumentError("workers", "an integer >= 1", workers)
     parallel = (workers > 1 or pool is not None) and planner is None and (
@@ -157,8 +154,6 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
         planner = _build_planner(scenario, objective, planner_kw)
     starts = start_programs(scenario, planner, n_turns=n_turns)
     if parallel:
-        from tmaplan.parallel import closing_pool, process_pool
-
         own = None
         if pool is None:
             pool = own = process_pool(min(int(workers), len(starts)), warm_up=(__name__,))
@@ -184,8 +179,6 @@ def plan_candidates(scenario: Scenario, objective: Any = None, *, n_turns: int =
 
 def _build_planner(scenario: Scenario, objective: Any, planner_kw: dict[str, Any]
                    ) -> HeadingPlanner:
-    from tmaplan.planning.heading import HeadingPlanner
-
     kw = dict(planner_kw)
     if objective is not None:
         kw["objective"] = objective
@@ -207,8 +200,6 @@ _WORKER: dict[str, Any] = {}
 def _solve_in_worker(key: tuple[Any, ...], u: np.ndarray) -> HeadingPlan | None:
     """One start on a worker process. ``key``: (token, scenario, objective, planner
     arguments); the planner and the prior belief are built once per worker and token."""
-    from tmaplan.planning.belief import Belief
-
     token, scenario, objective, planner_kw = key
     if _WORKER.get("token") != token:
         _WORKER.update(token=token, planner=_build_planner(scenario, objective, planner_kw),

@@ -22,18 +22,21 @@ from tmaplan.errors import (
     is_whole_count,
     whole_steps_text,
 )
-from tmaplan.policies._base import (
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.planning import Belief, HeadingPlanner
+from tmaplan.planning.converged_sqp import ConvergedSQP
+from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
+from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
     BeliefView,
     Controller,
-    _turn_limits,
     log,
+    turn_limits,
 )
-from tmaplan.policies.manoeuvres import _PLAN_CACHE, _TurnRatePlayback, offline_plan
+from tmaplan.policies.manoeuvres import TurnRatePlayback, offline_plan, remember_offline_plan
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["RECEDING_SOLVERS", "Receding", "prefetch_receding_model"]
@@ -75,6 +78,12 @@ class Receding:
       ``receding-realtime`` (the default before; the ``receding`` numbers of docs/results/ up
       to the seed-17 campaign were flown with it), ``receding-rti`` without the ``full_above``
       fallback.
+    * ``"sqp"``: every re-plan solved to IPOPT's tolerance (``full_tol``) by a condensed
+      quasi-Newton SQP over the turn rates (:class:`tmaplan.planning.converged_sqp.
+      ConvergedSQP`: the real-time iteration's Hessian model, BFGS updates carried from
+      re-plan to re-plan, ``qpsol`` QPs), warm-started as ``"ipopt"``; a solve that does not
+      converge falls back as IPOPT's does (``fallback_starts``). CLI name ``receding-sqp``;
+      not the default (docs/results/fast-replans.md).
     * ``"multi-start"``: the first re-plan by IPOPT warm-started from the offline plan from
       the prior; every later one by IPOPT from five starts — the previous plan shifted to the
       re-plan time, its mirror image (the same manoeuvre to the other side), straight and
@@ -101,11 +110,11 @@ class Receding:
         Particles passed to the planner as belief samples (>= 5): a systematic subsample
         when the filter has more, else all of them with their weights
         (:meth:`tmaplan.planning.Belief.from_particles`).
-    solver : {"ipopt", "real-time", "multi-start"}
+    solver : {"ipopt", "real-time", "multi-start", "sqp"}
         How the re-plans are solved (above).
     qpsol : str
-        With ``solver="real-time"``: QP solver of the real-time iteration
-        (:data:`tmaplan.planning.rti.QP_SOLVERS`).
+        With ``solver="real-time"`` or ``"sqp"``: QP solver of the real-time iteration or
+        of the SQP (:data:`tmaplan.planning.rti.QP_SOLVERS`).
     rti_steps : int
         With ``solver="real-time"``: SQP steps per re-plan of the real-time iteration, >= 1.
     full_solves : tuple of int
@@ -140,10 +149,10 @@ class Receding:
         With ``solver="real-time"`` or ``"ipopt"``: re-plans (0 = the first) solved from the
         five starts of ``"multi-start"`` instead (default none).
     rti : RTIModel, optional
-        With ``solver="real-time"``: the offline plan and the Hessian model of the real-time
-        iteration (:func:`tmaplan.planning.rti.reference_model`); computed once per scenario
-        if not given (:meth:`resolve` computes it once per campaign, so that workers receive
-        it).
+        With ``solver="real-time"`` or ``"sqp"``: the offline plan and the Hessian model of
+        the real-time iteration (:func:`tmaplan.planning.rti.reference_model`); computed once
+        per scenario if not given (:meth:`resolve` computes it once per campaign, so that
+        workers receive it).
     first_plan : HeadingPlan, optional
         With ``solver="ipopt"`` or ``"multi-start"``: the offline plan from the prior that
         the first re-plan starts from; computed once per scenario if not given (by
@@ -192,17 +201,17 @@ class Receding:
         iteration's model or the first re-plan's start, unless given or of another horizon.
         A campaign solves it first, its starts on the workers."""
         return self.horizon is None and (
-            (self.solver == "real-time" and self.rti is None)
-            or (self.solver != "real-time" and self.first_plan is None))
+            (self.solver in _MODEL_SOLVERS and self.rti is None)
+            or (self.solver not in _MODEL_SOLVERS and self.first_plan is None))
 
     def resolve(self, scenario: Scenario) -> Receding:
         """The same policy with what its re-plans start from computed (once per campaign):
         the real-time iteration's model, or the plan the first re-plan starts from."""
         _check_receding(self, scenario)
-        if self.solver == "real-time" and self.rti is None:
+        if self.solver in _MODEL_SOLVERS and self.rti is None:
             return dataclasses.replace(self, rti=_rti_model(scenario, self.objective,
                                                             self.horizon, self.until_end))
-        if self.solver != "real-time" and self.first_plan is None:
+        if self.solver not in _MODEL_SOLVERS and self.first_plan is None:
             return dataclasses.replace(self, first_plan=_first_plan(
                 scenario, self.objective, self.horizon, self.until_end))
         return self
@@ -213,7 +222,9 @@ class Receding:
 
 
 #: How :class:`Receding` solves its re-plans.
-RECEDING_SOLVERS = ("ipopt", "real-time", "multi-start")
+RECEDING_SOLVERS = ("ipopt", "real-time", "multi-start", "sqp")
+#: The solvers that use the real-time iteration's model (``rti``, ``qpsol``).
+_MODEL_SOLVERS = ("real-time", "sqp")
 
 #: Heading planners (casadi problems built once) by (scenario, objective, horizon, until_end),
 #: the 16 most recently used.
@@ -224,8 +235,6 @@ def _planner(scenario: Scenario, objective: str | None, horizon: float | None,
              until_end: bool = False) -> Any:
     key = (scenario, objective, horizon, until_end)
     if key not in _PLANNER_CACHE:
-        from tmaplan.planning import HeadingPlanner
-
         kw: dict[str, Any] = {"until_end": until_end}
         if objective is not None:
             kw["objective"] = objective
@@ -247,9 +256,6 @@ def _rti_model(scenario: Scenario, objective: str | None, horizon: float | None,
     """The real-time iteration's model at the offline plan from the prior (cached)."""
     key = (scenario, objective, horizon, until_end)
     if key not in _RTI_MODEL_CACHE:
-        from tmaplan.planning import Belief
-        from tmaplan.planning.rti import reference_model
-
         planner = _planner(scenario, objective, horizon, until_end)
         plan = _first_plan(scenario, objective, horizon, until_end)
         _RTI_MODEL_CACHE[key] = reference_model(planner, plan, Belief.from_prior(scenario))
@@ -276,8 +282,6 @@ def _first_plan(scenario: Scenario, objective: str | None, horizon: float | None
         return offline_plan(scenario, objective)
     key = (scenario, objective, horizon, until_end)
     if key not in _FIRST_PLAN_CACHE:
-        from tmaplan.planning import Belief
-
         _FIRST_PLAN_CACHE[key] = _planner(scenario, objective, horizon, until_end).solve(
             Belief.from_prior(scenario))
     return _FIRST_PLAN_CACHE[key]
@@ -303,14 +307,12 @@ def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Exe
 
 
 def _rti_model_on_worker(scenario: Scenario, objective: str | None, plan: Any) -> Any:
-    _PLAN_CACHE[(scenario, objective)] = plan
+    remember_offline_plan(scenario, objective, plan)
     return _rti_model(scenario, objective, None)
 
 
 def _rti(policy: Receding, scenario: Scenario) -> Any:
     """The policy's real-time iteration (casadi functions built once per process)."""
-    from tmaplan.planning.rti import RealTimeIteration
-
     model = policy.rti if policy.rti is not None else _rti_model(
         scenario, policy.objective, policy.horizon, policy.until_end)
     key = (scenario, policy.objective, policy.horizon, policy.until_end, policy.qpsol,
@@ -320,6 +322,18 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
         _RTI_CACHE[key] = RealTimeIteration(planner, model, qpsol=policy.qpsol,
                                             steps=policy.rti_steps)
     return _RTI_CACHE[key].with_model(model)
+
+
+def _sqp(planner: Any, rti: Any) -> Any:
+    """The converged SQP of a planner (casadi functions built once per process)."""
+    key = (planner, rti.qpsol)
+    if key not in _SQP_CACHE:
+        _SQP_CACHE[key] = ConvergedSQP(planner, rti.model, qpsol=rti.qpsol, rti=rti)
+    return _SQP_CACHE[key].with_model(rti.model)
+
+
+#: Converged SQPs by (planner, QP solver).
+_SQP_CACHE: LRUCache[tuple[Any, str], Any] = LRUCache(16)
 
 
 def _check_receding(policy: Receding, scenario: Scenario) -> None:
@@ -348,15 +362,12 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
         raise ArgumentError("receding.max_particles", "an integer >= 5", mp)
     if not as_real(policy.full_above) > 0:  # (NaN, a bool or a string fail)
         raise ArgumentError("receding.full_above", "> 0 (inf: never)", policy.full_above)
-    from tmaplan.planning import HeadingPlanner
-    from tmaplan.planning.rti import QP_SOLVERS
-
     HeadingPlanner.check_tolerance(policy.full_tol, "receding.full_tol")
-    if policy.solver == "real-time" and policy.qpsol not in QP_SOLVERS:
+    if policy.solver in _MODEL_SOLVERS and policy.qpsol not in QP_SOLVERS:
         raise ArgumentError("receding.qpsol", f"one of {', '.join(QP_SOLVERS)}", policy.qpsol)
     if policy.solver != "real-time":  # what only the real-time iteration uses, not ignored
         defaults = {f.name: f.default for f in dataclasses.fields(Receding)}
-        for field in _REAL_TIME_ONLY:
+        for field in _REAL_TIME_ONLY[2 if policy.solver == "sqp" else 0:]:
             value, default = getattr(policy, field), defaults[field]
             if value is not default and value != default:
                 raise ArgumentError(f"receding.{field}", f"{default!r} with solver="
@@ -364,8 +375,9 @@ def _check_receding(policy: Receding, scenario: Scenario) -> None:
                                     value)
 
 
-#: The fields that only ``solver="real-time"`` uses (refused off their defaults otherwise).
-_REAL_TIME_ONLY = ("qpsol", "rti_steps", "full_solves", "full_above", "rti")
+#: The fields that only ``solver="real-time"`` uses (refused off their defaults otherwise;
+#: ``"sqp"`` uses the first two).
+_REAL_TIME_ONLY = ("qpsol", "rti", "rti_steps", "full_solves", "full_above")
 
 
 class _RecedingController:
@@ -381,7 +393,8 @@ class _RecedingController:
         self.policy = policy
         self.scenario = scenario
         self.planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end)
-        self.rti = _rti(policy, scenario) if policy.solver == "real-time" else None
+        self.rti = _rti(policy, scenario) if policy.solver in _MODEL_SOLVERS else None
+        self.sqp = _sqp(self.planner, self.rti) if policy.solver == "sqp" else None
         # what the first re-plan starts from (None: a cold start)
         self.first: Any = None
         if self.rti is not None:
@@ -389,9 +402,9 @@ class _RecedingController:
         else:
             self.first = policy.first_plan if policy.first_plan is not None else _first_plan(
                 scenario, policy.objective, policy.horizon, policy.until_end)
-        self.u_max, self.dt = _turn_limits(scenario)
+        self.u_max, self.dt = turn_limits(scenario)
         self.plan: Any = None
-        self.playback: _TurnRatePlayback | None = None
+        self.playback: TurnRatePlayback | None = None
         self.next_replan = scenario.time.t0
         self.log: list[dict[str, Any]] = []
         self.alarms = 0
@@ -406,8 +419,6 @@ class _RecedingController:
         return Action(turn_rate=rate)
 
     def _replan(self, belief: BeliefView, t: float) -> None:
-        from tmaplan.planning import Belief
-
         t0 = time.perf_counter()
         # the filter's posterior at step k has assimilated the measurements at k (it predicts
         # and updates to k before the controller acts at k; at step 0 it has updated with the
@@ -434,7 +445,7 @@ class _RecedingController:
             entry.update(status=plan.status, success=True, solver=plan.solver,
                          fell_back=fell_back)
             self.plan = plan
-            self.playback = _TurnRatePlayback(plan, self.scenario)
+            self.playback = TurnRatePlayback(plan, self.scenario)
         except PlanningError as exc:  # keep flying the previous plan
             # no plan satisfies the constraints (infeasible), or not converged (the others)
             entry.update(status=str(exc), success=False, fell_back=True,
@@ -450,6 +461,8 @@ class _RecedingController:
         pol = self.policy
         full = {"heading0": heading0, "position0": position0,
                 "warm_start": self.plan or self.first, "tol": pol.full_tol}
+        if self.sqp is not None:
+            return self.sqp.solve(b, **full), False
         if self.rti is None or n in pol.full_solves:  # "ipopt", or a full solve asked
             return self.planner.solve(b, **full), False
         plan = self.rti.solve(b, previous=self.plan, heading0=heading0, position0=position0)

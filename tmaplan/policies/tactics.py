@@ -21,17 +21,19 @@ import numpy as np
 
 from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import bearing_of, wrap_angle
-from tmaplan.policies._base import (
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.planning.baselines import course_program_track, single_turn_track, straight_track
+from tmaplan.planning.belief import Belief
+from tmaplan.policies.base import (
     Action,
     BeliefView,
     Controller,
-    _CourseKeeper,
-    _initial_course,
-    _turn_limits,
+    CourseKeeper,
+    initial_course,
+    turn_limits,
 )
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
 __all__ = ["LeadLag", "LegTurnLeg", "belief_line_of_sight", "doctrine_course",
@@ -142,8 +144,6 @@ def _prior_line_of_sight(scenario: Scenario, t: float, track: ObserverTrack
                          ) -> tuple[float, float]:
     """Bearing and bearing rate of the prior-mean relative state at time ``t`` along ``track``
     (the nominal view a controller would have without measurements)."""
-    from tmaplan.planning.belief import Belief
-
     m = Belief.from_prior(scenario).mean
     # own position and velocity at t itself, between grid steps too (linear in time: exact
     # on a straight leg)
@@ -195,23 +195,21 @@ class LegTurnLeg:
         """A controller holding the course, then turning by the doctrine."""
         t_turn = self.turn_time(scenario)
         beam = _check_angle("leg-turn-leg.beam_angle", self.beam_angle)
-        u_max, dt = _turn_limits(scenario)
-        return _LegTurnLegController(t_turn, beam, _initial_course(scenario), u_max, dt)
+        u_max, dt = turn_limits(scenario)
+        return _LegTurnLegController(t_turn, beam, initial_course(scenario), u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The track flown when the line of sight at the turn is the prior mean's."""
-        from tmaplan.planning.baselines import single_turn_track, straight_track
-
         t_turn = self.turn_time(scenario)
         beam = _check_angle("leg-turn-leg.beam_angle", self.beam_angle)
         straight = straight_track(scenario)
         beta, _ = _prior_line_of_sight(scenario, t_turn, straight)
-        c0 = _initial_course(scenario)
+        c0 = initial_course(scenario)
         delta = float(wrap_angle(doctrine_course(beta, c0, beam) - c0))
         return single_turn_track(scenario, delta, t_turn - scenario.time.t0)
 
 
-class _LegTurnLegController(_CourseKeeper):
+class _LegTurnLegController(CourseKeeper):
     def __init__(self, t_turn: float, beam: float, c0: float, u_max: float, dt: float) -> None:
         super().__init__(c0, u_max, dt)
         self.t_turn, self.beam, self.course = t_turn, beam, self.c0
@@ -267,13 +265,11 @@ class LeadLag:
         """A controller flying the lead leg, then the lag leg."""
         t_lead, t_lag = self._times(scenario)
         ang = _check_angle("lead-lag.angle", self.angle)
-        u_max, dt = _turn_limits(scenario)
-        return _LeadLagController(t_lead, t_lag, ang, _initial_course(scenario), u_max, dt)
+        u_max, dt = turn_limits(scenario)
+        return _LeadLagController(t_lead, t_lag, ang, initial_course(scenario), u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The track flown when the line of sight is the prior mean's."""
-        from tmaplan.planning.baselines import course_program_track, straight_track
-
         t_lead, t_lag = self._times(scenario)
         ang = _check_angle("lead-lag.angle", self.angle)
         straight = straight_track(scenario)
@@ -286,7 +282,7 @@ class LeadLag:
                                                (t_lag - scenario.time.t0, c2)])
 
 
-class _LeadLagController(_CourseKeeper):
+class _LeadLagController(CourseKeeper):
     def __init__(self, t_lead: float, t_lag: float, angle: float, c0: float, u_max: float,
                  dt: float) -> None:
         super().__init__(c0, u_max, dt)

@@ -11,13 +11,14 @@ import numpy as np
 
 from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed, range_of, wrap_angle
+from tmaplan.models.observer import ObserverTrack
+from tmaplan.models.target import initial_velocity
 
 if TYPE_CHECKING:
-    from tmaplan.models.observer import ObserverTrack
     from tmaplan.scenario import Scenario
 
-__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "CourseSteering",
-           "ManoeuvrePolicy", "Policy"]
+__all__ = ["CLOSED_LOOP_OBJECTIVE", "Action", "BeliefView", "Controller", "CourseKeeper",
+           "CourseSteering", "ManoeuvrePolicy", "Policy", "initial_course", "turn_limits"]
 
 log = logging.getLogger("tmaplan.policies")
 
@@ -143,7 +144,14 @@ class ManoeuvrePolicy(Policy, Protocol):
 # --------------------------------------------------------------------------------------------
 
 
-def _turn_limits(scenario: Scenario) -> tuple[float, float]:
+def turn_limits(scenario: Scenario) -> tuple[float, float]:
+    """The manoeuvre policies' ``(maximum turn rate [rad/s], time step [s])``.
+
+    Raises
+    ------
+    ScenarioError
+        ``observer.turn_rate_max`` not set.
+    """
     o = scenario.observer
     if o.turn_rate_max is None:
         raise ScenarioError("observer.turn_rate_max", "a turn-rate limit for manoeuvre policies",
@@ -151,7 +159,7 @@ def _turn_limits(scenario: Scenario) -> tuple[float, float]:
     return float(o.turn_rate_max), float(scenario.time.dt)
 
 
-class _CourseKeeper:
+class CourseKeeper:
     """Steering to courses held in a continuous (unwrapped) heading frame, at the maximum
     turn rate: the base of the course-steering controllers (:class:`CourseSteering`).
 
@@ -208,9 +216,8 @@ class _CourseKeeper:
         return float(np.clip(delta / self.dt, -self.u_max, self.u_max))
 
 
-def _initial_course(scenario: Scenario) -> float:
-    from tmaplan.models.target import initial_velocity
-
+def initial_course(scenario: Scenario) -> float:
+    """The own ship's initial course [rad, clockwise from North]."""
     v = initial_velocity(scenario.observer)
     return float(course_speed(v)[0])
 

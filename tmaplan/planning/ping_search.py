@@ -7,18 +7,23 @@ hands it to the helpers here:
 
 * feasibility: candidate steps outside the forbidden windows, minimum spacing, the largest
   number of pings the spacing allows;
-* ``_exact``: exhaustive enumeration, or best-first branch and bound with the monotone lower
-  bound "all remaining candidates pinged" (docs/errata.md) — used for the position objective,
-  which the compiled kernel of :mod:`tmaplan.planning.ping_exact` does not evaluate;
-* the roundings of the relaxed weights of :mod:`tmaplan.planning.ping_relaxation`;
-* ``greedy`` and the local swaps that polish every method;
+* :func:`exact_search`: exhaustive enumeration, or best-first branch and bound with the
+  monotone lower bound "all remaining candidates pinged" (docs/errata.md) — used for the
+  position objective, which the compiled kernel of :mod:`tmaplan.planning.ping_exact` does
+  not evaluate;
+* :func:`round_weights`: the roundings of the relaxed weights of
+  :mod:`tmaplan.planning.ping_relaxation`;
+* :func:`greedy_schedule` and :func:`local_swaps`, which polish every method;
 * :func:`uniform_ping_steps`, the one definition of the evenly spaced reference schedule.
 
-The helpers are private to :mod:`tmaplan.planning.pings`, which re-exports the public ones.
+:mod:`tmaplan.planning.pings` re-exports the user-facing ones (:func:`ping_candidates`,
+:func:`uniform_ping_steps`, :func:`max_pings`); the searches serve it and
+:mod:`tmaplan.planning.joint_ocp` (rounding the joint OCP's ping weights).
 """
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import math
 import time
@@ -34,13 +39,13 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = [
-    "_exact",
-    "_greedy",
-    "_local_swaps",
-    "_round",
-    "_spacing_ok",
+    "exact_search",
+    "greedy_schedule",
+    "local_swaps",
     "max_pings",
     "ping_candidates",
+    "round_weights",
+    "spacing_ok",
     "uniform_ping_steps",
 ]
 
@@ -129,7 +134,9 @@ def uniform_ping_steps(times: np.ndarray, budget: int, *,
     return sorted(out)
 
 
-def _spacing_ok(steps: Sequence[int], gap: int) -> bool:
+def spacing_ok(steps: Sequence[int], gap: int) -> bool:
+    """Whether the ping steps ``steps`` (any order) are pairwise at least ``gap`` steps
+    apart."""
     s = sorted(steps)
     return all(b - a >= gap for a, b in itertools.pairwise(s))
 
@@ -147,9 +154,27 @@ def max_pings(cand: np.ndarray, gap: int) -> int:
 # --------------------------------------------------------------------------------------------
 # Search: rounding, local swaps, greedy, relaxed NLP, exact
 # --------------------------------------------------------------------------------------------
-def _round(u: np.ndarray, cand: np.ndarray, budget: int, gap: int) -> list[list[int]]:
+def round_weights(u: np.ndarray, cand: np.ndarray, budget: int, gap: int) -> list[list[int]]:
     """Two roundings of relaxed weights: largest-u-first, and systematic (the steps where the
-    cumulative Σu crosses i + 1/2); both respect the spacing."""
+    cumulative Σu crosses i + 1/2); both respect the spacing.
+
+    Parameters
+    ----------
+    u : ndarray, shape (n,)
+        Relaxed ping weights in [0, 1], one per candidate.
+    cand : ndarray of int, shape (n,)
+        Candidate steps (sorted).
+    budget : int
+        Pings wanted.
+    gap : int
+        Minimum spacing [steps].
+
+    Returns
+    -------
+    list of list of int
+        The two schedules (sorted steps; shorter than ``budget`` if the spacing allows no
+        more).
+    """
     def feasible(order: Sequence[int]) -> list[int]:
         chosen: list[int] = []
         for i in order:
@@ -168,13 +193,35 @@ def _round(u: np.ndarray, cand: np.ndarray, budget: int, gap: int) -> list[list[
     return [sorted(top), sorted(syst)]
 
 
-def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int,
+def local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int,
                  max_rounds: int = 8, radius: Sequence[int] = (1, 2, 4, 8, 16)) -> tuple[
                      list[int], float]:
     """Move pings to nearby candidates (±radius in candidate index) while that improves.
 
     Each round evaluates every single move in one batch, then applies the best move of every
     ping together if that beats the best single move (else the best single move).
+
+    Parameters
+    ----------
+    ev : PingEvaluator
+        The objective of a schedule (batched).
+    steps : list of int
+        Starting schedule (steps in ``cand``).
+    cand : ndarray of int, shape (n,)
+        Candidate steps (sorted).
+    gap : int
+        Minimum spacing [steps].
+    max_rounds : int
+        Rounds of moves at most.
+    radius : sequence of int
+        Moves tried per ping [candidate indices, both ways].
+
+    Returns
+    -------
+    steps : list of int
+        The polished schedule (sorted).
+    value : float
+        Its objective.
     """
     pos = {int(c): i for i, c in enumerate(cand)}
     steps = sorted(steps)
@@ -186,7 +233,7 @@ def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int
                 for j in (pos[s] - r, pos[s] + r):
                     if 0 <= j < cand.size and int(cand[j]) not in steps:
                         trial = [*steps[:i], int(cand[j]), *steps[i + 1:]]
-                        if _spacing_ok(trial, gap):
+                        if spacing_ok(trial, gap):
                             trials.append(sorted(trial))
                             owner.append(i)
                             moves.append(int(cand[j]))
@@ -202,7 +249,7 @@ def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int
             if mine:
                 combined[i] = moves[min(mine, key=lambda t: vals[t])]
         new, new_val = sorted(trials[j]), float(vals[j])
-        if len(set(combined)) == len(combined) and _spacing_ok(combined, gap) and \
+        if len(set(combined)) == len(combined) and spacing_ok(combined, gap) and \
                 sorted(combined) != new:
             cv = ev.value(sorted(combined))
             if cv < new_val:
@@ -211,7 +258,25 @@ def _local_swaps(ev: PingEvaluator, steps: list[int], cand: np.ndarray, gap: int
     return steps, best
 
 
-def _greedy(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[int]:
+def greedy_schedule(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int) -> list[int]:
+    """Pings added one at a time, each the candidate that lowers the objective most.
+
+    Parameters
+    ----------
+    ev : PingEvaluator
+        The objective of a schedule (batched).
+    cand : ndarray of int, shape (n,)
+        Candidate steps (sorted).
+    budget : int
+        Pings wanted.
+    gap : int
+        Minimum spacing [steps].
+
+    Returns
+    -------
+    list of int
+        The schedule (sorted; shorter than ``budget`` if the spacing allows no more).
+    """
     chosen: list[int] = []
     for _ in range(budget):
         opts = [c for c in cand if all(abs(int(c) - x) >= gap for x in chosen)]
@@ -230,29 +295,59 @@ def _maximal(chosen: Sequence[int], cand: np.ndarray, gap: int) -> bool:
                    if int(c) not in chosen)
 
 
-def _exact(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
+def exact_search(ev: PingEvaluator, cand: np.ndarray, budget: int, gap: int, incumbent: list[int],
            inc_val: float, max_enumerate: int, time_limit: float) -> tuple[list[int], float,
                                                                           float, str]:
     """Exhaustive enumeration or best-first branch and bound over every schedule of *at most*
-    ``budget`` pings. Returns (steps, val, lb, status).
+    ``budget`` pings.
 
     More pings never raise the objective, so the optimum is a set that cannot be extended:
     one of ``budget`` pings or, with a spacing (``gap`` > 1), a smaller set that no candidate
     fits beside (e.g. the middle one of three candidates too close to it); both kinds are
-    searched.
+    searched. The lower bound of a node is its schedule with every remaining candidate
+    pinged (docs/errata.md).
+
+    Parameters
+    ----------
+    ev : PingEvaluator
+        The objective of a schedule (batched).
+    cand : ndarray of int, shape (n,)
+        Candidate steps (sorted).
+    budget : int
+        Pings at most.
+    gap : int
+        Minimum spacing [steps].
+    incumbent : list of int
+        Best known schedule (the branch and bound's start).
+    inc_val : float
+        Its objective.
+    max_enumerate : int
+        Enumerate exhaustively when C(n, budget) is at most this.
+    time_limit : float
+        Branch and bound time limit [s].
+
+    Returns
+    -------
+    steps : list of int
+        The best schedule found.
+    value : float
+        Its objective.
+    lower_bound : float
+        Lower bound on every schedule (``value`` when optimal).
+    status : str
+        ``"optimal"`` or ``"gap (time limit)"``.
     """
     n = cand.size
     if math.comb(n, budget) <= max_enumerate:
         combos = [c for c in itertools.combinations(cand.tolist(), budget)
-                  if _spacing_ok(c, gap)]
+                  if spacing_ok(c, gap)]
         if gap > 1:  # the smaller sets that cannot be extended
             combos += [c for k in range(1, budget)
                        for c in itertools.combinations(cand.tolist(), k)
-                       if _spacing_ok(c, gap) and _maximal(c, cand, gap)]
+                       if spacing_ok(c, gap) and _maximal(c, cand, gap)]
         vals = ev.evaluate(ev.schedules(combos))
         j = int(np.argmin(vals))
         return list(combos[j]), float(vals[j]), float(vals[j]), "optimal"
-    import heapq
 
     t0 = time.perf_counter()
     best, best_val = list(incumbent), inc_val

@@ -34,10 +34,10 @@ from tmaplan.bounds.closed_form_engine import (
 )
 from tmaplan.bounds.fimdet import fim_bearings_generic, inverse_quadratic_generic, logdet_generic
 from tmaplan.errors import ArgumentError, is_integer
+from tmaplan.planning.belief import Belief
 from tmaplan.scenario import RangeSensor
 
 if TYPE_CHECKING:
-    from tmaplan.planning.belief import Belief
     from tmaplan.scenario import Scenario
 
 __all__ = [
@@ -88,6 +88,11 @@ class ParamLayout:
     def size(self) -> int:
         """Length of p."""
         return 34 + 4 * self.n_samples + 3 * (self.n_steps + 1)
+
+    def mean_offsets(self) -> tuple[int, ...]:
+        """Offsets in p of each belief's mean relative state ``E X_0`` (4 entries): one
+        belief here (the planner's keep-out reads them)."""
+        return (0,)
 
     def slices(self) -> dict[str, slice]:
         """Name -> slice of p."""
@@ -208,7 +213,7 @@ def _running_sum(rows: int, cols: int) -> Any:
     the same, but between two transposes. Without them, the default objective on ``default``
     takes 5.6 instead of 6.6 ms and its gradient 18.4 instead of 20.4 ms, with the same values
     bit for bit (docs/findings.md)."""
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     a, b = ca.MX.sym("a", rows), ca.MX.sym("b", rows)
     acc = ca.Function("running_sum_step", [a, b], [a + b]).mapaccum(cols)
@@ -231,7 +236,7 @@ def _sample_fim_terms(ctx: PlanContext, cumulative: bool) -> dict[str, Any]:
     The matrices are laid out samples × steps (n_samples, K+1): the FIM entries (n_samples, K+1)
     when ``cumulative``, else (n_samples, 1).
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     ns = ctx.layout.n_samples
     smp = ca.reshape(ctx.param("samples"), 4, ns).T  # row s = sample s
@@ -269,7 +274,7 @@ def logdet_graph(ctx: PlanContext) -> Any:
     (:class:`ParamLayout`), so a step of weight 0 (after the scenario's end, ``until_end``)
     adds no information.
     """
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     terms = _sample_fim_terms(ctx, cumulative=False)
     ld = logdet_generic(terms["F"])  # (n_samples, 1)
@@ -290,7 +295,7 @@ def relative_range_crlb_graph(ctx: PlanContext) -> Any:
     """
     if "rel_crlb" in ctx.cache:
         return ctx.cache["rel_crlb"]
-    import casadi as ca
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     terms = _sample_fim_terms(ctx, cumulative=True)
     rx, ry, r2, tt = terms["rx"], terms["ry"], terms["r2"], terms["tt"]

@@ -165,3 +165,18 @@ def test_campaign_on_several_contacts(tmp_path):
     again = run_campaign(spec, out_dir=tmp_path)
     assert len(again.loaded_runs) == 3
     assert without_timings(again.to_json()) == without_timings(payload)
+
+
+def test_contacts_with_their_own_required_accuracy_share_one_own_ship():
+    # a contact's required accuracy lives in its view's planning table: not a second own ship
+    from tmaplan.planning.contacts import ContactSet
+
+    cs = ContactSet.from_scenario(load("three-contacts-screen"))
+    assert cs.names == ("alpha", "bravo", "charlie")
+    assert cs.required_accuracies == (0.1, 0.1, 0.05)
+    sc = load("two-contacts-crossing")
+    views = list(sc.contact_views().values())
+    other = dataclasses.replace(views[1], planning=dataclasses.replace(
+        views[1].planning, ping_budget=7))
+    with pytest.raises(ArgumentError, match=r"contacts\[bravo\]\.planning"):
+        ContactSet(views=(views[0], other), names=("alpha", "bravo"))

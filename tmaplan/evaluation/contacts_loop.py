@@ -28,7 +28,7 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.particle_filter import PFConfig
-from tmaplan.evaluation.closed_loop import ClosedLoopRun
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, _read_only
 from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.seeding import run_streams
 from tmaplan.geometry import course_speed, wrap_angle
@@ -40,12 +40,6 @@ from tmaplan.scenario import Scenario
 from tmaplan.simulate import draw_common_noise, draw_truth, measure_step
 
 __all__ = ["paired_contacts_run", "run_contacts_loop"]
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    v = np.asarray(a).view()
-    v.flags.writeable = False
-    return v
 
 
 def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, np.ndarray], *,

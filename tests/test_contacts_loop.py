@@ -180,3 +180,19 @@ def test_contacts_with_their_own_required_accuracy_share_one_own_ship():
         views[1].planning, ping_budget=7))
     with pytest.raises(ArgumentError, match=r"contacts\[bravo\]\.planning"):
         ContactSet(views=(views[0], other), names=("alpha", "bravo"))
+
+
+def test_compare_default_policies_for_several_contacts():
+    import argparse
+
+    from tmaplan.cli import compare
+
+    seen = []
+    args = argparse.Namespace(policies=compare.POLICIES, truth="prior")
+    compare.preflight_several(args, load("two-contacts-crossing"),
+                              lambda a, view: seen.append(a.policies))
+    assert args.policies == compare.CONTACTS_POLICIES
+    assert seen == ["single-turn", "single-turn"]  # each contact's view, a turning stand-in
+    with pytest.raises(ArgumentError, match="--policies"):
+        compare.preflight_several(argparse.Namespace(policies="zigzag", truth="prior"),
+                                  load("two-contacts-crossing"), lambda a, v: None)

@@ -48,6 +48,8 @@ FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 #: Default of ``--policies``.
 POLICIES = "straight,single-turn,zigzag"
+#: Default of ``--policies`` on a several-contact problem (zig-zag flies for one contact).
+CONTACTS_POLICIES = "straight,single-turn,nearest-contact,planned"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -55,8 +57,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_problem_argument(parser)
     parser.add_argument("--policies", default=POLICIES,
                         help=f"comma-separated MANOEUVRE[+PING], each once (default {POLICIES}; "
+                             f"with several contacts {CONTACTS_POLICIES}; "
                              f"manoeuvres: {', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)}, "
-                             "a ping policy only with a range sensor)")
+                             "a ping policy only with a range sensor; several contacts: "
+                             f"{', '.join(CONTACTS_MANOEUVRES)}, planned:NAME, pings "
+                             f"{', '.join(CONTACTS_PINGS)})")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
@@ -79,7 +84,10 @@ def preflight_several(args: argparse.Namespace, scenario: Scenario,
     """``compare``'s checks on a several-contact problem: ``--policies`` against the whole
     scenario (its policies, :mod:`tmaplan.policies.contacts`), then the other checks on each
     contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: its prior, its truth
-    source, the turn-rate limit), with a one-contact stand-in for the policies."""
+    source, the turn-rate limit), with a one-contact stand-in for the policies. The
+    one-contact default of ``--policies`` becomes :data:`CONTACTS_POLICIES`."""
+    if args.policies == POLICIES:  # the one-contact default: the several-contact one
+        args.policies = CONTACTS_POLICIES
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     if not names or repeated(names) is not None:
         raise ArgumentError("--policies", "one or more distinct MANOEUVRE[+PING], each once",

@@ -116,8 +116,9 @@ def test_policy_names_for_several_contacts():
         "nearest-contact", "uniform", None)
     with pytest.raises(ArgumentError, match=r"alpha, bravo.*planned:zulu"):
         check_contacts_policy("planned:zulu", sc)
-    with pytest.raises(ArgumentError, match="receding flies for one contact"):
-        check_contacts_policy("receding", sc)
+    with pytest.raises(ArgumentError, match="receding-realtime flies for one contact"):
+        check_contacts_policy("receding-realtime", sc)
+    assert check_contacts_policy("receding", sc) == ("receding", None, None)
     with pytest.raises(PlanningError, match="unknown policy"):
         check_contacts_policy("straight+scheduled", sc)
 
@@ -196,3 +197,24 @@ def test_compare_default_policies_for_several_contacts():
     with pytest.raises(ArgumentError, match="--policies"):
         compare.preflight_several(argparse.Namespace(policies="zigzag", truth="prior"),
                                   load("two-contacts-crossing"), lambda a, v: None)
+
+
+def test_receding_replans_on_every_contacts_posterior():
+    from tmaplan.policies.contacts import ContactsReceding
+
+    sc = load("two-contacts-crossing")
+    first = ContactsReceding(first_plan=None, replan_interval=900.0)
+    pol = dataclasses.replace(first, first_plan=first.controller(sc).planner.solve())
+    rng = np.random.default_rng(5)
+    targets = {n: draw_truth(v, rng) for n, v in sc.contact_views().items()}
+    runs = run_contacts_loop(sc, pol, targets, noise_rng=np.random.default_rng(6),
+                             filter_rng=np.random.default_rng(7), n_particles=200)
+    log = runs["alpha"].replans
+    assert [e["t"] for e in log] == [900.0, 1800.0]
+    for e in log:  # converged, or reported as not converged
+        assert isinstance(e["success"], bool) and e["seconds"] > 0
+    u_max = sc.observer.turn_rate_max
+    assert np.all(np.abs(runs["alpha"].turn_rate) <= u_max + 1e-12)
+    # the first leg flies the plan from the priors
+    np.testing.assert_allclose(runs["alpha"].turn_rate[0],
+                               np.clip(pol.first_plan.plan.turn_rate[0], -u_max, u_max))

@@ -17,10 +17,14 @@ steering one own ship), computed offline from the contacts' priors:
   the end of the horizon, 2·N legs of equal length, leg i on contact (i mod N)'s course;
 * ``single-turn``: the single turn of the baseline grid (angles 30°…180° both ways, start
   ¼…¾ of the horizon) of lowest aggregate objective (``all-contacts-time-to-accuracy``);
-* ``straight``: hold the initial course.
+* ``straight``: hold the initial course;
+* ``receding``: the joint plan, re-planned every ``planning.replan_interval`` on all the
+  contacts' posteriors (:class:`ContactsReceding`; each re-plan one IPOPT solve of the joint
+  NLP warm-started from the previous plan, its horizon the planner's from the re-plan time).
 
 Pings: ``+no-ping`` or ``+uniform`` (a ping ranges every contact within ``max_range``).
-``receding`` and the other single-contact manoeuvres are refused for N > 1 with one line.
+The other single-contact manoeuvres (``zigzag``, the other ``receding-*``, the tactics) are
+refused for N > 1 with one line.
 """
 
 from __future__ import annotations
@@ -31,9 +35,10 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, cast
 
 from tmaplan.caching import LRUCache
-from tmaplan.errors import ArgumentError, PlanningError, finite_real
+from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, finite_real
 from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
+    Action,
     BeliefView,
     Controller,
     initial_course,
@@ -47,12 +52,13 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["CONTACTS_MANOEUVRES", "CONTACTS_PINGS", "Alternate", "ContactsBeliefView",
+           "ContactsReceding",
            "check_contacts_policy", "contact_plan", "heaviest_contact", "joint_plan",
            "nearest_contact", "parse_contacts_policy", "single_turn_all"]
 
 #: Manoeuvres of a several-contact problem by CLI name (``planned:NAME`` names a contact).
 CONTACTS_MANOEUVRES = ("planned", "nearest-contact", "heaviest-contact", "alternate",
-                       "single-turn", "straight")
+                       "single-turn", "straight", "receding")
 #: Ping policies of a several-contact problem.
 CONTACTS_PINGS = ("no-ping", "uniform")
 
@@ -264,7 +270,100 @@ def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
         m = alternate(scenario)
     elif man == "single-turn":
         m = single_turn_all(scenario)
+    elif man == "receding":
+        m = ContactsReceding(first_plan=_planner(scenario).solve())
     else:
         m = Straight()
     return Combined(manoeuvre=m, ping=UniformPings() if ping == "uniform" else NoPing())
 
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactsReceding:
+    """Re-plan the joint plan on every contact's posterior (several contacts).
+
+    Every ``replan_interval`` [s] (default ``planning.replan_interval``) the joint NLP
+    (:class:`tmaplan.planning.contacts.ContactsPlanner`, the contacts' beliefs from their
+    filters' particles, :meth:`tmaplan.planning.Belief.from_particles`) is solved from the
+    own ship's state, warm-started from the previous plan; a re-plan that fails keeps the
+    previous plan (logged: ``t``, ``status``, ``success``, ``fell_back``, ``infeasible``,
+    ``seconds``, as :class:`tmaplan.policies.Receding`).
+
+    Attributes
+    ----------
+    first_plan : ContactsPlan, optional
+        The plan from the priors (computed when None).
+    replan_interval : float, optional
+        [s], > 0.
+    max_particles : int
+        Particles kept per contact's belief.
+    """
+
+    first_plan: Any = None
+    replan_interval: float | None = None
+    max_particles: int = 2000
+    name: str = "receding"
+
+    def _interval(self, scenario: Scenario) -> float:
+        pl = scenario.planning
+        v = self.replan_interval if self.replan_interval is not None else (
+            pl.replan_interval if pl is not None else None)
+        if v is None:
+            raise ArgumentError("planning.replan_interval", "a re-planning interval for the "
+                                "receding policy", None, source=scenario.name)
+        return finite_real("receding.replan_interval", v, "an interval > 0 [s]", lower=1e-9)
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller re-planning on the contacts' posteriors."""
+        return _ContactsRecedingController(self, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
+        """The first plan's track."""
+        first = self.first_plan if self.first_plan is not None else _planner(scenario).solve()
+        return first.plan.observer
+
+
+class _ContactsRecedingController:
+    def __init__(self, policy: ContactsReceding, scenario: Scenario) -> None:
+        from tmaplan.policies.manoeuvres import TurnRatePlayback
+
+        self.policy, self.scenario = policy, scenario
+        self.interval = policy._interval(scenario)
+        self.planner = _planner(scenario)
+        self.plan = policy.first_plan
+        self.playback = None if self.plan is None else TurnRatePlayback(self.plan.plan, scenario)
+        self.next_replan = scenario.time.t0 + self.interval  # the first plan is the priors'
+        self.log: list[dict[str, Any]] = []
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        if t + 1e-9 >= self.next_replan or self.playback is None:
+            self._replan(belief, t)
+            self.next_replan = t + self.interval
+        rate = self.playback.rate_at(t) if self.playback is not None else 0.0
+        return Action(turn_rate=rate)
+
+    def _replan(self, belief: BeliefView, t: float) -> None:
+        import time
+
+        from tmaplan.planning.belief import Belief
+        from tmaplan.planning.multi_objectives import ContactBeliefs
+        from tmaplan.policies.manoeuvres import TurnRatePlayback
+
+        t0 = time.perf_counter()
+        views = getattr(belief, "contacts", None) or {"contact": belief}
+        bel = ContactBeliefs(beliefs=tuple(
+            Belief.from_particles(b.particles, b.weights, t=t,
+                                  max_samples=self.policy.max_particles, assimilated=True)
+            for b in views.values()), names=tuple(views))
+        entry: dict[str, Any] = {"t": t}
+        try:
+            plan = self.planner.solve(bel, heading0=belief.heading, position0=belief.position,
+                                      warm_start=self.plan, raise_on_failure=True)
+            self.plan = plan
+            self.playback = TurnRatePlayback(plan.plan, self.scenario)
+            entry.update(status=plan.plan.status, success=True, fell_back=False)
+        except PlanningError as exc:  # keep flying the previous plan
+            entry.update(status=str(exc), success=False, fell_back=True,
+                         infeasible=isinstance(exc, InfeasibleError))
+        entry["seconds"] = time.perf_counter() - t0
+        self.log.append(entry)

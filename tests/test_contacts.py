@@ -250,10 +250,9 @@ def test_per_contact_figures_are_named_after_the_contact(two_file, tmp_path):
     assert names == ["crlb_default-alpha.png", "crlb_default-bravo.png"]
 
 
-@pytest.mark.parametrize("verb", ["plan", "schedule", "compare", "rank-costs"])
+@pytest.mark.parametrize("verb", ["plan", "schedule", "rank-costs"])
 def test_verbs_not_yet_for_several_contacts_refuse_them(verb, two_file, tmp_path, capsys):
-    argv = [verb, str(two_file)] + (["--budget", "2"] if verb == "schedule" else []) + (
-        ["--policies", "straight", "--runs", "2"] if verb == "compare" else [])
+    argv = [verb, str(two_file)] + (["--budget", "2"] if verb == "schedule" else [])
     assert main([*argv, "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"tmaplan {verb} does not handle several contacts yet" in err[0]
@@ -268,8 +267,19 @@ def test_the_refusal_lives_in_one_place():
 
     able = {v for v, m in VERBS.items()
             if takes_several(importlib.import_module(f"tmaplan.cli.{m}"))}
-    assert {"crlb", "bound", "track"} <= able
-    assert not able & {"plan", "schedule", "compare", "rank-costs", "demo"}
+    assert {"crlb", "bound", "track", "compare"} <= able
+    assert not able & {"plan", "schedule", "rank-costs", "demo"}
+
+
+def test_compare_flies_several_contacts(two_file, tmp_path):
+    got = _run(["compare", str(two_file), "--policies", "straight", "--runs", "2",
+                "--particles", "200"], tmp_path)
+    pol = got["policies"]["straight"]
+    assert set(pol["contacts"]) == {"alpha", "bravo"}
+    per = [[np.inf if t is None else t for t in pol["contacts"][c]["time_to_accuracy_runs"]]
+           for c in ("alpha", "bravo")]
+    t_all = [np.inf if t is None else t for t in pol["time_to_accuracy_all_runs"]]
+    assert t_all == list(np.maximum(*per))
 
 
 def test_corpus_has_the_several_contact_errors():

@@ -192,8 +192,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 # a verb that cannot handle several contacts says so (tmaplan.cli.contacts)
                 refuse_several(args.verb, modules[args.verb], scenario, modules)
                 several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
-                if len(scenario.contacts) > 1:
-                    preflight_per_contact(args, scenario, preflight)
+                if len(scenario.contacts) > 1:  # a verb's own checks for them, or per contact
+                    getattr(modules[args.verb], "preflight_several", preflight_per_contact)(
+                        args, scenario, preflight)
                 else:
                     preflight(args, scenario)
             else:  # (preflight checks them with the problem)

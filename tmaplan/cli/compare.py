@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,15 +24,23 @@ from tmaplan.cli.args import (
     command_line,
     integer,
     open_fraction,
+    repeated,
 )
+from tmaplan.cli.contacts import preflight_per_contact
 from tmaplan.cli.finite import require_finite
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
-from tmaplan.policies.combine import MANOEUVRES, PINGS
+from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.report import efficiency, write_report
-from tmaplan.scenario import load
+from tmaplan.report_contacts import console_lines, contacts_figure, contacts_html
+from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
+
+#: Several contacts: the campaign flies all of them at once (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
@@ -39,6 +48,8 @@ FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
 
 #: Default of ``--policies``.
 POLICIES = "straight,single-turn,zigzag"
+#: Default of ``--policies`` on a several-contact problem (zig-zag flies for one contact).
+CONTACTS_POLICIES = "straight,single-turn,nearest-contact,planned"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,8 +57,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_problem_argument(parser)
     parser.add_argument("--policies", default=POLICIES,
                         help=f"comma-separated MANOEUVRE[+PING], each once (default {POLICIES}; "
+                             f"with several contacts {CONTACTS_POLICIES}; "
                              f"manoeuvres: {', '.join(MANOEUVRES)}; pings: {', '.join(PINGS)}, "
-                             "a ping policy only with a range sensor)")
+                             "a ping policy only with a range sensor; several contacts: "
+                             f"{', '.join(CONTACTS_MANOEUVRES)}, planned:NAME, pings "
+                             f"{', '.join(CONTACTS_PINGS)})")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
@@ -65,6 +79,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_figure_arguments(parser, report=True)
 
 
+def preflight_several(args: argparse.Namespace, scenario: Scenario,
+                      preflight: Callable[[argparse.Namespace, Any], None]) -> None:
+    """``compare``'s checks on a several-contact problem: ``--policies`` against the whole
+    scenario (its policies, :mod:`tmaplan.policies.contacts`), then the other checks on each
+    contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: its prior, its truth
+    source, the turn-rate limit), with a one-contact stand-in for the policies. The
+    one-contact default of ``--policies`` becomes :data:`CONTACTS_POLICIES`."""
+    if args.policies == POLICIES:  # the one-contact default: the several-contact one
+        args.policies = CONTACTS_POLICIES
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    if not names or repeated(names) is not None:
+        raise ArgumentError("--policies", "one or more distinct MANOEUVRE[+PING], each once",
+                            args.policies, source=scenario.name)
+    for name in names:
+        try:
+            check_policy(name, scenario)
+        except ArgumentError as exc:  # the policy's rule, on the flag that named it
+            raise ArgumentError("--policies", exc.expected, exc.received,
+                                source=scenario.name) from None
+        except PlanningError as exc:  # an unknown name
+            raise ArgumentError("--policies", f"names MANOEUVRE[+PING] with MANOEUVRE in "
+                                f"{', '.join(CONTACTS_MANOEUVRES)} or planned:NAME and PING "
+                                f"in {', '.join(CONTACTS_PINGS)} (several contacts)", name,
+                                source=scenario.name) from exc
+    turning = any(n.split("+")[0] != "straight" for n in names)
+    stand_in = argparse.Namespace(**{**vars(args),
+                                     "policies": "single-turn" if turning else "straight"})
+    preflight_per_contact(stand_in, scenario, preflight)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run or resume the campaign, write figures and ``<out>/<problem>_compare/report.html``."""
     scenario = load(args.problem)
@@ -80,8 +124,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                        f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
                        f"--particles {args.particles} --accuracy {args.accuracy} "
                        f"--truth {args.truth}")
-    report = write_report(result, Path(args.out) / f"{scenario.name}_compare", command=cmd,
-                          title=f"tmaplan compare: {scenario.name}")
+    out_dir = Path(args.out) / f"{scenario.name}_compare"
+    several = len(scenario.contacts) > 1  # per-contact tables and figure (report_contacts)
+    report = write_report(result, out_dir, command=cmd, title=f"tmaplan compare: "
+                          f"{scenario.name}", extra_html=contacts_html(result) if several
+                          else "", figures={"contacts": contacts_figure(result, out_dir)}
+                          if several and not getattr(args, "no_figure", False) else None)
     payload = result.to_json()
     for name, e in efficiency(result).items():
         payload["policies"][name]["efficiency"] = e
@@ -98,6 +146,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                   f"{s['reached_fraction']:4.0%}  final range RMSE "
                   f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
                   f"recoveries {s['recoveries']:.2f}{replan_cell(s['replans'])}")
+        for line in console_lines(result) if several else []:
+            print(line)
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")
     return payload

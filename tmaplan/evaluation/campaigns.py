@@ -34,9 +34,21 @@ from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
-from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, paired_run
+from tmaplan.evaluation.contacts_campaign import (
+    contacts_aggregate,
+    contacts_json,
+    contacts_run_one,
+    record_names,
+    several,
+)
 from tmaplan.evaluation.filter_options import FilterOptions
-from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
+from tmaplan.evaluation.metrics import (
+    PairedDifference,
+    RunMetrics,
+    censor_time,
+    paired_difference,
+)
 from tmaplan.evaluation.records import (
     FORMAT,
     PolicyRun,
@@ -55,6 +67,7 @@ from tmaplan.version import __version__
 __all__ = [
     "CampaignResult",
     "CampaignSpec",
+    "policy_run",
     "resolve_policies",
     "run_campaign",
     "run_one",
@@ -182,23 +195,31 @@ def _resolve(scenario: Scenario, parsed: Mapping[str, Any], workers: int,
     return {spec: pol.resolve(scenario) for spec, pol in parsed.items()}
 
 
+def policy_run(res: ClosedLoopRun, metrics: RunMetrics) -> PolicyRun:
+    """The stored record of one closed-loop run ``res`` with its ``metrics``."""
+    converged, fell_back, infeasible = replan_flags(res.replans)
+    return PolicyRun(
+        metrics=metrics,
+        observer=res.observer.position, target=res.target[:, :2],
+        estimate=res.estimate[:, :2] + res.observer.position,
+        ping_steps=res.ping_steps,
+        replan_seconds=np.array([e["seconds"] for e in res.replans]),
+        replan_converged=converged, replan_fell_back=fell_back,
+        replan_infeasible=infeasible,
+        recoveries=res.recoveries)
+
+
 def run_one(spec: CampaignSpec, policies: Mapping[str, Policy], run: int) -> RunRecord:
     """Run every policy on Monte Carlo run ``run`` (same truth and noise for all:
-    :func:`tmaplan.evaluation.closed_loop.paired_run`)."""
+    :func:`tmaplan.evaluation.closed_loop.paired_run`; several contacts:
+    :func:`tmaplan.evaluation.contacts_campaign.contacts_run_one`)."""
+    if several(spec.scenario):
+        return contacts_run_one(spec, policies, run, policy_run)
     out: dict[str, PolicyRun] = {}
     for name, res in paired_run(spec.scenario, policies, seed=spec.seed, run=run,
                                 n_particles=spec.n_particles, options=spec.filter_options,
                                 from_prior=spec.truth == "prior"):
-        converged, fell_back, infeasible = replan_flags(res.replans)
-        out[name] = PolicyRun(
-            metrics=res.metrics(spec.accuracy),
-            observer=res.observer.position, target=res.target[:, :2],
-            estimate=res.estimate[:, :2] + res.observer.position,
-            ping_steps=res.ping_steps,
-            replan_seconds=np.array([e["seconds"] for e in res.replans]),
-            replan_converged=converged, replan_fell_back=fell_back,
-            replan_infeasible=infeasible,
-            recoveries=res.recoveries)
+        out[name] = policy_run(res, res.metrics(spec.accuracy))
     return RunRecord(run=run, policies=out)
 
 
@@ -272,6 +293,7 @@ class CampaignResult:
                 "replan_seconds": s["replan_seconds"],
                 "replans": s["replans"].to_json(),
                 "recoveries": s["recoveries"],
+                **contacts_json(s),  # several contacts (contacts_campaign)
             }
         return {
             "policies": pol,
@@ -399,7 +421,7 @@ def _load_stored(spec: CampaignSpec, policies: Mapping[str, Policy] | None, dire
     for i in range(spec.runs):
         p = directory / "runs" / f"run_{i:05d}.npz"
         if p.exists():
-            d = RunRecord.load(p, tuple(spec.policies))
+            d = RunRecord.load(p, record_names(spec))
             if d is not None and d.run == i:
                 results[i] = d
             else:
@@ -546,7 +568,8 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
         raise PlanningError(f"campaign incomplete: {len(done)} of {spec.runs} runs done "
                             f"(re-run to resume{' from ' + str(directory) if directory else ''})")
     ordered = [results[i] for i in range(spec.runs)]
-    summary, diffs = _aggregate(spec, ordered, scenario.times)
+    summary, diffs = (contacts_aggregate(spec, ordered, scenario.times, _aggregate)
+                      if several(scenario) else _aggregate(spec, ordered, scenario.times))
     warn_not_converged({name: summary[name]["replans"] for name in spec.policies})
     examples = {name: ordered[0].policies[name] for name in spec.policies}
     return CampaignResult(spec=spec, times=scenario.times, policies=tuple(spec.policies),

@@ -49,6 +49,15 @@ __all__ = ["WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan", "ContactsPlanner
 WORST_CONTACT_IPOPT: dict[str, Any] = {"acceptable_tol": 1e-4, "acceptable_iter": 5}
 
 
+def _shared(view: Scenario, field: str) -> Any:
+    """A view's ``field`` as the contacts share it (``planning`` without the contact's
+    ``required_accuracy``, which :meth:`Scenario.contact_view` writes there)."""
+    value = getattr(view, field)
+    if field == "planning" and value is not None:
+        return dataclasses.replace(value, required_accuracy=None)
+    return value
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class ContactSet:
     """Several contacts seen from one own ship: the planners' input for N contacts.
@@ -110,7 +119,8 @@ class ContactSet:
         v0 = self.views[0]
         for name, v in zip(self.names[1:], self.views[1:], strict=True):
             for field in ("time", "observer", "sensors", "planning"):
-                if getattr(v, field) != getattr(v0, field):
+                # a view's planning holds its contact's required accuracy: not shared
+                if _shared(v, field) != _shared(v0, field):
                     raise ArgumentError(f"contacts[{name}].{field}", f"the {field} of the "
                                         f"other contacts (one own ship)", getattr(v, field))
 

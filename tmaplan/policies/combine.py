@@ -179,6 +179,11 @@ def check_policy(spec: str, scenario: Scenario) -> tuple[str, str | None]:
         the CLI's ping policies spend the scenario's budget). The same refusal for every
         ping policy: a uniform or adaptive policy would silently never ping.
     """
+    if len(scenario.contacts) > 1:  # several contacts: their own policies
+        from tmaplan.policies.contacts import check_contacts_policy
+
+        man, ping, _ = check_contacts_policy(spec, scenario)
+        return man, ping
     if not isinstance(spec, str):  # (None.strip() was an AttributeError)
         raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
     parts = spec.strip().split("+")
@@ -213,7 +218,9 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     steps only: no full re-solve when the optimum moves far; a rejected step still falls
     back to IPOPT), receding-multistart (IPOPT re-plans from five starts), receding-sqp
     (re-plans solved to IPOPT's tolerance by a condensed quasi-Newton SQP), leg-turn-leg,
-    lead-lag. Pings (:data:`PINGS`): no-ping, uniform,
+    lead-lag. Several contacts: :mod:`tmaplan.policies.contacts` (``planned`` the joint plan,
+    ``nearest-contact``, ``heaviest-contact``, ``alternate``, ``single-turn``, ``straight``).
+    Pings (:data:`PINGS`): no-ping, uniform,
     scheduled (offline schedule minimising the mean range bound over the horizon),
     scheduled-terminal (minimising the terminal range bound), adaptive.
 
@@ -224,6 +231,10 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
     ArgumentError
         A ping policy on a problem without a range sensor (:func:`check_policy`).
     """
+    if len(scenario.contacts) > 1:  # several contacts: tmaplan.policies.contacts
+        from tmaplan.policies.contacts import parse_contacts_policy
+
+        return parse_contacts_policy(spec, scenario)
     manoeuvre, ping = check_policy(spec, scenario)
     return Combined(manoeuvre=MANOEUVRES[manoeuvre](scenario),
                     ping=PINGS[ping]() if ping is not None else NoPing())

@@ -1,0 +1,196 @@
+"""The closed loop for several contacts: one own ship, one particle filter per contact.
+
+Role: issue 40's closed loop (DESIGN.md §6). The own ship is steered by ONE controller that
+sees every contact's belief (:class:`tmaplan.policies.contacts.ContactsBeliefView`); each
+contact has its own particle filter on its view (:meth:`tmaplan.scenario.Scenario.contact_view`:
+its prior and target model), fed with the measurements of that contact only (association is
+known: every bearing is tagged with its contact). A ping is one transmission: it returns the
+range of every contact whose TRUE range at that step is within the range sensor's
+``max_range`` (:func:`tmaplan.simulate.measure_step` on each contact's view).
+
+Randomness, in a fixed order so that every policy flown on a run sees the same truths and the
+same noise (common random numbers): the truths from the run's truth stream, contact by
+contact in file order (:func:`tmaplan.simulate.draw_truth` on each view); each contact's
+measurement noise (:func:`tmaplan.simulate.draw_common_noise`) from the noise stream, in file
+order; the filters share the filter stream (contact order at every step). A one-contact
+scenario never comes here: :func:`tmaplan.evaluation.closed_loop.run_closed_loop` runs it,
+bit for bit as before.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from tmaplan.errors import ArgumentError
+from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, _read_only
+from tmaplan.evaluation.filter_options import FilterOptions
+from tmaplan.evaluation.seeding import run_streams
+from tmaplan.geometry import course_speed, wrap_angle
+from tmaplan.models.observer import ObserverTrack, arc_displacement
+from tmaplan.models.target import initial_velocity
+from tmaplan.policies import BeliefView, Policy
+from tmaplan.policies.contacts import ContactsBeliefView
+from tmaplan.scenario import Scenario
+from tmaplan.simulate import draw_common_noise, draw_truth, measure_step
+
+__all__ = ["paired_contacts_run", "run_contacts_loop"]
+
+
+def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, np.ndarray], *,
+                      noise_rng: np.random.Generator, filter_rng: np.random.Generator,
+                      n_particles: int = 5000, options: FilterOptions | None = None
+                      ) -> dict[str, ClosedLoopRun]:
+    """Fly ``policy`` once against the true tracks of every contact.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with one or more contacts, each with a prior.
+    policy : Policy
+        Its controller is made once for the whole scenario and sees every belief.
+    targets : mapping of str to ndarray, shape (K + 1, 4)
+        True absolute target track of each contact, in ``scenario.contacts`` order [m, m/s].
+    noise_rng, filter_rng : numpy.random.Generator
+    n_particles : int
+        Particles of EACH contact's filter.
+    options : FilterOptions, optional
+        As :func:`tmaplan.evaluation.closed_loop.run_closed_loop` (one filter per contact);
+        an alarm response (pings on alarms) is refused here.
+
+    Returns
+    -------
+    dict of str to ClosedLoopRun
+        One run per contact, in ``scenario.contacts`` order: its truth, estimate and
+        covariance; the own-ship track, turn rates, pings (transmissions, reaching the
+        contact or not) and re-plan log are the same in every entry.
+
+    Raises
+    ------
+    ArgumentError
+        Targets that are not one finite (K + 1, 4) track per contact, generators that are not
+        ``numpy.random.Generator``, an alarm response in ``options``.
+    """
+    t_start = time.perf_counter()
+    K, dt, times = scenario.n_steps, scenario.time.dt, scenario.times
+    names = scenario.contact_names
+    for field, g in (("noise_rng", noise_rng), ("filter_rng", filter_rng)):
+        if not isinstance(g, np.random.Generator):
+            raise ArgumentError(field, "a numpy.random.Generator", type(g).__name__)
+    if list(targets) != list(names):
+        raise ArgumentError("targets", f"one track per contact {list(names)}", list(targets))
+    tracks = {n: np.asarray(targets[n], float) for n in names}
+    for n, tr in tracks.items():
+        if tr.shape != (K + 1, 4) or not np.isfinite(tr).all():
+            raise ArgumentError(f"targets[{n}]", f"a finite track of shape ({K + 1}, 4)",
+                                f"shape {tr.shape}")
+    opts = FilterOptions.monitored() if options is None else options
+    if opts.alarm_response is not None:
+        raise ArgumentError("options.alarm_response", "None with several contacts (pings on "
+                            "alarms are flown for one contact only)", opts.alarm_response)
+    views = scenario.contact_views()
+    noises = {n: draw_common_noise(views[n], noise_rng) for n in names}
+    v0 = initial_velocity(scenario.observer)
+    heading, speed = (float(x) for x in course_speed(v0))
+    pos = np.asarray(scenario.observer.position, float).copy()
+    u_max = scenario.observer.turn_rate_max
+    positions, vel_inst, vbar = np.empty((K + 1, 2)), np.empty((K + 1, 2)), np.empty((K + 1, 2))
+    headings = np.empty(K + 1)
+    positions[0], vel_inst[0], vbar[0], headings[0] = pos, v0, v0, heading
+    filters = {n: opts.build(PFConfig(n_particles=n_particles, dt=dt,
+                                      q=max(views[n].target.q, 1e-8))) for n in names}
+    ctrl = policy.controller(scenario)
+    active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
+    pings: list[int] = []
+    rates = np.zeros(K)
+    est = {n: np.full((K + 1, 4), np.nan) for n in names}
+    cov = {n: np.full((K + 1, 4, 4), np.nan) for n in names}
+    states: dict[str, Any] = {}
+    for n in names:
+        st = filters[n].init(views[n], filter_rng)
+        if meas0 := measure_step(views[n], 0, tracks[n][0] - np.concatenate([pos, v0]),
+                                 noises[n]):
+            st = filters[n].update(st, meas0, filter_rng)
+        states[n] = st
+        est[n][0], cov[n][0] = st.mean, st.cov
+
+    for k in range(K):
+        beliefs = {n: BeliefView(step=k, t=float(times[k]), heading=heading,
+                                 position=pos.copy(), particles=_read_only(s.particles),
+                                 weights=_read_only(s.weights), pings_used=len(pings),
+                                 alarms=len(getattr(s, "log", ())))
+                   for n, s in states.items()}
+        act = ctrl.act(ContactsBeliefView.of(beliefs), float(times[k]))
+        u = float(act.turn_rate)
+        if u_max is not None:
+            u = float(np.clip(u, -u_max, u_max))
+        rates[k] = u
+        disp = arc_displacement(np.array(heading), np.array(u), np.array(speed), dt)
+        pos = pos + disp
+        heading = heading + u * dt
+        vbar[k + 1] = disp / dt
+        vel_inst[k + 1] = speed * np.array([np.sin(heading), np.cos(heading)])
+        positions[k + 1], headings[k + 1] = pos, heading
+        pings.extend([k + 1] if act.ping and active else [])
+        own = np.concatenate([pos, vel_inst[k + 1]])
+        for n in names:
+            meas = measure_step(views[n], k + 1, tracks[n][k + 1] - own, noises[n],
+                                ping=bool(act.ping))
+            st = filters[n].predict(states[n], vbar[k + 1] - vbar[k], filter_rng)
+            states[n] = st = filters[n].update(st, meas, filter_rng)
+            est[n][k + 1], cov[n][k + 1] = st.mean, st.cov
+
+    obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
+                        heading=wrap_angle(headings), speed=np.full(K + 1, speed))
+    seconds = time.perf_counter() - t_start
+    return {n: ClosedLoopRun(times=times, truth=tracks[n] - obs.state, target=tracks[n],
+                             observer=obs, estimate=est[n], covariance=cov[n],
+                             ping_steps=np.asarray(pings, dtype=int), turn_rate=rates,
+                             replans=tuple(getattr(ctrl, "log", [])), seconds=seconds,
+                             recoveries=int(getattr(states[n], "recoveries", 0)),
+                             alarms=tuple(getattr(states[n], "log", ())))
+            for n in names}
+
+
+def paired_contacts_run(scenario: Scenario, policies: Mapping[str, Policy], *, seed: int,
+                        run: int, n_particles: int = 5000, options: FilterOptions | None = None,
+                        from_prior: bool = True
+                        ) -> Iterator[tuple[str, dict[str, ClosedLoopRun]]]:
+    """Monte Carlo run ``run`` of root ``seed`` for several contacts: the truths, then every
+    policy flown on them (:func:`run_contacts_loop`), as
+    :func:`tmaplan.evaluation.closed_loop.paired_run` does for one contact (the same streams,
+    :func:`tmaplan.evaluation.seeding.run_streams`; BLAS on one thread).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    policies : mapping
+        Name -> policy, flown in this order.
+    seed, run : int
+        Root seed and run index.
+    n_particles : int
+    options : FilterOptions, optional
+    from_prior : bool
+        Draw each contact's initial state from its prior (else its scenario state).
+
+    Yields
+    ------
+    name : str
+    result : dict of str to ClosedLoopRun
+        Per contact.
+    """
+    streams = run_streams(seed, run)
+    with threadpool_limits(limits=1):
+        truth_rng = np.random.default_rng(streams.truth)
+        targets = {n: draw_truth(v, truth_rng, from_prior=from_prior)
+                   for n, v in scenario.contact_views().items()}
+        for name, pol in policies.items():
+            yield name, run_contacts_loop(scenario, pol, targets,
+                                          noise_rng=np.random.default_rng(streams.noise),
+                                          filter_rng=np.random.default_rng(streams.filter),
+                                          n_particles=n_particles, options=options)

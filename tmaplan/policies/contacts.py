@@ -1,0 +1,369 @@
+"""Policies for several contacts: the joint plan and the baselines a practitioner would fly.
+
+Role: issue 40's policies (DESIGN.md §6), by command-line name (``compare --policies``;
+:data:`CONTACTS_MANOEUVRES`), chosen by :func:`tmaplan.policies.combine.parse_policy` when the
+scenario holds several contacts. Every one is an ordinary manoeuvre policy (one controller
+steering one own ship), computed offline from the contacts' priors:
+
+* ``planned``: the joint plan (:class:`tmaplan.planning.contacts.ContactsPlanner`, objective
+  ``all-contacts-time-to-accuracy``, the default for N > 1);
+* ``nearest-contact``: the single-contact plan (``expected-time-to-accuracy``, the plan
+  ``planned`` flies for one contact) of the contact nearest by prior mean range;
+* ``heaviest-contact``: the single-contact plan of the contact of largest weight (the first
+  of equal weights);
+* ``planned:NAME``: the single-contact plan of contact ``NAME``;
+* ``alternate``: each contact's best single turn (the baseline grid for its own
+  ``expected-time-to-accuracy``), flown in turn: from the earliest of those turns' times to
+  the end of the horizon, 2·N legs of equal length, leg i on contact (i mod N)'s course;
+* ``single-turn``: the single turn of the baseline grid (angles 30°…180° both ways, start
+  ¼…¾ of the horizon) of lowest aggregate objective (``all-contacts-time-to-accuracy``);
+* ``straight``: hold the initial course;
+* ``receding``: the joint plan, re-planned every ``planning.replan_interval`` on all the
+  contacts' posteriors (:class:`ContactsReceding`; each re-plan one IPOPT solve of the joint
+  NLP warm-started from the previous plan, its horizon the planner's from the re-plan time).
+
+Pings: ``+no-ping`` or ``+uniform`` (a ping ranges every contact within ``max_range``).
+The other single-contact manoeuvres (``zigzag``, the other ``receding-*``, the tactics) are
+refused for N > 1 with one line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, cast
+
+from tmaplan.caching import LRUCache
+from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, finite_real
+from tmaplan.policies.base import (
+    CLOSED_LOOP_OBJECTIVE,
+    Action,
+    BeliefView,
+    Controller,
+    initial_course,
+    turn_limits,
+)
+from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, _CourseSchedule
+
+if TYPE_CHECKING:
+    from tmaplan.models.observer import ObserverTrack
+    from tmaplan.planning.contacts import ContactsPlanner
+    from tmaplan.scenario import Scenario
+
+__all__ = ["CONTACTS_MANOEUVRES", "CONTACTS_PINGS", "Alternate", "ContactsBeliefView",
+           "ContactsReceding",
+           "check_contacts_policy", "contact_plan", "heaviest_contact", "joint_plan",
+           "nearest_contact", "parse_contacts_policy", "single_turn_all"]
+
+#: Manoeuvres of a several-contact problem by CLI name (``planned:NAME`` names a contact).
+CONTACTS_MANOEUVRES = ("planned", "nearest-contact", "heaviest-contact", "alternate",
+                       "single-turn", "straight", "receding")
+#: Ping policies of a several-contact problem.
+CONTACTS_PINGS = ("no-ping", "uniform")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactsBeliefView(BeliefView):
+    """What a controller sees with several contacts: every contact's belief.
+
+    The inherited fields are the first contact's belief (so a single-contact controller flown
+    here reads a belief, never the truth); ``contacts`` holds them all.
+
+    Attributes
+    ----------
+    contacts : mapping of str to BeliefView
+        Each contact's belief, in ``scenario.contacts`` order.
+    """
+
+    contacts: Mapping[str, BeliefView] = dataclasses.field(default_factory=dict)
+
+    @classmethod
+    def of(cls, beliefs: Mapping[str, BeliefView]) -> ContactsBeliefView:
+        """The view of ``beliefs`` (one per contact, the first giving the inherited fields;
+        ``alarms`` is the sum over the contacts)."""
+        first = next(iter(beliefs.values()))
+        fields = {f.name: getattr(first, f.name) for f in dataclasses.fields(BeliefView)}
+        fields["alarms"] = sum(b.alarms for b in beliefs.values())
+        return cls(**fields, contacts=dict(beliefs))
+
+
+def nearest_contact(scenario: Scenario) -> str:
+    """Name of the contact nearest by prior mean range (the range of its prior's mean
+    relative position, :meth:`tmaplan.planning.Belief.mean_range`; the first of equals)."""
+    from tmaplan.planning.belief import Belief
+
+    ranges = {n: Belief.from_prior(v).mean_range() for n, v in scenario.contact_views().items()}
+    return min(ranges, key=lambda n: ranges[n])
+
+
+def heaviest_contact(scenario: Scenario) -> str:
+    """Name of the contact of largest weight (the first of equal weights)."""
+    best = max(c.weight for c in scenario.contacts)
+    return next(c.name for c in scenario.contacts if c.weight == best)
+
+
+#: Joint planners by scenario (their NLP built once), the 8 most recently used.
+_PLANNERS: LRUCache[Scenario, ContactsPlanner] = LRUCache(8)
+
+
+def _planner(scenario: Scenario) -> ContactsPlanner:
+    if scenario not in _PLANNERS:
+        from tmaplan.planning.contacts import ContactSet, ContactsPlanner
+
+        _PLANNERS[scenario] = ContactsPlanner(ContactSet.from_scenario(scenario))
+    return _PLANNERS[scenario]
+
+
+def joint_plan(scenario: Scenario) -> Any:
+    """The joint heading plan (``HeadingPlan``) from the contacts' priors
+    (:class:`tmaplan.planning.contacts.ContactsPlanner`, ``all-contacts-time-to-accuracy``).
+
+    Raises
+    ------
+    SolverError
+        The joint NLP converged from no start.
+    """
+    return _planner(scenario).solve().plan
+
+
+def contact_plan(scenario: Scenario, name: str) -> Any:
+    """Contact ``name``'s own plan from its prior: the plan ``planned`` flies on its view
+    (:func:`tmaplan.policies.manoeuvres.offline_plan`, :data:`CLOSED_LOOP_OBJECTIVE`)."""
+    from tmaplan.policies.manoeuvres import offline_plan
+
+    return offline_plan(scenario.contact_view(name), CLOSED_LOOP_OBJECTIVE)
+
+
+def single_turn_all(scenario: Scenario) -> SingleTurn:
+    """The single turn of the baseline grid (:func:`tmaplan.planning.baselines
+    .evaluate_baselines`) of lowest joint objective (the joint planner's evaluator,
+    ``all-contacts-time-to-accuracy`` with its turn penalty, on the contacts' priors)."""
+    from tmaplan.planning.baselines import evaluate_baselines
+
+    pl = _planner(scenario)
+    # the joint planner's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
+    ev = pl.joint.evaluator(cast(Any, pl.contacts.beliefs()))
+    best = evaluate_baselines(pl.contacts.views[0], evaluator=ev)["single-turn"][0]
+    return SingleTurn(angle=float(best.params["angle"]),
+                      time=scenario.time.t0 + float(best.params["time"]))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Alternate:
+    """Legs alternated between the contacts' best turns: from ``start`` [s] to the end of the
+    horizon, ``2·len(angles)`` legs of equal length, leg i on the initial course plus
+    ``angles[i mod len(angles)]`` [rad], turning at the maximum rate.
+
+    Attributes
+    ----------
+    angles : tuple of float
+        Course of each contact's leg from the initial course [rad], each in [−π, π].
+    start : float
+        Start of the first leg [s], in [t0, t0 + horizon).
+    """
+
+    angles: tuple[float, ...]
+    start: float
+    name: str = "alternate"
+
+    def _schedule(self, scenario: Scenario) -> list[tuple[float, float]]:
+        t0, end = scenario.time.t0, scenario.time.t0 + scenario.time.horizon
+        t = finite_real("alternate.start", self.start, f"a time in [{t0:g}, {end:g}) s",
+                        lower=t0)
+        if t >= end or not self.angles:
+            raise ArgumentError("alternate", "a start before the end of the horizon and one "
+                                "angle per contact", (self.start, self.angles))
+        for a in self.angles:
+            if not (math.isfinite(a) and abs(a) <= math.pi):
+                raise ArgumentError("alternate.angles", "angles in [−π, π] rad", self.angles)
+        c0 = initial_course(scenario)
+        n = 2 * len(self.angles)
+        leg = (end - t) / n
+        return [(t0, c0)] + [(t + i * leg, c0 + self.angles[i % len(self.angles)])
+                             for i in range(n)]
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller following the alternating course schedule."""
+        u_max, dt = turn_limits(scenario)
+        return _CourseSchedule(self._schedule(scenario), u_max, dt)
+
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
+        """The own-ship track flown."""
+        from tmaplan.planning.baselines import course_program_track
+
+        return course_program_track(scenario, [(t - scenario.time.t0, c)
+                                               for t, c in self._schedule(scenario)[1:]])
+
+
+def alternate(scenario: Scenario) -> Alternate:
+    """:class:`Alternate` of the contacts' best single turns
+    (:func:`tmaplan.policies.combine.best_single_turn` on each contact's view), from the
+    earliest of them."""
+    from tmaplan.policies.combine import best_single_turn
+
+    turns = [best_single_turn(v) for v in scenario.contact_views().values()]
+    return Alternate(angles=tuple(float(t.angle) for t in turns),
+                     start=min(float(t.time) for t in turns))
+
+
+def check_contacts_policy(spec: str, scenario: Scenario) -> tuple[str, str | None, str | None]:
+    """``(manoeuvre, ping, contact)`` of a several-contact policy name
+    ``MANOEUVRE[+PING]`` (``planned:NAME``: ``contact`` NAME), checked before anything is
+    computed.
+
+    Raises
+    ------
+    PlanningError
+        An unknown manoeuvre or ping policy (the message lists the valid ones).
+    ArgumentError
+        ``policy``: a contact that is not the scenario's, a single-contact manoeuvre
+        (``receding``, ``zigzag``, ...), a ping policy without an active range sensor.
+    """
+    from tmaplan.policies.combine import MANOEUVRES
+    from tmaplan.simulate import ping_sensors
+
+    if not isinstance(spec, str):
+        raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
+    parts = spec.strip().split("+")
+    man, _, contact = parts[0].partition(":")
+    names = scenario.contact_names
+    if contact or parts[0].endswith(":"):
+        if man != "planned" or contact not in names:
+            raise ArgumentError("policy", f"planned:NAME with NAME a contact of the problem "
+                                f"({', '.join(names)})", spec, source=scenario.name)
+    elif man in MANOEUVRES and man not in CONTACTS_MANOEUVRES:
+        raise ArgumentError("policy", f"a manoeuvre for several contacts "
+                            f"({', '.join(CONTACTS_MANOEUVRES)}, planned:NAME): {man} flies "
+                            "for one contact", spec, source=scenario.name)
+    if len(parts) > 2 or man not in CONTACTS_MANOEUVRES or (
+            len(parts) == 2 and parts[1] not in CONTACTS_PINGS):
+        raise PlanningError(f"unknown policy {spec!r} for several contacts: expected "
+                            f"MANOEUVRE[+PING] with MANOEUVRE in {list(CONTACTS_MANOEUVRES)} "
+                            f"or planned:NAME and PING in {list(CONTACTS_PINGS)}")
+    ping = parts[1] if len(parts) == 2 else None
+    if ping == "uniform" and not ping_sensors(scenario):
+        raise ArgumentError("policy", "no ping policy (+PING): there is no active range "
+                            "sensor to ping with", spec, source=scenario.name)
+    return man, ping, contact or None
+
+
+def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
+    """The policy (:class:`tmaplan.policies.Combined`, its plan computed) of a several-contact
+    policy name (:func:`check_contacts_policy`)."""
+    from tmaplan.policies.combine import Combined
+    from tmaplan.policies.pings import NoPing, UniformPings
+
+    man, ping, contact = check_contacts_policy(spec, scenario)
+    m: Any
+    if contact is not None:
+        m = Planned(plan=contact_plan(scenario, contact), name=f"planned:{contact}")
+    elif man == "planned":
+        m = Planned(objective="all-contacts-time-to-accuracy", plan=joint_plan(scenario))
+    elif man == "nearest-contact":
+        m = Planned(plan=contact_plan(scenario, nearest_contact(scenario)),
+                    name="nearest-contact")
+    elif man == "heaviest-contact":
+        m = Planned(plan=contact_plan(scenario, heaviest_contact(scenario)),
+                    name="heaviest-contact")
+    elif man == "alternate":
+        m = alternate(scenario)
+    elif man == "single-turn":
+        m = single_turn_all(scenario)
+    elif man == "receding":
+        m = ContactsReceding(first_plan=_planner(scenario).solve())
+    else:
+        m = Straight()
+    return Combined(manoeuvre=m, ping=UniformPings() if ping == "uniform" else NoPing())
+
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ContactsReceding:
+    """Re-plan the joint plan on every contact's posterior (several contacts).
+
+    Every ``replan_interval`` [s] (default ``planning.replan_interval``) the joint NLP
+    (:class:`tmaplan.planning.contacts.ContactsPlanner`, the contacts' beliefs from their
+    filters' particles, :meth:`tmaplan.planning.Belief.from_particles`) is solved from the
+    own ship's state, warm-started from the previous plan; a re-plan that fails keeps the
+    previous plan (logged: ``t``, ``status``, ``success``, ``fell_back``, ``infeasible``,
+    ``seconds``, as :class:`tmaplan.policies.Receding`).
+
+    Attributes
+    ----------
+    first_plan : ContactsPlan, optional
+        The plan from the priors (computed when None).
+    replan_interval : float, optional
+        [s], > 0.
+    max_particles : int
+        Particles kept per contact's belief.
+    """
+
+    first_plan: Any = None
+    replan_interval: float | None = None
+    max_particles: int = 2000
+    name: str = "receding"
+
+    def _interval(self, scenario: Scenario) -> float:
+        pl = scenario.planning
+        v = self.replan_interval if self.replan_interval is not None else (
+            pl.replan_interval if pl is not None else None)
+        if v is None:
+            raise ArgumentError("planning.replan_interval", "a re-planning interval for the "
+                                "receding policy", None, source=scenario.name)
+        return finite_real("receding.replan_interval", v, "an interval > 0 [s]", lower=1e-9)
+
+    def controller(self, scenario: Scenario) -> Controller:
+        """A controller re-planning on the contacts' posteriors."""
+        return _ContactsRecedingController(self, scenario)
+
+    def nominal_track(self, scenario: Scenario) -> ObserverTrack:
+        """The first plan's track."""
+        first = self.first_plan if self.first_plan is not None else _planner(scenario).solve()
+        return first.plan.observer
+
+
+class _ContactsRecedingController:
+    def __init__(self, policy: ContactsReceding, scenario: Scenario) -> None:
+        from tmaplan.policies.manoeuvres import TurnRatePlayback
+
+        self.policy, self.scenario = policy, scenario
+        self.interval = policy._interval(scenario)
+        self.planner = _planner(scenario)
+        self.plan = policy.first_plan
+        self.playback = None if self.plan is None else TurnRatePlayback(self.plan.plan, scenario)
+        self.next_replan = scenario.time.t0 + self.interval  # the first plan is the priors'
+        self.log: list[dict[str, Any]] = []
+
+    def act(self, belief: BeliefView, t: float) -> Action:
+        if t + 1e-9 >= self.next_replan or self.playback is None:
+            self._replan(belief, t)
+            self.next_replan = t + self.interval
+        rate = self.playback.rate_at(t) if self.playback is not None else 0.0
+        return Action(turn_rate=rate)
+
+    def _replan(self, belief: BeliefView, t: float) -> None:
+        import time
+
+        from tmaplan.planning.belief import Belief
+        from tmaplan.planning.multi_objectives import ContactBeliefs
+        from tmaplan.policies.manoeuvres import TurnRatePlayback
+
+        t0 = time.perf_counter()
+        views = getattr(belief, "contacts", None) or {"contact": belief}
+        bel = ContactBeliefs(beliefs=tuple(
+            Belief.from_particles(b.particles, b.weights, t=t,
+                                  max_samples=self.policy.max_particles, assimilated=True)
+            for b in views.values()), names=tuple(views))
+        entry: dict[str, Any] = {"t": t}
+        try:
+            plan = self.planner.solve(bel, heading0=belief.heading, position0=belief.position,
+                                      warm_start=self.plan, raise_on_failure=True)
+            self.plan = plan
+            self.playback = TurnRatePlayback(plan.plan, self.scenario)
+            entry.update(status=plan.plan.status, success=True, fell_back=False)
+        except PlanningError as exc:  # keep flying the previous plan
+            entry.update(status=str(exc), success=False, fell_back=True,
+                         infeasible=isinstance(exc, InfeasibleError))
+        entry["seconds"] = time.perf_counter() - t0
+        self.log.append(entry)

@@ -165,7 +165,7 @@ def test_rank_costs_report_command_keeps_every_setting(monkeypatch, tmp_path):
             str(tmp_path)]
     cmd = _reproduce_command(monkeypatch, "rank-costs", argv, {
         f"{rank.__name__}.rank_costs": lambda *a, **k: fake,
-        "tmaplan.ranking_report.write_ranking_report": None})
+        f"{rank.__name__}.write_ranking_report": None})
     for part in ("--accuracy 0.2", "--plans none", "--cost-samples 50", "--resamples 10"):
         assert part in cmd, cmd
 

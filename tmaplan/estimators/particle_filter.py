@@ -243,14 +243,14 @@ class PFState:
     @functools.cached_property
     def weights(self) -> np.ndarray:
         """Normalised weights, shape (N,) (read-only)."""
-        return _read_only(np.exp(self.log_weights))
+        return read_only(np.exp(self.log_weights))
 
     @functools.cached_property
     def mean(self) -> np.ndarray:
         """Posterior mean of X, shape (4,) (read-only)."""
         if self.kernel == "numba":
-            return _read_only(self._moments[0])
-        return _read_only(self.weights @ self.particles)
+            return read_only(self._moments[0])
+        return read_only(self.weights @ self.particles)
 
     @property
     def cov(self) -> np.ndarray:
@@ -272,7 +272,7 @@ class PFState:
         return self.particles.shape[0]
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
+def read_only(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
 
@@ -286,7 +286,7 @@ def _fast() -> Any:
 
 def _with_weights(state: PFState, w: np.ndarray) -> PFState:
     """``state`` with its :attr:`PFState.weights` already known (``exp(log_weights)``)."""
-    state.__dict__["weights"] = _read_only(w)
+    state.__dict__["weights"] = read_only(w)
     return state
 
 

@@ -94,7 +94,7 @@ class ClosedLoopRun:
                            accuracy=accuracy, n_pings=len(self.ping_steps))
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
+def read_only(a: np.ndarray) -> np.ndarray:
     """A read-only view of the filter's array (a controller must not change the filter)."""
     v = np.asarray(a).view()
     v.flags.writeable = False
@@ -171,8 +171,8 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     def step(k: int, state: Any) -> tuple[np.ndarray, list[Measurement]]:
         nonlocal heading, pos
         belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
-                            particles=_read_only(state.particles),
-                            weights=_read_only(state.weights),
+                            particles=read_only(state.particles),
+                            weights=read_only(state.weights),
                             pings_used=len(pings), alarms=len(getattr(state, "log", ())))
         act = ctrl.act(belief, float(times[k]))
         u = float(act.turn_rate)

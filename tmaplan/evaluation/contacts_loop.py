@@ -28,7 +28,7 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.particle_filter import PFConfig
-from tmaplan.evaluation.closed_loop import ClosedLoopRun, _read_only
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, read_only
 from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.seeding import run_streams
 from tmaplan.geometry import course_speed, wrap_angle
@@ -121,8 +121,8 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
 
     for k in range(K):
         beliefs = {n: BeliefView(step=k, t=float(times[k]), heading=heading,
-                                 position=pos.copy(), particles=_read_only(s.particles),
-                                 weights=_read_only(s.weights), pings_used=len(pings),
+                                 position=pos.copy(), particles=read_only(s.particles),
+                                 weights=read_only(s.weights), pings_used=len(pings),
                                  alarms=len(getattr(s, "log", ())))
                    for n, s in states.items()}
         act = ctrl.act(ContactsBeliefView.of(beliefs), float(times[k]))

@@ -19,6 +19,7 @@ from tmaplan.policies.base import (
     ManoeuvrePolicy,
     Policy,
 )
+from tmaplan.policies.contacts import check_contacts_policy, parse_contacts_policy
 from tmaplan.policies.manoeuvres import (
     Planned,
     SingleTurn,
@@ -180,7 +181,6 @@ def check_policy(spec: str, scenario: Scenario) -> tuple[str, str | None]:
         ping policy: a uniform or adaptive policy would silently never ping.
     """
     if len(scenario.contacts) > 1:  # several contacts: their own policies
-        from tmaplan.policies.contacts import check_contacts_policy
 
         man, ping, _ = check_contacts_policy(spec, scenario)
         return man, ping
@@ -232,7 +232,6 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
         A ping policy on a problem without a range sensor (:func:`check_policy`).
     """
     if len(scenario.contacts) > 1:  # several contacts: tmaplan.policies.contacts
-        from tmaplan.policies.contacts import parse_contacts_policy
 
         return parse_contacts_policy(spec, scenario)
     manoeuvre, ping = check_policy(spec, scenario)

@@ -31,11 +31,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, cast
 
 from tmaplan.caching import LRUCache
 from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, finite_real
+from tmaplan.planning.baselines import course_program_track, evaluate_baselines
+from tmaplan.planning.belief import Belief
+from tmaplan.planning.contacts import ContactSet, ContactsPlanner
+from tmaplan.planning.multi_objectives import ContactBeliefs
 from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -44,7 +49,16 @@ from tmaplan.policies.base import (
     initial_course,
     turn_limits,
 )
-from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, _CourseSchedule
+from tmaplan.policies.manoeuvres import (
+    CourseSchedule,
+    Planned,
+    SingleTurn,
+    Straight,
+    TurnRatePlayback,
+    offline_plan,
+)
+from tmaplan.policies.pings import NoPing, UniformPings
+from tmaplan.simulate import ping_sensors
 
 if TYPE_CHECKING:
     from tmaplan.models.observer import ObserverTrack
@@ -91,7 +105,6 @@ class ContactsBeliefView(BeliefView):
 def nearest_contact(scenario: Scenario) -> str:
     """Name of the contact nearest by prior mean range (the range of its prior's mean
     relative position, :meth:`tmaplan.planning.Belief.mean_range`; the first of equals)."""
-    from tmaplan.planning.belief import Belief
 
     ranges = {n: Belief.from_prior(v).mean_range() for n, v in scenario.contact_views().items()}
     return min(ranges, key=lambda n: ranges[n])
@@ -109,7 +122,6 @@ _PLANNERS: LRUCache[Scenario, ContactsPlanner] = LRUCache(8)
 
 def _planner(scenario: Scenario) -> ContactsPlanner:
     if scenario not in _PLANNERS:
-        from tmaplan.planning.contacts import ContactSet, ContactsPlanner
 
         _PLANNERS[scenario] = ContactsPlanner(ContactSet.from_scenario(scenario))
     return _PLANNERS[scenario]
@@ -130,7 +142,6 @@ def joint_plan(scenario: Scenario) -> Any:
 def contact_plan(scenario: Scenario, name: str) -> Any:
     """Contact ``name``'s own plan from its prior: the plan ``planned`` flies on its view
     (:func:`tmaplan.policies.manoeuvres.offline_plan`, :data:`CLOSED_LOOP_OBJECTIVE`)."""
-    from tmaplan.policies.manoeuvres import offline_plan
 
     return offline_plan(scenario.contact_view(name), CLOSED_LOOP_OBJECTIVE)
 
@@ -139,7 +150,6 @@ def single_turn_all(scenario: Scenario) -> SingleTurn:
     """The single turn of the baseline grid (:func:`tmaplan.planning.baselines
     .evaluate_baselines`) of lowest joint objective (the joint planner's evaluator,
     ``all-contacts-time-to-accuracy`` with its turn penalty, on the contacts' priors)."""
-    from tmaplan.planning.baselines import evaluate_baselines
 
     pl = _planner(scenario)
     # the joint planner's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
@@ -186,11 +196,10 @@ class Alternate:
     def controller(self, scenario: Scenario) -> Controller:
         """A controller following the alternating course schedule."""
         u_max, dt = turn_limits(scenario)
-        return _CourseSchedule(self._schedule(scenario), u_max, dt)
+        return CourseSchedule(self._schedule(scenario), u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown."""
-        from tmaplan.planning.baselines import course_program_track
 
         return course_program_track(scenario, [(t - scenario.time.t0, c)
                                                for t, c in self._schedule(scenario)[1:]])
@@ -221,7 +230,6 @@ def check_contacts_policy(spec: str, scenario: Scenario) -> tuple[str, str | Non
         (``receding``, ``zigzag``, ...), a ping policy without an active range sensor.
     """
     from tmaplan.policies.combine import MANOEUVRES
-    from tmaplan.simulate import ping_sensors
 
     if not isinstance(spec, str):
         raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
@@ -252,7 +260,6 @@ def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
     """The policy (:class:`tmaplan.policies.Combined`, its plan computed) of a several-contact
     policy name (:func:`check_contacts_policy`)."""
     from tmaplan.policies.combine import Combined
-    from tmaplan.policies.pings import NoPing, UniformPings
 
     man, ping, contact = check_contacts_policy(spec, scenario)
     m: Any
@@ -325,7 +332,6 @@ class ContactsReceding:
 
 class _ContactsRecedingController:
     def __init__(self, policy: ContactsReceding, scenario: Scenario) -> None:
-        from tmaplan.policies.manoeuvres import TurnRatePlayback
 
         self.policy, self.scenario = policy, scenario
         self.interval = policy._interval(scenario)
@@ -343,11 +349,7 @@ class _ContactsRecedingController:
         return Action(turn_rate=rate)
 
     def _replan(self, belief: BeliefView, t: float) -> None:
-        import time
 
-        from tmaplan.planning.belief import Belief
-        from tmaplan.planning.multi_objectives import ContactBeliefs
-        from tmaplan.policies.manoeuvres import TurnRatePlayback
 
         t0 = time.perf_counter()
         views = getattr(belief, "contacts", None) or {"contact": belief}

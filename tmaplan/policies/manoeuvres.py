@@ -96,7 +96,7 @@ class SingleTurn:
         angle, t = self._checked(scenario)
         u_max, dt = turn_limits(scenario)
         c0 = initial_course(scenario)
-        return _CourseSchedule([(scenario.time.t0, c0), (t, c0 + angle)], u_max, dt)
+        return CourseSchedule([(scenario.time.t0, c0), (t, c0 + angle)], u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
@@ -155,7 +155,7 @@ class Zigzag:
             sched.append((t, c0 + sign * float(self.angle)))
             t += float(self.leg_duration)
             sign = -sign
-        return _CourseSchedule(sched, u_max, dt)
+        return CourseSchedule(sched, u_max, dt)
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The own-ship track flown (used to schedule pings offline)."""
@@ -164,7 +164,7 @@ class Zigzag:
         return zigzag_track(scenario, float(self.leg_duration), 2.0 * float(self.angle))
 
 
-class _CourseSchedule(CourseKeeper):
+class CourseSchedule(CourseKeeper):
     """Course ``c`` [rad, unwrapped, the first one the initial course] from time ``t`` [s],
     for the ``(t, c)`` of ``schedule``."""
 

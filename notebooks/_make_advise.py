@@ -84,9 +84,10 @@ assert adv.pings.lower_bound <= adv.pings.objective"""),
 
 `tmaplan advise` writes the JSON, the figures, the page `advise.html` and, per contact, the
 leg table and the recommended track as GPX and CSV."""),
-    ("code", """run = subprocess.run([sys.executable, "-m", "tmaplan.cli", "advise", "run/bearings.csv",
-                      "--ownship", "run/ownship.gpx", "--horizon", "10 min", "--out", "out",
-                      "--json", "advice.json"], capture_output=True, text=True)
+    ("code", """run = subprocess.run([sys.executable, "-m", "tmaplan.cli", "advise",
+                      "run/bearings.csv", "--ownship", "run/ownship.gpx", "--horizon",
+                      "10 min", "--out", "out", "--json", "advice.json"],
+                     capture_output=True, text=True)
 print(run.stdout)
 assert run.returncode == 0, run.stderr
 got = json.loads(Path("advice.json").read_text())

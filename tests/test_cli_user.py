@@ -73,16 +73,16 @@ def test_plan_json_times_are_all_on_the_scenario_clock(tmp_path, capsys):
 def test_schedule_figure_is_on_the_clock_of_its_ping_times(tmp_path, monkeypatch, capsys):
     # the console and the JSON give the ping times on the scenario clock ("60.3, 61.3 min");
     # the figure drew them (and its axis) from t0, at 0.3 and 1.3 min
-    import tmaplan.cli.schedule as schedule
-
     figs = []
 
     def keep(*a, **k):
         figs.append(real(*a, **k))
         return figs[-1]
 
-    real = schedule.plot_schedule
-    monkeypatch.setattr(schedule, "plot_schedule", keep)
+    import tmaplan.plotting as plotting
+
+    real = plotting.plot_schedule  # the verb imports it when it draws
+    monkeypatch.setattr(plotting, "plot_schedule", keep)
     assert main(["schedule", _scenario(tmp_path), "--method", "greedy", "--budget", "2",
                  "--out", str(tmp_path), "--json", "-"]) == 0
     d = json.loads(capsys.readouterr().out)

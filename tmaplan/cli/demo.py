@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from tmaplan.cli.args import (
+    DEMO_POLICIES,
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
@@ -74,9 +75,6 @@ REPORT_DIR = "demo"
 #: Policies compared by the demo (manoeuvre[+ping]). The re-planning is the real-time
 #: iteration (``receding-realtime``): ``receding``'s IPOPT solve at every re-plan, about 1 s
 #: on ``default`` against 0.08 s, would triple the demo's two minutes.
-DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding-realtime",
-                 "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
-                 "receding-realtime+scheduled")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from tmaplan.cli.demo import DEMO_POLICIES
+from tmaplan.cli.args import DEMO_POLICIES
 from tmaplan.display import seconds_text
 from tmaplan.memory import check_steps
 from tmaplan.models.plausibility import warn_suspicious

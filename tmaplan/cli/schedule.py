@@ -29,7 +29,6 @@ from tmaplan.models.target import initial_velocity
 from tmaplan.planning import max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
-from tmaplan.plotting import plot_schedule
 from tmaplan.scenario import Scenario, load
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
@@ -238,6 +237,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
               f"lower bound {res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); "
               f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
     if not args.no_figure:
+        from tmaplan.plotting import plot_schedule  # deferred: matplotlib is slow to import
+
         path = Path(args.out) / f"{scenario.name}_schedule.png"
         plot_schedule(scenario, obs, belief, res, path)
         payload["figure"] = str(path)

@@ -8,9 +8,16 @@ from pathlib import Path
 
 import matplotlib
 import pytest
+from hypothesis import settings
 
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
+
+# The property tests draw their examples from a seed fixed per test (a red CI is a defect to
+# reproduce, not chance); TMAPLAN_HYPOTHESIS=explore draws fresh examples on every run.
+settings.register_profile("fixed", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("TMAPLAN_HYPOTHESIS", "fixed"))
 
 
 @pytest.fixture

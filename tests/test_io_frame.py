@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pyproj
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from tmaplan.errors import ArgumentError
@@ -38,20 +38,22 @@ def test_local_latlon_round_trip_within_a_millimetre(centre, offs):
 
 @settings(max_examples=60, deadline=None)
 @given(centres, offsets)
+@example(centre=(0.0, 1e-9), offs=[(2.0, 1.0)])  # found by CI: 0.09 mm off at 2 m
+@example(centre=(0.0, 1e-9), offs=[(2.0, 0.0)])
 def test_distance_and_azimuth_from_the_centre_are_the_geodesic_ones(centre, offs):
     frame = LocalFrame(lat0=centre[0], lon0=centre[1])
     e, n = _points(offs)
     lat, lon = frame.to_latlon(e, n)
     az, _, d = GEOD.inv(np.full(lat.size, centre[1]), np.full(lat.size, centre[0]), lon, lat)
     r = np.hypot(e, n)
+    # a millimetre plus 1e-6 of the distance: PROJ's aeqd inverse returns the centre itself for
+    # points within 1e-10 Earth radii of it (0.64 mm) and is good to ~0.1 mm a few metres out
+    assert np.all(np.abs(d - r) < 1e-3 + 1e-6 * r)
+    # the plane's bearing from the centre is the geodesic azimuth (where it is defined), to the
+    # angle a millimetre across subtends
     far = r > 1.0
-    assert np.all(np.abs(d[far] / r[far] - 1.0) < 1e-6)
-    # near the centre, absolutely: PROJ's aeqd inverse returns the centre itself for points
-    # within 1e-10 Earth radii of it (0.64 mm), so the tolerance is a millimetre there
-    assert np.all(np.abs(d[~far] - r[~far]) < 1e-3)
-    # the plane's bearing from the centre is the geodesic azimuth (where it is defined)
     diff = np.angle(np.exp(1j * (np.deg2rad(az[far]) - np.arctan2(e[far], n[far]))))
-    assert np.all(np.abs(diff) < 1e-6)
+    assert np.all(np.abs(diff) < 1e-6 + 1e-3 / r[far])
 
 
 def test_the_centre_is_the_origin_and_north_is_up():

@@ -6,7 +6,7 @@ Prints measured medians on ``brehard2005-s1`` (1000 steps) in the same run:
   step functions compiled to C, cached) and, for reference, the casadi-VM path;
 * the full ``closed_form_pcrb`` call (which also draws the 1e5 prior samples of eq. 56 and
   computes the side-assumption diagnostic);
-* the Monte Carlo PCRB in LPC with 1000 samples (file 000 L612), same prior, unchanged code;
+* the Monte Carlo PCRB in LPC with 1000 samples (brehard2005, §5), same prior, unchanged code;
 * batched evaluation of random ping schedules (schedules of 1000 steps per second): the C
   kernel and the numpy reference loop. Both start from the per-track quantities (moments,
   D-terms, J₀: computed once per observer track, timed above) and include everything that

@@ -188,6 +188,11 @@ def _signal_in_solver(sig: int, dwell: float = 0.25):
         thread.join()
 
 
+def _by_handler(exc: BaseException) -> bool:
+    """Raised by the signal handler in Python code (the signal arrived outside a solver)."""
+    return traceback.extract_tb(exc.__traceback__)[-1].name == "_handler"
+
+
 def _in_solver(exc: BaseException) -> bool:
     """Raised by :func:`solver_call` (the solver swallowed the interrupt), not by the signal
     handler in Python code."""
@@ -207,7 +212,10 @@ def test_interrupted_ipopt_solve_raises(default, prior, sig):
     # after the multi-start ran to its end; how soon is measured by benchmarks/interrupts.py,
     # not here (no timed tests)
     assert isinstance(ei.value, Interrupted) and ei.value.signum == sig
-    assert _in_solver(ei.value)
+    # raised by the solver call that swallowed it, or by the handler when the signal reached
+    # Python just after the solve returned (a race of the watcher thread, seen once in CI):
+    # an interrupt either way, never a failed solve
+    assert _in_solver(ei.value) or _by_handler(ei.value)
 
 
 def test_interrupted_receding_replan_raises_and_logs_no_failure(default, prior):

@@ -92,8 +92,7 @@ def _replans(c: ReplanCounts | None) -> str:
 def replan_warning(result: CampaignResult) -> str:
     """HTML paragraph naming the policies with more than
     :data:`~tmaplan.evaluation.replans.NOT_CONVERGED_WARNING` of their re-plans not
-    converged ("" if none), as the campaign's :class:`~tmaplan.evaluation.replans.
-    ReplanWarning`."""
+    converged ("" if none), as the campaign's :class:`~tmaplan.evaluation.replans.ReplanWarning`."""
 
     over = [(n, c) for n in result.policies if (c := result.summary[n].get("replans"))
             is not None and c.not_converged_share > NOT_CONVERGED_WARNING]

@@ -408,3 +408,24 @@ def test_the_bound_and_the_scheduler_check_their_memory_first(monkeypatch, no_so
         closed_form_pcrb(sc)
     with pytest.raises(ScenarioError, match="the ping scheduler"):
         schedule_pings(sc, budget=2)
+
+
+@pytest.mark.parametrize("verb", [["plan"], ["compare", "--policies", "straight,planned"]])
+@pytest.mark.parametrize("case", ["keep-out", "turn-rate", "horizon"])
+def test_an_impossible_input_is_refused_before_the_heavy_imports(case, verb, tmp_path):
+    """The refusal comes before matplotlib, scipy.stats and pint's registry are imported (a
+    second of start-up between them: ``python benchmarks/refusals.py`` times the refusals):
+    only the verb named is imported, figures and reports import matplotlib when they draw,
+    and a scenario in common units is read without pint (:data:`tmaplan.units.COMMON_UNITS`)."""
+    import subprocess
+    import sys
+
+    f = _scenario_file(tmp_path, case)
+    code = ("import sys; import tmaplan.memory as m; m.available_bytes = lambda: 16 * 2**30; "
+            "from tmaplan.cli import main; "
+            f"status = main({[*verb[:1], str(f), *verb[1:], '--out', str(tmp_path)]!r}); "
+            "print(status, sorted(m for m in ('matplotlib', 'scipy.stats', 'pint') "
+            "if m in sys.modules))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.stdout.split(maxsplit=1) == ["1", "[]\n"], (run.stdout, run.stderr)
+    assert "error: " in run.stderr and run.stderr.count("\n") == 1, run.stderr

@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tmaplan.display import objective_label
 from tmaplan.models.observer import observer_track
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
 from tmaplan.planning.objectives import ObjectiveEvaluator
-from tmaplan.plotting import objective_label, plot_plan, plot_schedule
+from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.scenario import load_problem
 
 

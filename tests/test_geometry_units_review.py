@@ -6,9 +6,9 @@ import types
 import numpy as np
 import pytest
 
+from tmaplan.display import objective_label
 from tmaplan.errors import ArgumentError, UnitError
 from tmaplan.geometry import range_of
-from tmaplan.plotting import objective_label
 from tmaplan.units import to_si, to_si_vector
 
 

@@ -56,6 +56,8 @@ DEFERRED_MODULES: dict[str, str] = {
     "tmaplan.estimators.pf_numba": "numba",  # the compiled particle-filter kernels
     "tmaplan.io": "pyproj",  # recorded data in and out (and pynmea2, gpxpy)
     "tmaplan.plotting": "matplotlib",  # the figures of a verb whose checks every verb runs
+    "tmaplan.report": "matplotlib",  # a campaign's report, after the runs
+    "tmaplan.report_contacts": "matplotlib",  # the per-contact figure of that report
 }
 
 #: Findings tolerated for now, as (file under tmaplan/, stripped text of the offending line):

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 import time
 
 import numpy as np
 import pytest
 
+from tmaplan import units
 from tmaplan.errors import ScenarioError, UnitError
 from tmaplan.units import DEG, DIMENSIONS, KNOT, NMI, format_quantity, to_si, to_si_vector
 
@@ -222,3 +225,27 @@ def test_a_non_finite_number_is_called_so(text: str) -> None:
 def test_a_word_is_still_not_a_number(text: str) -> None:
     with pytest.raises(UnitError, match="does not start with a number"):
         to_si(text, "length", "f")
+
+
+@pytest.mark.parametrize("unit", sorted(units.COMMON_UNITS))
+def test_common_units_are_pints_factors_bit_for_bit(unit: str) -> None:
+    """The table that spares a scenario's load pint's registry holds pint's own factor and
+    dimension for each unit, to the last bit (a plan from "12 kn" is the same either way)."""
+    factor, dimension = units.COMMON_UNITS[unit]
+    pint_factor, root = units.ureg.get_root_units(units.ureg.parse_units(unit))
+    si = {"length": "m", "time": "s", "angle": "rad", "speed": "m/s", "angular_rate": "rad/s",
+          "frequency": "1/s", "process_noise": "m**2/s**3"}[dimension]
+    assert factor == float(pint_factor)
+    assert root == units.ureg.get_root_units(units.ureg.parse_units(si))[1]
+    assert to_si(f"2.5 {unit}", dimension, "f") == 2.5 * float(pint_factor)
+
+
+def test_a_scenario_in_common_units_loads_without_pint() -> None:
+    """Loading a built-in problem (all in common units) imports no pint: a bad input is
+    refused before pint's 0.8 s import; a unit outside the table still goes to pint."""
+    code = ("import sys; from tmaplan.scenario import load_problem; load_problem('default'); "
+            "print('pint' in sys.modules); from tmaplan.units import to_si; "
+            "to_si('3 furlong', 'length', 'f'); print('pint' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "True"]

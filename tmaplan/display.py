@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -21,8 +22,8 @@ import tomli_w
 
 from tmaplan.units import KNOT
 
-__all__ = ["angle", "distance", "minute_list", "minutes", "rate", "scenario_text",
-           "seconds_text", "short_repr", "speed", "timespan"]
+__all__ = ["OBJECTIVE_UNITS", "angle", "distance", "minute_list", "minutes", "objective_label",
+           "rate", "scenario_text", "seconds_text", "short_repr", "speed", "timespan"]
 
 
 def _num(x: float, digits: int = 4) -> str:
@@ -224,3 +225,35 @@ def short_repr(obj: Any) -> str:
     parts = [f"{f.name}={_brief(getattr(obj, f.name))}" for f in dataclasses.fields(obj)
              if f.repr]
     return f"{type(obj).__name__}({', '.join(parts)})"
+
+
+#: Units of the planning and scheduling functionals (plot labels), by base name.
+OBJECTIVE_UNITS: dict[str, str] = {
+    "logdet": "−ln det FIM, SI units",
+    "range-bound": "m", "terminal-range-bound": "m", "mean-range-bound": "m",
+    "position-bound": "m", "terminal-position-bound": "m", "mean-position-bound": "m",
+    "relative-range-bound": "σ_r/r, –", "mean-relative-range-bound": "σ_r/r, –",
+    "relative-range-crlb": "σ_r/r, –", "mean-relative-range-crlb": "σ_r/r, –",
+    "time-to-accuracy": "fraction of the horizon not localised, –",
+    "expected-time-to-accuracy": "s",
+    "turn-penalty": "–",
+}
+
+
+def objective_label(name: str) -> str:
+    """``name [unit]`` of a planning / scheduling functional for titles and axes.
+
+    Composite objectives (``a+b``, weights ``w*a``) label each term. A name outside
+    :data:`OBJECTIVE_UNITS` gets its unit from its family (``…range-bound``,
+    ``…position-bound``: m; ``relative…``: –) or none.
+    """
+    parts = []
+    # a "+" after a digit and an "e" is a weight's exponent ("1e+06*range-bound"), not a sum
+    for term in re.split(r"(?<![0-9][eE])\+", name):
+        base = term.split("*")[-1]
+        unit = OBJECTIVE_UNITS.get(base)
+        if unit is None:
+            unit = ("σ_r/r, –" if "relative" in base else
+                    "m" if base.endswith(("range-bound", "position-bound")) else None)
+        parts.append(f"{term} [{unit}]" if unit else term)
+    return " + ".join(parts)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
@@ -10,12 +9,13 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from tmaplan.display import objective_label
 from tmaplan.geometry import bearing_of
 from tmaplan.planning import PingEvaluator
 from tmaplan.simulate import Simulation
 
-__all__ = ["OBJECTIVE_UNITS", "new_figure", "objective_label", "plot_bearings", "plot_geometry",
-           "plot_plan", "plot_schedule", "save_figure"]
+__all__ = ["new_figure", "plot_bearings", "plot_geometry", "plot_plan", "plot_schedule",
+           "save_figure"]
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.0, 5.5),
@@ -94,19 +94,6 @@ def plot_geometry(sim: Simulation, path: str | Path | None = None, *, n_lines: i
     return fig
 
 
-#: Units of the planning and scheduling functionals (plot labels), by base name.
-OBJECTIVE_UNITS: dict[str, str] = {
-    "logdet": "−ln det FIM, SI units",
-    "range-bound": "m", "terminal-range-bound": "m", "mean-range-bound": "m",
-    "position-bound": "m", "terminal-position-bound": "m", "mean-position-bound": "m",
-    "relative-range-bound": "σ_r/r, –", "mean-relative-range-bound": "σ_r/r, –",
-    "relative-range-crlb": "σ_r/r, –", "mean-relative-range-crlb": "σ_r/r, –",
-    "time-to-accuracy": "fraction of the horizon not localised, –",
-    "expected-time-to-accuracy": "s",
-    "turn-penalty": "–",
-}
-
-
 def plot_bearings(sim: Simulation, path: str | Path) -> Path | None:
     """What an operator watches: the bearings (measured dots, true line) [°] and the true
     bearing rate [°/min] against time [min]; None when the run has no bearing sensor.
@@ -143,25 +130,6 @@ def plot_bearings(sim: Simulation, path: str | Path) -> Path | None:
         a.grid(True, alpha=0.3)
     ax[0, 0].set_title(f"{sim.scenario.name}: bearing and bearing rate")
     return save_figure(fig, path)
-
-
-def objective_label(name: str) -> str:
-    """``name [unit]`` of a planning / scheduling functional for titles and axes.
-
-    Composite objectives (``a+b``, weights ``w*a``) label each term. A name outside
-    :data:`OBJECTIVE_UNITS` gets its unit from its family (``…range-bound``,
-    ``…position-bound``: m; ``relative…``: –) or none.
-    """
-    parts = []
-    # a "+" after a digit and an "e" is a weight's exponent ("1e+06*range-bound"), not a sum
-    for term in re.split(r"(?<![0-9][eE])\+", name):
-        base = term.split("*")[-1]
-        unit = OBJECTIVE_UNITS.get(base)
-        if unit is None:
-            unit = ("σ_r/r, –" if "relative" in base else
-                    "m" if base.endswith(("range-bound", "position-bound")) else None)
-        parts.append(f"{term} [{unit}]" if unit else term)
-    return " + ".join(parts)
 
 
 def plot_plan(plan: Any, base: dict[str, Any], belief: Any, path: str | Path, *,

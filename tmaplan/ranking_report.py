@@ -10,8 +10,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from tmaplan.display import objective_label
 from tmaplan.evaluation.cost_ranking import CostRankingResult
-from tmaplan.plotting import new_figure, objective_label, save_figure
+from tmaplan.plotting import new_figure, save_figure
 from tmaplan.report_tables import sample_warning
 
 __all__ = ["candidate_label", "cost_label", "plot_cost_ranking", "write_ranking_report"]

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     import pint  # annotations only: imported on first use (_registry)
 
 __all__ = [
+    "COMMON_UNITS",
     "DEG",
     "DIMENSIONS",
     "KNOT",
@@ -157,6 +158,24 @@ def _unit_factor(unit: str) -> tuple[float, pint.Unit]:
     return float(cast(float, factor)), root
 
 
+#: The units of the built-in problems and of most scenario files: unit string -> (factor to
+#: the SI unit, dimension), pint's own factors (a test checks each against pint bit for bit).
+#: A scenario in these units loads without pint's registry (about 0.8 s to import and build),
+#: so a command refuses a bad input in well under a second; any other unit goes to pint.
+COMMON_UNITS: Final[dict[str, tuple[float, str]]] = {
+    "m": (1.0, "length"), "km": (1000.0, "length"), "nmi": (1852.0, "length"),
+    "s": (1.0, "time"), "min": (60.0, "time"), "h": (3600.0, "time"), "d": (86400.0, "time"),
+    "deg": (0.017453292519943295, "angle"), "°": (0.017453292519943295, "angle"),
+    "rad": (1.0, "angle"),
+    "kn": (0.5144444444444445, "speed"), "m/s": (1.0, "speed"),
+    "km/h": (0.2777777777777778, "speed"),
+    "deg/s": (0.017453292519943295, "angular_rate"),
+    "deg/min": (0.0002908882086657216, "angular_rate"), "rad/s": (1.0, "angular_rate"),
+    "Hz": (1.0, "frequency"),
+    "m^2/s^3": (1.0, "process_noise"), "km^2/s^3": (1000000.0, "process_noise"),
+}
+
+
 @functools.lru_cache(maxsize=4096)
 def _parse(text: str, dimension: str) -> float:
     """Convert ``text`` (number + optional unit) to SI ``dimension``; cached.
@@ -180,6 +199,8 @@ def _parse(text: str, dimension: str) -> float:
     elif _AMBIGUOUS_NM_RE.search(unit):
         raise _ParseError(f"unit {unit!r}: 'nm' is ambiguous (pint reads the nanometre); "
                           "write 'nmi' for nautical miles or 'nanometer'")
+    elif COMMON_UNITS.get(unit, (0.0, ""))[1] == dimension:
+        value = magnitude * COMMON_UNITS[unit][0]
     else:
         factor, root = _unit_factor(unit)
         if root != _si_root(dimension):

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy.special import ndtr
 
 from tmaplan.errors import (
     ArgumentError,
@@ -194,7 +194,7 @@ def _check_prior_range_support(scenario: Scenario) -> None:
     if p.range_distribution == "normal" and p.range_std:
         rel = true_initial_state(scenario)[:2] - np.asarray(scenario.observer.position, float)
         mean = p.range_mean if p.range_mean is not None else float(np.hypot(*rel))
-        bad = bad or stats.norm.cdf(0.0, loc=mean, scale=p.range_std) > 1e-12
+        bad = bad or ndtr(-mean / p.range_std) > 1e-12  # P(range < 0)
     if bad:
         raise ScenarioError(
             "prior.range_min",

@@ -31,6 +31,7 @@ from tmaplan.cli.contacts import (
     preflight_per_contact,
     refuse_several,
     run_per_contact,
+    takes_several,
 )
 from tmaplan.cli.finite import require_finite
 from tmaplan.cli.paths import check_outputs
@@ -93,8 +94,23 @@ def write_json(payload: Any, path: str) -> None:
         Path(path).write_text(text + "\n", encoding="utf-8")
 
 
-def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
-                             dict[str, argparse.ArgumentParser]]:
+def _chosen_verb(argv: Sequence[str]) -> str | None:
+    """The verb ``argv`` names (its first word that is not an option), if it is one of
+    :data:`VERBS`; ``None`` otherwise (no verb, ``--help``, a misspelt verb)."""
+    for word in argv:
+        if word in ("-h", "--help", "--version"):
+            return None
+        if not word.startswith("-"):
+            return word if word in VERBS else None
+    return None
+
+
+def _build_parser(verb: str | None = None) -> tuple[
+        argparse.ArgumentParser, dict[str, Any], dict[str, argparse.ArgumentParser]]:
+    """The ``tmaplan`` parser with every verb's sub-parser, or only ``verb``'s: a verb's
+    module imports what it computes with (casadi, scipy, matplotlib), which a command that
+    names its verb need not load for the others (an impossible input is refused in a second,
+    not after every verb's imports)."""
     parser = OneLineParser(
         prog="tmaplan",
         description="Observer-trajectory planning and sensor management for TMA.",
@@ -104,22 +120,24 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, Any],
     sub = parser.add_subparsers(dest="verb", metavar="VERB")
     modules: dict[str, Any] = {}
     parsers: dict[str, argparse.ArgumentParser] = {}
-    for verb, modname in VERBS.items():
+    for name, modname in VERBS.items():
+        if verb is not None and name != verb:
+            continue
         try:
             mod = importlib.import_module(f"tmaplan.cli.{modname}")
         except ModuleNotFoundError as exc:
             if exc.name == f"tmaplan.cli.{modname}":
                 continue
             raise
-        p = sub.add_parser(verb, help=mod.HELP, description=mod.HELP)
+        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP)
         p.add_argument("--json", metavar="PATH", default=None, type=json_path,
                        help="write machine-readable output to PATH ('-' for stdout)")
         # SUPPRESS: no default of its own, so `tmaplan --debug VERB` keeps the top-level value
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help="show tracebacks on errors")
         mod.add_arguments(p)
-        modules[verb] = mod
-        parsers[verb] = p
+        modules[name] = mod
+        parsers[name] = p
     return parser, modules, parsers
 
 
@@ -164,7 +182,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     interrupted by SIGINT or SIGTERM, with one line on stderr
     (for a campaign: the runs kept and the command that resumes it).
     """
-    parser, modules, parsers = _build_parser()
+    parser, modules, parsers = _build_parser(
+        _chosen_verb(sys.argv[1:] if argv is None else argv))
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:  # reported by the verb's parser, whose --help lists what it takes
@@ -190,6 +209,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 # the rules that need the motion model (tmaplan.scenario is below the models)
                 check_scenario(scenario, source=args.problem if fixed is None else None)
                 # a verb that cannot handle several contacts says so (tmaplan.cli.contacts)
+                if len(scenario.contacts) > 1 and not takes_several(modules[args.verb]):
+                    modules = {**_build_parser()[1], **modules}  # to name the verbs that do
                 refuse_several(args.verb, modules[args.verb], scenario, modules)
                 several = len(scenario.contacts) > 1 and per_contact(modules[args.verb])
                 if len(scenario.contacts) > 1:  # a verb's own checks for them, or per contact

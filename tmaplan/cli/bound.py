@@ -27,7 +27,6 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import matplotlib
 import numpy as np
 
 from tmaplan.bounds.closed_form import closed_form_pcrb
@@ -204,6 +203,8 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
 
 
 def _figure(results: list[Any], path: Path, title: str) -> None:
+    import matplotlib  # deferred: matplotlib takes ~0.3 s to import; only when drawing
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 

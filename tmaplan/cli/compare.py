@@ -33,8 +33,6 @@ from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
-from tmaplan.report import efficiency, write_report
-from tmaplan.report_contacts import console_lines, contacts_figure, contacts_html
 from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
@@ -124,12 +122,20 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                        f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
                        f"--particles {args.particles} --accuracy {args.accuracy} "
                        f"--truth {args.truth}")
+    # the report's figures need matplotlib (~0.8 s), not the checks before the runs
+    from tmaplan import report_contacts  # deferred: matplotlib
+    from tmaplan.report import efficiency, write_report  # deferred: matplotlib
+
+    console_lines = report_contacts.console_lines
+
     out_dir = Path(args.out) / f"{scenario.name}_compare"
     several = len(scenario.contacts) > 1  # per-contact tables and figure (report_contacts)
-    report = write_report(result, out_dir, command=cmd, title=f"tmaplan compare: "
-                          f"{scenario.name}", extra_html=contacts_html(result) if several
-                          else "", figures={"contacts": contacts_figure(result, out_dir)}
-                          if several and not getattr(args, "no_figure", False) else None)
+    figures = ({"contacts": report_contacts.contacts_figure(result, out_dir)}
+               if several and not getattr(args, "no_figure", False) else None)
+    report = write_report(result, out_dir, command=cmd,
+                          title=f"tmaplan compare: {scenario.name}",
+                          extra_html=report_contacts.contacts_html(result) if several else "",
+                          figures=figures)
     payload = result.to_json()
     for name, e in efficiency(result).items():
         payload["policies"][name]["efficiency"] = e

@@ -18,16 +18,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import matplotlib
 import numpy as np
-from matplotlib.patches import Ellipse
 
 from tmaplan.bounds.crlb import CRLBResult, crlb
 from tmaplan.bounds.observability import observability
 from tmaplan.cli.args import add_figure_arguments, add_problem_argument, frequency_lines
 from tmaplan.cli.contacts import scenario_of
 from tmaplan.display import timespan
-from tmaplan.plotting import plot_geometry
 from tmaplan.scenario import Scenario
 from tmaplan.simulate import simulate
 
@@ -53,6 +50,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _figure(scenario: Scenario, res: CRLBResult, path: Path) -> None:
     """Truth geometry (km) with the 2σ CRLB ellipse of the target position at t_N."""
+    import matplotlib  # deferred: matplotlib takes ~0.8 s to import; only when drawing
+    from matplotlib.patches import Ellipse  # deferred: as matplotlib
+
+    from tmaplan.plotting import plot_geometry  # deferred: matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 

@@ -25,7 +25,7 @@ from tmaplan.cli.args import (
     integer,
 )
 from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, parse_start
-from tmaplan.display import minute_list
+from tmaplan.display import minute_list, objective_label
 from tmaplan.io import LocalFrame
 from tmaplan.io.plans import legs_from_track, legs_table, write_plan
 from tmaplan.planning.baselines import evaluate_baselines
@@ -35,7 +35,6 @@ from tmaplan.planning.joint import plan_joint
 from tmaplan.planning.joint_ocp import plan_joint_ocp
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.planning.pings import schedule_pings
-from tmaplan.plotting import objective_label, plot_plan
 from tmaplan.policies.plan_starts import plan_from_prior
 from tmaplan.scenario import load
 
@@ -140,6 +139,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
             control_interval=args.control_interval, transcription=args.transcription,
             starts=_starts(args), joint=args.joint, ping_stride=args.ping_stride)
+        from tmaplan.plotting import plot_plan  # deferred: matplotlib
+
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
         payload["figure"] = str(path)
         if args.json != "-":

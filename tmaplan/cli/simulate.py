@@ -19,7 +19,6 @@ from tmaplan.cli.args import (
 from tmaplan.cli.observer_plan import with_observer_plan
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError
-from tmaplan.plotting import plot_bearings, plot_geometry
 from tmaplan.scenario import load
 from tmaplan.simulate import ContactsSimulation, Simulation, simulate, simulate_contacts
 
@@ -198,6 +197,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.json != "-":
             print(f"wrote {', '.join(files.values())}")
     if not args.no_figure:
+        from tmaplan.plotting import plot_bearings, plot_geometry  # deferred: matplotlib
+
         path = Path(args.out) / f"{scenario.name}_geometry.png"
         plot_geometry(sim, path)
         payload["figure"] = str(path)
@@ -237,6 +238,8 @@ def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
         if args.json != "-":
             print(_summary(f"{scenario.name} contact {name}", run, args.seed))
         if not args.no_figure:
+            from tmaplan.plotting import plot_geometry  # deferred: matplotlib
+
             path = Path(args.out) / f"{scenario.name}-{name}_geometry.png"
             plot_geometry(run, path)
             payload["contacts"][name]["figure"] = str(path)

@@ -9,7 +9,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import matplotlib
 import numpy as np
 
 from tmaplan.cli.args import (
@@ -92,6 +91,8 @@ def _with_lines(scenario: Scenario, n: int | None) -> Scenario:
 
 
 def _figure(res: Any, path: Path) -> None:
+    import matplotlib  # deferred: matplotlib takes ~0.3 s to import; only when drawing
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # deferred: pyplot sets up its backend; only when drawing
 

@@ -69,7 +69,7 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
@@ -93,6 +93,8 @@ def _truncated_sum_quantile(n: int, alpha: float, step: float = 0.005) -> float:
     """(1 − α) quantile of the sum of n iid χ²₁ truncated to [0, χ²₁ (1 − α) quantile],
     by convolving the binned distribution (bin probabilities from the CDF, so the x^{-1/2}
     singularity at 0 costs nothing); error below ``n·step/2``."""
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     cap = float(stats.chi2.isf(alpha, 1))
     edges = np.arange(0.0, cap + step, step)
     edges[-1] = cap
@@ -218,6 +220,8 @@ class MonitorConfig:
     @property
     def range_threshold(self) -> float:
         """χ²₁ (1 − α) quantile."""
+        from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
         return float(stats.chi2.isf(self.alpha, 1))
 
     @property

@@ -35,7 +35,6 @@ import dataclasses
 from typing import Literal
 
 import numpy as np
-from scipy import stats
 from scipy.special import gammaln
 
 from tmaplan.errors import ArgumentError, EstimationError, finite_real, is_integer
@@ -338,6 +337,8 @@ def initialise_from_bearings(
         raise ArgumentError("bearings", f"at least {2 * k_min + 1} bearings", n)
     delta = float(dt) if dt is not None else float(np.median(np.diff(t)))
     k_hi = (n - 1) // 2 if k_max is None else min(k_max, (n - 1) // 2)
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     chi3 = stats.chi2.ppf(1 - alpha, 3)
     chi4 = stats.chi2.ppf(1 - alpha, 4)
     # Σ V(B) (corrected eq. 26): N·E[Y4⁵]·(π χ²₄)²/Γ(3)·sqrt(det Q), sqrt det Q = q²δ⁴/12.

@@ -34,7 +34,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from tmaplan.errors import ArgumentError, finite_real, is_integer
 from tmaplan.geometry import wrap_angle
@@ -74,6 +73,8 @@ def glr_threshold(alpha: float, candidates: int) -> float:
         raise ArgumentError("alpha", "a probability in (0, 0.5)", alpha)
     if candidates < 1:
         raise ArgumentError("candidates", "an integer >= 1", candidates)
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     return float(stats.chi2.isf(alpha / candidates, 2))
 
 

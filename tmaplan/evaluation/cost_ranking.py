@@ -35,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from tmaplan.bounds.pcrb import monte_carlo_pcrb
 from tmaplan.bounds.truth_bound import truth_bounds
@@ -337,6 +336,8 @@ def _metrics(tta: np.ndarray, fre: np.ndarray, censor: float) -> tuple[np.ndarra
 def _rho(cost: np.ndarray, metric: np.ndarray) -> tuple[float, float]:
     if cost.size < 3 or np.all(cost == cost[0]) or np.all(metric == metric[0]):
         return float("nan"), float("nan")
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     return (float(stats.spearmanr(cost, metric).statistic),
             float(stats.kendalltau(cost, metric).statistic))
 
@@ -423,6 +424,8 @@ def rank_correlations(costs: Mapping[str, np.ndarray], tta: np.ndarray, fre: np.
 
         cis = [(float("nan"), float("nan"))] * 3
         if (np.isfinite(s) or np.isfinite(s2)) and R >= 2 and n_resamples > 0:
+            from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
             with np.errstate(invalid="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # degenerate resamples (constant cost)
                 bs = stats.bootstrap((np.arange(R), ok), stat, paired=False,

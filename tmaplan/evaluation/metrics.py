@@ -14,7 +14,6 @@ import numbers
 from collections.abc import Mapping
 
 import numpy as np
-from scipy import stats
 
 from tmaplan.errors import ArgumentError, as_real
 from tmaplan.geometry import course_speed, range_of, wrap_angle
@@ -249,6 +248,8 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     if n < 2:
         return PairedDifference(a=a, b=b, metric=metric, mean=m, ci_low=-np.inf, ci_high=np.inf,
                                 level=level, n=n)
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     half = float(stats.t.ppf(0.5 + level / 2, n - 1) * d.std(ddof=1) / np.sqrt(n))
     return PairedDifference(a=a, b=b, metric=metric, mean=m, ci_low=m - half, ci_high=m + half,
                             level=level, n=n)

@@ -9,7 +9,6 @@ N(true bearing, σ_θ²) has the same distribution over runs.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import bearing_of, course_speed, range_of
@@ -42,6 +41,8 @@ def _truncnorm(mean: float, std: float, lo: float, hi: float, n: int,
                                 "is 0: every sample is the mean)", mean, source=source)
         return np.full(n, float(mean))
     check_truncated_normal(name, mean, std, lo, hi, unit, source, truth=truth)
+    from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
+
     a, b = (lo - mean) / std, (hi - mean) / std
     return stats.truncnorm.rvs(a, b, loc=mean, scale=std, size=n, random_state=rng)
 

@@ -230,3 +230,24 @@ def test_no_merge_that_leaves_the_track():
     loose = navigator_legs(legs, fast.position, speed=20.0, dt=15.0, position_tol=1e4,
                            rate_tol=math.radians(0.2))
     assert len(loose.legs) < len(nav.legs)  # the tolerance, not the rates, stopped the merge
+
+
+def test_contacts_last_seen_at_different_times(recording, tmp_path):
+    """A contact whose bearings end earlier is moved to the latest one's time: one plan from
+    the latest own-ship state."""
+    lines = (recording / "run" / "bearings.csv").read_text().splitlines()
+    bravo = [i for i, x in enumerate(lines) if x.endswith(",bravo")]
+    drop = set(bravo[-8:])  # bravo's last 2 minutes
+    (tmp_path / "b.csv").write_text("\n".join(x for i, x in enumerate(lines)
+                                              if i not in drop) + "\n")
+    rec = read_recording(tmp_path / "b.csv", recording / "run" / "ownship.csv")
+    pl = Platform(particles=2000)
+    sols = [solve_contact(contact_problem(rec, c, pl), rng=contact_rng(0, i, 2),
+                          frame=rec.frame, particles=pl.particles)
+            for i, c in enumerate(rec.contacts)]
+    ends = {s.name: float(s.problem.observer.times[-1]) for s in sols}
+    assert ends["bravo"] < ends["alpha"]
+    adv = advise_contacts(sols, pl, horizon=300.0)
+    assert adv.track.times[0] == pytest.approx(ends["alpha"])
+    assert adv.expected_time_to_accuracy <= adv.hold_course_time_to_accuracy
+    assert set(adv.contacts) == {"alpha", "bravo"}

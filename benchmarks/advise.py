@@ -7,7 +7,9 @@ the verdict and Ekelund's range. Target: read and solved in at most 10 s.
 
 Times in seconds, best of ``--repeat``: ``read`` (``read_recording``), ``solve`` (every
 contact's ``contact_problem`` + ``solve_contact``), and their sum; ``--advice`` also times
-the advice of one contact (the planner and the pings; not part of the target).
+the advice of one contact and the joint advice of all contacts (``advise_contacts``: one
+manoeuvre and two shared pings for all, what ``tmaplan advise`` runs with several contacts;
+not part of the target, reported with the total of read, solve and joint advice).
 
 Run: python benchmarks/advise.py [--hours 2] [--contacts 3] [--repeat 2] [--advice] [--json OUT]
 """
@@ -23,7 +25,14 @@ from pathlib import Path
 
 from io_read import write_recording  # the same recording as the readers' benchmark
 
-from tmaplan.advice import Platform, advise_contact, contact_problem, contact_rng, solve_contact
+from tmaplan.advice import (
+    Platform,
+    advise_contact,
+    advise_contacts,
+    contact_problem,
+    contact_rng,
+    solve_contact,
+)
 from tmaplan.io import read_recording
 
 
@@ -62,6 +71,14 @@ def main() -> None:
             t = time.perf_counter()
             advise_contact(sols[0], platform, horizon=1200.0, budget=2)
             seconds["advice_one_contact"] = time.perf_counter() - t
+            t = time.perf_counter()
+            joint = advise_contacts(sols, platform, horizon=1200.0, budget=2)
+            seconds["advice_joint"] = time.perf_counter() - t
+            seconds["total_with_joint_advice"] = seconds["total"] + seconds["advice_joint"]
+            print(f"joint advice: {joint.note}; pings lower bound "
+                  f"{joint.pings.schedule.lower_bound:.1f} m <= objective "
+                  f"{joint.pings.schedule.objective:.1f} m (gap {joint.pings.schedule.gap:.2%})"
+                  if joint.pings is not None else f"joint advice: {joint.note}")
     rows = sum(c.times.size for c in rec.contacts)
     print(f"{args.hours:g} h, {args.contacts} contacts, {rows} bearings at 1 s, "
           f"{platform.particles} particles, {platform.step_min:g} s grid; best of "

@@ -250,15 +250,3 @@ def test_a_prior_that_excludes_the_solution_is_told(tmp_path, capsys):
     assert "outside the prior's 30-40 km" in got["cross_check"]
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "warning: SolutionWarning" in err[0]
-
-
-def test_joint_advice_hook_takes_the_nearest_contact():
-    from types import SimpleNamespace as NS
-
-    from tmaplan.cli.advise import joint_advice
-
-    sols = [NS(pf=NS(range=9000.0), mle=NS(range=8000.0)),
-            NS(pf=NS(range=float("nan")), mle=NS(range=5000.0)),
-            NS(pf=NS(range=7000.0), mle=NS(range=1000.0))]
-    assert joint_advice(sols, ["far", "nearest by its ML range", "near"]) == \
-        "nearest by its ML range"

@@ -50,7 +50,7 @@ from tmaplan.scenario import (
 from tmaplan.scenario.names import DEFAULT_CONTACT
 
 __all__ = ["ACCURACY", "CONTROL_INTERVAL", "PLAN_STEP", "Advice", "advise_contact",
-           "planning_scenario"]
+           "contact_belief", "planning_scenario"]
 
 #: Step of the planning grid [s].
 PLAN_STEP = 15.0
@@ -108,9 +108,11 @@ class Advice:
 
 
 def planning_scenario(problem: ContactProblem, platform: Platform, horizon: float,
-                      budget: int) -> tuple[Scenario, float, float, np.ndarray]:
+                      budget: int, *, sigma: float | None = None
+                      ) -> tuple[Scenario, float, float, np.ndarray]:
     """The scenario the planner sees from now: the own ship's current state and limits, the
-    contact's bearing noise, a ping sensor, ``horizon`` rounded to whole control intervals.
+    contact's bearing noise (``sigma`` [rad] when given, else the median of its bearings'), a
+    ping sensor, ``horizon`` rounded to whole control intervals.
 
     Returns
     -------
@@ -125,7 +127,8 @@ def planning_scenario(problem: ContactProblem, platform: Platform, horizon: floa
     course, speed = course_speed(obs.mean_velocity[-1])
     heading0, speed0 = float(course), float(speed)
     p0 = obs.position[-1]
-    sigma = float(np.median([float(m.sigma) for m in problem.measurements]))
+    if sigma is None:
+        sigma = float(np.median([float(m.sigma) for m in problem.measurements]))
     est = problem.scenario.target
     sc = Scenario(
         name=problem.name, description=f"advice for contact '{problem.name}'",
@@ -142,8 +145,20 @@ def planning_scenario(problem: ContactProblem, platform: Platform, horizon: floa
     return sc, heading0, speed0, np.asarray(p0, float)
 
 
-def _belief(sol: ContactSolution, now: float) -> Belief:
-    """The contact's current posterior, relative to the own ship (module doc)."""
+def contact_belief(sol: ContactSolution, now: float) -> Belief:
+    """The contact's current posterior, relative to the own ship (module doc).
+
+    Parameters
+    ----------
+    sol : ContactSolution
+    now : float
+        The time of its last grid step [s].
+
+    Returns
+    -------
+    Belief
+        Assimilated (it holds the bearings at ``now``).
+    """
     st = getattr(sol.pf_track, "details", None)
     if st is not None and getattr(st, "particles", None) is not None:
         w = np.exp(np.asarray(st.log_weights, float))
@@ -176,7 +191,7 @@ def advise_contact(sol: ContactSolution, platform: Platform, *, horizon: float =
     problem = sol.problem
     now = float(problem.observer.times[-1])
     sc, h0, s0, p0 = planning_scenario(problem, platform, horizon, budget)
-    belief = _belief(sol, now)
+    belief = contact_belief(sol, now)
     planner = HeadingPlanner(sc, objective="expected-time-to-accuracy",
                              turn_rate_max=platform.turn_rate_max,
                              keep_out_range=platform.keep_out_range)

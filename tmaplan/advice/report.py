@@ -8,6 +8,9 @@
   solution fits: dots within ±2 without a trend);
 * ``advise_bound.png``: the closed-form PCRB range bound [m] over the next horizon along the
   recommended track and holding course, per contact, with 10 % of its current range.
+
+With several contacts the advice is one (:class:`~tmaplan.advice.joint.JointAdvice`): one
+recommended track (black, dotted) and every contact's bound along it in the contact's colour.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.advice.joint import JointAdvice
 from tmaplan.advice.recommend import ACCURACY, Advice
 from tmaplan.advice.solution import ContactSolution, Estimate
 from tmaplan.io.recording import Recording
@@ -30,7 +34,8 @@ __all__ = ["advice_figures", "write_advice_page"]
 _CAPTIONS = {
     "picture": "Geographic picture (local plane, km): own ship, bearing lines, each contact's "
                "ML (solid) and particle-filter (dashed) position with its 95 % ellipse, and "
-               "the recommended track (dotted) over the next horizon.",
+               "the recommended track (dotted; with several contacts one track for all, "
+               "black) over the next horizon.",
     "residuals": "Stacked dots: bearing residuals against the ML solution, in standard "
                  "deviations, one row per contact.",
     "bound": "Range bound (closed-form PCRB, m) over the next horizon: recommended track "
@@ -51,20 +56,44 @@ def _ellipse(ax: Any, est: Estimate, color: str, style: str) -> None:
             color=color, ms=4, mfc="none" if style != "-" else color)
 
 
+def _bounds(solutions: Sequence[ContactSolution],
+            advice: Sequence[Advice | None] | JointAdvice
+            ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, str] | None]:
+    """Per contact: (times from now [min], bound along the recommended track, bound holding
+    course [m], label), None without advice."""
+    if isinstance(advice, JointAdvice):
+        t = (advice.track.times - advice.track.times[0]) / 60.0
+        return [(t, advice.range_bounds[s.name], advice.hold_range_bounds[s.name],
+                 f"{s.name}: {advice.recommendation} (all contacts)") for s in solutions]
+    return [None if a is None else ((a.track.times - a.track.times[0]) / 60.0, a.range_bound,
+                                    a.hold_range_bound, f"{s.name}: {a.recommendation}")
+            for s, a in zip(solutions, advice, strict=True)]
+
+
 def advice_figures(recording: Recording, solutions: Sequence[ContactSolution],
-                   advice: Sequence[Advice | None], out_dir: str | Path) -> dict[str, Path]:
-    """Write the three figures (module doc) into ``out_dir``; name -> path."""
+                   advice: Sequence[Advice | None] | JointAdvice,
+                   out_dir: str | Path) -> dict[str, Path]:
+    """Write the three figures (module doc) into ``out_dir``; name -> path. ``advice``: one
+    per contact (None: no advice), or the joint advice of several contacts."""
     out = Path(out_dir)
     colors = [f"C{i % 10}" for i in range(len(solutions))]
+    joint = advice if isinstance(advice, JointAdvice) else None
+    per: Sequence[Advice | None] = [None] * len(solutions) if joint is not None \
+        else advice  # type: ignore[assignment]
     nav = recording.nav
     fig, ax = new_figure(size=(7.0, 6.0))
     a = ax[0, 0]
     assert nav.east is not None and nav.north is not None
     a.plot(nav.east / 1e3, nav.north / 1e3, "k-", lw=1.5, label="own ship")
-    for sol, adv, col in zip(solutions, advice, colors, strict=True):
+    if joint is not None:
+        a.plot(joint.track.position[:, 0] / 1e3, joint.track.position[:, 1] / 1e3, "k:", lw=2,
+               label=f"recommended for all contacts ({joint.recommendation})")
+    for sol, adv, col in zip(solutions, per, colors, strict=True):
         c = recording.contact(sol.name)
-        r = np.nanmax([sol.mle.range, sol.pf.range, 1000.0])
-        r = r if np.isfinite(r) else 10_000.0
+        # the filter's range (its prior bounds it); the ML range of an unobservable contact
+        # can be anything (1e10 km seen): not the length of the bearing lines
+        r = sol.pf.range if np.isfinite(sol.pf.range) else sol.mle.range
+        r = float(np.clip(r, 1000.0, 100_000.0)) if np.isfinite(r) else 10_000.0
         idx = np.unique(np.linspace(0, c.times.size - 1, 20).astype(int))
         p = c.ownship.position[idx]
         end = p + 1.3 * r * np.column_stack([np.sin(c.bearing[idx]), np.cos(c.bearing[idx])])
@@ -103,13 +132,12 @@ def advice_figures(recording: Recording, solutions: Sequence[ContactSolution],
 
     fig, ax = new_figure(size=(7.0, 4.0))
     a = ax[0, 0]
-    for sol, adv, col in zip(solutions, advice, colors, strict=True):
-        if adv is None:
+    for sol, bound, col in zip(solutions, _bounds(solutions, advice), colors, strict=True):
+        if bound is None:
             continue
-        t = (adv.track.times - adv.track.times[0]) / 60.0
-        a.semilogy(t, adv.range_bound, "-", color=col,
-                   label=f"{sol.name}: {adv.recommendation}")
-        a.semilogy(t, adv.hold_range_bound, "--", color=col)
+        t, rb, hold, label = bound
+        a.semilogy(t, rb, "-", color=col, label=label)
+        a.semilogy(t, hold, "--", color=col)
         r = sol.pf.range if np.isfinite(sol.pf.range) else sol.mle.range
         if np.isfinite(r):
             a.axhline(ACCURACY * r, color=col, lw=0.8, ls=":")

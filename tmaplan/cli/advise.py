@@ -6,12 +6,14 @@ Per contact: the batch ML solution with its CRLB and the particle filter's poste
 (:mod:`tmaplan.advice.solution`), an observability verdict, Ekelund's range where the own ship
 has manoeuvred, and the advice (:mod:`tmaplan.advice.recommend`): the recommended manoeuvre
 over ``--horizon`` with its leg table against holding course, and ``--budget`` ping times with
-the certificate. Writes the figures, ``advise.html``, and per contact ``<contact>_legs.csv``,
-``<contact>_track.gpx`` and ``<contact>_track.csv`` into ``--out``.
+the certificate. Writes the figures, ``advise.html``, and per contact ``<contact>_legs.csv``
+(the exact leg table), ``<contact>_navigator_legs.csv`` (the merged one,
+:mod:`tmaplan.models.leg_table`), ``<contact>_track.gpx`` and ``<contact>_track.csv`` into
+``--out``.
 
-Several contacts: one solution and one advice per contact; the top-level ``advice`` is the
-nearest contact's (by estimated range) until several-contact planning plans for all at once
-(the hook: :func:`joint_advice`).
+Several contacts: one solution per contact and ONE advice for all of them at once
+(:func:`tmaplan.advice.joint.advise_contacts`: the several-contact planner's manoeuvre against
+holding course, one shared ping schedule); its files are ``all-contacts_*``.
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.advice.joint import JointAdvice, advise_contacts
 from tmaplan.advice.problem import Platform, contact_problem, read_platform
-from tmaplan.advice.recommend import advise_contact
+from tmaplan.advice.recommend import ACCURACY, advise_contact
 from tmaplan.advice.report import advice_figures, write_advice_page
 from tmaplan.advice.solution import contact_rng, solve_contact
 from tmaplan.cli.args import (
@@ -42,7 +45,8 @@ from tmaplan.cli.args import (
 from tmaplan.errors import ArgumentError, DataError, UnitError
 from tmaplan.io import read_recording
 from tmaplan.io.faults import warn
-from tmaplan.io.plans import legs_table, write_plan
+from tmaplan.io.plans import legs_json, write_plan
+from tmaplan.models.leg_table import NavigatorLegs, track_navigator_legs
 from tmaplan.units import to_si
 
 HELP = ("recorded bearings + own-ship navigation: each contact's solution with its uncertainty, "
@@ -50,6 +54,8 @@ HELP = ("recorded bearings + own-ship navigation: each contact's solution with i
 
 #: Default ``--horizon`` [s].
 HORIZON = 1200.0
+#: The stem of the joint advice's files and its key under ``exports``.
+JOINT = "all-contacts"
 
 
 def _quantity(dimension: str) -> Any:
@@ -119,38 +125,56 @@ def _platform(args: argparse.Namespace) -> Any:
     return p
 
 
-def joint_advice(solutions: Sequence[Any], advice: Sequence[Any]) -> Any:
-    """The one advice of the top-level ``advice``: today the nearest contact's (by the
-    particle filter's range); the hook where several-contact planning will plan for all
-    contacts at once."""
-    ranges = [s.pf.range if math.isfinite(s.pf.range) else s.mle.range for s in solutions]
-    ranges = [r if math.isfinite(r) else math.inf for r in ranges]
-    i = int(np.argmin(ranges))
-    return advice[i]
+def _navigator(adv: Any) -> NavigatorLegs:
+    """The navigator's (merged) table of an advice's plan."""
+    return track_navigator_legs(adv.legs, adv.track)
 
 
-def _advice_json(adv: Any, rec: Any) -> dict[str, Any]:
+def _plan_json(adv: Any, rec: Any, pings: Any) -> dict[str, Any]:
+    """The keys of one recommended plan (the one-contact advice and the joint one)."""
     tr = adv.track
     lat = lon = None
     if rec.frame is not None:
         lat, lon = rec.frame.to_latlon(tr.position[:, 0], tr.position[:, 1])
-    p = adv.pings
-    return {"contact": adv.name, "recommendation": adv.recommendation, "note": adv.note,
+    p = pings
+    return {"recommendation": adv.recommendation, "note": adv.note,
             "start": float(tr.times[0]), "start_time": rec.time_text(float(tr.times[0])),
-            "legs": [{"start": leg.start, "course": leg.course, "turn": leg.turn,
-                      "rate": leg.rate, "duration": leg.duration} for leg in adv.legs],
+            "legs": legs_json(adv.legs), "navigator_legs": _navigator(adv).to_json(),
             "track": {"times": tr.times, "lat": lat, "lon": lon, "east": tr.position[:, 0],
                       "north": tr.position[:, 1]},
             "expected_time_to_accuracy": adv.expected_time_to_accuracy,
             "hold_course_time_to_accuracy": adv.hold_course_time_to_accuracy,
             "plan_time_to_accuracy": adv.plan_time_to_accuracy,
-            "range_bound": adv.range_bound, "hold_range_bound": adv.hold_range_bound,
             "ping_times": [] if p is None else p.times,
             "lower_bound": None if p is None else p.lower_bound,
             "gap": None if p is None else p.gap,
             "ping_status": None if p is None else p.status,
             "ping_objective": None if p is None else p.objective,
             "solver": adv.solver}
+
+
+def _advice_json(adv: Any, rec: Any) -> dict[str, Any]:
+    out = {"contact": adv.name, **_plan_json(adv, rec, adv.pings),
+           "range_bound": adv.range_bound, "hold_range_bound": adv.hold_range_bound}
+    return out
+
+
+def _joint_json(adv: JointAdvice, rec: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The top-level ``advice`` of several contacts (docs/recordings.md) and each contact's
+    ``advice``."""
+    p = adv.pings
+    top = {"contacts": list(adv.names), "objective": adv.objective,
+           **_plan_json(adv, rec, None if p is None else p.schedule)}
+    each = {}
+    for n in adv.names:
+        d: dict[str, Any] = {**adv.contacts[n], "range_bound": adv.range_bounds[n],
+                             "hold_range_bound": adv.hold_range_bounds[n]}
+        if p is not None:
+            d.update({"ping_objective": p.objectives[n],
+                      "no_ping_objective": p.no_ping_objectives[n],
+                      "pings_in_reach": p.pings_in_reach[n]})
+        each[n] = d
+    return top, each
 
 
 def solution_of(sol: Any) -> Any:
@@ -199,16 +223,32 @@ def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
         if sol.ekelund is not None and math.isfinite(sol.ekelund.range):
             print(f"  Ekelund range at {rec.time_text(sol.ekelund.time)}: "
                   f"{sol.ekelund.range / 1e3:.2f} ± {sol.ekelund.std / 1e3:.2f} km")
-    for adv in advice:
-        if adv is None:
-            continue
-        print(f"advice for {adv.name}: {adv.note}")
-        print(legs_table(adv.legs))
-        if adv.pings is not None:
-            p = adv.pings
-            times = ", ".join(rec.time_text(float(t)) for t in p.times)
-            print(f"  pings: {times or 'none'} (lower bound {p.lower_bound:.1f} m, gap "
-                  f"{p.gap:.2%}, {p.status})")
+    for title, _stem, adv, pings in _plans(advice):
+        print(f"advice for {title}: {adv.note}")
+        if isinstance(adv, JointAdvice):
+            for n, c in adv.contacts.items():
+                print(f"  {n}: expected time to {ACCURACY:.0%} range accuracy "
+                      f"{c['expected_time_to_accuracy'] / 60:.1f} min (holding course "
+                      f"{c['hold_course_time_to_accuracy'] / 60:.1f} min; its own plan alone "
+                      f"{c['alone_expected_time_to_accuracy'] / 60:.1f} min)")
+        print(_navigator(adv).text())
+        if pings is not None:
+            times = ", ".join(rec.time_text(float(t)) for t in pings.times)
+            print(f"  pings: {times or 'none'} (lower bound {pings.lower_bound:.1f} m, "
+                  f"objective {pings.objective:.1f} m, gap {pings.gap:.2%}, {pings.status})")
+            if isinstance(adv, JointAdvice) and adv.pings is not None:
+                reach = ", ".join(f"{n} {k}" for n, k in adv.pings.pings_in_reach.items())
+                print(f"  pings in reach of each contact: {reach}")
+
+
+def _plans(advice: Any) -> list[tuple[str, str, Any, Any]]:
+    """Each recommended plan as (title, file stem, advice, ping schedule or None): one per
+    contact (one contact), or the joint one (several contacts)."""
+    if isinstance(advice, JointAdvice):
+        return [(f"all {len(advice.names)} contacts ({', '.join(advice.names)})", JOINT,
+                 advice, None if advice.pings is None else advice.pings.schedule)]
+    return [(adv.name, "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in adv.name),
+             adv, adv.pings) for adv in advice if adv is not None]
 
 
 def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
@@ -229,32 +269,46 @@ def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
              "<table><tr><th>contact</th><th>estimator</th><th>range [km]</th>"
              "<th>bearing [°]</th><th>course [°]</th><th>speed [kn]</th><th>status</th></tr>"
              + "".join(rows) + "</table>"]
-    for adv in advice:
-        if adv is None:
-            continue
+    for title, _stem, adv, pings in _plans(advice):
+        nav = _navigator(adv)
         legs = "".join(f"<tr><td>{leg.start / 60:.1f}</td><td>"
                        f"{math.degrees(leg.course) % 360:.1f}</td><td>{leg.turn}</td><td>"
                        f"{math.degrees(leg.rate):.3f}</td><td>{leg.duration / 60:.1f}</td></tr>"
-                       for leg in adv.legs)
-        parts.append(f"<h2>Advice for {html.escape(adv.name)}</h2><p>{html.escape(adv.note)}"
-                     "</p><table><tr><th>start [min]</th><th>course [°]</th><th>turn</th>"
-                     f"<th>rate [°/s]</th><th>duration [min]</th></tr>{legs}</table>")
+                       for leg in nav.legs)
+        extra = ""
+        if isinstance(adv, JointAdvice):
+            extra = "<table><tr><th>contact</th><th>expected time to accuracy [min]</th>" \
+                "<th>holding course [min]</th><th>its own plan alone [min]</th>" + \
+                "".join(f"<tr><td>{html.escape(n)}</td>"
+                        f"<td>{c['expected_time_to_accuracy'] / 60:.1f}</td>"
+                        f"<td>{c['hold_course_time_to_accuracy'] / 60:.1f}</td>"
+                        f"<td>{c['alone_expected_time_to_accuracy'] / 60:.1f}</td></tr>"
+                        for n, c in adv.contacts.items()) + "</table>"
+        if pings is not None:
+            times = ", ".join(rec.time_text(float(t)) for t in pings.times) or "none"
+            extra += (f"<p>Pings: {html.escape(times)} (lower bound {pings.lower_bound:.1f} "
+                      f"m, objective {pings.objective:.1f} m, gap {pings.gap:.2%}, "
+                      f"{html.escape(pings.status)})</p>")
+        parts.append(f"<h2>Advice for {html.escape(title)}</h2><p>{html.escape(adv.note)}"
+                     f"</p>{extra}<table><tr><th>start [min]</th><th>course [°]</th>"
+                     "<th>turn</th><th>rate [°/s]</th><th>duration [min]</th></tr>"
+                     f"{legs}</table><p>{html.escape(nav.text().splitlines()[-1].strip())}"
+                     "</p>")
     return "\n".join(parts)
 
 
-def _exports(out: Path, rec: Any, advice: Sequence[Any]) -> dict[str, dict[str, str]]:
-
-
+def _exports(out: Path, rec: Any, advice: Any) -> dict[str, dict[str, str]]:
+    """Each plan's leg tables and track files (:func:`tmaplan.io.plans.write_plan`), by
+    contact (one contact) or under :data:`JOINT`."""
     files: dict[str, dict[str, str]] = {}
-    for adv in advice:
-        if adv is None:
-            continue
-        stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in adv.name)
+    for _title, stem, adv, _pings in _plans(advice):
         t0 = float(adv.track.times[0])
         start = None if rec.start is None else rec.start + dt.timedelta(seconds=t0)
-        files[adv.name] = write_plan(out, stem, adv.legs, adv.track.times - t0,
-                                     adv.track.position[:, 0], adv.track.position[:, 1],
-                                     start=start, frame=rec.frame)
+        key = JOINT if isinstance(adv, JointAdvice) else adv.name
+        files[key] = write_plan(out, stem, adv.legs, adv.track.times - t0,
+                                adv.track.position[:, 0], adv.track.position[:, 1],
+                                start=start, frame=rec.frame,
+                                navigator=_navigator(adv).legs)
     return files
 
 
@@ -303,9 +357,14 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         texts.append(str(w.message))
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     horizon = HORIZON if args.horizon is None else args.horizon
-    advice = [None if args.no_advice else advise_contact(s, platform, horizon=horizon,
-                                                         budget=args.budget)
-              for s in solutions]
+    advice: Any = [None] * len(solutions)
+    if args.no_advice:
+        pass
+    elif len(solutions) > 1:
+        advice = advise_contacts(solutions, platform, horizon=horizon, budget=args.budget)
+    else:
+        advice = [advise_contact(s, platform, horizon=horizon, budget=args.budget)
+                  for s in solutions]
     quiet = args.json == "-"
     if not quiet:
         _print(rec, solutions, advice)
@@ -317,12 +376,14 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                       "lon": None if rec.frame is None else rec.frame.lon0,
                       "projection": None if rec.frame is None else rec.frame.projection},
         "platform": dataclasses.asdict(platform), "warnings": texts}
-    if not args.no_advice:
-        per = {a.name: _advice_json(a, rec) for a in advice if a is not None}
-        for name, a in per.items():
+    if isinstance(advice, JointAdvice):
+        payload["advice"], each = _joint_json(advice, rec)
+        for name, a in each.items():
             payload["contacts"][name]["advice"] = a
-        top = joint_advice(solutions, advice)
-        payload["advice"] = per[top.name]
+    elif not args.no_advice:
+        a = _advice_json(advice[0], rec)
+        payload["contacts"][advice[0].name]["advice"] = a
+        payload["advice"] = a
     out = Path(args.out)
     if not args.no_advice:
         payload["exports"] = _exports(out, rec, advice)

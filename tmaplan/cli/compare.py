@@ -3,6 +3,13 @@
 The report and its figures go to ``<out>/P_compare/`` (``tmaplan demo`` writes to
 ``<out>/demo/``, another problem to its own directory: no report overwrites another's); the
 runs are stored in ``<out>/campaign-<key>/`` and reloaded by the same campaign.
+
+The closed loop as a navigator sees it: the own-ship track each policy flew on run 0 (the
+report's example run) as a leg table, printed (merged, :mod:`tmaplan.models.leg_table`) and
+written to ``<out>/P_compare/<policy>_run0_legs.csv`` (exact) and ``_navigator_legs.csv``
+(merged), with its track as GPX and CSV (``_track.gpx``, ``_track.csv``; the own ship at
+``simulate --export``'s default origin and start), JSON ``flown: {policy: {legs,
+navigator_legs, exports}}``.
 """
 
 from __future__ import annotations
@@ -13,6 +20,8 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from tmaplan.cli.args import (
     MAX_PARTICLES,
@@ -28,9 +37,14 @@ from tmaplan.cli.args import (
 )
 from tmaplan.cli.contacts import preflight_per_contact
 from tmaplan.cli.finite import require_finite
+from tmaplan.cli.plan import navigator_exports
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.geometry import course_speed
+from tmaplan.io.plans import legs_from_track
+from tmaplan.models.leg_table import flown_turn_rates, navigator_legs
+from tmaplan.models.target import initial_velocity
 from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.scenario import Scenario, load
@@ -156,4 +170,27 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             print(line)
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")
+    payload["flown"] = flown_legs(result, scenario, out_dir, quiet=quiet)
     return payload
+
+
+def flown_legs(result: Any, scenario: Scenario, out_dir: Path, *,
+               quiet: bool) -> dict[str, Any]:
+    """Each policy's own-ship track on run 0 as a navigator's plan (module doc): its turn
+    rates recovered from the flown positions (:func:`tmaplan.models.leg_table.flown_turn_rates`,
+    exact for the closed loop's constant rate over each step)."""
+    times = result.times
+    dt = float(times[1] - times[0])
+    heading0 = float(course_speed(initial_velocity(scenario.observer))[0])
+    out: dict[str, Any] = {}
+    for name in result.policies:
+        pos = np.asarray(result.examples[name].observer, float)
+        rates, courses, speed = flown_turn_rates(pos, heading0, dt)
+        legs = legs_from_track(times - times[0], courses, turn_rates=rates)
+        nav = navigator_legs(legs, pos, speed=speed, dt=dt)
+        stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) + "_run0"
+        if not quiet:
+            print(f"{name}, flown on run 0:")
+        out[name] = navigator_exports(legs, nav, times, pos, scenario, out_dir, stem,
+                                      quiet=quiet)
+    return out

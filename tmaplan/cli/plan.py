@@ -11,6 +11,7 @@ counts it from ``t0``); durations (``leg_duration``) are durations.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,8 @@ from tmaplan.cli.args import (
 from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, parse_start
 from tmaplan.display import minute_list, objective_label
 from tmaplan.io import LocalFrame
-from tmaplan.io.plans import legs_from_track, legs_table, write_plan
+from tmaplan.io.plans import Leg, legs_from_track, legs_json, write_plan
+from tmaplan.models.leg_table import NavigatorLegs, track_navigator_legs
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
@@ -150,24 +152,32 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,
                     quiet: bool) -> dict[str, Any]:
-    """The plan as a navigator uses it (docs/recordings.md): its leg table, printed and
-    written (``<stem>_legs.csv``), and its track as GPX and CSV, the own ship starting at
-    ``simulate --export``'s default origin and time (the scenario's plane shifted there)."""
-
+    """The plan as a navigator uses it (:func:`navigator_exports`)."""
     legs = legs_from_track(plan.times - plan.times[0], plan.heading,
                            turn_rates=plan.turn_rate)
     obs = plan.observer
+    return navigator_exports(legs, track_navigator_legs(legs, obs), obs.times, obs.position,
+                             scenario, out, stem, quiet=quiet)
+
+
+def navigator_exports(legs: Sequence[Leg], nav: NavigatorLegs, times: np.ndarray,
+                      position: np.ndarray, scenario: Any, out: Path, stem: str, *,
+                      quiet: bool) -> dict[str, Any]:
+    """A scenario's own-ship track as a navigator uses it (docs/recordings.md): its leg
+    table printed (``nav``, the merged one) and written (``<stem>_legs.csv``, exact;
+    ``<stem>_navigator_legs.csv``, merged), and its track as GPX and CSV, the own ship
+    starting at ``simulate --export``'s default origin and time (the scenario's plane shifted
+    there). Returns the JSON keys ``legs``, ``navigator_legs``, ``exports``."""
     p0 = np.asarray(scenario.observer.position, float)
     t0 = float(scenario.time.t0)
-    files = write_plan(out, stem, legs, obs.times - t0, obs.position[:, 0] - p0[0],
-                       obs.position[:, 1] - p0[1], start=parse_start(DEFAULT_START),
-                       frame=LocalFrame(lat0=DEFAULT_ORIGIN[0], lon0=DEFAULT_ORIGIN[1]))
+    files = write_plan(out, stem, legs, np.asarray(times) - t0, position[:, 0] - p0[0],
+                       position[:, 1] - p0[1], start=parse_start(DEFAULT_START),
+                       frame=LocalFrame(lat0=DEFAULT_ORIGIN[0], lon0=DEFAULT_ORIGIN[1]),
+                       navigator=nav.legs)
     if not quiet:
-        print(legs_table(legs))
+        print(nav.text())
         print(f"wrote {', '.join(files.values())}")
-    return {"legs": [{"start": leg.start, "course": leg.course, "turn": leg.turn,
-                      "rate": leg.rate, "duration": leg.duration} for leg in legs],
-            "exports": files}
+    return {"legs": legs_json(legs), "navigator_legs": nav.to_json(), "exports": files}
 
 
 def figure_name(problem: str, objective: str, pings: int = 0, *,

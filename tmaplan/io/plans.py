@@ -35,7 +35,7 @@ from tmaplan.io.nav import write_ownship_csv
 from tmaplan.io.table import read_table, write_csv
 from tmaplan.io.times import parse_utc, time_text
 
-__all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "legs_table", "read_legs_csv",
+__all__ = ["RATE_TOL", "Leg", "Turn", "legs_from_track", "legs_json", "legs_table", "read_legs_csv",
            "step_turn_rates", "write_legs_csv", "write_plan", "write_track"]
 
 #: Turn rates [rad/s] closer than this are one leg; smaller in magnitude, a straight leg.
@@ -250,6 +250,13 @@ def legs_table(legs: Sequence[Leg]) -> str:
     return "\n".join(rows)
 
 
+def legs_json(legs: Sequence[Leg]) -> list[dict[str, float | str]]:
+    """The legs as the verbs' JSON writes them: ``start``, ``course``, ``turn``, ``rate``,
+    ``duration`` [s, rad, rad/s] per leg."""
+    return [{"start": leg.start, "course": leg.course, "turn": leg.turn, "rate": leg.rate,
+             "duration": leg.duration} for leg in legs]
+
+
 def step_turn_rates(legs: Sequence[Leg], dt: float, n_steps: int) -> np.ndarray:
     """The mean turn rate over each step ``[k·dt, (k+1)·dt]`` of a grid starting at the
     plan's start (``observer.turn_rates``; a step across a leg boundary gets its mean; after
@@ -280,9 +287,12 @@ def step_turn_rates(legs: Sequence[Leg], dt: float, n_steps: int) -> np.ndarray:
 
 def write_plan(directory: str | Path, stem: str, legs: Sequence[Leg], times: ArrayLike,
                east: ArrayLike, north: ArrayLike, *, start: dt.datetime | None,
-               frame: LocalFrame | None) -> dict[str, str]:
-    """Write a plan as a navigator uses it: ``<stem>_legs.csv`` and, with a start time and a
-    geographic frame, ``<stem>_track.gpx`` and ``<stem>_track.csv``.
+               frame: LocalFrame | None, navigator: Sequence[Leg] | None = None
+               ) -> dict[str, str]:
+    """Write a plan as a navigator uses it: ``<stem>_legs.csv`` (the exact table), with
+    ``navigator`` ``<stem>_navigator_legs.csv`` (the merged table,
+    :mod:`tmaplan.models.leg_table`) and, with a start time and a geographic frame,
+    ``<stem>_track.gpx`` and ``<stem>_track.csv``.
 
     Parameters
     ----------
@@ -297,14 +307,19 @@ def write_plan(directory: str | Path, stem: str, legs: Sequence[Leg], times: Arr
     start : datetime.datetime or None
         Aware time of ``times == 0``.
     frame : LocalFrame or None
+    navigator : sequence of Leg, optional
+        The navigator's (merged) table.
 
     Returns
     -------
     dict of str to str
-        ``legs``, ``track_gpx``, ``track_csv`` to paths.
+        ``legs``, ``navigator_legs``, ``track_gpx``, ``track_csv`` to paths.
     """
     d = Path(directory)
     files = {"legs": str(write_legs_csv(d / f"{stem}_legs.csv", legs, start=start))}
+    if navigator is not None:
+        files["navigator_legs"] = str(write_legs_csv(d / f"{stem}_navigator_legs.csv",
+                                                     navigator, start=start))
     if start is not None and frame is not None:
         for suffix in ("gpx", "csv"):
             files[f"track_{suffix}"] = str(write_track(

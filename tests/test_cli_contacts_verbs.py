@@ -126,3 +126,21 @@ def test_one_contact_schedule_keeps_its_shape(tmp_path):
     got, _ = _run(["schedule", "default", "--budget", "2", "--method", "greedy",
                    "--no-figure"], tmp_path)
     assert "contacts" not in got and "max_range" not in got
+
+
+def test_weighted_objective_is_the_weighted_mean_of_the_contacts_times(tmp_path):
+    # three-contacts-screen weighs its fast contact 3: the objective is Σ w E[T] / Σ w plus
+    # the turn penalty 0.02·(K+1)·dt·mean (u/u_max)², in [0, 0.02·span], each E[T] scored on
+    # the plan's track
+    got, _ = _run(["plan", "three-contacts-screen", "--objective", "weighted-time-to-accuracy",
+                   "--control-interval", "3 min", "--no-figure"], tmp_path)
+    sc = load_problem("three-contacts-screen")
+    span = sc.time.horizon + sc.time.dt
+    c = got["contacts"]
+    assert got["objective_name"] == "weighted-time-to-accuracy"
+    assert [c[n]["weight"] for n in sc.contact_names] == [x.weight for x in sc.contacts]
+    mean = sum(v["weight"] * v["expected_time_to_accuracy"] for v in c.values()) / sum(
+        v["weight"] for v in c.values())
+    assert mean - 1e-3 * span <= got["objective"] <= mean + 0.021 * span
+    for name, alone in got["alone_plans"].items():
+        assert got["objective"] <= alone["objective"] + 1e-3 * span, name

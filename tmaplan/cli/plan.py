@@ -295,7 +295,7 @@ def _contacts_table(names: tuple[str, ...], payload: dict[str, Any]) -> list[str
                  f"{n:<{width}}" for n in names)]
     lines += [f"  {label:<22} {value:>13.4g} s  " + "".join(f"{c:<{width}}" for c in cells)
               for label, value, cells in rows]
-    return lines
+    return [line.rstrip() for line in lines]
 
 
 def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,

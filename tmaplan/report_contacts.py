@@ -1,24 +1,37 @@
-"""The several-contact parts of a comparison report: the per-contact table and figure.
+"""The several-contact tables and figures: comparison report, joint plan, shared pings.
 
 Role: issue 40's report (DESIGN.md §6). For a campaign on several contacts
 (:mod:`tmaplan.evaluation.contacts_campaign`), ``tmaplan compare`` adds to the report
 (:func:`tmaplan.report.write_report`) an aggregate table (time until every contact is
 localised, weighted mean time, worst final range error) and a per-contact table, and a figure
 of run 0 in which every contact has its own colour and label; :func:`console_lines` gives the
-same tables on the console.
+same tables on the console. :func:`plan_figure` draws ``tmaplan plan``'s joint plan against
+each contact's own plan, :func:`schedule_figure` ``tmaplan schedule``'s shared pings; every
+contact has the colour :func:`contact_colour` of its index in all of them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import html
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from tmaplan.experiments import CampaignResult
+from tmaplan.models.target import target_track
 from tmaplan.plotting import new_figure, save_figure
 
-__all__ = ["console_lines", "contacts_figure", "contacts_html"]
+__all__ = ["console_lines", "contact_colour", "contacts_figure", "contacts_html",
+           "plan_figure", "schedule_figure"]
+
+
+def contact_colour(i: int) -> str:
+    """The colour of the contact of index ``i`` in every several-contact figure (``C0`` is
+    left to the own ship's plan)."""
+    return f"C{(i + 1) % 10}"
 
 
 def _minutes(t: float) -> str:
@@ -85,7 +98,7 @@ def contacts_figure(result: CampaignResult, out_dir: str | Path) -> Path:
         ax.plot(own[:, 0], own[:, 1], color="k", lw=2, label="own ship")
         for i, (c, v) in enumerate(s["contacts"].items()):
             ex = v["example"]
-            col = f"C{(i + 1) % 10}"
+            col = contact_colour(i)
             tr, est = ex.target / 1e3, ex.estimate / 1e3
             ax.plot(tr[:, 0], tr[:, 1], color=col, lw=1.8, label=f"{c} (truth)")
             ax.plot(est[:, 0], est[:, 1], color=col, ls=":", lw=1.2, label=f"{c} (estimate)")
@@ -97,3 +110,109 @@ def contacts_figure(result: CampaignResult, out_dir: str | Path) -> Path:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="best")
     return save_figure(fig, Path(out_dir) / "contacts.png")
+
+
+def plan_figure(views: Sequence[Any], names: Sequence[str], plans: Mapping[str, Any],
+                bounds: Mapping[str, Mapping[str, np.ndarray]], path: str | Path,
+                *, title: str = "") -> Path:
+    """A plan for several contacts against each contact's own plan.
+
+    Left: the own-ship track of each plan (the joint plan solid black, contact c's own plan
+    dashed in c's colour) and each contact's true track over the plan (its view's
+    ``target``, noise-free) in its colour, labelled. Right: each contact's closed-form range
+    bound [m] over time on the joint plan (solid) and on each contact's own plan (dashed:
+    c's own plan; dotted: another contact's), log scale.
+
+    Parameters
+    ----------
+    views : sequence of Scenario
+        Each contact's one-contact view (its ``target``: the true track drawn).
+    names : sequence of str
+        The contacts' names, in the order of ``views``.
+    plans : mapping of str to HeadingPlan
+        ``"joint"`` and ``"alone:<name>"`` (those present) -> plan.
+    bounds : mapping of str to mapping of str to ndarray
+        Same keys as ``plans`` -> contact name -> range bound per step (K+1,) [m].
+    path : path
+        PNG file.
+    title : str
+        Figure title.
+    """
+    fig, axes = new_figure(1, 2, size=(13.0, 5.5))
+    ax, bx = axes[0, 0], axes[0, 1]
+    colour = {n: contact_colour(i) for i, n in enumerate(names)}
+    for label, plan in plans.items():
+        own = plan.observer
+        mine = label.removeprefix("alone:")
+        style = ({"color": "k", "lw": 2.2, "ls": "-"} if label == "joint" else
+                 {"color": colour.get(mine, "0.5"), "lw": 1.2, "ls": "--"})
+        ax.plot(own.position[:, 0] / 1e3, own.position[:, 1] / 1e3,
+                label="joint plan" if label == "joint" else f"{mine}'s own plan", **style)
+        t = (own.times - own.times[0]) / 60.0
+        on = "the joint plan" if label == "joint" else f"{mine}'s plan"
+        for n in names:
+            curve = bounds[label][n]
+            ls = "-" if label == "joint" else "--" if mine == n else ":"
+            bx.plot(t[: len(curve)], curve, ls=ls, color=colour[n],
+                    lw=2.0 if label == "joint" else 1.1, label=f"{n} on {on}")
+    joint = plans.get("joint", next(iter(plans.values())))
+    for v, n in zip(views, names, strict=True):
+        grid = dataclasses.replace(v.time, horizon=float(joint.observer.times[-1] - v.time.t0))
+        tr = target_track(v.target, grid, None)[:, :2] / 1e3
+        ax.plot(tr[:, 0], tr[:, 1], color=colour[n], lw=1.6, alpha=0.8, label=f"{n} (truth)")
+        ax.plot(*tr[0], "o", color=colour[n], ms=4)
+        ax.annotate(n, tuple(tr[0]), color=colour[n], fontsize=9)
+    ax.set_xlabel("East [km]")
+    ax.set_ylabel("North [km]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best", framealpha=0.6)
+    ax.set_title("own-ship plans and the contacts' true tracks")
+    bx.set_yscale("log")
+    bx.set_xlabel("time [min]")
+    bx.set_ylabel("closed-form PCRB range bound [m]")
+    bx.grid(True, alpha=0.3)
+    bx.legend(fontsize=7, loc="best", framealpha=0.6)
+    bx.set_title("each contact's range bound: joint plan (solid), own plans (dashed/dotted)",
+                 fontsize=9)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return save_figure(fig, path)
+
+
+def schedule_figure(res: Any, times: np.ndarray, path: str | Path, *, title: str = "",
+                    ) -> Path:
+    """Shared pings: each contact's range bound [m] over time with the schedule (solid, its
+    colour), the steps where a ping reaches it (dots on the curve) and the ping times
+    (vertical lines).
+
+    Parameters
+    ----------
+    res : tmaplan.planning.ping_contacts.ContactsPingSchedule
+    times : ndarray, shape (K+1,)
+        The track's times [s] (the scenario clock).
+    path : path
+        PNG file.
+    title : str
+        Axes title.
+    """
+    fig, axes = new_figure(1, 1, size=(8.0, 5.0))
+    ax = axes[0, 0]
+    t = np.asarray(times, float) / 60.0
+    for i, n in enumerate(res.names):
+        b = np.asarray(res.bounds[n], float)
+        ax.plot(t, b, color=contact_colour(i), lw=1.8,
+                label=f"{n}: {res.objectives[n]:.4g} m (no pings {res.no_ping_objectives[n]:.4g}"
+                      f" m; {res.pings_in_reach[n]} ping(s) in reach)")
+        hit = np.intersect1d(np.asarray(res.schedule.steps, int), np.flatnonzero(res.reach[n]))
+        ax.plot(t[hit], b[hit], "o", color=contact_colour(i), ms=5)
+    for tp in res.schedule.times:
+        ax.axvline(tp / 60.0, color="k", lw=0.8, alpha=0.5)
+    ax.set_yscale("log")
+    ax.set_xlabel("time [min] (lines: ping times; dots: a ping that reaches the contact)")
+    ax.set_ylabel("closed-form PCRB range bound per step [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best", framealpha=0.6)
+    if title:
+        ax.set_title(title, fontsize=10)
+    return save_figure(fig, path)

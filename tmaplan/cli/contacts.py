@@ -23,8 +23,8 @@ from tmaplan.errors import ArgumentError, ScenarioError, TmaplanError
 from tmaplan.scenario import Scenario, load
 from tmaplan.scenario.contacts import in_contact
 
-__all__ = ["per_contact", "preflight_per_contact", "refuse_several", "run_per_contact",
-           "scenario_of", "takes_several"]
+__all__ = ["per_contact", "preflight_per_contact", "refuse_several", "require_priors",
+           "run_per_contact", "scenario_of", "takes_several"]
 
 
 def takes_several(module: Any) -> bool:
@@ -77,6 +77,17 @@ def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
                 raise
             raise ArgumentError(exc.field, f"{exc.expected} (contact '{c.name}')",
                                 exc.received, source=exc.source) from None
+
+
+def require_priors(scenario: Scenario, why: str) -> None:
+    """Refuse a several-contact scenario in which a contact has no prior, naming the contact
+    (``field 'contacts[1].prior': expected a [prior] table: <why> (contact 'bravo')``): a
+    joint verb (``plan``, ``schedule``) starts from every contact's prior."""
+    for i, c in enumerate(scenario.contacts):
+        if c.prior is None:
+            with in_contact(scenario, i):
+                raise ScenarioError("prior", f"a [prior] table: {why}", None,
+                                    source=scenario.name)
 
 
 def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario

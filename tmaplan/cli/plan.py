@@ -6,6 +6,11 @@ The JSON carries the planned observer track on the scenario's grid (``observer``
 Every time in it is on the scenario clock (``t0`` included), the single-turn baseline's
 ``baseline_params.time`` too (the library's :class:`~tmaplan.planning.baselines.Baseline`
 counts it from ``t0``); durations (``leg_duration``) are durations.
+
+Several contacts (docs/several-contacts.md): one joint own-ship plan for all of them
+(:class:`tmaplan.planning.contacts.ContactsPlanner`, ``--objective`` one of
+:data:`tmaplan.planning.multi_objectives.CONTACTS_OBJECTIVE_NAMES`), set against each
+contact's own plan: the JSON adds ``contacts: {name: {...}}`` and ``alone_plans``.
 """
 
 from __future__ import annotations
@@ -13,7 +18,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -25,25 +30,32 @@ from tmaplan.cli.args import (
     duration,
     integer,
 )
+from tmaplan.cli.contacts import preflight_per_contact, require_priors
 from tmaplan.cli.simulate import DEFAULT_ORIGIN, DEFAULT_START, parse_start
 from tmaplan.display import minute_list, objective_label
+from tmaplan.errors import ArgumentError
 from tmaplan.io import LocalFrame
 from tmaplan.io.plans import Leg, legs_from_track, legs_json, write_plan
 from tmaplan.models.leg_table import NavigatorLegs, track_navigator_legs
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import plan_joint
 from tmaplan.planning.joint_ocp import plan_joint_ocp
+from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES, DEFAULT_CONTACTS_OBJECTIVE
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.planning.pings import schedule_pings
 from tmaplan.policies.plan_starts import plan_from_prior
-from tmaplan.scenario import load
+from tmaplan.scenario import Scenario, load
 
 HELP = "optimal observer heading plan (casadi/IPOPT) compared with baseline manoeuvres"
 
 #: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
+
+#: Several contacts: one joint plan for all of them (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "joint"
 
 
 #: Defaults of ``--transcription`` and ``--starts`` (a figure's name omits them).
@@ -54,8 +66,11 @@ STARTS = 4
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``plan``."""
     add_problem_argument(parser)
-    parser.add_argument("--objective", choices=OBJECTIVE_NAMES, default=None,
-                        help="objective (default: the problem's planning.objective)")
+    parser.add_argument("--objective", choices=OBJECTIVE_NAMES + CONTACTS_OBJECTIVE_NAMES,
+                        default=None,
+                        help="objective (default: the problem's planning.objective); with "
+                             f"several contacts one of {', '.join(CONTACTS_OBJECTIVE_NAMES)} "
+                             f"(default {DEFAULT_CONTACTS_OBJECTIVE})")
     parser.add_argument("--horizon", type=duration(), default=None, metavar="T",
                         help="planning horizon, seconds or with a unit ('30 min'; default: "
                              "the problem's; at most its time.horizon)")
@@ -88,6 +103,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     """Plan, evaluate the baselines, write the figure (:func:`figure_name`); return the
     payload."""
     scenario = load(args.problem)
+    if len(scenario.contacts) > 1:
+        return _run_several(args, scenario)
     planner = HeadingPlanner(scenario, objective=args.objective, horizon=args.horizon,
                              control_interval=args.control_interval,
                              transcription=args.transcription, n_starts=_starts(args))
@@ -131,16 +148,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
               f"{plan.seconds:.2f} s)")
         for k, v in payload["baselines"].items():
             print(f"  baseline {k:<12} {v:.4g}" + (" (no pings)" if pings else ""))
-    payload.update(_navigator_plan(plan, scenario, Path(args.out), figure_name(
-        scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
-        control_interval=args.control_interval, transcription=args.transcription,
-        starts=_starts(args), joint=args.joint, ping_stride=args.ping_stride)[:-4],
-        quiet=args.json == "-"))
+    payload.update(_navigator_plan(plan, scenario, Path(args.out),
+                                   _figure(args, scenario, planner.objective.name)[:-4],
+                                   quiet=args.json == "-"))
     if not args.no_figure:
-        path = Path(args.out) / figure_name(
-            scenario.name, planner.objective.name, args.pings, horizon=args.horizon,
-            control_interval=args.control_interval, transcription=args.transcription,
-            starts=_starts(args), joint=args.joint, ping_stride=args.ping_stride)
+        path = Path(args.out) / _figure(args, scenario, planner.objective.name)
         from tmaplan.plotting import plot_plan  # deferred: matplotlib
 
         plot_plan(plan, base, belief, path, objective=planner.objective.name)
@@ -148,6 +160,146 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.json != "-":
             print(f"wrote {path}")
     return payload
+
+
+def _figure(args: argparse.Namespace, scenario: Scenario, objective: str) -> str:
+    """The figure's name of this plan (:func:`figure_name`; its stem names the exports)."""
+    return figure_name(scenario.name, objective, args.pings, horizon=args.horizon,
+                       control_interval=args.control_interval,
+                       transcription=args.transcription, starts=_starts(args),
+                       joint=args.joint, ping_stride=args.ping_stride)
+
+
+def preflight_several(args: argparse.Namespace, scenario: Scenario,
+                      preflight: Any) -> None:
+    """``plan``'s checks on a several-contact problem: ``--objective`` one of
+    :data:`CONTACTS_OBJECTIVE_NAMES` (a one-contact objective is refused, not mapped),
+    no ``--pings`` (the joint plan is heading-only: schedule the pings along it with
+    ``tmaplan schedule P --observer-plan PLAN.json``), then the one-contact checks on each
+    contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: the horizon, the
+    control interval, ``--starts``, the keep-out range from each contact's prior)."""
+    if args.objective is not None and args.objective not in CONTACTS_OBJECTIVE_NAMES:
+        raise ArgumentError("--objective", f"with several contacts one of "
+                            f"{', '.join(CONTACTS_OBJECTIVE_NAMES)} (default "
+                            f"{DEFAULT_CONTACTS_OBJECTIVE}; {', '.join(scenario.contact_names)})",
+                            args.objective, source=scenario.name)
+    require_priors(scenario, "the joint plan starts from every contact's prior")
+    if args.pings:
+        raise ArgumentError("--pings", "0 with several contacts: the joint plan is "
+                            "heading-only; schedule the pings along it with `tmaplan schedule "
+                            "P --observer-plan PLAN.json`", args.pings, source=scenario.name)
+    preflight_per_contact(argparse.Namespace(**{**vars(args), "objective": None}), scenario,
+                          preflight)
+
+
+def _run_several(args: argparse.Namespace, scenario: Scenario) -> dict[str, Any]:
+    """The joint plan of several contacts, each contact's own plan, their per-contact values
+    (console table, JSON ``contacts`` and ``alone_plans``), baselines and figure."""
+    cs = ContactSet.from_scenario(scenario)
+    kw: dict[str, Any] = {"horizon": args.horizon, "control_interval": args.control_interval,
+                          "transcription": args.transcription}
+    if args.starts is not None:
+        kw["n_starts"] = int(args.starts)
+    planner = ContactsPlanner(cs, objective=args.objective, **kw)
+    bel = cs.beliefs()
+    res = planner.solve(bel)  # a joint NLP that converged from no start raises
+    plans: dict[str, HeadingPlan] = {"joint": res.plan,
+                                     **{f"alone:{n}": p for n, p in res.alone.items()}}
+    each = dict(zip(plans, planner.per_contact(bel, [p.observer for p in plans.values()]),
+                    strict=True))
+    ev = planner.joint.evaluator(cast(Any, bel))  # the joint objective, settings and all
+    base = evaluate_baselines(cs.views[0], evaluator=ev)
+    plan = res.plan
+    payload: dict[str, Any] = {
+        "problem": scenario.name, "objective_name": res.objective_name,
+        "times": plan.times, "heading": plan.heading, "turn_rate": plan.turn_rate,
+        "switch_times": plan.switch_times, "objective": plan.objective,
+        "range_bound_times": plan.observer.times,
+        "baselines": {k: v[0].objective for k, v in base.items()},
+        "baseline_params": {k: _on_clock(v[0].params, scenario.time.t0)
+                            for k, v in base.items()},
+        "solver": {"status": plan.status, "seconds": res.seconds, "message": plan.message,
+                   "iterations": plan.iterations, "transcription": plan.transcription,
+                   "start": res.start},
+        "observer": _observer_json(plan),
+        "contacts": _contacts_json(cs, res, each),
+        "alone_plans": {n: {"objective": ev(p.observer)[0], "own_objective": p.objective,
+                            "status": p.status, "heading": p.heading,
+                            "turn_rate": p.turn_rate, "times": p.times,
+                            "contacts": {c: {"expected_time_to_accuracy": t,
+                                             "final_range_bound": float(b[-1])}
+                                         for c, (t, b) in each[f"alone:{n}"].items()}}
+                        for n, p in res.alone.items()},
+    }
+    quiet = args.json == "-"
+    if not quiet:
+        print(f"{scenario.name}: {len(cs)} contacts, {objective_label(res.objective_name)} = "
+              f"{plan.objective:.4g} over {minute_list(plan.times[-1] - plan.times[0], 0)} "
+              f"({plan.status}, solved in {res.seconds:.2f} s, kept the start {res.start})")
+        for k, v in payload["baselines"].items():
+            print(f"  baseline {k:<12} {v:.4g}")
+    stem = _figure(args, scenario, res.objective_name)
+    payload.update(_navigator_plan(plan, scenario, Path(args.out), stem[:-4], quiet=quiet))
+    if not quiet:
+        for line in _contacts_table(cs.names, payload):
+            print(line)
+    if not args.no_figure:
+        path = Path(args.out) / stem
+        from tmaplan.report_contacts import plan_figure  # deferred: matplotlib
+
+        plan_figure(cs.views, cs.names, plans,
+                    {k: {c: b for c, (_, b) in v.items()} for k, v in each.items()}, path,
+                    title=f"{scenario.name}: {res.objective_name} = {plan.objective:.4g} s")
+        payload["figure"] = str(path)
+        if not quiet:
+            print(f"wrote {path}")
+    return payload
+
+
+def _observer_json(plan: HeadingPlan) -> dict[str, Any]:
+    """A plan's own-ship track for ``schedule --observer-plan`` (SI, the scenario clock)."""
+    obs = plan.observer
+    return {"times": obs.times, "position": obs.position, "velocity": obs.velocity,
+            "mean_velocity": obs.mean_velocity, "heading": obs.heading, "speed": obs.speed}
+
+
+def _contacts_json(cs: ContactSet, res: ContactsPlan,
+                   each: dict[str, dict[str, tuple[float, np.ndarray]]]) -> dict[str, Any]:
+    """``contacts: {name: {...}}`` of a joint plan: the contact's weight, required accuracy,
+    expected time to accuracy [s] and range bound [m] (per step, final) on the joint plan
+    and on its own plan (``alone_*``)."""
+    out: dict[str, Any] = {}
+    for (name, values), w, a in zip(res.contacts_json().items(), cs.weights,
+                                    cs.required_accuracies, strict=True):
+        bound = each["joint"][name][1]
+        d: dict[str, Any] = {"weight": w, "required_accuracy": a, **values,
+                             "final_range_bound": float(bound[-1]), "range_bound": bound}
+        if f"alone:{name}" in each:
+            d["alone_final_range_bound"] = float(each[f"alone:{name}"][name][1][-1])
+        out[name] = d
+    return out
+
+
+def _contacts_table(names: tuple[str, ...], payload: dict[str, Any]) -> list[str]:
+    """The console's per-contact table: each contact's expected time to accuracy and final
+    range bound on the joint plan and on each contact's own plan (the trade-off)."""
+    def cell(t: float, b: float) -> str:
+        return f"{t / 60:6.1f} min / {b:7.0f} m"
+
+    rows = [("joint plan", payload["objective"],
+             [cell(payload["contacts"][n]["expected_time_to_accuracy"],
+                   payload["contacts"][n]["final_range_bound"]) for n in names])]
+    rows += [(f"{own}'s own plan", a["objective"],
+              [cell(a["contacts"][n]["expected_time_to_accuracy"],
+                    a["contacts"][n]["final_range_bound"]) for n in names])
+             for own, a in payload["alone_plans"].items()]
+    width = max(24, *(len(n) + 2 for n in names))
+    lines = ["expected time to accuracy / final range bound of each contact, on each plan:",
+             f"  {'plan':<22} {'joint objective':>15}  " + "".join(
+                 f"{n:<{width}}" for n in names)]
+    lines += [f"  {label:<22} {value:>13.4g} s  " + "".join(f"{c:<{width}}" for c in cells)
+              for label, value, cells in rows]
+    return [line.rstrip() for line in lines]
 
 
 def _navigator_plan(plan: HeadingPlan, scenario: Any, out: Path, stem: str, *,

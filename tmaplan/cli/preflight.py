@@ -24,6 +24,8 @@ from tmaplan.errors import (
 )
 from tmaplan.estimators.applicability import check_applicable
 from tmaplan.planning.joint import JOINT_OBJECTIVES
+from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES
+from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
 from tmaplan.scenario import measurement_steps
 from tmaplan.simulate import check_truth_source
@@ -61,6 +63,11 @@ def _check_starts(args: argparse.Namespace, scenario: Any) -> None:
 
 
 def _check_plan(args: argparse.Namespace, scenario: Any) -> None:
+    if getattr(args, "objective", None) in CONTACTS_OBJECTIVE_NAMES:  # (several: plan's own)
+        raise _flag_error("--objective", f"with one contact one of {', '.join(OBJECTIVE_NAMES)}"
+                          f" ({', '.join(CONTACTS_OBJECTIVE_NAMES)} plan for several "
+                          "contacts, [[contacts]] in the scenario file)", args.objective,
+                          scenario)
     _check_starts(args, scenario)
     dt = float(scenario.time.dt)
     pl = scenario.planning

@@ -1,5 +1,10 @@
 """``tmaplan rank-costs P [--candidates N] [--runs R] [--workers W | --scheduler ADDR]``: how
-well each cost functional predicts closed-loop performance."""
+well each cost functional predicts closed-loop performance.
+
+Several contacts: the ranking runs per contact (:func:`tmaplan.cli.contacts.run_per_contact`),
+on each contact's one-contact view with the same seeds: the cost functionals are one-contact
+functionals, so each is ranked against the closed loop of the contact it scores; figures and
+reports are named ``<problem>-<contact>_...``."""
 
 from __future__ import annotations
 
@@ -22,16 +27,19 @@ from tmaplan.cli.args import (
     open_fraction,
     repeated,
 )
+from tmaplan.cli.contacts import scenario_of
 from tmaplan.errors import ArgumentError
 from tmaplan.experiments import rank_costs
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
-from tmaplan.scenario import load
 
 HELP = ("rank every cost functional against closed-loop Monte Carlo over a family of candidate "
         "manoeuvres (Spearman/Kendall with bootstrap intervals)")
 #: Largest ``--candidates`` (the grid of single turns and zig-zags plus tactics and plans).
 MAX_CANDIDATES = 500
+
+#: Several contacts: each contact's view is ranked in turn (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "per-contact"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -81,7 +89,7 @@ def _plans(text: str) -> tuple[str, ...] | None:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run (or resume) the ranking; write the figure and ``<problem>_rank-costs.html``."""
-    scenario = load(args.problem)
+    scenario = scenario_of(args)
     quiet = args.json == "-"
     res = rank_costs(scenario, candidates=args.candidates, runs=args.runs, seed=args.seed,
                      n_particles=args.particles, accuracy=args.accuracy,

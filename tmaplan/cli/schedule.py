@@ -2,6 +2,12 @@
 
 Pings are scheduled along the problem's scripted observer track, or along a planned track
 saved by ``tmaplan plan P --json PLAN.json`` (``--observer-plan PLAN.json``).
+
+Several contacts (docs/several-contacts.md): one set of ping times under one budget for all
+of them, a ping ranging every contact within the range sensor's ``max_range``
+(:func:`tmaplan.planning.ping_contacts.schedule_contact_pings`); the objective is the
+contacts' weighted mean, certified as for one contact; the JSON adds ``contacts: {name:
+{...}}``.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from tmaplan.cli.args import (
     duration,
     integer,
 )
+from tmaplan.cli.contacts import preflight_per_contact, require_priors
 from tmaplan.display import minute_list, seconds_text
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import course_speed
@@ -28,6 +35,8 @@ from tmaplan.models.sensors import default_ping_budget
 from tmaplan.models.target import initial_velocity
 from tmaplan.planning import max_pings, ping_candidates
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.contacts import ContactSet
+from tmaplan.planning.ping_contacts import ping_max_range, schedule_contact_pings
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
 from tmaplan.scenario import Scenario, load
 
@@ -35,6 +44,9 @@ HELP = "schedule active range pings under a budget (closed-form PCRB)"
 
 #: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("objective",)
+
+#: Several contacts: one shared schedule for all of them (:mod:`tmaplan.cli.contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Defaults of ``--method``, ``--objective`` and ``--time-limit`` [s].
 METHOD = "relaxed"
@@ -206,15 +218,33 @@ def check_spacing(args: argparse.Namespace, scenario: Scenario,
                      "outside planning.ping_forbidden)", budget, source=scenario.name)
 
 
+def preflight_several(args: argparse.Namespace, scenario: Scenario, preflight: Any) -> None:
+    """``schedule``'s checks on a several-contact problem: no ``--workers`` (the shared
+    schedule's search runs in one process), then the one-contact checks on each contact's
+    view (:func:`tmaplan.cli.contacts.preflight_per_contact`: the budget, the spacing,
+    ``--observer-plan``, the options of the method, each contact's prior)."""
+    if args.workers is not None:
+        raise ArgumentError("--workers", "only with one contact (the search of a schedule "
+                            "shared by several contacts runs in one process)", args.workers,
+                            source=scenario.name)
+    require_priors(scenario, "the shared schedule minimises every contact's bound from its "
+                   "prior")
+    if args.observer_plan is not None:  # the own ship's: its error names no contact
+        read_observer_plan(args.observer_plan, scenario)
+    preflight_per_contact(args, scenario, preflight)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Schedule, write ``<out>/<problem>_schedule.png`` and return the payload."""
     scenario = load(args.problem)
     budget = args.budget if args.budget is not None else default_ping_budget(scenario)
-    belief = Belief.from_prior(scenario)
     if args.observer_plan is not None:
         obs = read_observer_plan(args.observer_plan, scenario)
     else:
         obs = observer_track(scenario.observer, scenario.time)
+    if len(scenario.contacts) > 1:
+        return _run_several(args, scenario, budget, obs)
+    belief = Belief.from_prior(scenario)
     res = schedule_pings(scenario, budget=budget, method=args.method,
                          objective=args.objective, observer=obs, belief=belief,
                          min_spacing=args.min_spacing,
@@ -243,5 +273,55 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         plot_schedule(scenario, obs, belief, res, path)
         payload["figure"] = str(path)
         if args.json != "-":
+            print(f"wrote {path}")
+    return payload
+
+
+def _run_several(args: argparse.Namespace, scenario: Scenario, budget: int,
+                 obs: ObserverTrack) -> dict[str, Any]:
+    """One ping schedule shared by the contacts (their weighted mean objective), its
+    certificate and each contact's values; figure ``<out>/<problem>_schedule.png``."""
+    cs = ContactSet.from_scenario(scenario)
+    both = schedule_contact_pings(cs, budget=budget, method=args.method,
+                                  objective=args.objective, observer=obs,
+                                  min_spacing=args.min_spacing,
+                                  time_limit=TIME_LIMIT if args.time_limit is None
+                                  else args.time_limit)
+    res = both.schedule
+    contacts = both.contacts_json()
+    for c, w, a in zip(cs.names, cs.weights, cs.required_accuracies, strict=True):
+        contacts[c] = {"weight": w, "required_accuracy": a, **contacts[c]}
+    payload: dict[str, Any] = {
+        "problem": scenario.name, "budget": budget, "objective_name": res.objective_name,
+        "ping_times": res.times, "ping_steps": res.steps, "objective": res.objective,
+        "no_ping_objective": res.no_ping_objective, "uniform_objective": res.uniform_objective,
+        "lower_bound": res.lower_bound, "gap": res.gap, "gap_reference": res.gap_reference,
+        "times": obs.times, "bound": res.bound, "observer_plan": args.observer_plan,
+        "max_range": ping_max_range(scenario),
+        "solver": {"status": res.status, "seconds": res.seconds, "method": res.method,
+                   "bound_seconds": res.bound_seconds},
+        "contacts": contacts,
+    }
+    quiet = args.json == "-"
+    if not quiet:
+        along = f"along {args.observer_plan}" if args.observer_plan else "along the scripted track"
+        print(f"{scenario.name}: {len(cs)} contacts, weighted mean of their "
+              f"{res.objective_name} = {res.objective:.4g} m with pings at "
+              f"{minute_list(res.times)} {along} ({res.method}, {res.status}, lower bound "
+              f"{res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); no pings "
+              f"{res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
+        for c in cs.names:
+            d = contacts[c]
+            print(f"  {c:<16} weight {d['weight']:g}: {d['objective']:.4g} m with the pings "
+                  f"(no pings {d['no_ping_objective']:.4g} m), {d['pings_in_reach']} of "
+                  f"{len(res.steps)} ping(s) in reach")
+    if not args.no_figure:
+        path = Path(args.out) / f"{scenario.name}_schedule.png"
+        from tmaplan.report_contacts import schedule_figure  # deferred: matplotlib
+
+        schedule_figure(both, obs.times, path, title=f"{scenario.name}: {budget} pings shared "
+                        f"by {len(cs)} contacts, {res.status} (gap {100 * res.gap:.2f} %)")
+        payload["figure"] = str(path)
+        if not quiet:
             print(f"wrote {path}")
     return payload

@@ -26,7 +26,7 @@ import numpy as np
 
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, SolverError, is_integer
-from tmaplan.models.observer import turn_rate_track
+from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import (
@@ -290,16 +290,26 @@ class ContactsPlanner:
                        plans: Sequence[HeadingPlan]) -> list[dict[str, float]]:
         """Each contact's expected time to its required accuracy [s] on each plan's track
         (``expected-time-to-accuracy`` without the turn penalty)."""
+        return [{n: t for n, (t, _) in o.items()}
+                for o in self.per_contact(beliefs, [p.observer for p in plans])]
+
+    def per_contact(self, beliefs: ContactBeliefs, tracks: Sequence[ObserverTrack],
+                    ) -> list[dict[str, tuple[float, np.ndarray]]]:
+        """Each contact's expected time to its required accuracy [s] and closed-form range
+        bound per step (K+1,) [m] (brehard2005, DESIGN.md §4) on each own-ship track
+        (:class:`ObjectiveEvaluator` of ``expected-time-to-accuracy`` without the turn
+        penalty, on the contact's view and belief): one dict ``{name: (time, bound)}`` per
+        track, in order."""
         j = self.joint
-        out: list[dict[str, float]] = [{} for _ in plans]
+        out: list[dict[str, tuple[float, np.ndarray]]] = [{} for _ in tracks]
         for v, b, name, a in zip(self.contacts.views, beliefs.beliefs, self.contacts.names,
                                  self.contacts.required_accuracies, strict=True):
             ev = ObjectiveEvaluator(v, expected_time_to_accuracy(a, self._samples,
                                                                  turn_weight=0.0),
                                     n_steps=j.K, belief=b, turn_rate_max=j.u_max,
                                     until_end=j.until_end)
-            for o, plan in zip(out, plans, strict=True):
-                o[name] = ev(plan.observer)[0]
+            for o, track in zip(out, tracks, strict=True):
+                o[name] = ev(track)
         return out
 
     def solve(self, beliefs: ContactBeliefs | Sequence[Belief] | None = None, *,

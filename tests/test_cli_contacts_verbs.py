@@ -1,0 +1,146 @@
+"""``plan``, ``schedule`` and ``rank-costs`` on a several-contact problem (issue 40).
+
+The joint plan is multi-started from each contact's own plan, so it cannot score worse on
+the joint objective than either (up to the solver's tolerance); the shared ping schedule is
+certified (its lower bound never above its objective) and its objective is the contacts'
+weighted mean; ``rank-costs`` ranks each contact on its own view. A one-contact problem keeps
+its JSON shape (no ``contacts`` key). The refusals (a one-contact objective, ``--pings``,
+``--workers``, a contact without a prior) are in ``tests/data/invalid_cli/cases.toml``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tmaplan.cli import main
+from tmaplan.scenario import load_problem
+
+PROBLEM = "two-contacts-crossing"
+
+
+def _run(argv, tmp_path, capsys=None):
+    out = tmp_path / f"{argv[0]}.json"
+    assert main([*argv, "--json", str(out), "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out if capsys is not None else ""
+    return json.loads(out.read_text(encoding="utf-8")), printed
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory):
+    """The joint plan of the built-in problem, with its console text."""
+    tmp = tmp_path_factory.mktemp("plan")
+    out = tmp / "plan.json"
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["plan", PROBLEM, "--json", str(out), "--out", str(tmp)]) == 0
+    return json.loads(out.read_text(encoding="utf-8")), buf.getvalue(), out
+
+
+def test_joint_plan_is_no_worse_than_each_contacts_own_plan(planned):
+    got, _, _ = planned
+    sc = load_problem(PROBLEM)
+    span = sc.time.horizon + sc.time.dt  # the scale of a time to accuracy [s]
+    assert got["objective_name"] == "all-contacts-time-to-accuracy"
+    assert got["solver"]["status"] == "Solve_Succeeded"
+    assert list(got["contacts"]) == list(sc.contact_names) == list(got["alone_plans"])
+    for name, alone in got["alone_plans"].items():
+        # the joint NLP started from this plan (or from a start screened better than it)
+        assert got["objective"] <= alone["objective"] + 1e-3 * span, name
+    for name, c in got["contacts"].items():
+        assert 0 < c["expected_time_to_accuracy"] <= span
+        assert len(c["range_bound"]) == len(got["observer"]["times"])
+        assert c["final_range_bound"] == pytest.approx(c["range_bound"][-1])
+        own = got["alone_plans"][name]["contacts"][name]["expected_time_to_accuracy"]
+        assert own == pytest.approx(c["alone_expected_time_to_accuracy"], rel=1e-9)
+    # the expected time until all are localised is at least each contact's own
+    worst = max(c["expected_time_to_accuracy"] for c in got["contacts"].values())
+    assert got["objective"] >= worst - 1e-3 * span
+    assert {"straight", "single-turn"} <= set(got["baselines"])
+
+
+def test_joint_plan_console_and_outputs(planned):
+    got, printed, _ = planned
+    assert "2 contacts, all-contacts-time-to-accuracy" in printed
+    assert "joint plan" in printed and "alpha's own plan" in printed
+    assert "bravo's own plan" in printed and "start min  course" in printed  # the leg table
+    assert Path(got["figure"]).is_file() and got["figure"].endswith(
+        f"{PROBLEM}_plan_all-contacts-time-to-accuracy.png")
+    assert all(Path(p).is_file() for p in got["exports"].values())
+    assert got["legs"] and got["legs"][0]["start"] == 0.0
+
+
+def test_schedule_along_the_joint_plan_is_certified(planned, tmp_path):
+    _, _, plan_json = planned
+    got, _ = _run(["schedule", PROBLEM, "--budget", "2", "--observer-plan", str(plan_json),
+                   "--no-figure"], tmp_path)
+    assert got["observer_plan"] == str(plan_json) and len(got["ping_times"]) <= 2
+    plan = json.loads(plan_json.read_text(encoding="utf-8"))
+    np.testing.assert_allclose(got["times"], plan["observer"]["times"])
+    _check_schedule(got)
+
+
+def test_shared_schedule_is_certified_and_covers_every_contact(tmp_path, capsys):
+    got, printed = _run(["schedule", PROBLEM, "--budget", "2"], tmp_path, capsys)
+    _check_schedule(got)
+    assert got["max_range"] == pytest.approx(20_000.0)
+    assert "2 contacts, weighted mean of their mean-range-bound" in printed
+    assert "lower bound" in printed and "gap" in printed
+    for name in ("alpha", "bravo"):
+        assert f"  {name} " in printed
+    assert Path(got["figure"]).is_file()
+
+
+def _check_schedule(got):
+    assert set(got["contacts"]) == {"alpha", "bravo"}
+    assert got["solver"]["status"] in ("optimal", "feasible")
+    # the certificate: the relaxation's optimum is below every feasible schedule's objective
+    assert got["lower_bound"] <= got["objective"] * (1 + 1e-9)
+    assert 0 <= got["gap"] <= 1
+    assert got["objective"] <= got["no_ping_objective"] * (1 + 1e-9)
+    w = {n: c["weight"] for n, c in got["contacts"].items()}
+    mean = sum(w[n] * c["objective"] for n, c in got["contacts"].items()) / sum(w.values())
+    assert got["objective"] == pytest.approx(mean, rel=1e-9)
+    for c in got["contacts"].values():
+        assert c["pings_in_reach"] <= len(got["ping_steps"])
+        assert c["objective"] <= c["no_ping_objective"] * (1 + 1e-9)
+        assert len(c["bound"]) == len(got["times"]) == len(c["reach"])
+
+
+def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
+    got, _ = _run(["rank-costs", PROBLEM, "--candidates", "3", "--runs", "2", "--particles",
+                   "50", "--plans", "none", "--cost-samples", "20", "--resamples", "0",
+                   "--no-figure"], tmp_path)
+    assert set(got) == {"problem", "contacts"} and list(got["contacts"]) == ["alpha", "bravo"]
+    for name, c in got["contacts"].items():
+        assert c["costs"] and c["candidates"] == 3
+        assert Path(c["report"]).name == f"{PROBLEM}-{name}_rank-costs.html"
+
+
+def test_one_contact_schedule_keeps_its_shape(tmp_path):
+    got, _ = _run(["schedule", "default", "--budget", "2", "--method", "greedy",
+                   "--no-figure"], tmp_path)
+    assert "contacts" not in got and "max_range" not in got
+
+
+def test_weighted_objective_is_the_weighted_mean_of_the_contacts_times(tmp_path):
+    # three-contacts-screen weighs its fast contact 3: the objective is Σ w E[T] / Σ w plus
+    # the turn penalty 0.02·(K+1)·dt·mean (u/u_max)², in [0, 0.02·span], each E[T] scored on
+    # the plan's track
+    got, _ = _run(["plan", "three-contacts-screen", "--objective", "weighted-time-to-accuracy",
+                   "--control-interval", "3 min", "--no-figure"], tmp_path)
+    sc = load_problem("three-contacts-screen")
+    span = sc.time.horizon + sc.time.dt
+    c = got["contacts"]
+    assert got["objective_name"] == "weighted-time-to-accuracy"
+    assert [c[n]["weight"] for n in sc.contact_names] == [x.weight for x in sc.contacts]
+    mean = sum(v["weight"] * v["expected_time_to_accuracy"] for v in c.values()) / sum(
+        v["weight"] for v in c.values())
+    assert mean - 1e-3 * span <= got["objective"] <= mean + 0.021 * span
+    for name, alone in got["alone_plans"].items():
+        assert got["objective"] <= alone["objective"] + 1e-3 * span, name

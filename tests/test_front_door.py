@@ -41,3 +41,23 @@ def test_the_front_door_runs_the_three_jobs_entry_points():
     assert isinstance(s, tmaplan.Scenario)
     with pytest.raises(tmaplan.ScenarioError):
         tmaplan.load("no-such-problem-anywhere")
+
+
+def test_no_verb_module_imports_matplotlib_scipy_stats_or_pint():
+    """Each verb's module imports only what it computes with: matplotlib when it draws,
+    ``scipy.stats`` where a test statistic is used, pint for a unit outside
+    :data:`tmaplan.units.COMMON_UNITS`. So every refusal comes in about a second
+    (``benchmarks/refusals.py``), not after the figures' imports."""
+    import subprocess
+
+    from tmaplan.cli import VERBS
+
+    code = ("import importlib, sys; heavy = ('matplotlib', 'scipy.stats', 'pint'); "
+            f"bad = {{}}\nfor m in {sorted(VERBS.values())!r}:\n"
+            "    importlib.import_module('tmaplan.cli.' + m)\n"
+            "    got = [h for h in heavy if h in sys.modules]\n"
+            "    if got: bad[m] = got; break\n"
+            "print(bad)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "{}", out

@@ -58,6 +58,8 @@ DEFERRED_MODULES: dict[str, str] = {
     "tmaplan.plotting": "matplotlib",  # the figures of a verb whose checks every verb runs
     "tmaplan.report": "matplotlib",  # a campaign's report, after the runs
     "tmaplan.report_contacts": "matplotlib",  # the per-contact figure of that report
+    "tmaplan.ranking_report": "matplotlib",  # rank-costs' report, after the runs
+    "tmaplan.advice.report": "matplotlib",  # advise's figures and page
 }
 
 #: Findings tolerated for now, as (file under tmaplan/, stripped text of the offending line):

@@ -33,7 +33,6 @@ import numpy as np
 from tmaplan.advice.joint import JointAdvice, advise_contacts
 from tmaplan.advice.problem import Platform, contact_problem, read_platform
 from tmaplan.advice.recommend import ACCURACY, advise_contact
-from tmaplan.advice.report import advice_figures, write_advice_page
 from tmaplan.advice.solution import contact_rng, solve_contact
 from tmaplan.cli.args import (
     add_figure_arguments,
@@ -388,6 +387,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if not args.no_advice:
         payload["exports"] = _exports(out, rec, advice)
     if not args.no_figure:
+        from tmaplan.advice.report import advice_figures, write_advice_page  # deferred: matplotlib
+
         figs = advice_figures(rec, solutions, advice, out)
         page = write_advice_page(out, title=f"tmaplan advice: {Path(args.bearings).name}",
                                  command=command_line("advise", f"tmaplan advise "

@@ -53,11 +53,9 @@ from tmaplan.headline import (
 from tmaplan.models.sensors import default_ping_budget
 from tmaplan.parallel import closing_pool, process_pool
 from tmaplan.planning import Belief, HeadingPlanner, evaluate_baselines, schedule_pings
-from tmaplan.plotting import plot_plan, plot_schedule
 from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
 from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.policies.receding import prefetch_receding_model
-from tmaplan.report import efficiency, write_report
 from tmaplan.report_tables import baseline_parameters
 from tmaplan.scenario import load_problem
 
@@ -115,6 +113,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str, Any]:
+    from tmaplan.plotting import plot_plan, plot_schedule  # deferred: matplotlib
+    from tmaplan.report import efficiency, write_report  # deferred: matplotlib
+
     scenario = load_problem(PROBLEM)
     belief = Belief.from_prior(scenario)
     rep = out / REPORT_DIR  # the report and its figures; the runs stay in `out`

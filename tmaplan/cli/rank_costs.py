@@ -31,7 +31,6 @@ from tmaplan.cli.contacts import scenario_of
 from tmaplan.errors import ArgumentError
 from tmaplan.experiments import rank_costs
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
-from tmaplan.ranking_report import plot_cost_ranking, write_ranking_report
 
 HELP = ("rank every cost functional against closed-loop Monte Carlo over a family of candidate "
         "manoeuvres (Spearman/Kendall with bootstrap intervals)")
@@ -98,6 +97,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                      scheduler=args.scheduler, out_dir=args.out,
                      progress=(not quiet) and sys.stderr.isatty())
     payload = res.to_json()
+    # the report's figures need matplotlib (~0.8 s), not the checks before the runs
+    from tmaplan import ranking_report  # deferred: matplotlib
+
+    plot_cost_ranking = ranking_report.plot_cost_ranking
+    write_ranking_report = ranking_report.write_ranking_report
+
     fig = None
     if not args.no_figure:
         fig = plot_cost_ranking(res, f"{args.out}/{scenario.name}_rank_costs.png")

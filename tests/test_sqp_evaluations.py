@@ -110,8 +110,9 @@ def test_an_accepted_full_step_is_evaluated_once(setup, monkeypatch):
                     raise_on_failure=False)
     ev, me = points["evaluate"], points["merit"]
     assert out.iterations >= 2  # at least one line search
-    # the start's merit value (the objective's scale) is the one call before the first step
+    assert len(ev) >= out.iterations  # every step's QP from a full evaluation
+    # no point evaluated twice; the start's merit value (the objective's scale) is the one
+    # merit call at a point the full evaluation also sees (the first step's)
     assert len(set(ev)) == len(ev)
+    assert me and me[0] == ev[0]
     assert not set(ev) & set(me[1:])
-    # one full evaluation per step, one more per line search whose full step was rejected
-    assert out.iterations <= len(ev) <= out.iterations + len(me) - 1

@@ -281,7 +281,7 @@ class RealTimeIteration:
         ``Z = [−J_s⁻¹ J_u; I]``; the QP has the reduced Hessian ``Zᵀ H Z`` and gradient
         ``Zᵀ(∇f + H z₀)``.
         """
-        f0, grad, g0, J = self._eval(x0, P) if evaluated is None else evaluated
+        f0, grad, g0, J = self.evaluate(x0, P) if evaluated is None else evaluated
         g0 = g0.reshape(-1)
         eq, xs, xu = self._eq, self._x, self._u
         Js = J[np.ix_(eq, xs)]

@@ -14,8 +14,13 @@ IPOPT's optimum.
 plus one step) of a ``tmaplan compare PROBLEM --policies receding,receding-sqp`` campaign
 directory, and the ratio of their re-plan seconds.
 
+``--gradient``: the wall and CPU times of the objective, the objective with its gradient and
+the SQP's evaluation at every recorded re-plan's start (CPU time: the thread's, which a loaded
+machine does not inflate as it does the wall time of the longer calls).
+
 Run: OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py --harvest --problem default --runs 4
      OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py [--candidates a,b] [--repeat 1]
+     OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py --gradient [--repeat 20]
      python benchmarks/replan_solvers.py --pair out/campaign-... --problem bow-closing
 """
 
@@ -179,35 +184,78 @@ def compare(store, names, repeat):
             order = names[j % len(names):] + names[:j % len(names)]  # rotated
             row = {}
             for name in order:
-                ts = []
+                ts, cs = [], []
                 for _ in range(repeat):
-                    t = time.perf_counter()
+                    t, c = time.perf_counter(), time.thread_time()
                     try:
                         f, ok, it, u = cands[name](rec)
                     except PlanningError as exc:  # refused before a solve (keep-out)
                         print(f"  {name}: {exc}")
                         f, ok, it, u = np.nan, False, 0, np.full(len(iu), np.nan)
+                    cs.append(time.thread_time() - c)
                     ts.append(time.perf_counter() - t)
-                row[name] = (min(ts), f, ok, it, u)
+                row[name] = (min(ts), f, ok, it, u, min(cs))
             ref = row["ipopt"]
             if not np.isfinite(ref[1]):
                 print(f"{problem} run {rec['run']} re-plan {rec['index']}: refused, skipped")
                 continue
             for name in names:
-                sec, f, ok, it, u = row[name]
+                sec, f, ok, it, u, cpu = row[name]
                 res[name].append({"problem": problem, "seconds": sec, "ratio": sec / ref[0],
+                                  "cpu": cpu, "cpu_ratio": cpu / ref[5],
                                   "ok": ok, "iter": it, "rel": (f - ref[1]) / abs(ref[1]),
                                   "du": float(np.max(np.abs(u - ref[4])))})
             print(f"{problem} run {rec['run']} re-plan {rec['index']}: " + "  ".join(
-                f"{n} {1000 * row[n][0]:.0f} ms {'ok' if row[n][2] else 'FAIL'} "
+                f"{n} {1000 * row[n][0]:.0f} ms (CPU {1000 * row[n][5]:.0f}) "
+                f"{'ok' if row[n][2] else 'FAIL'} "
                 f"it {row[n][3]} rel {(row[n][1] - ref[1]) / abs(ref[1]):+.1e}"
                 for n in names), flush=True)
     _table(res, names)
 
 
+def gradient_cost(store, repeat):
+    """Per recorded re-plan at its start point: wall time (minimum and median of ``repeat``
+    calls) and CPU time of this thread (median) of the objective alone, the objective with its
+    gradient, and the SQP's evaluation (objective, gradient, constraints, their Jacobian)."""
+    import casadi as ca
+
+    from tmaplan.planning.casadi_eval import NumpyFunction
+
+    with open(store, "rb") as fh:
+        recs = pickle.load(fh)
+    rows = {}
+    for problem in sorted({r["problem"] for r in recs}):
+        pl = receding._planner(load_problem(problem), CLOSED_LOOP_OBJECTIVE, None)
+        w, p, f, g = (pl.nlp[k] for k in ("x", "p", "f", "g"))
+        fns = {"f": NumpyFunction(ca.Function("f", [w, p], [f])),
+               "f+grad": NumpyFunction(ca.Function("fg", [w, p], [f, ca.gradient(f, w)])),
+               "sqp eval": NumpyFunction(ca.Function("e", [w, p], [
+                   f, ca.gradient(f, w), g, ca.jacobian(g, w)]))}
+        for rec in (r for r in recs if r["problem"] == problem):
+            x0, P = _inputs(pl, rec)[:2]
+            for name, fn in fns.items():
+                wall, cpu = [], []
+                for _ in range(repeat):
+                    t, c = time.perf_counter(), time.thread_time()
+                    fn(x0, P)
+                    cpu.append(time.thread_time() - c)
+                    wall.append(time.perf_counter() - t)
+                rows.setdefault((problem, name), []).append(
+                    (min(wall), np.median(wall), np.median(cpu)))
+    print(f"{'problem':<13}{'function':<10}{'n':>4}{'wall min ms':>13}{'wall med ms':>13}"
+          f"{'CPU med ms':>12}{'CPU / f':>9}")
+    for (problem, name), v in rows.items():
+        a = np.array(v)
+        ratio = np.median(a[:, 2] / np.array(rows[(problem, "f")])[:, 2])
+        print(f"{problem:<13}{name:<10}{len(a):>4}{1000 * np.median(a[:, 0]):>13.2f}"
+              f"{1000 * np.median(a[:, 1]):>13.2f}{1000 * np.median(a[:, 2]):>12.2f}"
+              f"{ratio:>9.2f}")
+
+
 def _table(res, names):
     print(f"\n{'candidate':<18}{'problem':<13}{'n':>4}{'median ms':>11}{'p90 ms':>9}"
-          f"{'ratio':>8}{'conv.':>7}{'|rel| med':>11}{'rel<=1e-4':>10}{'rel max':>10}"
+          f"{'ratio':>8}{'CPU ms':>8}{'CPU ratio':>10}{'conv.':>7}{'|rel| med':>11}"
+          f"{'rel<=1e-4':>10}{'rel max':>10}"
           f"{'iter':>6}{'du max':>8}")
     for name in names:
         for problem in [*sorted({r["problem"] for r in res[name]}), "all"]:
@@ -217,7 +265,9 @@ def _table(res, names):
             ok = np.array([r["ok"] for r in rows])
             print(f"{name:<18}{problem:<13}{len(rows):>4}{1000 * np.median(sec):>11.0f}"
                   f"{1000 * np.quantile(sec, 0.9):>9.0f}"
-                  f"{np.median([r['ratio'] for r in rows]):>8.3f}{ok.mean():>7.0%}"
+                  f"{np.median([r['ratio'] for r in rows]):>8.3f}"
+                  f"{1000 * np.median([r['cpu'] for r in rows]):>8.0f}"
+                  f"{np.median([r['cpu_ratio'] for r in rows]):>10.3f}{ok.mean():>7.0%}"
                   f"{np.median(np.abs(rel)):>11.1e}{np.mean(rel <= 1e-4):>10.0%}"
                   f"{rel.max():>+10.1e}{np.median([r['iter'] for r in rows]):>6.0f}"
                   f"{max(r['du'] for r in rows):>8.3f}")
@@ -268,11 +318,16 @@ def main() -> None:
     ap.add_argument("--store", default=STORE)
     ap.add_argument("--candidates", default="sqp-daqp,sqpmethod-daqp,ipopt-ma")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--gradient", action="store_true",
+                    help="time the objective, its gradient and the SQP evaluation (wall, CPU)")
     ap.add_argument("--pair", metavar="CAMPAIGN_DIR",
                     help="paired receding-sqp - receding of a compare campaign directory")
     args = ap.parse_args()
     if args.pair:
         pair(args.pair, args.problem, "receding", "receding-sqp")
+    elif args.gradient:
+        with threadpool_limits(limits=1):
+            gradient_cost(args.store, max(args.repeat, 20))
     elif args.harvest:
         harvest(args.problem, args.runs, args.seed, args.first_run, args.store)
     else:

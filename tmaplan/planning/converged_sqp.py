@@ -17,7 +17,11 @@ dense quadratic programme over ``u`` with the keep-out constraint linearised:
    solve stops when ``‖B d‖∞ ≤ tol`` and the keep-out holds (``constraint_tol``): IPOPT's
    ``tol`` on the same scaled problem;
 4. line search: Armijo on the ℓ1 merit ``F + μ·violation`` (μ above the largest
-   multiplier), step lengths 1, ½, … .
+   multiplier), step lengths 1, ½, … . The full step is evaluated with the gradient and the
+   constraint Jacobian (:meth:`RealTimeIteration.evaluate`): accepted, as most are, that
+   evaluation is the next step's, so an accepted full step costs one casadi call instead of
+   two (the objective alone, then again with its gradient); shorter steps evaluate the merit
+   function alone.
 
 A solve that does not converge within ``max_iter`` steps, whose QP fails or whose line search
 finds no decrease raises :class:`tmaplan.errors.SolverError` (or returns ``success=False``),
@@ -156,9 +160,10 @@ class ConvergedSQP:
         step: np.ndarray | None = None
         grad_l, lam = np.zeros(0), np.zeros(0)
         mu, status, iters, converged = 1.0, "Maximum_Iterations_Exceeded", 0, False
+        evaluated: tuple[np.ndarray, ...] | None = None  # evaluate(x, P) of the full step
         while iters < self.max_iter:
             iters += 1
-            f0, g0, qp = self._rti.condensed(x, P, lbw, ubw, lbg, ubg)
+            f0, g0, qp = self._rti.condensed(x, P, lbw, ubw, lbg, ubg, evaluated)
             if not np.isfinite(f0):
                 status = "objective not finite"
                 break
@@ -186,10 +191,15 @@ class ConvergedSQP:
             phi0 = f0 + mu * v0
             slope = float(qp["g"] @ d) - mu * v0
             alpha, accepted = 1.0, False
-            for _ in range(30):
+            for trial in range(30):
                 u1 = np.clip(u + alpha * d, -1, 1)
                 x1 = pl.decision_vector(u1, heading0, speed0)
-                f1, g1 = self._merit_eval(x1, P)
+                if trial == 0:
+                    evaluated = self._rti.evaluate(x1, P)
+                    f1, g1 = evaluated[0], evaluated[2]
+                else:
+                    evaluated = None
+                    f1, g1 = self._merit_eval(x1, P)
                 phi1 = f1.item() + mu * _violation(g1.reshape(-1), lbg, ubg)
                 if np.isfinite(phi1) and phi1 <= phi0 + 1e-4 * alpha * min(slope, 0.0):
                     accepted = True

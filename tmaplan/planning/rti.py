@@ -260,19 +260,28 @@ class RealTimeIteration:
         call), called with the dict :meth:`condensed` returns."""
         return self._qp
 
+    def evaluate(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The NLP's objective (1, 1), its gradient (n_w, 1), the constraints (n_g, 1) and
+        their Jacobian (n_g, n_w) at the decision vector ``x`` for the parameters ``P`` (one
+        casadi call; the gradient by one reverse sweep, ``casadi.gradient``)."""
+        return self._eval(x, P)
+
     def condensed(self, x0: np.ndarray, P: np.ndarray, lbw: np.ndarray, ubw: np.ndarray,
-                  lbg: np.ndarray, ubg: np.ndarray) -> tuple[float, np.ndarray, dict[str, Any]]:
+                  lbg: np.ndarray, ubg: np.ndarray,
+                  evaluated: tuple[np.ndarray, ...] | None = None
+                  ) -> tuple[float, np.ndarray, dict[str, Any]]:
         """Objective and constraints at x0, and the QP over the turn-rate step d_u.
 
         ``x0`` is the NLP's decision vector, ``P`` its parameters, ``lbw``…``ubg`` its bounds
-        (:meth:`HeadingPlanner.bounds`). Returns ``(f0, g0, qp)``: the objective, the
+        (:meth:`HeadingPlanner.bounds`); ``evaluated``: :meth:`evaluate` ``(x0, P)`` if
+        already computed (not evaluated again). Returns ``(f0, g0, qp)``: the objective, the
         constraints at ``x0`` and the arguments of :attr:`qp`.
 
         Linearised equalities ``J_s d_s + J_u d_u = −g_E`` give ``d = Z d_u + z₀`` with
         ``Z = [−J_s⁻¹ J_u; I]``; the QP has the reduced Hessian ``Zᵀ H Z`` and gradient
         ``Zᵀ(∇f + H z₀)``.
         """
-        f0, grad, g0, J = self._eval(x0, P)
+        f0, grad, g0, J = self.evaluate(x0, P) if evaluated is None else evaluated
         g0 = g0.reshape(-1)
         eq, xs, xu = self._eq, self._x, self._u
         Js = J[np.ix_(eq, xs)]

@@ -63,7 +63,9 @@ class Estimate:
     covariance : ndarray, shape (4, 4)
         Of ``state`` (MLE: the CRLB at the estimate; PF: the posterior's).
     range, bearing, course, speed : float
-        From the own ship [m, rad]; the contact's course [rad] and speed [m/s].
+        From the own ship [m, rad]; the contact's course [rad] and speed [m/s]. With a
+        frame, bearing and course are true (clockwise from true north, as a recording's
+        bearings; :meth:`tmaplan.io.frame.LocalFrame.true_azimuth`), else the plane's.
     std : dict of str to float
         ``range``, ``bearing``, ``course``, ``speed``, ``east``, ``north`` [m, rad, m/s].
     ellipse : tuple of float
@@ -122,6 +124,7 @@ def estimate_at(estimator: str, status: str, time: float, state: np.ndarray,
     ownship : ndarray, shape (2,)
         The own ship's position [m] at ``time``.
     frame : LocalFrame or None
+        Gives latitude/longitude, and the true bearing and course (else the plane's).
 
     Returns
     -------
@@ -160,6 +163,10 @@ def estimate_at(estimator: str, status: str, time: float, state: np.ndarray,
     if frame is not None:
         la, lo = frame.to_latlon(S[0], S[1])
         lat, lon = float(np.asarray(la)), float(np.asarray(lo))
+        if np.isfinite(S).all():  # true bearing at the own ship, true course at the contact
+            own = np.asarray(ownship, float)
+            b = float(frame.true_azimuth(own[0], own[1], b)[0])
+            c = float(np.mod(frame.true_azimuth(S[0], S[1], c)[0], 2 * np.pi))
     return Estimate(estimator=estimator, status=status, time=float(time), state=S,
                     covariance=P, range=r, bearing=float(np.mod(b, 2 * np.pi)), course=c,
                     speed=s, std=std, ellipse=ellipse, lat=lat, lon=lon)

@@ -3,9 +3,10 @@ recording does not hold) and :func:`contact_problem` (a scenario, measurement se
 ship's track on a time grid, the inputs of :func:`tmaplan.estimators.run`).
 
 **Grid.** ``dt`` is the median interval between the contact's distinct bearing times, or its
-smallest multiple ``m·interval`` of at least ``Platform.step_min`` (10 s); the first step
-with bearings is at the centre of the first ``m`` bearings (:func:`_grid_steps`: each step's
-bearings straddle its time), step 0 is one ``dt`` before it when the navigation covers it
+smallest multiple ``m·interval`` of at least ``Platform.step_min`` (10 s); each step is at
+the centre of its ``m`` bearings, counted back from the last bearing (:func:`_grid_steps`:
+each step's bearings straddle its time), step 0 is one ``dt`` before the first bearings' step
+when the navigation covers it
 (as ``simulate --export`` writes: bearings from step 1), else that step. Each bearing is
 taken at its nearest step (a warning says by how much when a bearing is more than a tenth of
 its own interval off the grid, another when a step's bearings are on average more than a tenth
@@ -301,23 +302,27 @@ def contact_problem(recording: Recording, contact: Contact, platform: Platform,
                             source=recording.bearings_source)
 
 
-def _grid_steps(tb: np.ndarray, interval: float, m: int, nav_first: float, nav_last: float
+def _grid_steps(tb: np.ndarray, interval: float, m: int, nav_first: float
                 ) -> tuple[float, np.ndarray, int]:
     """The grid's start ``t0`` [s], each bearing's step and the last step (module doc).
 
     With ``m`` bearings per step (``dt = m·interval``) each step's time is the centre of its
-    ``m`` bearings, ``(m − 1)·interval/2`` after its first: bearings at ``±interval/2,
-    ±3·interval/2, …`` of the step's time, whose mean is the bearing at the step's time to
-    second order. Taking the first ``m`` bearings at their first one's time instead biases
+    ``m`` bearings: bearings at ``±interval/2, ±3·interval/2, …`` (m even) or ``0,
+    ±interval, …`` (m odd) of the step's time, whose mean is the bearing at the step's time
+    to second order. Taking the first ``m`` bearings at their first one's time instead biases
     the step's bearing by the bearing rate times ``(m − 1)·interval/2`` (and with ``m = 2``
-    rounding half to even gave steps one, two or three bearings). When the last step's
-    centre would fall after the navigation's last fix the grid is moved back to end there.
+    rounding half to even gave steps one, two or three bearings). The grid is anchored on
+    the last bearings (the solution's time, ``(m − 1)·interval/2`` before the last bearing,
+    has a full step); the first step may hold fewer (moved later, off its bearings' centre,
+    when its centre would fall before the navigation's first fix).
     """
     dt = m * interval
-    centre = 0.5 * (m - 1) * interval
-    t0 = float(tb[0] + centre)
-    tail = np.rint((tb[-1] - t0) / dt)  # the last bearing's step
-    t0 -= max(0.0, float(t0 + tail * dt - nav_last))
+    if m == 1:
+        t0 = float(tb[0])
+    else:
+        last = float(tb[-1]) - 0.5 * (m - 1) * interval
+        t0 = last - float(np.rint((last - tb[0]) / dt)) * dt
+        t0 += max(0.0, nav_first - t0)
     if t0 - dt >= nav_first - 1e-9 * dt:
         t0 -= dt  # step 0 one step before the first bearings' step (bearings from step 1)
     steps = np.rint((tb - t0) / dt).astype(int)
@@ -357,7 +362,7 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
     interval = float(np.median(np.diff(distinct)))
     m = max(1, int(np.ceil(platform.step_min / interval - 1e-9)))
     dt = interval * m
-    t0, steps, K = _grid_steps(tb, interval, m, float(nav_times[0]), float(nav_times[-1]))
+    t0, steps, K = _grid_steps(tb, interval, m, float(nav_times[0]))
     offset = float(np.max(np.abs(tb - (t0 + steps * dt))))
     own = np.abs((tb - tb[0]) / interval - np.rint((tb - tb[0]) / interval))
     if float(np.max(own)) > 0.1:

@@ -132,6 +132,11 @@ def test_after_the_turn_each_contact_is_solved(tmp_path, variant, capsys):
         assert "4 sentences with a bad or missing checksum skipped" in err
     if "no-sigma" in variant:
         assert "sigma_deg" in err
+    if variant == "csv-60N-far-east":
+        # the contacts end 60-80 km away, beyond the prior's 40 km, but started 10-20 km
+        # away: the prior held where it applies (the start), no warning that it was wrong
+        assert max(c["range"] for c in got["contacts"].values()) > 40e3
+        assert "outside the prior" not in err
 
 
 def test_true_bearings_are_turned_to_the_plane():

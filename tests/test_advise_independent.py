@@ -22,6 +22,7 @@ were combined at the time of the first of each step's bearings.
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import math
 from pathlib import Path
@@ -55,6 +56,10 @@ VARIANTS = {
                            {"gap": (400.0, 640.0)}),
     "nmea-gap-bad-checksums": ({"lat0": 60.0, "lon0": 5.0}, {"duplicates": 2}, "nmea",
                                {"gap": (300.0, 500.0), "bad_checksums": 4}),
+    # across midnight UTC (the +02:00 rows a day later still), south of the equator, east
+    "nmea-midnight-south": ({"lat0": -33.5, "lon0": 151.5,
+                             "start": dt.datetime(2024, 12, 31, 23, 35, tzinfo=dt.UTC)},
+                            {}, "nmea", {}),
     # 30 kn east for 40 min, a turn, 40 min: 75 km from the plane's centre at 60°N
     "csv-60N-far-east": ({"lat0": 60.0, "lon0": 5.0, "own_speed": 30 * KNOT,
                           "own_course": 90.0, "leg1": 2400.0, "leg2": 2400.0,

@@ -67,13 +67,16 @@ VARIANTS = {
 }
 
 
-def _record(tmp: Path, variant: str, seed: int, *, until: float | str | None = None):
+def _record(tmp: Path, variant: str, seed: int, *, until: float | str | None = None,
+            cut_nav: bool = False):
     sim_kw, b_kw, kind, nav_kw = VARIANTS[variant]
     rec = simulate(seed, **sim_kw)
     d = tmp / f"{variant}-{seed}"
     d.mkdir(parents=True, exist_ok=True)
     if until == "turn":
         until = rec.turn_start - 30.0
+        if cut_nav:  # the navigation ends before the turn too (no fix after it)
+            nav_kw = dict(nav_kw, gap=(rec.turn_start - 10.0, 1e9))
     b = write_bearings(rec, d / "bearings.csv", until=until, seed=seed, **b_kw)
     n = NAV[kind](rec, d / f"ownship.{kind}", **nav_kw)
     return rec, b, n
@@ -100,9 +103,11 @@ def _errors(rec, got: dict, estimator: str = "pf") -> dict[tuple[str, str], floa
     return z
 
 
-@pytest.mark.parametrize("variant", ["csv-50N", "nmea-60N-no-sigma", "gpx-gap-duplicates"])
-def test_unobservable_before_the_turn(tmp_path, variant, capsys):
-    _, b, n = _record(tmp_path, variant, 1, until="turn")
+@pytest.mark.parametrize(("variant", "cut_nav"), [
+    ("csv-50N", False), ("nmea-60N-no-sigma", False), ("gpx-gap-duplicates", False),
+    ("nmea-midnight-south", True)])
+def test_unobservable_before_the_turn(tmp_path, variant, cut_nav, capsys):
+    _, b, n = _record(tmp_path, variant, 1, until="turn", cut_nav=cut_nav)
     got = _advise(tmp_path, b, n, 1)
     assert set(got["contacts"]) == {"S1", "E7"}
     for c in got["contacts"].values():

@@ -109,7 +109,8 @@ def test_solutions_cover_the_truth(tmp_path):
         x = truth.contacts["contact"][-1]
         own = rec.nav.east[-1], rec.nav.north[-1]
         r_true = math.hypot(x[0] - own[0], x[1] - own[1])
-        c_true = math.atan2(x[2], x[3])
+        # the reported course is true (from true north at the contact), as truth.json's
+        c_true = float(rec.frame.true_azimuth(x[0], x[1], math.atan2(x[2], x[3]))[0])
         s_true = math.hypot(x[2], x[3])
         e = sol.pf  # the reported solution (advise's `solution`)
         dc = (c_true - e.course + math.pi) % (2 * math.pi) - math.pi

@@ -112,7 +112,10 @@ def test_truth_round_trip(tmp_path):
     d = json.loads(p.read_text())
     lat, _lon = frame.to_latlon(x[:, 0], x[:, 1])
     np.testing.assert_array_equal(d["contacts"]["A"]["lat"], lat)
-    np.testing.assert_allclose(d["contacts"]["A"]["course"], np.arctan2(3.0, -1.0))
+    # the course is true (from true north at the contact), the velocity the plane's
+    np.testing.assert_allclose(d["contacts"]["A"]["course"],
+                               frame.true_azimuth(x[:, 0], x[:, 1], np.arctan2(3.0, -1.0)))
+    assert abs(d["contacts"]["A"]["course"][0] - np.arctan2(3.0, -1.0)) > 1e-5
     assert d["utc"][1] == "2024-06-01T12:00:15Z" and d["reference"]["lat"] == 45.0
     p.write_text('{"times": []}')
     assert "missing key 'reference'" in data_error(read_truth, p)

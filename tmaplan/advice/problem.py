@@ -3,10 +3,14 @@ recording does not hold) and :func:`contact_problem` (a scenario, measurement se
 ship's track on a time grid, the inputs of :func:`tmaplan.estimators.run`).
 
 **Grid.** ``dt`` is the median interval between the contact's distinct bearing times, or its
-smallest multiple of at least ``Platform.step_min`` (10 s); step 0 is one ``dt`` before the
-first bearing when the navigation covers it (as ``simulate --export`` writes: bearings from
-step 1), else the first bearing. Each bearing is taken at its nearest step (a warning says by
-how much when a bearing is more than a tenth of its own interval off the grid), and the
+smallest multiple ``m·interval`` of at least ``Platform.step_min`` (10 s); each step is at
+the centre of its ``m`` bearings, counted back from the last bearing (:func:`_grid_steps`:
+each step's bearings straddle its time), step 0 is one ``dt`` before the first bearings' step
+when the navigation covers it
+(as ``simulate --export`` writes: bearings from step 1), else that step. Each bearing is
+taken at its nearest step (a warning says by how much when a bearing is more than a tenth of
+its own interval off the grid, another when a step's bearings are on average more than a tenth
+of the interval off its time), and the
 bearings of one step and one σ are one, their circular mean with σ/√m
 (:func:`combine_bearings`: the same likelihood; a 2-hour log at 1 s is 720 steps);
 the own ship's position at each step is interpolated from the fixes
@@ -184,7 +188,8 @@ class ContactProblem:
     offset : float
         Largest distance of a bearing's time from its step's time [s].
     times, bearing, sigma : ndarray, shape (n,)
-        The bearings as recorded [s, rad, rad] (before :func:`combine_bearings`).
+        The bearings as recorded [s, rad, rad] (before :func:`combine_bearings`), the
+        bearings as azimuths in the plane (:func:`contact_problem`).
     velocity : ndarray, shape (n, 2)
         The own ship's velocity at ``times`` [m/s] (:func:`tmaplan.io.ownship_at`).
     """
@@ -265,6 +270,11 @@ def contact_problem(recording: Recording, contact: Contact, platform: Platform,
                     ) -> ContactProblem:
     """The estimation problem of one recorded contact (module doc).
 
+    The recorded bearings are true (clockwise from true north); with a geographic frame
+    (:attr:`Recording.frame`) each is turned into the plane's azimuth at the own ship's
+    position (:meth:`tmaplan.io.frame.LocalFrame.grid_azimuth`: grid north is true north only
+    on the plane's central meridian).
+
     Parameters
     ----------
     recording : Recording
@@ -283,9 +293,40 @@ def contact_problem(recording: Recording, contact: Contact, platform: Platform,
     """
     nav = recording.nav
     assert nav.east is not None and nav.north is not None  # every aligned NavTrack has both
-    return bearings_problem(contact.name, contact.times, contact.bearing, contact.sigma,
+    bearing = contact.bearing
+    if recording.frame is not None:  # true bearings to the plane's (grid) azimuths
+        own = contact.ownship.position
+        bearing = recording.frame.grid_azimuth(own[:, 0], own[:, 1], bearing)
+    return bearings_problem(contact.name, contact.times, bearing, contact.sigma,
                             nav.times, nav.east, nav.north, platform,
                             source=recording.bearings_source)
+
+
+def _grid_steps(tb: np.ndarray, interval: float, m: int, nav_first: float
+                ) -> tuple[float, np.ndarray, int]:
+    """The grid's start ``t0`` [s], each bearing's step and the last step (module doc).
+
+    With ``m`` bearings per step (``dt = m·interval``) each step's time is the centre of its
+    ``m`` bearings: bearings at ``±interval/2, ±3·interval/2, …`` (m even) or ``0,
+    ±interval, …`` (m odd) of the step's time, whose mean is the bearing at the step's time
+    to second order. Taking the first ``m`` bearings at their first one's time instead biases
+    the step's bearing by the bearing rate times ``(m − 1)·interval/2`` (and with ``m = 2``
+    rounding half to even gave steps one, two or three bearings). The grid is anchored on
+    the last bearings (the solution's time, ``(m − 1)·interval/2`` before the last bearing,
+    has a full step); the first step may hold fewer (moved later, off its bearings' centre,
+    when its centre would fall before the navigation's first fix).
+    """
+    dt = m * interval
+    if m == 1:
+        t0 = float(tb[0])
+    else:
+        last = float(tb[-1]) - 0.5 * (m - 1) * interval
+        t0 = last - float(np.rint((last - tb[0]) / dt)) * dt
+        t0 += max(0.0, nav_first - t0)
+    if t0 - dt >= nav_first - 1e-9 * dt:
+        t0 -= dt  # step 0 one step before the first bearings' step (bearings from step 1)
+    steps = np.rint((tb - t0) / dt).astype(int)
+    return t0, steps, int(steps[-1])
 
 
 def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: np.ndarray,
@@ -319,16 +360,23 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
                         f"different times (4 unknowns), received {distinct.size}",
                         field="contact", received=name)
     interval = float(np.median(np.diff(distinct)))
-    dt = interval * max(1, int(np.ceil(platform.step_min / interval - 1e-9)))
-    first = 1 if tb[0] - dt >= nav_times[0] - 1e-9 * dt else 0
-    t0 = float(tb[0] - first * dt)
-    steps = np.rint((tb - t0) / dt).astype(int)
-    K = int(steps[-1])
+    m = max(1, int(np.ceil(platform.step_min / interval - 1e-9)))
+    dt = interval * m
+    t0, steps, K = _grid_steps(tb, interval, m, float(nav_times[0]))
     offset = float(np.max(np.abs(tb - (t0 + steps * dt))))
-    own = np.abs((tb - t0) / interval - np.rint((tb - t0) / interval))
+    own = np.abs((tb - tb[0]) / interval - np.rint((tb - tb[0]) / interval))
     if float(np.max(own)) > 0.1:
         warn(f"{source}: contact '{name}': bearings up to {offset:.3g} s off the {dt:g} s "
              "grid of the estimators; each taken at its nearest step")
+    # a step's bearings, combined, are its measurement at the step's time: their mean time
+    # must be the step's (a bearing rate times a time bias is a bearing bias); the first and
+    # the last step may hold fewer than m bearings (one bearing among hundreds: negligible)
+    drift = (np.bincount(steps, weights=tb - (t0 + steps * dt)) / np.maximum(
+        np.bincount(steps), 1))[int(steps[0]) + 1:K]
+    if drift.size and float(np.max(np.abs(drift))) > 0.1 * interval:
+        warn(f"{source}: contact '{name}': the bearings combined on one step of the "
+             f"estimators' {dt:g} s grid lie up to {float(np.max(np.abs(drift))):.3g} s off "
+             "the step's time on average (irregular bearing times)")
     grid = t0 + dt * np.arange(K + 1)
     # the last grid time may pass the last fix by round-off of t0 + K·dt
     grid = np.minimum(grid, nav_times[-1])

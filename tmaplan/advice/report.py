@@ -96,7 +96,8 @@ def advice_figures(recording: Recording, solutions: Sequence[ContactSolution],
         r = float(np.clip(r, 1000.0, 100_000.0)) if np.isfinite(r) else 10_000.0
         idx = np.unique(np.linspace(0, c.times.size - 1, 20).astype(int))
         p = c.ownship.position[idx]
-        end = p + 1.3 * r * np.column_stack([np.sin(c.bearing[idx]), np.cos(c.bearing[idx])])
+        g = sol.problem.bearing[idx]  # the plane's azimuths (grid north)
+        end = p + 1.3 * r * np.column_stack([np.sin(g), np.cos(g)])
         for p0, p1 in zip(p, end, strict=True):
             a.plot([p0[0] / 1e3, p1[0] / 1e3], [p0[1] / 1e3, p1[1] / 1e3], "-", color=col,
                    lw=0.4, alpha=0.5)

@@ -63,7 +63,9 @@ class Estimate:
     covariance : ndarray, shape (4, 4)
         Of ``state`` (MLE: the CRLB at the estimate; PF: the posterior's).
     range, bearing, course, speed : float
-        From the own ship [m, rad]; the contact's course [rad] and speed [m/s].
+        From the own ship [m, rad]; the contact's course [rad] and speed [m/s]. With a
+        frame, bearing and course are true (clockwise from true north, as a recording's
+        bearings; :meth:`tmaplan.io.frame.LocalFrame.true_azimuth`), else the plane's.
     std : dict of str to float
         ``range``, ``bearing``, ``course``, ``speed``, ``east``, ``north`` [m, rad, m/s].
     ellipse : tuple of float
@@ -122,6 +124,7 @@ def estimate_at(estimator: str, status: str, time: float, state: np.ndarray,
     ownship : ndarray, shape (2,)
         The own ship's position [m] at ``time``.
     frame : LocalFrame or None
+        Gives latitude/longitude, and the true bearing and course (else the plane's).
 
     Returns
     -------
@@ -160,6 +163,10 @@ def estimate_at(estimator: str, status: str, time: float, state: np.ndarray,
     if frame is not None:
         la, lo = frame.to_latlon(S[0], S[1])
         lat, lon = float(np.asarray(la)), float(np.asarray(lo))
+        if np.isfinite(S).all():  # true bearing at the own ship, true course at the contact
+            own = np.asarray(ownship, float)
+            b = float(frame.true_azimuth(own[0], own[1], b)[0])
+            c = float(np.mod(frame.true_azimuth(S[0], S[1], c)[0], 2 * np.pi))
     return Estimate(estimator=estimator, status=status, time=float(time), state=S,
                     covariance=P, range=r, bearing=float(np.mod(b, 2 * np.pi)), course=c,
                     speed=s, std=std, ellipse=ellipse, lat=lat, lon=lon)
@@ -213,17 +220,23 @@ class SolutionWarning(UserWarning):
     """A contact's solutions disagree, or the batch solution lies outside the prior."""
 
 
-def cross_check(problem: ContactProblem, mle: Estimate, pf: Estimate) -> str:
+def cross_check(problem: ContactProblem, mle: Estimate, pf: Estimate, *,
+                start_range: float | None = None) -> str:
     """Why a contact's two solutions should not be trusted, or "".
 
-    The batch ML solution outside the prior's range interval or above its maximum speed (the
-    filter cannot follow it there: the prior is wrong), or the two ranges more than 3
-    standard deviations of their difference apart.
+    The batch ML solution outside the prior's range interval at the prior's time (the grid's
+    first step) or above its maximum speed (the filter cannot follow it there: the prior is
+    wrong), or the two ranges more than 3 standard deviations of their difference apart.
 
     Parameters
     ----------
     problem : ContactProblem
     mle, pf : Estimate
+    start_range : float, optional
+        The batch solution's range [m] at the grid's first step, where the prior holds
+        (default ``mle.range``). A contact inside the prior's interval at the start may be
+        outside it at the end (issue 41: an own ship running 75 km away from its contacts
+        was told its prior was wrong).
 
     Returns
     -------
@@ -236,8 +249,10 @@ def cross_check(problem: ContactProblem, mle: Estimate, pf: Estimate) -> str:
     p = problem.scenario.prior
     assert p is not None
     hi = p.range_max if p.range_max is not None else np.inf
-    if not p.range_min <= mle.range <= hi:
-        return (f"the batch solution's range {mle.range / 1e3:.2f} km lies outside the prior's "
+    r0 = mle.range if start_range is None or not np.isfinite(start_range) else start_range
+    if not p.range_min <= r0 <= hi:
+        return (f"the batch solution's range {r0 / 1e3:.2f} km at the start lies outside "
+                "the prior's "
                 f"{p.range_min / 1e3:g}-{hi / 1e3:g} km: the particle filter cannot follow it; "
                 "widen --range-min/--range-max")
     if p.speed_max is not None and mle.speed > p.speed_max:
@@ -328,7 +343,11 @@ def solve_contact(problem: ContactProblem, *, rng: np.random.Generator,
         observable = bool(np.isfinite(rsd))
         verdict = (f"observable: range {mle_est.range / 1e3:.2f} km ± {Z_95 * rsd:.0%} (95 %)"
                    if observable else "unobservable: the range's bound is not finite")
-    check = cross_check(problem, mle_est, pf_est) if observable else ""
+    r0 = None  # the batch solution's range where the prior holds: its first finite step
+    if mle_tr is not None and np.isfinite(mle_tr.estimates).all(axis=1).any():
+        k0 = int(np.argmax(np.isfinite(mle_tr.estimates).all(axis=1)))
+        r0 = float(np.hypot(*mle_tr.estimates[k0, :2]))
+    check = cross_check(problem, mle_est, pf_est, start_range=r0) if observable else ""
     if check:
         warnings.warn(f"contact '{problem.name}': {check}", SolutionWarning, stacklevel=2)
     return ContactSolution(name=problem.name, problem=problem, mle=mle_est, pf=pf_est,

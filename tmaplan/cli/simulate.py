@@ -90,6 +90,8 @@ def export(sim: Simulation | ContactsSimulation, directory: str | Path, *,
     (centred on the first fix), so reading the files back gives the simulation's positions
     less the own ship's start. Times are ``start`` plus the scenario's time since its first
     step. The bearings are the bearing sensors' (with their ``sigma_deg``) of every contact,
+    turned from the plane's azimuths into true bearings at the own ship's position
+    (:meth:`tmaplan.io.frame.LocalFrame.true_azimuth`, which the readers undo),
     each row naming its contact (one contact: ``"contact"``); ``truth.json`` holds every
     contact's track.
 
@@ -144,7 +146,10 @@ def export(sim: Simulation | ContactsSimulation, directory: str | Path, *,
     lat, lon = frame.to_latlon(local[:, 0], local[:, 1])
     bt = np.concatenate([m.times for _, m in bearings]) - t0
     order = np.argsort(bt, kind="stable")
-    values = np.concatenate([m.values for _, m in bearings])[order]
+    # the simulation's bearings are the plane's azimuths; a recording's are true
+    own = np.concatenate([local[m.steps] for _, m in bearings])
+    values = frame.true_azimuth(own[:, 0], own[:, 1],
+                                np.concatenate([m.values for _, m in bearings]))[order]
     sigma = np.concatenate([np.full(m.steps.size, float(m.sigma)) for _, m in bearings])[order]
     names = np.concatenate([np.full(m.steps.size, name, dtype=object) for name, m in bearings])
     contact: str | list[str] = (next(iter(runs)) if len(runs) == 1

@@ -11,6 +11,9 @@ Keys (SI units, angles in radians, latitude/longitude in degrees, arrays per tim
 
 The plane is the one the readers build (:mod:`tmaplan.io.recording`): the azimuthal
 equidistant projection centred on the own ship's first fix, with ``t = 0`` at that fix.
+``east``, ``north``, ``v_east``, ``v_north`` are the plane's; ``course`` is true (clockwise
+from true north at the contact's position, :meth:`LocalFrame.true_azimuth`), as a recording's
+bearings and ``advise``'s courses.
 """
 
 from __future__ import annotations
@@ -99,6 +102,7 @@ def write_truth(path: str | Path, *, times: ArrayLike, start: dt.datetime, frame
     for name, x in contacts.items():
         s = np.asarray(x, float).reshape(t.size, 4)
         course, speed = course_speed(s[:, 2:])
+        course = frame.true_azimuth(s[:, 0], s[:, 1], course)  # true, as a recording's
         lat, lon = frame.to_latlon(s[:, 0], s[:, 1])
         out["contacts"][name] = {
             "east": _floats(s[:, 0]), "north": _floats(s[:, 1]), "v_east": _floats(s[:, 2]),

@@ -276,7 +276,8 @@ def test_prior_mass_at_zero_range_is_an_error(s1):
 
 def _unchecked(sc, prior):
     """``sc`` with ``prior``, not validated: a scenario refuses these zero stds at load
-    (tests/test_scenario_spreads.py); the bound still names them for one built otherwise."""
+    (tests/scenario/test_scenario_spreads.py); the bound still names them for one built
+    otherwise."""
     import copy
 
     out = copy.copy(sc)

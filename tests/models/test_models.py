@@ -150,11 +150,6 @@ def test_brehard2005_s2_observer_changes_velocity():
 # Review of the motion, sensor, fault and prior models: defects found and their fixes.
 # ----------------------------------------------------------------------------------------------
 
-@pytest.fixture(scope="module")
-def default():
-    return load_problem("default")
-
-
 def test_observer_leg_before_t0_is_refused(default):
     # The message said "within the horizon [t0, t1]" but only the upper bound was checked.
     grid = dataclasses.replace(default.time, t0=100.0)

@@ -31,8 +31,9 @@ from tmaplan.cli.finite import require_finite
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.evaluation.replans import replan_cell
 from tmaplan.experiments import CampaignSpec, run_campaign
-from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
+from tmaplan.policies.parse import check_policy
 from tmaplan.report import efficiency, write_report
 from tmaplan.report_contacts import console_lines, contacts_figure, contacts_html
 from tmaplan.scenario import Scenario, load

@@ -24,7 +24,8 @@ from tmaplan.errors import (
 )
 from tmaplan.estimators.applicability import check_applicable
 from tmaplan.planning.joint import JOINT_OBJECTIVES
-from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.combine import MANOEUVRES, PINGS
+from tmaplan.policies.parse import check_policy
 from tmaplan.scenario import measurement_steps
 from tmaplan.simulate import check_truth_source
 

@@ -47,6 +47,7 @@ def test_every_public_module_declares_all():
                if not hasattr(m, "__all__") and not m.__name__.startswith("tmaplan.cli")]
     assert not lacking, lacking
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_docs_review.py (folded in, issue 39):
 # The user documentation agrees with the code: its scenario examples load, and the entry

@@ -375,6 +375,7 @@ def test_inverse_jacobian_identity(X: np.ndarray) -> None:
         np.testing.assert_allclose(P, I4, rtol=0, atol=1e-12)
         np.testing.assert_allclose(Q, I4, rtol=0, atol=1e-12)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_geometry_units_review.py (folded in, issue 39):
 # Review of geometry, units, plotting and the planning graphs' parameter layout: defects found

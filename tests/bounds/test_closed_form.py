@@ -485,6 +485,7 @@ def test_information_terms_reproduce_the_engine_recursion():
     rb = np.sqrt(terms.er2 * var[:, 1])
     np.testing.assert_allclose(rb, eng.evaluate_schedules(u[None])[0], rtol=1e-9)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_closed_form_review.py (folded in, issue 39):
 # Review tests of the closed-form LPC PCRB and its inputs (brehard2005 §4–5).

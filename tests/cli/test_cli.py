@@ -121,6 +121,7 @@ def test_importing_the_entry_point_does_not_run_the_cli(module, monkeypatch, cap
     importlib.import_module(module)  # SystemExit(2) if it ran the CLI
     assert capsys.readouterr().err == ""
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_cli_review.py (folded in, issue 39):
 # Command line review: ``--debug`` before the verb, ``--json`` never destroys an input, and

@@ -200,6 +200,7 @@ def test_monte_carlo_refuses_bad_input_before_any_run(monkeypatch, change, field
         monte_carlo(load_problem("ristic-bot-moderate"), "pf", **kw)
     assert info.value.field == field
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_runner_review.py (folded in, issue 39):
 # Review of the estimator runner (:mod:`tmaplan.estimators.runner`): every measurement

@@ -388,6 +388,7 @@ def test_mle_multi_leg_agrees_with_the_batch_crlb() -> None:
     ratio = np.sqrt(np.mean(np.square(errs))) / sd
     assert 0.7 < ratio < 1.45, ratio
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_mle_review.py (folded in, issue 39):
 # Input checks of the batch MLE (tmaplan.estimators.mle).

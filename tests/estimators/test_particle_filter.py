@@ -335,6 +335,7 @@ def test_pf_bearings_init_brehard_s2_converges_after_manoeuvre() -> None:
     assert np.median(errs_after) < 0.3
     assert np.median(errs_after) < 0.5 * np.median(errs_before)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_pf_review.py (folded in, issue 39):
 # Review of the particle filter: input validation and multi-line frequency measurements.

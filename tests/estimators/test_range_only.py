@@ -304,6 +304,7 @@ def test_range_only_vs_pf_sharma() -> None:
     assert lo < np.mean(ro.nees[1:]) < hi
     assert np.all(ro.nees[1:] < 1.5 * hi)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_range_only_review.py (folded in, issue 39):
 # Review of the range-only filter (tmaplan.estimators.range_only): the predictive range

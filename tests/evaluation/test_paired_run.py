@@ -61,6 +61,7 @@ def test_run_metrics_json_says_never_with_null(default):
     assert math.isfinite(js["final_range_error"]) and js["pings_used"] == 0
     assert isinstance(js["diverged"], bool)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_closed_loop_review.py (folded in, issue 39):
 # run_closed_loop (tmaplan.evaluation.closed_loop): bad input is refused before any work.

@@ -145,6 +145,7 @@ def test_brehard2005_s2_observer_changes_velocity():
         np.tile([4.0, 12.0], (((t >= 1500) & (t < 4500)).sum(), 1)))
     assert tr.velocity[t >= 4500] == pytest.approx(np.tile([8.0, -7.0], ((t >= 4500).sum(), 1)))
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_models_review.py (folded in, issue 39):
 # Review of the motion, sensor, fault and prior models: defects found and their fixes.

@@ -250,6 +250,7 @@ def test_planning_from_the_prior_counts_the_bearing_at_t0(default, first_step):
         assert PingEvaluator(sc, track, post, "mean-range-bound").value([5, 20]) == \
             pytest.approx(cf1.range_bound.mean(), rel=1e-7)
 
+
 # ----------------------------------------------------------------------------------------------
 # From test_ping_schedule_review.py (folded in, issue 39):
 # Review of the active-ping scheduler (fix/sched): exact search over *at most* ``budget``

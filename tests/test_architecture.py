@@ -110,7 +110,8 @@ def test_every_estimator_name_is_built_in_the_runner() -> None:
 
 def test_every_policy_name_is_built_in_combine_py() -> None:
     from tmaplan.policies import ManoeuvrePolicy, Policy
-    from tmaplan.policies.combine import MANOEUVRES, PINGS, parse_policy
+    from tmaplan.policies.combine import MANOEUVRES, PINGS
+    from tmaplan.policies.parse import parse_policy
     from tmaplan.scenario import load_problem
 
     scenario = load_problem("default")

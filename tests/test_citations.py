@@ -122,7 +122,7 @@ def test_the_checks_detect_what_they_should():
 
 
 def test_errata_name_existing_tests():
-    named = set(re.findall(r"`(test_\w+\.py)::(\w+)`", ERRATA.read_text()))
+    named = set(re.findall(r"`((?:\w+/)?test_\w+\.py)::(\w+)`", ERRATA.read_text()))
     assert len(named) > 20
     missing = [f"{f}::{fn}" for f, fn in sorted(named)
                if not (ROOT / "tests" / f).is_file()

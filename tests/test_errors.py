@@ -181,7 +181,7 @@ def test_is_whole_count_is_round_off_tolerant_and_at_least_one():
 
 
 def test_whole_steps_rules_say_the_same_thing_everywhere():
-    # the scenario file, the re-planner and the command line (tests/test_cli_args.py) word
+    # the scenario file, the re-planner and the command line (tests/cli/test_cli_args.py) word
     # "whole steps of dt" once (whole_steps_text); the scenario's said "dt = 15.0 s", the
     # others had no "(>= 1)"
     import dataclasses

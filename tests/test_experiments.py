@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import PlanningError
-from tmaplan.evaluation.metrics import censor_time, paired_difference, time_to_accuracy
+from tmaplan.evaluation.metrics import censor_time, paired_difference, settling_time
 from tmaplan.evaluation.records import RunRecord, scenario_hash
 from tmaplan.experiments import CampaignSpec, resolve_policies, run_campaign, run_one
 from tmaplan.policies import Combined, SingleTurn, Straight, UniformPings, Zigzag
@@ -31,14 +31,14 @@ def _spec(scenario, runs=3, policies=("straight", "zigzag+uniform")):
                         n_particles=300)
 
 
-def test_time_to_accuracy():
+def test_settling_time():
     t = np.arange(6) * 10.0
-    assert time_to_accuracy(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
-    assert time_to_accuracy(t, np.array([0.05] * 6), 0.1) == 0.0
-    assert time_to_accuracy(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
+    assert settling_time(t, np.array([0.5, 0.05, 0.2, 0.05, 0.04, 0.01]), 0.1) == 30.0
+    assert settling_time(t, np.array([0.05] * 6), 0.1) == 0.0
+    assert settling_time(t, np.array([0.05] * 5 + [0.2]), 0.1) == float("inf")
     # docs/findings.md's "first time after which the error *stays* below": a dip is not enough
-    assert time_to_accuracy(t, np.array([0.5, 0.05, 0.05, 0.2, 0.5, 0.05]), 0.1) == 50.0
-    assert time_to_accuracy(t, np.array([0.05, np.nan, 0.05, 0.05, 0.05, 0.05]), 0.1) == 20.0
+    assert settling_time(t, np.array([0.5, 0.05, 0.05, 0.2, 0.5, 0.05]), 0.1) == 50.0
+    assert settling_time(t, np.array([0.05, np.nan, 0.05, 0.05, 0.05, 0.05]), 0.1) == 20.0
 
 
 def test_censor_time_is_the_horizon_plus_one_step(scenario):

@@ -65,11 +65,7 @@ DEFERRED_MODULES: dict[str, str] = {
 #: Findings tolerated for now, as (file under tmaplan/, stripped text of the offending line):
 #: none since issue 39 removed the last. Only shrinks: an entry that matches no finding fails
 #: :func:`test_known_violations_still_exist`.
-KNOWN_VIOLATIONS: frozenset[tuple[str, str]] = frozenset({
-    ("policies/contacts.py", "from tmaplan.policies.combine import best_single_turn"),
-    ("policies/contacts.py", "from tmaplan.policies.combine import MANOEUVRES"),
-    ("policies/contacts.py", "from tmaplan.policies.combine import Combined"),
-})
+KNOWN_VIOLATIONS: frozenset[tuple[str, str]] = frozenset()
 
 
 # --------------------------------------------------------------------------------------------

@@ -35,10 +35,11 @@ import numpy as np
 from tmaplan.errors import DataError, UnitError
 from tmaplan.geometry import course_speed, wrap_angle
 from tmaplan.io.faults import warn
-from tmaplan.io.recording import Contact, Recording, ownship_at
+from tmaplan.io.recording import RecordedContact, Recording, ownship_at
 from tmaplan.models.observer import ObserverTrack
 from tmaplan.scenario import (
     BearingSensor,
+    Contact,
     Observer,
     Planning,
     Prior,
@@ -47,7 +48,6 @@ from tmaplan.scenario import (
     Target,
     TimeGrid,
 )
-from tmaplan.scenario import Contact as ScenarioContact
 from tmaplan.scenario.names import DEFAULT_CONTACT
 from tmaplan.simulate import MeasurementSet
 from tmaplan.units import to_si
@@ -266,7 +266,7 @@ def combine_bearings(steps: np.ndarray, bearing: np.ndarray, sigma: np.ndarray
             uniq[:, 1] / np.sqrt(count))
 
 
-def contact_problem(recording: Recording, contact: Contact, platform: Platform,
+def contact_problem(recording: Recording, contact: RecordedContact, platform: Platform,
                     ) -> ContactProblem:
     """The estimation problem of one recorded contact (module doc).
 
@@ -279,7 +279,7 @@ def contact_problem(recording: Recording, contact: Contact, platform: Platform,
     ----------
     recording : Recording
         Its navigation gives the own ship.
-    contact : Contact
+    contact : RecordedContact
     platform : Platform
 
     Returns
@@ -405,7 +405,7 @@ def bearings_problem(name: str, times: np.ndarray, bearing: np.ndarray, sigma: n
     scenario = Scenario(
         name=name, description=f"recorded contact '{name}' ({source})",
         time=TimeGrid(dt=dt, horizon=K * dt, t0=t0),
-        contacts=(ScenarioContact(name=DEFAULT_CONTACT, target=target, prior=prior),),
+        contacts=(Contact(name=DEFAULT_CONTACT, target=target, prior=prior),),
         observer=Observer(position=(float(p0[0]), float(p0[1])),
                           velocity=(float(obs.mean_velocity[0, 0]),
                                     float(obs.mean_velocity[0, 1])),

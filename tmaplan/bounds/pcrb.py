@@ -348,7 +348,7 @@ def predicted_information(A: np.ndarray, Q: np.ndarray, *,
     had, so that its results stay bit-identical: given ``covariance`` (``J_k⁻¹``, already
     formed), the Cholesky inverse of ``Q + A P Aᵀ``; given ``information``, ``(Q + A
     solve(J, Aᵀ))⁻¹``, or ``A⁻ᵀ J A⁻¹`` without process noise (``Q = 0``). The two forms agree
-    to rounding (tests/test_tichavsky.py, with a plain loop as the cross-check).
+    to rounding (tests/bounds/test_tichavsky.py, with a plain loop as the cross-check).
 
     Parameters
     ----------

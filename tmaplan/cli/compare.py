@@ -45,8 +45,9 @@ from tmaplan.geometry import course_speed
 from tmaplan.io.plans import legs_from_track
 from tmaplan.models.leg_table import flown_turn_rates, navigator_legs
 from tmaplan.models.target import initial_velocity
-from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
+from tmaplan.policies.parse import check_policy
 from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"

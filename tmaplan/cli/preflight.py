@@ -26,7 +26,8 @@ from tmaplan.estimators.applicability import check_applicable
 from tmaplan.planning.joint import JOINT_OBJECTIVES
 from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
-from tmaplan.policies.combine import MANOEUVRES, PINGS, check_policy
+from tmaplan.policies.combine import MANOEUVRES, PINGS
+from tmaplan.policies.parse import check_policy
 from tmaplan.scenario import measurement_steps
 from tmaplan.simulate import check_truth_source
 

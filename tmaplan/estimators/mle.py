@@ -28,7 +28,8 @@ minima in :attr:`MLEResult.alternatives` instead of hiding the ambiguity.
 ``MLEConfig.turn_direction`` (default: the scenario's ``[estimation]`` section) restricts the
 search to one sense of turn, prior knowledge that clavard2013's Table 1 shows its clockwise study
 had (σ̂_ω = σ_CRLB leaves no room for a single mirror estimate), while its Table 2 biases are
-those of a both-senses search (a 21 % mixture with the clockwise mirror; tests/test_mle.py).
+those of a both-senses search (a 21 % mixture with the clockwise mirror;
+tests/estimators/test_mle.py).
 
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 

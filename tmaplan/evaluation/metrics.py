@@ -25,7 +25,7 @@ __all__ = [
     "paired_difference",
     "run_metrics",
     "runs_to_exclude_zero",
-    "time_to_accuracy",
+    "settling_time",
 ]
 
 
@@ -44,7 +44,7 @@ class RunMetrics:
     speed_error : ndarray, shape (K + 1,)
         Target speed error [m/s].
     time_to_accuracy : float
-        [s] since t0 (inf if never, see :func:`time_to_accuracy`).
+        [s] since t0 (inf if never, see :func:`settling_time`).
     diverged : bool
     pings_used : int
     final_position_error, final_range_error : float
@@ -77,7 +77,7 @@ class RunMetrics:
                 "pings_used": int(self.pings_used), "diverged": bool(self.diverged)}
 
 
-def time_to_accuracy(times: np.ndarray, rel_error: np.ndarray, threshold: float) -> float:
+def settling_time(times: np.ndarray, rel_error: np.ndarray, threshold: float) -> float:
     """First time after which the relative error stays below ``threshold``.
 
     Parameters
@@ -155,7 +155,7 @@ def run_metrics(times: np.ndarray, truth: np.ndarray, estimate: np.ndarray,
     return RunMetrics(
         position_error=pos_err, range_error=rng_err, rel_range_error=rel,
         course_error=course_err, speed_error=speed_err,
-        time_to_accuracy=time_to_accuracy(times, rel, accuracy) if finite else float("inf"),
+        time_to_accuracy=settling_time(times, rel, accuracy) if finite else float("inf"),
         diverged=(not finite) or bool(rel[-1] > divergence), pings_used=int(n_pings),
         final_position_error=float(pos_err[-1]), final_range_error=float(rng_err[-1]),
         final_rel_range_error=float(rel[-1]))

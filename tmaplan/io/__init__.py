@@ -23,8 +23,8 @@ from tmaplan.io.navigation import read_nav
 from tmaplan.io.nmea import read_nmea, write_nmea
 from tmaplan.io.plans import Leg, legs_from_track, read_legs_csv, write_legs_csv, write_track
 from tmaplan.io.recording import (
-    Contact,
     OwnshipState,
+    RecordedContact,
     Recording,
     align,
     ownship_at,
@@ -34,13 +34,13 @@ from tmaplan.io.truth import Truth, read_truth, write_truth
 
 __all__ = [
     "BearingLog",
-    "Contact",
     "ContactBearings",
     "DataWarning",
     "Leg",
     "LocalFrame",
     "NavTrack",
     "OwnshipState",
+    "RecordedContact",
     "Recording",
     "Truth",
     "align",

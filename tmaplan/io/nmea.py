@@ -36,11 +36,10 @@ from tmaplan.io.faults import warn
 from tmaplan.io.nav import NavTrack, check_latlon, finish_nav
 from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC
+from tmaplan.units import KNOT
 
-__all__ = ["KNOT", "read_nmea", "write_nmea"]
+__all__ = ["read_nmea", "write_nmea"]
 
-#: One knot [m/s].
-KNOT = 1852.0 / 3600.0
 _DAY = 86400.0
 _TIME = re.compile(r"^(\d{2})(\d{2})(\d{2}(?:\.\d+)?)$")
 

@@ -40,7 +40,7 @@ from tmaplan.io.nav import NavTrack
 from tmaplan.io.navigation import read_nav
 from tmaplan.io.times import format_time
 
-__all__ = ["Contact", "OwnshipState", "Recording", "align", "ownship_at", "read_recording"]
+__all__ = ["OwnshipState", "RecordedContact", "Recording", "align", "ownship_at", "read_recording"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -73,7 +73,7 @@ class OwnshipState:
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
-class Contact:
+class RecordedContact:
     """One contact's bearings with the own ship's state at each.
 
     Attributes
@@ -116,7 +116,7 @@ class Recording:
     nav : NavTrack
         The fixes, times since ``t = 0``, with ``east``/``north`` [m] and, with a frame,
         ``lat``/``lon`` [deg].
-    contacts : tuple of Contact
+    contacts : tuple of RecordedContact
         In the order of the bearings file.
     """
 
@@ -126,15 +126,15 @@ class Recording:
     start_seconds: float
     frame: LocalFrame | None
     nav: NavTrack
-    contacts: tuple[Contact, ...]
+    contacts: tuple[RecordedContact, ...]
 
     @property
     def names(self) -> tuple[str, ...]:
         """The contacts' names."""
         return tuple(c.name for c in self.contacts)
 
-    def contact(self, name: str) -> Contact:
-        """Contact ``name`` (KeyError if there is none)."""
+    def contact(self, name: str) -> RecordedContact:
+        """The contact ``name`` (KeyError if there is none)."""
         for c in self.contacts:
             if c.name == name:
                 return c
@@ -237,8 +237,9 @@ def align(bearings: BearingLog, nav: NavTrack, *,
                                     lat=lat, lon=lon)
     contacts = _within_span(bearings, [c.times + shift for c in bearings.contacts], nav_t,
                             start, start_seconds)
-    out = tuple(Contact(name=c.name, times=tc, bearing=c.bearing, sigma=c.sigma, lines=c.lines,
-                        ownship=ownship_at(nav_t, east, north, tc, frame=frame))
+    out = tuple(RecordedContact(name=c.name, times=tc, bearing=c.bearing, sigma=c.sigma,
+                                lines=c.lines,
+                                ownship=ownship_at(nav_t, east, north, tc, frame=frame))
                 for c, tc in contacts)
     return Recording(bearings_source=bearings.source, nav_source=nav.source, start=start,
                      start_seconds=start_seconds, frame=frame, nav=nav_local, contacts=out)

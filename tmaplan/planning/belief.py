@@ -11,7 +11,7 @@ A :class:`Belief` holds the moments (and optionally weighted samples) of the rel
 * the Cartesian prior information ``Cov(X)⁻¹`` for the ``logdet`` objective (lecadre1997).
 
 Beliefs without samples (moments only, e.g. from a Gaussian filter) get deterministic Gaussian
-samples (fixed seed) for J₀, truncated to ranges above :data:`MIN_RANGE`.
+samples (fixed seed) for J₀, truncated to ranges above :data:`MIN_SAMPLE_RANGE`.
 """
 
 from __future__ import annotations
@@ -37,10 +37,10 @@ from tmaplan.models.prior import relative_prior_samples
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["MIN_RANGE", "Belief"]
+__all__ = ["MIN_SAMPLE_RANGE", "Belief"]
 
 #: Samples closer than this to the observer are dropped when forming J₀ [m].
-MIN_RANGE = 1.0
+MIN_SAMPLE_RANGE = 1.0
 #: Samples drawn for J₀ when a belief has moments only.
 _GAUSS_SAMPLES = 20_000
 
@@ -248,7 +248,7 @@ class Belief:
     def lpc_information(self) -> np.ndarray:
         """LPC prior information ``J₀`` (4, 4) of brehard2005 eq. 56 (weighted samples), by
         :func:`tmaplan.bounds.inputs.lpc_prior_information` (samples within
-        :data:`MIN_RANGE` of the observer are dropped).
+        :data:`MIN_SAMPLE_RANGE` of the observer are dropped).
 
         Raises
         ------
@@ -261,7 +261,7 @@ class Belief:
             X = np.random.default_rng(7).multivariate_normal(self.mean, self.cov,
                                                              size=_GAUSS_SAMPLES)
             w = None
-        keep = range_of(X) > MIN_RANGE
+        keep = range_of(X) > MIN_SAMPLE_RANGE
         X = X[keep]
         if w is not None:
             w = w[keep]

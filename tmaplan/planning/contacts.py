@@ -73,7 +73,7 @@ class ContactSet:
         Contact weights > 0 (dimensionless; default 1 each).
     required_accuracies : tuple of float
         Relative range accuracy each contact must reach, in (0, 1) (default
-        :data:`tmaplan.planning.multi_objectives.DEFAULT_REQUIRED_ACCURACY`, 10 %).
+        :data:`tmaplan.scenario.names.DEFAULT_REQUIRED_ACCURACY`, 10 %).
 
     Notes
     -----

@@ -47,7 +47,11 @@ from tmaplan.planning.objectives import (
     horizon_turn_penalty,
     not_localised_graph,
 )
-from tmaplan.scenario.names import CONTACTS_OBJECTIVE_NAMES, DEFAULT_CONTACTS_OBJECTIVE
+from tmaplan.scenario.names import (
+    CONTACTS_OBJECTIVE_NAMES,
+    DEFAULT_CONTACTS_OBJECTIVE,
+    DEFAULT_REQUIRED_ACCURACY,
+)
 
 if TYPE_CHECKING:
     from tmaplan.planning.belief import Belief
@@ -63,9 +67,6 @@ __all__ = [
     "pairing_permutation",
 ]
 
-#: Relative range accuracy a contact must reach when it names none (the 10 % of the
-#: ``expected-time-to-accuracy`` objective and of the campaigns' time-to-accuracy metric).
-DEFAULT_REQUIRED_ACCURACY = 0.1
 
 
 def pairing_permutation(name: str, n: int) -> np.ndarray:

@@ -29,8 +29,9 @@ from tmaplan.policies.base import (
     ManoeuvrePolicy,
     Policy,
 )
-from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag, parse_policy
+from tmaplan.policies.combine import Combined, best_single_turn, best_zigzag
 from tmaplan.policies.manoeuvres import Planned, SingleTurn, Straight, Zigzag
+from tmaplan.policies.parse import parse_policy
 from tmaplan.policies.pings import AdaptivePings, NoPing, ScheduledPings, UniformPings
 from tmaplan.policies.receding import Receding
 from tmaplan.policies.tactics import LeadLag, LegTurnLeg

@@ -1,7 +1,7 @@
 """Policies for several contacts: the joint plan and the baselines a practitioner would fly.
 
 Role: issue 40's policies (DESIGN.md §6), by command-line name (``compare --policies``;
-:data:`CONTACTS_MANOEUVRES`), chosen by :func:`tmaplan.policies.combine.parse_policy` when the
+:data:`CONTACTS_MANOEUVRES`), chosen by :func:`tmaplan.policies.parse.parse_policy` when the
 scenario holds several contacts. Every one is an ordinary manoeuvre policy (one controller
 steering one own ship), computed offline from the contacts' priors:
 
@@ -49,6 +49,7 @@ from tmaplan.policies.base import (
     initial_course,
     turn_limits,
 )
+from tmaplan.policies.combine import MANOEUVRES, Combined, best_single_turn
 from tmaplan.policies.manoeuvres import (
     CourseSchedule,
     Planned,
@@ -209,8 +210,6 @@ def alternate(scenario: Scenario) -> Alternate:
     """:class:`Alternate` of the contacts' best single turns
     (:func:`tmaplan.policies.combine.best_single_turn` on each contact's view), from the
     earliest of them."""
-    from tmaplan.policies.combine import best_single_turn
-
     turns = [best_single_turn(v) for v in scenario.contact_views().values()]
     return Alternate(angles=tuple(float(t.angle) for t in turns),
                      start=min(float(t.time) for t in turns))
@@ -229,8 +228,6 @@ def check_contacts_policy(spec: str, scenario: Scenario) -> tuple[str, str | Non
         ``policy``: a contact that is not the scenario's, a single-contact manoeuvre
         (``receding``, ``zigzag``, ...), a ping policy without an active range sensor.
     """
-    from tmaplan.policies.combine import MANOEUVRES
-
     if not isinstance(spec, str):
         raise PlanningError(f"unknown policy {spec!r}: expected a name MANOEUVRE[+PING]")
     parts = spec.strip().split("+")
@@ -259,8 +256,6 @@ def check_contacts_policy(spec: str, scenario: Scenario) -> tuple[str, str | Non
 def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
     """The policy (:class:`tmaplan.policies.Combined`, its plan computed) of a several-contact
     policy name (:func:`check_contacts_policy`)."""
-    from tmaplan.policies.combine import Combined
-
     man, ping, contact = check_contacts_policy(spec, scenario)
     m: Any
     if contact is not None:

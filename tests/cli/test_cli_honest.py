@@ -106,7 +106,7 @@ def test_every_ping_policy_needs_a_range_sensor(tmp_path, ping, one_line_error):
 def test_parse_policy_refuses_pings_without_a_range_sensor():
     from tmaplan.errors import ArgumentError
     from tmaplan.policies import parse_policy
-    from tmaplan.policies.combine import check_policy
+    from tmaplan.policies.parse import check_policy
 
     sc = load_problem("gordon1993-bot")
     for spec in ("straight+uniform", "straight+adaptive", "straight+scheduled"):

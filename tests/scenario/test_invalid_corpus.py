@@ -21,13 +21,14 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from repo_paths import DATA
 
 from tmaplan.cli import main
 from tmaplan.errors import ScenarioError
 from tmaplan.models.checks import check_scenario
 from tmaplan.scenario import load
 
-CORPUS = sorted((Path(__file__).parent / "data" / "invalid").glob("*.toml"))
+CORPUS = sorted((DATA / "invalid").glob("*.toml"))
 
 
 def _expect(path: Path) -> tuple[str, str]:
@@ -74,7 +75,7 @@ def test_the_schema_alone_takes_what_only_the_motion_model_refuses():
 
 
 # ------------------------------------------------------------ command lines that cannot work
-CLI_DIR = Path(__file__).parent / "data" / "invalid_cli"
+CLI_DIR = DATA / "invalid_cli"
 CLI_CASES = tomllib.loads((CLI_DIR / "cases.toml").read_text(encoding="utf-8"))["case"]
 
 
@@ -98,7 +99,7 @@ def test_cli_corpus_covers_every_estimator():
 
 
 # ------------------------------------------------------------ recorded data (tmaplan.io)
-DATA_DIR = Path(__file__).parent / "data" / "invalid_data"
+DATA_DIR = DATA / "invalid_data"
 DATA_CASES = tomllib.loads((DATA_DIR / "cases.toml").read_text(encoding="utf-8"))["case"]
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import DATA
 from scipy import stats
 
 from tmaplan.advice.problem import Platform, bearings_problem, contact_problem, read_platform
@@ -30,7 +31,7 @@ from tmaplan.io import read_nav, read_recording, read_truth
 from tmaplan.scenario import load
 from tmaplan.simulate import simulate
 
-PROBLEM = Path(__file__).parent / "data" / "advise" / "manoeuvre.toml"
+PROBLEM = DATA / "advise" / "manoeuvre.toml"
 #: The own ship's turn starts at 20 min (manoeuvre.toml).
 TURN = 1200.0
 
@@ -228,7 +229,7 @@ def test_combined_bearings_keep_the_likelihood():
 
 
 def test_a_contact_with_too_few_bearings_is_left_out(tmp_path, capsys):
-    data = Path(__file__).parent / "data" / "invalid_cli"
+    data = DATA / "invalid_cli"
     lines = (data / "advise_bearings.csv").read_text().splitlines()
     extra = [x.rsplit(",", 1)[0] + ",B" for x in lines[1:4]]
     (tmp_path / "b.csv").write_text("\n".join([*lines, *extra]) + "\n")

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-from pathlib import Path
+
+from repo_paths import ROOT
 
 from tmaplan.models.sensors import default_ping_budget
 from tmaplan.scenario import load_problem
 
-PACKAGE = Path(__file__).resolve().parents[1] / "tmaplan"
+PACKAGE = ROOT / "tmaplan"
 
 
 def test_the_default_is_the_scenarios_budget_or_zero_without_planning():

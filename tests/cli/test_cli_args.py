@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import DATA, ROOT
 
 from tmaplan.cli import main
 from tmaplan.cli.args import MAX_PLAN_STEPS
@@ -252,7 +252,7 @@ def test_binary_scenario_file_names_the_file(tmp_path, one_line_error):
 
 def test_a_scenario_written_from_the_docs_plans_and_compares(tmp_path, capsys):
     # the example of docs/scenario-files.md, to which the README points
-    docs = (Path(__file__).resolve().parents[1] / "docs" / "scenario-files.md").read_text(
+    docs = (ROOT / "docs" / "scenario-files.md").read_text(
         encoding="utf-8")
     f = tmp_path / "my.toml"
     f.write_text(docs.split("```toml\n", 1)[1].split("```", 1)[0], encoding="utf-8")
@@ -340,7 +340,7 @@ def test_truths_from_the_prior_of_a_circling_target_are_refused_up_front(tmp_pat
     assert "target.model" in line and "constant-turn" in line and "--truth scenario" in line
 
 
-@pytest.mark.parametrize("path", sorted((Path(__file__).parent / "data" / "planning").glob(
+@pytest.mark.parametrize("path", sorted((DATA / "planning").glob(
     "*.toml")), ids=lambda p: p.stem)
 def test_a_planning_horizon_of_no_whole_control_intervals_is_refused_by_the_planner(
         path, one_line_error):

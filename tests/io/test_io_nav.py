@@ -20,7 +20,7 @@ from tmaplan.io import (
     write_nmea,
     write_ownship_csv,
 )
-from tmaplan.io.nmea import KNOT
+from tmaplan.units import KNOT
 
 START = dt.datetime(2024, 6, 1, 23, 58, 0, tzinfo=dt.UTC)
 FRAME = LocalFrame(lat0=-33.8, lon0=151.3)

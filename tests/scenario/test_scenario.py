@@ -6,10 +6,10 @@ from __future__ import annotations
 import copy
 import re
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import ROOT
 
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import (
@@ -248,7 +248,7 @@ def test_builtin_priors_say_what_they_take_from_the_truth(name):
 
 def _docs_scenario_text() -> str:
     """The example of docs/scenario-files.md (the README points there)."""
-    path = Path(__file__).resolve().parents[1] / "docs" / "scenario-files.md"
+    path = ROOT / "docs" / "scenario-files.md"
     block = path.read_text(encoding="utf-8").split("```toml\n", 1)[1].split("```", 1)[0]
     assert "[prior]" in block and 'name = "my-case"' in block
     return block
@@ -279,7 +279,7 @@ def test_docs_prior_without_velocity_names_the_keys_to_add():
 
 
 def test_course_mode_true_is_an_explicit_choice():
-    # (with a spread: a zero course_std is refused, tests/test_scenario_spreads.py)
+    # (with a spread: a zero course_std is refused, tests/scenario/test_scenario_spreads.py)
     d = _set(_set(_base(), "prior.course_mode", "true"), "prior.course_std", "10 deg")
     s = from_dict(d)
     assert s.prior.truth_fields == ("course_mode",) and not s.prior.centred_on_truth

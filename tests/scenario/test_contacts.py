@@ -10,13 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import DATA
 
 from tmaplan.cli import main
 from tmaplan.errors import ScenarioError
 from tmaplan.scenario import Contact, dump, from_dict, load_problem, loads, problems_dir, to_dict
 from tmaplan.scenario.names import DEFAULT_REQUIRED_ACCURACY
 
-CORPUS = Path(__file__).parent / "data" / "invalid"
+CORPUS = DATA / "invalid"
 
 
 def _default_dict():

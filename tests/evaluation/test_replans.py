@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
+from repo_paths import DATA
 
 from tmaplan.errors import SolverError
 from tmaplan.evaluation.replans import (
@@ -254,12 +255,11 @@ def test_a_re_plan_that_stalled_converges_or_says_so():
     in 15-17 iterations. Whatever IPOPT does here on this machine, the re-plan ends with a
     converged plan or is logged as not; it falls back exactly when the warm-started solve
     did not converge; and a rescued plan is a converged solve from a fallback start."""
-    from pathlib import Path
 
     from tmaplan.planning.heading_plan import HeadingPlan
     from tmaplan.scenario import load_problem
 
-    d = np.load(Path(__file__).parent / "data" / "planning" / "bow_closing_stalled_replan.npz")
+    d = np.load(DATA / "planning" / "bow_closing_stalled_replan.npz")
     sc = load_problem("bow-closing")
     t = float(d["t"])
     n = d["previous_turn_rate"].size

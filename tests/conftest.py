@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import signal
 from pathlib import Path
 
 import matplotlib
@@ -18,6 +19,12 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 settings.register_profile("fixed", derandomize=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("TMAPLAN_HYPOTHESIS", "fixed"))
+
+# A suite started in the background (`make test &`, `nohup`) inherits SIGINT ignored, and Python
+# then installs no KeyboardInterrupt handler: Ctrl-C as a terminal delivers it, which the
+# interrupt tests send, would be lost. Give the tests Python's own handler, as in a terminal.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture

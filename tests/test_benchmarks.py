@@ -18,7 +18,7 @@ from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
 SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
-           "particle_filter", "interrupts")
+           "particle_filter", "interrupts", "contacts_general")
 
 
 class _Parsed(Exception):
@@ -155,12 +155,15 @@ def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_s
 @pytest.mark.parametrize("script, argv", [
     ("planning_pays", ["--runs", "1"]), ("planning_general", ["--seed", "9", "--runs", "1"]),
     ("planning_general", ["--seed", "9", "--problems", "1"]),
+    ("contacts_general", ["--seed", "9", "--runs", "1"]),
+    ("contacts_general", ["--seed", "9", "--problems", "1"]),
     ("value_of_information", ["--runs", "1"]), ("particle_filter", ["--runs", "1"])])
 def test_benchmarks_refuse_too_few_runs_before_work(benchmark_script, monkeypatch, capsys,
                                                     script, argv):
     # one run (or one problem) gave NaN standard deviations and intervals after the work
     bench = benchmark_script(script)
-    for name in ("load_problem", "random_problems", "ProcessPoolExecutor"):
+    for name in ("load_problem", "random_problems", "random_contacts_problems",
+                 "ProcessPoolExecutor"):
         if hasattr(bench, name):
             monkeypatch.setattr(bench, name, lambda *a, **k: pytest.fail("work started"))
     monkeypatch.setattr(sys, "argv", [f"{script}.py", *argv])

@@ -22,8 +22,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -77,21 +78,13 @@ class ProblemFamily:
     horizon_step: float = 5.0 * _MINUTE
 
     def __post_init__(self) -> None:
-        limits = {"relative_bearing": (-math.pi, math.pi, "[-pi, pi] rad"),
-                  "range_min": (0.0, math.inf, "> 0 m"),
-                  "range_ratio": (1.0, math.inf, "> 1"),
-                  "target_speed_max": (0.0, math.inf, "> 0 m/s"),
-                  "own_speed": (0.0, math.inf, "> 0 m/s"),
-                  "bearing_sigma": (0.0, 0.2, "(0, 0.2] rad"),
-                  "horizon": (0.0, math.inf, "> 0 s")}
-        for name, (lo, hi, text) in limits.items():
-            v = getattr(self, name)
-            closed = name == "relative_bearing"
-            ok = (isinstance(v, tuple) and len(v) == 2
-                  and all(math.isfinite(as_real(x)) for x in v)
-                  and v[0] <= v[1] and (lo <= v[0] if closed else lo < v[0]) and v[1] <= hi)
-            if not ok:
-                raise ArgumentError(name, f"(low, high) with low <= high, each {text}", v)
+        check_intervals(self, {"relative_bearing": (-math.pi, math.pi, "[-pi, pi] rad"),
+                               "range_min": (0.0, math.inf, "> 0 m"),
+                               "range_ratio": (1.0, math.inf, "> 1"),
+                               "target_speed_max": (0.0, math.inf, "> 0 m/s"),
+                               "own_speed": (0.0, math.inf, "> 0 m/s"),
+                               "bearing_sigma": (0.0, 0.2, "(0, 0.2] rad"),
+                               "horizon": (0.0, math.inf, "> 0 s")})
         finite_real("horizon_step", self.horizon_step, "> 0 s", lower=0.0, strict=True)
         if math.floor(self.horizon[1] / self.horizon_step + 1e-9) < math.ceil(
                 self.horizon[0] / self.horizon_step - 1e-9):
@@ -218,13 +211,48 @@ def random_problems(base: Scenario, count: int, *, seed: int = 0,
     -------
     tuple of Scenario
     """
+    return draw_problems(random_problem, base, count, seed=seed, family=family)
+
+
+def draw_problems(draw: Callable[..., Scenario], base: Scenario, count: int, *, seed: int,
+                  family: Any) -> tuple[Scenario, ...]:
+    """``count`` problems ``draw(base, rng, family=family, name=...)``, problem ``i`` drawn by
+    ``default_rng(SeedSequence(seed, spawn_key=(i,)))`` and named ``<base>-s<seed>-<i>``
+    (the rule of :func:`random_problems`), ``count`` and ``seed`` checked first.
+
+    Raises
+    ------
+    ArgumentError
+        ``count`` not an integer >= 1, ``seed`` not an integer >= 0.
+    """
     if not is_integer(count, 1):
         raise ArgumentError("count", "an integer >= 1", count)
     if not is_integer(seed, 0):
         raise ArgumentError("seed", "an integer >= 0", seed)
-    return tuple(random_problem(base, np.random.default_rng(s), family=family,
-                                name=f"{base.name}-s{seed}-{i}")
+    return tuple(draw(base, np.random.default_rng(s), family=family,
+                      name=f"{base.name}-s{seed}-{i}")
                  for i, s in enumerate(run_seeds(seed, int(count))))
+
+
+def check_intervals(family: Any, limits: Mapping[str, tuple[float, float, str]]) -> None:
+    """Check a problem family's ``(low, high)`` fields: ``limits`` maps a field name to
+    ``(lo, hi, text)``; each field must be a pair of finite reals with ``low <= high``,
+    ``lo < low`` (``lo <= low`` for ``relative_bearing``, a closed interval) and
+    ``high <= hi``.
+
+    Raises
+    ------
+    ArgumentError
+        Naming the first field that is not such a pair (``text`` its expected values).
+    """
+    for name, (lo, hi, text) in limits.items():
+        v = getattr(family, name)
+        closed = name == "relative_bearing"
+        ok = (isinstance(v, tuple) and len(v) == 2
+              and all(math.isfinite(as_real(x)) for x in v)
+              and v[0] <= v[1] and (lo <= v[0] if closed else lo < v[0]) and v[1] <= hi)
+        if not ok:
+            raise ArgumentError(name, f"(low, high) with low <= high, each {text}", v)
 
 
 #: The issue's inequalities: name -> (baseline X, bound on the paired interval of

@@ -224,8 +224,13 @@ def test_bound_gives_each_contact_its_own_reach(tmp_path, capsys):
         return json.loads(out.read_text("utf-8"))["contacts"]
 
     got = run("12.5 km", "--ping-steps", "5,10")
-    assert "max_range" not in capsys.readouterr().err
+    printed = capsys.readouterr()
+    assert "max_range" not in printed.err
+    alpha, bravo = printed.out.split("contact bravo")
+    assert "2 pings (2 within max_range on the true track)" in alpha
+    assert "2 pings (0 within max_range on the true track)" in bravo
     free = run(None, "--ping-steps", "5,10")
+    assert "within max_range" not in capsys.readouterr().out
     none = run(None)
     for key in ("std", "range_std", "position_std"):
         np.testing.assert_array_equal(got["alpha"][key], free["alpha"][key])

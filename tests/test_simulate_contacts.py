@@ -186,15 +186,22 @@ def test_the_batch_crlb_leaves_out_the_ranges_beyond_reach():
     assert full.n_measurements["range"] > a.n_measurements["range"] > 0
 
 
-def test_the_bound_warns_that_it_does_not_apply_the_reach(tmp_path, capsys):
+def test_the_bound_applies_the_reach_without_a_warning(tmp_path, capsys):
+    """`tmaplan bound` (the PCRB conditioned on the true track) counts only the pings whose
+    true range is within the reach: with every ping out of reach it is the bound without a
+    ping (tests/bounds/test_pcrb_reach.py for the PCRBs themselves)."""
     d = tomllib.loads((problems_dir() / "default.toml").read_text(encoding="utf-8"))
-    d["sensors"][1]["max_range"] = "10 km"
+    d["sensors"][1]["max_range"] = "5 km"  # the truth stays beyond 6.6 km
     path = tmp_path / "reach.toml"
     path.write_text(dump(from_dict(d)), encoding="utf-8")
-    argv = ["bound", str(path), "--method", "closed-form", "--no-figure", "--out",
-            str(tmp_path)]
-    assert main([*argv, "--ping-every", "10 min"]) == 0
-    err = capsys.readouterr().err
-    assert "field 'sensors[1].max_range': not applied by the PCRB yet" in err
-    assert main(argv) == 0  # no range reading: nothing to say
+
+    def bound(problem, *flags):
+        out = tmp_path / "b.json"
+        assert main(["bound", str(problem), "--no-figure", "--samples", "20", "--json",
+                     str(out), "--out", str(tmp_path), *flags]) == 0
+        return json.loads(out.read_text(encoding="utf-8"))
+
+    got = bound(path, "--ping-every", "10 min")
     assert "max_range" not in capsys.readouterr().err
+    assert got["std"] == bound("default")["std"]
+    assert got["std"] != bound("default", "--ping-every", "10 min")["std"]

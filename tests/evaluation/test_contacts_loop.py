@@ -218,3 +218,43 @@ def test_receding_replans_on_every_contacts_posterior():
     # the first leg flies the plan from the priors
     np.testing.assert_allclose(runs["alpha"].turn_rate[0],
                                np.clip(pol.first_plan.plan.turn_rate[0], -u_max, u_max))
+
+
+@pytest.mark.parametrize("fallback", [True, False])
+def test_receding_falls_back_to_other_starts_when_the_warm_start_fails(monkeypatch, fallback):
+    """A re-plan whose warm-started joint solve fails is solved again from the other starts
+    (``multi-start: …``, logged ``fell_back``); without fallbacks the previous plan is kept
+    and the re-plan reported as not converged."""
+    from tmaplan.errors import SolverError
+    from tmaplan.planning.contacts import ContactsPlanner
+    from tmaplan.policies.contacts import ContactsReceding
+
+    sc = load("two-contacts-crossing")
+    first = ContactsReceding(first_plan=None, replan_interval=1800.0, fallback_starts=fallback)
+    pol = dataclasses.replace(first, first_plan=first.controller(sc).planner.solve())
+    solve = ContactsPlanner.solve
+
+    def failing(self, *a, **kw):
+        if kw.get("warm_start") is not None:
+            raise SolverError("ipopt", "Maximum_Iterations_Exceeded", "a stalled warm start")
+        return solve(self, *a, **kw)
+
+    monkeypatch.setattr(ContactsPlanner, "solve", failing)
+    rng = np.random.default_rng(5)
+    targets = {n: draw_truth(v, rng) for n, v in sc.contact_views().items()}
+    runs = run_contacts_loop(sc, pol, targets, noise_rng=np.random.default_rng(6),
+                             filter_rng=np.random.default_rng(7), n_particles=200)
+    (e,) = runs["alpha"].replans
+    assert e["t"] == 1800.0 and e["fell_back"]
+    if fallback:
+        assert e["success"] and e["start"].startswith("multi-start: ")
+    else:
+        assert not e["success"] and "stalled warm start" in e["status"]
+
+
+@pytest.mark.parametrize("tol", [0.0, 1.5, "1e-4", True])
+def test_receding_refuses_a_bad_fallback_tolerance(tol):
+    from tmaplan.policies.contacts import ContactsReceding
+
+    with pytest.raises(ArgumentError, match=r"receding\.fallback_tol"):
+        ContactsReceding(fallback_tol=tol).controller(load("two-contacts-crossing"))

@@ -43,7 +43,8 @@ from tmaplan.scenario import (
 from tmaplan.scenario.prior_checks import zero_prior_stds
 
 __all__ = ["MIN_PRIOR_RANGE", "PCRBInputs", "check_ping_steps", "information_rates",
-           "lpc_prior_information", "prepare", "resolve_ping_steps"]
+           "lpc_prior_information", "prepare", "range_reach_terms", "reached_range_weight",
+           "resolve_ping_steps"]
 
 #: Prior samples closer than this to the observer count as "mass at zero range" [m].
 MIN_PRIOR_RANGE = 1.0
@@ -75,6 +76,11 @@ class PCRBInputs:
         range sensors (0 where there is none).
     range_sigma : float or None
         σ_r of a ping [m] (:func:`resolve_ping_steps`).
+    range_reach : tuple of (float, ndarray of shape (K + 1,))
+        The parts of ``ping_weight`` [m⁻²] read by range sensors with a ``max_range`` [m],
+        one per reach (:func:`range_reach_terms`): at step k such a reading counts only where
+        the range is within its reach (:func:`reached_range_weight`). Empty: every reading
+        counts (no ``max_range``).
     frequency_sensors : tuple of (FrequencySensor, ndarray)
         Each frequency sensor with its steps.
     prior_samples : int
@@ -104,6 +110,7 @@ class PCRBInputs:
     ping_steps: np.ndarray
     ping_weight: np.ndarray
     range_sigma: float | None
+    range_reach: tuple[tuple[float, np.ndarray], ...] = ()
     frequency_sensors: tuple[tuple[FrequencySensor, np.ndarray], ...]
     prior_samples: int
     m0: np.ndarray
@@ -182,6 +189,80 @@ def resolve_ping_steps(scenario: Scenario, ping_steps: Sequence[int] | None,
     if sigma is not None:
         weight[steps] += 1.0 / sigma**2
     return steps, weight, sigma
+
+
+def range_reach_terms(scenario: Scenario, ping_steps: Sequence[int] | None = None,
+                      ) -> tuple[tuple[float, np.ndarray], ...]:
+    """The range information per step limited by a reach: one term per ``max_range``.
+
+    The readings of :func:`resolve_ping_steps` (same rules: passive range sensors at their own
+    steps; ``ping_steps=None``, the active sensors at theirs; an explicit list, the pinging
+    sensor at those steps) whose sensor has a ``max_range``, grouped by reach. A reading is
+    the range of the contact only where its range is at most the reach (the echo exists,
+    :func:`tmaplan.simulate.simulate`); :func:`reached_range_weight` applies the terms.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    ping_steps : sequence of int, optional
+        As :func:`resolve_ping_steps` (checked there).
+
+    Returns
+    -------
+    tuple of (float, ndarray of shape (K + 1,))
+        ``(max_range [m], Σ 1/σ_r² [m⁻²] per step)`` for each reach with a reading, sorted by
+        reach; a part of :func:`resolve_ping_steps`' weight. Empty without a ``max_range``.
+    """
+    K = scenario.time.n_steps
+    sensors = [s for s in scenario.sensors if isinstance(s, RangeSensor)]
+    pinger = next(iter([s for s in sensors if s.active] or sensors), None)
+    terms: dict[float, np.ndarray] = {}
+    for s in sensors:
+        if s.max_range is None:
+            continue
+        w = np.zeros(K + 1)
+        if not s.active or ping_steps is None:
+            w += information_rates(scenario, sensors=[s])[1]
+        if ping_steps is not None and s is pinger:
+            w[np.unique(np.asarray(list(ping_steps), int))] += 1.0 / float(s.sigma) ** 2
+        if w.any():
+            terms[float(s.max_range)] = terms.get(float(s.max_range), 0.0) + w
+    return tuple(sorted(terms.items()))
+
+
+def reached_range_weight(weight: np.ndarray, reach: Sequence[tuple[float, np.ndarray]],
+                         ranges: np.ndarray, step: int | None = None) -> np.ndarray:
+    """Range information Σ 1/σ_r² [m⁻²] of the readings that reach the contact.
+
+    ``weight − Σ_terms w_term·1[r > max_range]``: a reading whose sensor has a ``max_range``
+    counts only where the range ``r`` is within it (:func:`range_reach_terms`); the others
+    always count. Without a reach (``reach`` empty), or where every range is within it, the
+    result is ``weight`` itself, bit for bit.
+
+    Parameters
+    ----------
+    weight : ndarray, shape (..., K + 1)
+        Range information per step of all the readings [m⁻²] (``PCRBInputs.ping_weight``).
+    reach : sequence of (float, ndarray of shape (..., K + 1))
+        ``(max_range [m], weight of its readings per step [m⁻²])``.
+    ranges : ndarray
+        Ranges [m]: shape (..., K + 1) (every step), or any shape (samples at ``step``).
+    step : int, optional
+        Only this step: ``weight`` and the terms are taken at ``step``.
+
+    Returns
+    -------
+    ndarray
+        The broadcast shape of ``ranges`` and ``weight`` (at ``step``) [m⁻²].
+    """
+    r = np.asarray(ranges, float)
+    w = np.asarray(weight, float)
+    out = np.broadcast_to(w if step is None else w[..., step], np.broadcast_shapes(
+        r.shape, w.shape if step is None else w.shape[:-1])).copy()
+    for max_range, wt in reach:
+        part = np.asarray(wt, float) if step is None else np.asarray(wt, float)[..., step]
+        out -= np.where(r > max_range, part, 0.0)
+    return np.maximum(out, 0.0, out=out)  # no negative round-off where none reaches
 
 
 def _check_prior_range_support(scenario: Scenario) -> None:
@@ -354,7 +435,8 @@ def prepare(scenario: Scenario, *, ping_steps: Sequence[int] | None = None,
     return PCRBInputs(
         times=np.asarray(grid.times), dt=float(grid.dt), A=A, Q=Q, observer=obs, c=c,
         bearing_info=bearing_info, ambiguity=ambiguity,
-        ping_steps=steps, ping_weight=weight, range_sigma=sigma, frequency_sensors=tuple(freq),
+        ping_steps=steps, ping_weight=weight, range_sigma=sigma,
+        range_reach=range_reach_terms(scenario, ping_steps), frequency_sensors=tuple(freq),
         prior_samples=n, m0=m0, S0=S0, cov_cart0=relative_prior_covariance(scenario, X0),
         cov_lpc0=cov_lpc,
         prior_subsample=X0[:500].copy())

@@ -22,7 +22,9 @@ is wrong, docs/errata.md).
 The measurement term D33 is the Monte Carlo average over the propagated X of the *conditional*
 Fisher information ``E[s sᵀ | X]`` (Rao–Blackwellised: the expectation over the measurement
 noise is analytic), for bearings (1/σ_β²; with the π ambiguity this holds up to the overlap of
-the wrapped components, e^{−π²/(2σ²)}, brehard2005 eq. 84), range pings and frequency lines. The
+the wrapped components, e^{−π²/(2σ²)}, brehard2005 eq. 84), range pings and frequency lines. A
+range reading of a sensor with a ``max_range`` counts, sample by sample, only where that
+sample's range is within the reach (:func:`measurement_information`). The
 frequency lines' emitted tones are treated as *known* here (the bound is then optimistic
 compared with clavard2013's unknown-tone CRLB).
 """
@@ -36,7 +38,7 @@ from typing import Literal
 
 import numpy as np
 
-from tmaplan.bounds.inputs import PCRBInputs, prepare
+from tmaplan.bounds.inputs import PCRBInputs, prepare, reached_range_weight
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, ObservabilityError, ScenarioError
 from tmaplan.geometry import (
@@ -302,11 +304,46 @@ def measurement_information(X: np.ndarray, step: int, inputs: PCRBInputs,
                             coords: Coords, ping_weight: float | None = None) -> np.ndarray:
     """Average conditional Fisher information of the measurements at ``step`` (4, 4).
 
-    ``E_X[E[s sᵀ | X]]`` over the samples ``X`` (N, 4) of the relative state.
+    ``E_X[E[s sᵀ | X]]`` over the samples ``X`` of the relative state: the measurement term
+    D33 of Tichavský's recursion (brehard2005 eq. 29; ristic2004, ch. 4). A range reading of a
+    sensor with a ``max_range`` exists only where the range is within it (the echo,
+    :func:`tmaplan.simulate.simulate`), so its term is ``E_X[1[r(X) ≤ max_range]·∇r∇rᵀ/σ_r²]``:
+    each sample counts it at its own range (:func:`tmaplan.bounds.inputs.reached_range_weight`).
+    This is the measurement-existence form of the PCRB with a state-dependent detection
+    probability, here 0 or 1: the information of the echoes received; the information that
+    an echo is *absent* (``r > max_range``, a step in X with no Fisher information) is not
+    counted. With every sample within reach (or none) the term is the unlimited one (or no
+    ping), bit for bit.
+
+    Parameters
+    ----------
+    X : ndarray, shape (N, 4)
+        Samples of the relative state at ``step`` [m, m, m/s, m/s].
+    step : int
+        Grid step k.
+    inputs : PCRBInputs
+        Per-step bearing, range (with their reach) and frequency information.
+    coords : {"cartesian", "lpc"}
+    ping_weight : float, optional
+        Range information Σ 1/σ_r² at ``step`` [m⁻²] counted for every sample (no reach);
+        default ``inputs.ping_weight[step]`` with the reach of ``inputs.range_reach``.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        Information in ``coords`` units.
     """
     N = X.shape[0]
-    w = inputs.ping_weight[step] if ping_weight is None else ping_weight
-    info = conditional_information(X, inputs.bearing_info[step], w, coords, average=True)
+    if ping_weight is None:
+        wn = reached_range_weight(inputs.ping_weight, inputs.range_reach, range_of(X), step)
+        w = float(wn[0]) if np.all(wn == wn[0]) else None
+    else:
+        w = ping_weight
+    info = conditional_information(X, inputs.bearing_info[step], w or 0.0, coords,
+                                   average=True)
+    if w is None:  # samples in and out of reach: each counts the readings that reach it
+        g = _range_grad(X, coords)
+        info += (g * wn[:, None]).T @ g / N
     for sensor, steps in inputs.frequency_sensors:
         if step in steps:
             f0, sig = np.asarray(sensor.f0, float), np.asarray(sensor.sigma, float)
@@ -401,7 +438,11 @@ def monte_carlo_pcrb(scenario: Scenario, *, samples: int, rng: np.random.Generat
         For the propagation samples and the process noise.
     coords : {"cartesian", "lpc"}
     ping_steps : sequence of int, optional
-        Range-ping steps; None = the steps of the scenario's range sensors.
+        Range-ping steps; None = the steps of the scenario's range sensors. A range sensor's
+        ``max_range`` applies sample by sample: this bound is averaged over the prior, so a
+        reading counts in the expectation over the propagated samples whose range is within
+        the reach (:func:`measurement_information`), the probability of an echo times its
+        information, not at one track's range.
     observer : ObserverTrack, optional
         A (manoeuvring) observer; default the scenario's.
     prior_samples : int, optional

@@ -20,7 +20,10 @@ truth-conditional bound is ~1 km.)
 
 Bearings and ranges are included (per-step information
 :func:`tmaplan.bounds.inputs.information_rates`, conditional Fisher information
-:func:`tmaplan.bounds.pcrb.conditional_information`); frequency lines are not.
+:func:`tmaplan.bounds.pcrb.conditional_information`); frequency lines are not. A range
+sensor's ``max_range`` applies run by run with the *true* range of that run (as the simulation
+and the batch CRLB apply it): a reading beyond the reach has no echo and adds nothing
+(:func:`tmaplan.bounds.inputs.reached_range_weight`).
 """
 
 from __future__ import annotations
@@ -31,7 +34,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tmaplan.bounds.inputs import information_rates, prepare
+from tmaplan.bounds.inputs import (
+    information_rates,
+    prepare,
+    range_reach_terms,
+    reached_range_weight,
+)
 from tmaplan.bounds.pcrb import PCRBResult, conditional_information, predicted_information
 from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.geometry import range_of
@@ -47,6 +55,7 @@ __all__ = ["closed_loop_truth_bounds", "truth_bounds", "truth_conditioned_pcrb",
 def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
                      prior_cov: np.ndarray | None = None,
                      range_info: np.ndarray | None = None,
+                     range_reach: Sequence[tuple[float, np.ndarray]] | None = None,
                      ) -> tuple[np.ndarray, np.ndarray]:
     """Run-averaged PCRB covariance along given true relative trajectories.
 
@@ -67,6 +76,11 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
     range_info : ndarray, shape (K + 1,) or (R, K + 1), optional
         Range information per step Σ 1/σ_r² [m⁻²] (per run: closed-loop pings); default the
         scenario's range sensors (:func:`tmaplan.bounds.inputs.information_rates`).
+    range_reach : sequence of (float, ndarray of shape (K + 1,) or (R, K + 1)), optional
+        The parts of the range information read by sensors with a ``max_range`` [m]
+        (:func:`tmaplan.bounds.inputs.range_reach_terms`), applied with each run's true range
+        (:func:`tmaplan.bounds.inputs.reached_range_weight`). Default: with ``range_info``
+        None, the reach of the scenario's range sensors; with ``range_info``, none.
 
     Returns
     -------
@@ -88,8 +102,11 @@ def truth_covariance(scenario: Scenario, relative: np.ndarray, *,
     F, Q = ncv_matrices(scenario.time.dt, scenario.target.q)
     P0 = prior_relative_moments(scenario)[1] if prior_cov is None else np.asarray(prior_cov)
     info_b, info_r = information_rates(scenario)
-    w_r = np.broadcast_to(info_r if range_info is None else np.asarray(range_info, float),
-                          (R, K + 1))
+    if range_reach is None:
+        range_reach = range_reach_terms(scenario) if range_info is None else ()
+    w_r = reached_range_weight(np.broadcast_to(
+        info_r if range_info is None else np.asarray(range_info, float), (R, K + 1)),
+        range_reach, range_of(X))
     J = np.broadcast_to(np.linalg.inv(P0), (R, 4, 4)).copy()
     cov = np.zeros((K + 1, 4, 4))
     rvar = np.zeros(K + 1)
@@ -156,7 +173,10 @@ def truth_conditioned_pcrb(scenario: Scenario, *, samples: int, rng: np.random.G
     ``samples`` realisations of the *true* target track (the scenario's own initial state,
     propagated with its process noise, as ``tmaplan track`` simulates it), ``J_0 = P_0⁻¹``
     with ``P_0`` the prior's covariance, the bound covariance averaged over the realisations
-    (:func:`truth_covariance`). This is the bound a filter run on that truth can approach;
+    (:func:`truth_covariance`). A range sensor's ``max_range`` applies with each
+    realisation's true range (the echo exists, as in the simulation and the batch CRLB): the
+    bound is conditioned on the truth, so the reach is the truth's, not an expectation over
+    the prior. This is the bound a filter run on that truth can approach;
     the prior-averaged PCRB (:func:`tmaplan.bounds.pcrb.monte_carlo_pcrb`) averages the
     *information* over geometries drawn from the prior and is much more optimistic while the
     geometry is weakly observable (on ``ristic-bot-moderate`` tens of metres where this bound
@@ -198,7 +218,7 @@ def truth_conditioned_pcrb(scenario: Scenario, *, samples: int, rng: np.random.G
             truths[:, k + 1] += e
     rel = truths - inp.observer.state[None]
     cov, rvar = truth_covariance(scenario, rel, prior_cov=inp.cov_cart0,
-                                 range_info=inp.ping_weight)
+                                 range_info=inp.ping_weight, range_reach=inp.range_reach)
     std = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
     return PCRBResult(
         times=inp.times, coords="cartesian", method="monte-carlo",
@@ -222,8 +242,10 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
     observer, target : ndarray, shape (R, K + 1, 2)
         Own-ship and true target positions of R runs [m].
     ping_steps : sequence of R int arrays
-        Steps (>= 0; those past K are ignored) at which each run pinged (σ of the scenario's
-        first active range sensor); passive range sensors count at their own steps.
+        Steps (>= 0; those past K are ignored) at which each run pinged (σ and ``max_range``
+        of the scenario's first active range sensor); passive range sensors count at their
+        own steps. A reading counts only where the run's true range is within its sensor's
+        ``max_range`` (the closed loop's echoes, :func:`tmaplan.simulate.measure_step`).
 
     Returns
     -------
@@ -265,5 +287,8 @@ def closed_loop_truth_bounds(scenario: Scenario, observer: np.ndarray, target: n
         for i, st in enumerate(ping_steps):  # per-run ping weights (bookkeeping)
             np.add.at(w[i], np.asarray(st, int)[np.asarray(st, int) <= K],
                       1.0 / float(active[0].sigma) ** 2)
-    cov, rvar = truth_covariance(passive, tgt - obs, range_info=w)
+    reach = list(range_reach_terms(passive))
+    if active and active[0].max_range is not None:  # an echo only within reach
+        reach.append((float(active[0].max_range), w - base))
+    cov, rvar = truth_covariance(passive, tgt - obs, range_info=w, range_reach=reach)
     return np.sqrt(cov[:, 0, 0] + cov[:, 1, 1]), np.sqrt(rvar)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.bounds.closed_form import closed_form_pcrb
+from tmaplan.bounds.inputs import range_reach_terms
 from tmaplan.bounds.pcrb import monte_carlo_pcrb
 from tmaplan.bounds.truth_bound import truth_conditioned_pcrb
 from tmaplan.cli.args import (
@@ -44,7 +45,9 @@ from tmaplan.cli.args import (
 from tmaplan.cli.contacts import scenario_of
 from tmaplan.display import timespan
 from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.geometry import range_of
 from tmaplan.scenario import RangeSensor, Scenario, measurement_steps
+from tmaplan.simulate import simulate
 
 HELP = ("posterior Cramér-Rao bound over time (default: Monte Carlo, conditioned on the "
         "true track; or the closed form in LPC)")
@@ -202,6 +205,20 @@ def _compute(scenario: Scenario, method: str, coords: str, samples: int, seed: i
                             coords=coords, ping_steps=pings)  # type: ignore[arg-type]
 
 
+def _pings_in_reach_text(scenario: Scenario, pings: list[int] | None,
+                        ping_steps: np.ndarray) -> str:
+    """`` (M within max_range on the true track)`` for the console's ping count when a range
+    sensor has a ``max_range`` (the truth-conditioned bound counts a ping only where the true
+    range is within it, :func:`tmaplan.bounds.truth_bound.truth_conditioned_pcrb`); "" without
+    a reach. The noise-free true track: the realisations of its process noise may differ."""
+    terms = range_reach_terms(scenario, pings)
+    if not terms or not len(ping_steps):
+        return ""
+    r = range_of(simulate(scenario, None).relative)
+    out = {int(k) for R, w in terms for k in ping_steps if w[k] > 0 and r[k] > R}
+    return f" ({len(ping_steps) - len(out)} within max_range on the true track)"
+
+
 def _figure(results: list[Any], path: Path, title: str) -> None:
     import matplotlib  # deferred: matplotlib takes ~0.3 s to import; only when drawing
 
@@ -286,8 +303,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         payload["figure"] = str(fig_path)
     if not quiet:
         k = len(res.times) - 1
+        reach = _pings_in_reach_text(scenario, pings, res.ping_steps) if over == "truth" else ""
         print(f"{scenario.name}: {label}, {k} steps over "
-              f"{timespan(res.times[-1] - res.times[0])}, {len(res.ping_steps)} pings, "
+              f"{timespan(res.times[-1] - res.times[0])}, {len(res.ping_steps)} pings{reach}, "
               f"computed in {res.seconds:.3f} s")
         if caveat is not None:
             print(f"  caveat: {caveat}")

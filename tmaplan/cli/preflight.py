@@ -19,7 +19,6 @@ from tmaplan.errors import (
     PlanningError,
     ScenarioError,
     is_whole_count,
-    warn_field,
     whole_steps_text,
 )
 from tmaplan.estimators.applicability import check_applicable
@@ -28,7 +27,6 @@ from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.parse import check_policy
-from tmaplan.scenario import measurement_steps
 from tmaplan.simulate import check_truth_source
 
 __all__ = ["preflight"]
@@ -253,20 +251,4 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
         check(args, scenario)
     check_feasible(args, scenario, prior_verb=args.verb in _PRIOR_VERBS)
     _truth_note(args.verb, scenario)
-    _reach_note(args, scenario)
 
-
-def _reach_note(args: argparse.Namespace, scenario: Any) -> None:
-    """``bound``/``track``: a one-line warning when a range sensor with a ``max_range`` gives
-    range readings, which the PCRB counts as if each reached the contact (the simulation and
-    the batch CRLB apply the reach)."""
-    if args.verb not in ("bound", "track"):
-        return
-    flagged = getattr(args, "ping_every", None) or getattr(args, "ping_steps", None)
-    for i, s in enumerate(scenario.sensors):
-        if getattr(s, "max_range", None) is not None and (
-                flagged or measurement_steps(s, scenario.time).size):
-            warn_field(f"sensors[{i}].max_range", "not applied by the PCRB yet: it counts every "
-                       "range reading as if it reached the contact (the simulation, the filters "
-                       "and the batch CRLB apply the reach), so the bound may be optimistic",
-                       source=scenario.name)

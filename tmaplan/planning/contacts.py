@@ -186,7 +186,8 @@ class ContactsPlan:
     start : str
         The start the kept solution came from: ``"alone:<name>"``, ``"straight"``,
         ``"built-in <i>"`` (:meth:`HeadingPlanner.start_programs`), ``"built-in"`` (the
-        planner's own multi-start) or ``"warm"`` (a re-plan).
+        planner's own multi-start), ``"warm"`` (a re-plan) or ``"multi-start: <start>"`` (a
+        re-plan's fallback, :meth:`wrap`).
     seconds : float
         Wall time of the whole plan, the contacts' own plans included [s].
     solves : tuple of (str, int, str)
@@ -411,6 +412,29 @@ class ContactsPlanner:
                             alone_times={n: t[n] for n, t in zip(alone, times[1:], strict=True)},
                             start=start, seconds=time.perf_counter() - t0,
                             solves=tuple(solves))
+
+    def wrap(self, beliefs: ContactBeliefs | Sequence[Belief] | None, plan: HeadingPlan, *,
+             start: str, t0: float) -> ContactsPlan:
+        """A joint solution found outside :meth:`solve` (a re-plan's fallback start,
+        :func:`tmaplan.policies.receding.multi_start_replan` on :attr:`joint`) as a
+        :class:`ContactsPlan`: each contact's expected time on it, no own plans.
+
+        Parameters
+        ----------
+        beliefs : ContactBeliefs or sequence of Belief, optional
+            As :meth:`solve`.
+        plan : HeadingPlan
+            A converged solution of :attr:`joint`.
+        start : str
+            The start it came from.
+        t0 : float
+            ``time.perf_counter()`` when the re-plan began [s].
+        """
+        bel = self.contacts.beliefs(beliefs)
+        return ContactsPlan(plan=plan, objective_name=self.objective_name,
+                            names=self.contacts.names,
+                            expected_times=self.expected_times(bel, [plan])[0], alone={},
+                            alone_times={}, start=start, seconds=time.perf_counter() - t0)
 
 
 def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Belief] | None

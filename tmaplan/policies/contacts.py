@@ -35,11 +35,20 @@ import time
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, cast
 
+import numpy as np
+
 from tmaplan.caching import LRUCache
-from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, finite_real
+from tmaplan.errors import (
+    ArgumentError,
+    InfeasibleError,
+    PlanningError,
+    SolverError,
+    finite_real,
+)
 from tmaplan.planning.baselines import course_program_track, evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.contacts import ContactSet, ContactsPlanner
+from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import ContactBeliefs
 from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
@@ -59,6 +68,7 @@ from tmaplan.policies.manoeuvres import (
     offline_plan,
 )
 from tmaplan.policies.pings import NoPing, UniformPings
+from tmaplan.policies.receding import multi_start_replan
 from tmaplan.simulate import ping_sensors
 
 if TYPE_CHECKING:
@@ -287,7 +297,8 @@ class ContactsReceding:
     Every ``replan_interval`` [s] (default ``planning.replan_interval``) the joint NLP
     (:class:`tmaplan.planning.contacts.ContactsPlanner`, the contacts' beliefs from their
     filters' particles, :meth:`tmaplan.planning.Belief.from_particles`) is solved from the
-    own ship's state, warm-started from the previous plan; a re-plan that fails keeps the
+    own ship's state, warm-started from the previous plan; if that solve fails, from the
+    other starts (``fallback_starts``); a re-plan that fails from every start keeps the
     previous plan (logged: ``t``, ``status``, ``success``, ``fell_back``, ``infeasible``,
     ``seconds``, as :class:`tmaplan.policies.Receding`).
 
@@ -299,11 +310,22 @@ class ContactsReceding:
         [s], > 0.
     max_particles : int
         Particles kept per contact's belief.
+    fallback_starts : bool
+        A re-plan whose warm-started solve fails is solved again from the other starts of
+        :func:`tmaplan.policies.receding.multi_start_replan` (logged ``fell_back``; the
+        previous plan is kept only if none converges).
+    fallback_tol : float, optional
+        IPOPT's tolerance of the fallback solves (default 1e-4, the one-contact
+        :class:`tmaplan.policies.Receding`'s ``full_tol``; None: the planner's 1e-7, which
+        the warm-started solve uses). The stalled joint re-plans of ``three-contacts-screen``
+        hit IPOPT's iteration limit at 1e-7 from every start.
     """
 
     first_plan: Any = None
     replan_interval: float | None = None
     max_particles: int = 2000
+    fallback_starts: bool = True
+    fallback_tol: float | None = 1e-4
     name: str = "receding"
 
     def _interval(self, scenario: Scenario) -> float:
@@ -329,6 +351,7 @@ class _ContactsRecedingController:
     def __init__(self, policy: ContactsReceding, scenario: Scenario) -> None:
 
         self.policy, self.scenario = policy, scenario
+        HeadingPlanner.check_tolerance(policy.fallback_tol, "receding.fallback_tol")
         self.interval = policy._interval(scenario)
         self.planner = _planner(scenario)
         self.plan = policy.first_plan
@@ -353,14 +376,40 @@ class _ContactsRecedingController:
                                   max_samples=self.policy.max_particles, assimilated=True)
             for b in views.values()), names=tuple(views))
         entry: dict[str, Any] = {"t": t}
+        kw: dict[str, Any] = {"heading0": belief.heading, "position0": belief.position}
         try:
-            plan = self.planner.solve(bel, heading0=belief.heading, position0=belief.position,
-                                      warm_start=self.plan, raise_on_failure=True)
+            try:
+                plan, fell_back = self.planner.solve(bel, warm_start=self.plan,
+                                                     raise_on_failure=True, **kw), False
+            except (SolverError, InfeasibleError) as exc:  # (not a bad request)
+                if self.plan is None or not self.policy.fallback_starts:
+                    raise
+                # the warm start did not converge: the one-contact policy's other starts
+                # (mirror image, straight, turn early to either side) on the joint NLP
+                plan, fell_back = self._fall_back(bel, exc, t0, **kw), True
+                entry["start"] = plan.start
             self.plan = plan
             self.playback = TurnRatePlayback(plan.plan, self.scenario)
-            entry.update(status=plan.plan.status, success=True, fell_back=False)
+            entry.update(status=plan.plan.status, success=True, fell_back=fell_back)
         except PlanningError as exc:  # keep flying the previous plan
             entry.update(status=str(exc), success=False, fell_back=True,
                          infeasible=isinstance(exc, InfeasibleError))
         entry["seconds"] = time.perf_counter() - t0
         self.log.append(entry)
+
+    def _fall_back(self, bel: ContactBeliefs, error: PlanningError, t0: float, *,
+                   heading0: float, position0: np.ndarray) -> Any:
+        """The best converged joint solve from :func:`multi_start_replan`'s other starts
+        after the warm-started one failed with ``error`` (an error naming both failures if
+        none converged, as :class:`tmaplan.policies.Receding`'s fallback)."""
+        assert self.plan is not None  # (the caller's check)
+        try:
+            hp = multi_start_replan(self.planner.joint, bel, self.plan.plan, heading0=heading0,
+                                    position0=position0, tol=self.policy.fallback_tol,
+                                    warm=False)
+        except PlanningError as again:
+            if str(again) == str(error):  # refused before any solve (the same check)
+                raise
+            cls = InfeasibleError if isinstance(again, InfeasibleError) else PlanningError
+            raise cls(f"{error}; then from the fallback starts: {again}") from error
+        return self.planner.wrap(bel, hp, start=hp.message, t0=t0)

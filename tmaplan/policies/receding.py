@@ -39,7 +39,7 @@ from tmaplan.policies.manoeuvres import TurnRatePlayback, offline_plan, remember
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["RECEDING_SOLVERS", "Receding", "prefetch_receding_model"]
+__all__ = ["RECEDING_SOLVERS", "Receding", "multi_start_replan", "prefetch_receding_model"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -489,62 +489,77 @@ class _RecedingController:
 
     def multi_start(self, b: Any, *, heading0: float | None,
                     position0: np.ndarray | None, warm: bool = True) -> Any:
-        """Full IPOPT re-plan from several starts, the best kept (its ``message`` names the
-        start): the previous plan shifted to ``b.t`` (warm), its mirror image (the same
-        manoeuvre to the other side), straight and the turn-early guesses to both sides.
+        """:func:`multi_start_replan` from the previous plan (or the first), at the
+        policy's ``full_tol``."""
+        return multi_start_replan(self.planner, b, self.plan or self.first, heading0=heading0,
+                                  position0=position0, tol=self.policy.full_tol, warm=warm)
 
-        Parameters
-        ----------
-        b : Belief
-            The belief to plan against, at ``b.t`` [s].
-        heading0 : float, optional
-            Own-ship heading [rad] (None: the scenario's initial course).
-        position0 : ndarray, shape (2,), optional
-            Own-ship position [m].
-        warm : bool
-            Include the warm start; False (the fallback after it failed): the other starts,
-            the mirror image only if there is a previous plan.
 
-        Returns
-        -------
-        HeadingPlan
-            The best of the converged solves.
+def multi_start_replan(planner: Any, b: Any, prev: Any, *, heading0: float | None,
+                       position0: np.ndarray | None, tol: float | None,
+                       warm: bool = True) -> Any:
+    """Full IPOPT re-plan from several starts, the best kept (its ``message`` names the
+    start): the previous plan shifted to ``b.t`` (warm), its mirror image (the same
+    manoeuvre to the other side), straight and the turn-early guesses to both sides.
 
-        Raises
-        ------
-        SolverError
-            If no start converged (a start stopped at the iteration limit or failed).
-        InfeasibleError
-            If every start reported the problem infeasible, or it is (the estimate inside
-            the keep-out range).
-        """
-        prev = self.plan or self.first
-        if prev is None and warm:
-            raise PlanningError("multi-start re-plan: no previous plan to start from")
-        pl = self.planner
-        kw = {"heading0": heading0, "position0": position0,
-              "tol": self.policy.full_tol, "raise_on_failure": False}
-        j = np.arange(pl.n)
-        starts = {"straight": np.zeros(pl.n), "early-port": np.where(j < pl.n / 4, -1.0, 0.0),
-                  "early-starboard": np.where(j < pl.n / 4, 1.0, 0.0)}
-        plans = {}
-        if prev is not None:
-            k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
-            u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
-            u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
-            u = np.resize(u, pl.n) if u.size != pl.n else u
-            starts = {"mirrored": -u, **starts}
-            if warm:
-                plans["warm"] = pl.solve(b, warm_start=prev, **kw)
-        for name, s in starts.items():
-            plans[name] = pl.solve(b, starts=[s], **kw)
-        ok = {n: p for n, p in plans.items() if p.success and np.isfinite(p.objective)}
-        if not ok:
-            statuses = sorted({p.status for p in plans.values()})
-            what = f"multi-start re-plan at t={b.t:.0f} s from {len(plans)} start(s)"
-            if all("Infeasible" in st for st in statuses):
-                raise InfeasibleError(f"{what}: infeasible from every start (IPOPT: "
-                                      f"{', '.join(statuses)})")
-            raise SolverError("ipopt", ", ".join(statuses), f"{what}: no start converged")
-        name = min(ok, key=lambda n: ok[n].objective)
-        return dataclasses.replace(ok[name], message=f"multi-start: {name}")
+    Parameters
+    ----------
+    planner : HeadingPlanner
+        The planner re-solved (for several contacts: the joint planner,
+        :attr:`tmaplan.planning.contacts.ContactsPlanner.joint`).
+    b : Belief or ContactBeliefs
+        The belief(s) to plan against, at ``b.t`` [s].
+    prev : HeadingPlan, optional
+        The plan flown so far (None: no warm start, no mirror image).
+    heading0 : float, optional
+        Own-ship heading [rad] (None: the scenario's initial course).
+    position0 : ndarray, shape (2,), optional
+        Own-ship position [m].
+    tol : float, optional
+        IPOPT's tolerance (None: the planner's).
+    warm : bool
+        Include the warm start; False (the fallback after it failed): the other starts,
+        the mirror image only if there is a previous plan.
+
+    Returns
+    -------
+    HeadingPlan
+        The best of the converged solves.
+
+    Raises
+    ------
+    SolverError
+        If no start converged (a start stopped at the iteration limit or failed).
+    InfeasibleError
+        If every start reported the problem infeasible, or it is (the estimate inside
+        the keep-out range).
+    """
+    if prev is None and warm:
+        raise PlanningError("multi-start re-plan: no previous plan to start from")
+    pl = planner
+    kw = {"heading0": heading0, "position0": position0, "tol": tol,
+          "raise_on_failure": False}
+    j = np.arange(pl.n)
+    starts = {"straight": np.zeros(pl.n), "early-port": np.where(j < pl.n / 4, -1.0, 0.0),
+              "early-starboard": np.where(j < pl.n / 4, 1.0, 0.0)}
+    plans = {}
+    if prev is not None:
+        k = max(round((b.t - float(prev.times[0])) / pl.Tc), 0)
+        u = np.clip(prev.turn_rate / max(pl.u_max, 1e-12), -1.0, 1.0)
+        u = np.concatenate([u[k:], np.full(min(k, pl.n), u[-1] if u.size else 0.0)])
+        u = np.resize(u, pl.n) if u.size != pl.n else u
+        starts = {"mirrored": -u, **starts}
+        if warm:
+            plans["warm"] = pl.solve(b, warm_start=prev, **kw)
+    for name, s in starts.items():
+        plans[name] = pl.solve(b, starts=[s], **kw)
+    ok = {n: p for n, p in plans.items() if p.success and np.isfinite(p.objective)}
+    if not ok:
+        statuses = sorted({p.status for p in plans.values()})
+        what = f"multi-start re-plan at t={b.t:.0f} s from {len(plans)} start(s)"
+        if all("Infeasible" in st for st in statuses):
+            raise InfeasibleError(f"{what}: infeasible from every start (IPOPT: "
+                                  f"{', '.join(statuses)})")
+        raise SolverError("ipopt", ", ".join(statuses), f"{what}: no start converged")
+    name = min(ok, key=lambda n: ok[n].objective)
+    return dataclasses.replace(ok[name], message=f"multi-start: {name}")

@@ -434,7 +434,8 @@ class ContactsPlanner:
         return ContactsPlan(plan=plan, objective_name=self.objective_name,
                             names=self.contacts.names,
                             expected_times=self.expected_times(bel, [plan])[0], alone={},
-                            alone_times={}, start=start, seconds=time.perf_counter() - t0)
+                            alone_times={}, start=start, seconds=time.perf_counter() - t0,
+                            solves=((start, plan.iterations, plan.status),))
 
 
 def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Belief] | None

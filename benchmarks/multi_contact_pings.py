@@ -28,7 +28,7 @@ def contacts(steps: int) -> ContactSet:
     d = d.replace(time=dataclasses.replace(d.time, horizon=horizon),
                   planning=dataclasses.replace(d.planning, horizon=horizon))
     a = load_problem("contact-astern")
-    astern = dataclasses.replace(d, name="astern", target=a.target, prior=a.prior)
+    astern = d.replace(name="astern", target=a.target, prior=a.prior)
     return ContactSet(views=(d, astern), names=("north-east", "astern"))
 
 

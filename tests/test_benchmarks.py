@@ -18,7 +18,7 @@ from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
 SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
-           "particle_filter", "interrupts", "contacts_general")
+           "particle_filter", "interrupts", "contacts_general", "multi_contact_plan")
 
 
 class _Parsed(Exception):
@@ -185,3 +185,11 @@ def test_planning_general_eval_seeds(benchmark_script, monkeypatch, capsys):
     with pytest.raises(SystemExit):
         bench.main()
     assert "--eval-seed" in capsys.readouterr().err
+
+
+def test_multi_contact_benchmarks_build_their_contacts(benchmark_script):
+    """The several-contact benchmarks' contacts share one own ship (a ContactSet builds)."""
+    plan = benchmark_script("multi_contact_plan").contacts()
+    assert plan.names == ("north-east", "astern", "west")
+    pings = benchmark_script("multi_contact_pings").contacts(20)
+    assert len(pings) == 2 and pings.views[0].time.n_steps == 20

@@ -9,9 +9,13 @@ weight and required accuracy. Every single-contact machine runs per contact on i
 block per contact (:mod:`tmaplan.planning.multi_objectives`), built once and re-solved.
 
 Multi-start: the plan of each contact alone (``expected-time-to-accuracy`` at its required
-accuracy, its own planner) and the straight course are the starts of the joint NLP; the
-best converged solution is kept. With one contact the plan is today's
-``expected-time-to-accuracy`` plan (the same planner, bit for bit).
+accuracy, its own planner) and the built-in turn-rate programs are the candidate starts of the
+joint NLP, screened by the joint objective (for ``worst-contact`` the largest contact's value);
+the best converged solution is kept. The min-max (``worst-contact``) is solved from its best
+start only, the next one tried if that solve fails (its epigraph NLP costs about twice the
+iterations per start of the other objectives; docs/results/multi-contact-planning-time.md).
+With one contact the plan is today's ``expected-time-to-accuracy`` plan (the same planner,
+bit for bit).
 """
 
 from __future__ import annotations
@@ -42,11 +46,20 @@ if TYPE_CHECKING:
     from tmaplan.planning.heading_plan import HeadingPlan
     from tmaplan.scenario import Scenario
 
-__all__ = ["WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan", "ContactsPlanner",
-           "plan_contacts"]
+__all__ = ["JOINT_STARTS", "WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan",
+           "ContactsPlanner", "plan_contacts"]
 
-#: IPOPT options of the ``worst-contact`` joint NLP (under the caller's ``solver_options``).
-WORST_CONTACT_IPOPT: dict[str, Any] = {"acceptable_tol": 1e-4, "acceptable_iter": 5}
+#: IPOPT options of the ``worst-contact`` joint NLP (under the caller's ``solver_options``):
+#: without second-order corrections (``max_soc`` 0): with the limited-memory Hessian they
+#: drifted along the active epigraph constraints where the contacts' times tie (227 IPOPT
+#: iterations instead of 74 on the three contacts of benchmarks/multi_contact_plan.py).
+WORST_CONTACT_IPOPT: dict[str, Any] = {"acceptable_tol": 1e-4, "acceptable_iter": 5,
+                                       "max_soc": 0}
+
+#: Default ``joint_starts`` of :class:`ContactsPlanner` per objective: the screened starts
+#: solved (at least two are tried while none converged).
+JOINT_STARTS: dict[str, int] = {"all-contacts-time-to-accuracy": 2,
+                                "weighted-time-to-accuracy": 2, "worst-contact": 1}
 
 
 def _shared(view: Scenario, field: str) -> Any:
@@ -177,6 +190,9 @@ class ContactsPlan:
         re-plan's fallback, :meth:`wrap`).
     seconds : float
         Wall time of the whole plan, the contacts' own plans included [s].
+    solves : tuple of (str, int, str)
+        Each solve of the joint NLP in order: its start (as ``start``), IPOPT iterations and
+        return status (one entry per start tried; the contacts' own plans not included).
     """
 
     __repr__ = short_repr
@@ -189,6 +205,7 @@ class ContactsPlan:
     alone_times: dict[str, float]
     start: str
     seconds: float
+    solves: tuple[tuple[str, int, str], ...] = ()
 
     @property
     def objective(self) -> float:
@@ -223,10 +240,11 @@ class ContactsPlanner:
     alone_starts : int
         Starts of each contact's own plan: the built-in turn-rate programs
         (:meth:`HeadingPlanner.start_programs`) of lowest value of the contact's objective.
-    joint_starts : int
-        Starts of the joint NLP: of the contacts' own plans and the built-in programs, the
-        ones of lowest joint objective (each evaluated once; the multi-start adds the plan of
-        each contact alone to the candidates).
+    joint_starts : int, optional
+        Starts of the joint NLP solved: of the contacts' own plans and the built-in programs,
+        the ones of lowest joint objective (each evaluated once; the multi-start adds the plan
+        of each contact alone to the candidates). While none converged, the next ones are
+        tried, two starts at least. Default :data:`JOINT_STARTS` (2; 1 for ``worst-contact``).
     **planner_kw
         :class:`HeadingPlanner` options shared by the joint and the contacts' own planners
         (``horizon``, ``control_interval``, ``transcription``, ``n_starts``, ...); the
@@ -242,7 +260,7 @@ class ContactsPlanner:
     """
 
     def __init__(self, contacts: ContactSet, *, objective: str | None = None,
-                 samples: int = 128, alone_starts: int = 1, joint_starts: int = 2,
+                 samples: int = 128, alone_starts: int = 1, joint_starts: int | None = None,
                  **planner_kw: Any) -> None:
         name = DEFAULT_CONTACTS_OBJECTIVE if objective is None else objective
         if name not in CONTACTS_OBJECTIVE_NAMES:
@@ -258,8 +276,8 @@ class ContactsPlanner:
                                      accuracies=acc, weights=contacts.weights, samples=samples)
         joint_kw = dict(planner_kw)
         if name == "worst-contact" and not self.single:
-            # the min-max's dual residual stalls where the worst contact changes (300 IPOPT
-            # iterations for 0.1 % on three contacts): accept 1e-4 after 5 such iterations
+            # where the contacts' times tie the min-max converges slowly: no second-order
+            # corrections, and 1e-4 accepted after 5 such iterations (WORST_CONTACT_IPOPT)
             joint_kw["solver_options"] = {**WORST_CONTACT_IPOPT,
                                           **(planner_kw.get("solver_options") or {})}
         self.joint = HeadingPlanner(contacts.views[0], objective=obj, **joint_kw)
@@ -268,6 +286,8 @@ class ContactsPlanner:
             HeadingPlanner(v, objective=expected_time_to_accuracy(a, samples), **alone_kw)
             for v, a in zip(contacts.views, acc, strict=True))
         self._samples = int(samples)
+        if joint_starts is None:
+            joint_starts = JOINT_STARTS[name]
         if not (is_integer(alone_starts, 1) and is_integer(joint_starts, 1)):
             raise ArgumentError("alone_starts/joint_starts", "integers >= 1",
                                 (alone_starts, joint_starts))
@@ -346,10 +366,11 @@ class ContactsPlanner:
             plan = self.joint.solve(bel.beliefs[0], raise_on_failure=raise_on_failure,
                                     warm_start=None if warm_start is None else
                                     warm_start.plan, **kw)
+            start = "built-in" if warm_start is None else "warm"
             return ContactsPlan(plan=plan, objective_name=self.objective_name, names=cs.names,
                                 expected_times=self.expected_times(bel, [plan])[0], alone={},
-                                alone_times={}, start="built-in" if warm_start is None else
-                                "warm", seconds=time.perf_counter() - t0)
+                                alone_times={}, start=start, seconds=time.perf_counter() - t0,
+                                solves=((start, plan.iterations, plan.status),))
         j = self.joint
         if warm_start is not None or j.transcription != "direct":
             # a re-plan from the previous plan; or the bang-bang transcription, whose starts
@@ -358,6 +379,7 @@ class ContactsPlanner:
             best = j.solve(cast(Any, bel), raise_on_failure=False, warm_start=None if
                            warm_start is None else warm_start.plan, **kw)
             start = "built-in" if warm_start is None else "warm"
+            solves = [(start, best.iterations, best.status)]
         else:
             alone = {name: p.solve(b, raise_on_failure=False, starts=self._screen(
                 p, p.evaluator(b), p.start_programs(), self.alone_starts, kw), **kw)
@@ -369,22 +391,27 @@ class ContactsPlanner:
             # the planner reads the beliefs' t, assimilated, mean and mean_range(), and its
             # layout (ContactsLayout) packs one block per contact
             keep = self._screen(j, j.evaluator(cast(Any, bel)), list(cands.values()),
-                                self.joint_starts, kw)
+                                max(self.joint_starts, 2), kw)
             labels = {id(u): lab for lab, u in cands.items()}
-            best, start = None, "built-in"
-            for u in keep:
+            best, start, solves = None, "built-in", []
+            for i, u in enumerate(keep):
+                if i >= self.joint_starts and best is not None and best.success:
+                    break  # the next start only while none converged
                 p = j.solve(cast(Any, bel), starts=[u], raise_on_failure=False, **kw)
+                solves.append((labels[id(u)], p.iterations, p.status))
                 if best is None or (p.success, -p.objective) > (best.success, -best.objective):
                     best, start = p, labels[id(u)]
         assert best is not None
         if not best.success and raise_on_failure:
             raise SolverError("ipopt", best.status, f"heading plan for {len(cs)} contacts "
-                              f"({self.objective_name}) did not converge from any start")
+                              f"({self.objective_name}) did not converge from any of "
+                              f"{len(solves)} start(s)")
         times = self.expected_times(bel, [best, *alone.values()])
         return ContactsPlan(plan=best, objective_name=self.objective_name, names=cs.names,
                             expected_times=times[0], alone=alone,
                             alone_times={n: t[n] for n, t in zip(alone, times[1:], strict=True)},
-                            start=start, seconds=time.perf_counter() - t0)
+                            start=start, seconds=time.perf_counter() - t0,
+                            solves=tuple(solves))
 
     def wrap(self, beliefs: ContactBeliefs | Sequence[Belief] | None, plan: HeadingPlan, *,
              start: str, t0: float) -> ContactsPlan:
@@ -407,7 +434,8 @@ class ContactsPlanner:
         return ContactsPlan(plan=plan, objective_name=self.objective_name,
                             names=self.contacts.names,
                             expected_times=self.expected_times(bel, [plan])[0], alone={},
-                            alone_times={}, start=start, seconds=time.perf_counter() - t0)
+                            alone_times={}, start=start, seconds=time.perf_counter() - t0,
+                            solves=((start, plan.iterations, plan.status),))
 
 
 def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Belief] | None

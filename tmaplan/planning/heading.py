@@ -464,12 +464,13 @@ class HeadingPlanner:
             elif raise_on_failure:
                 raise SolverError("ipopt", status, f"heading OCP ({self.transcription}) did "
                                   f"not converge from {len(guesses)} start(s)")
-        x = np.asarray(sol["x"]).reshape(-1)
+        P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
+        # a min-max's epigraph variable at its tightest: the objective is the largest term's
+        x = self._with_epigraph(np.asarray(sol["x"]).reshape(-1)[: self._n_w], P)
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,
                 "shape": (self.transcription, self.n, self.n_arcs), "scale": scale}
-        return self.make_plan(x, np.concatenate([pvec, [heading0, speed0, scale, sgn]]),
-                              belief.t, p0, speed0, status, success, iters, seconds, warm,
+        return self.make_plan(x, P, belief.t, p0, speed0, status, success, iters, seconds, warm,
                               ", ".join(statuses))
 
     def _with_epigraph(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -502,12 +502,12 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         X = A.T
         if fm is not None and fv is not None:
             fm, fv = fm[idx], fv[idx]
-        lw = np.full(n, -np.log(n))
+        lw = _fast().full(n, -np.log(n)) if fast else np.full(n, -np.log(n))
         resampled = True
     new = PFState(step=state.step, particles=X, log_weights=lw, freq_mean=fm, freq_var=fv,
                   ess=ess, resampled=resampled, degenerate=degenerate, kernel=config.kernel)
     if fast:
-        return _with_weights(new, np.full(n, 1.0 / n) if resampled else w)
+        return _with_weights(new, _fast().full(n, 1.0 / n) if resampled else w)
     return new
 
 

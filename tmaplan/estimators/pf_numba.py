@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.estimators import pf_buffers
 from tmaplan.estimators.pf_kernels import (
     clutter_floor,
     frequency_update,
@@ -375,7 +376,7 @@ def _key(rng: np.random.Generator) -> np.ndarray:
 def predict_rows(A: np.ndarray, dt: float, chol: tuple[float, float, float], dv: np.ndarray,
                  rng: np.random.Generator | np.ndarray) -> np.ndarray:
     """The predicted (4, N) cloud (see :func:`_predict_kernel`); ``rng`` may be a key."""
-    out = np.empty_like(A)
+    out = pf_buffers.empty(A.shape)
     l11, l21, l22 = chol
     key = np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray) else _key(rng)
     with _LOCK:
@@ -445,7 +446,7 @@ def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
     """``lw`` plus the log-likelihoods, and the parts (w, per-block table) of
     :func:`_loglik_kernel`."""
     n = lw.shape[0]
-    out, w = np.empty(n), np.empty(n)
+    out, w = pf_buffers.empty(n), pf_buffers.empty(n)
     part = np.zeros((_n_blocks(n), 4))
     ex = np.empty(0) if extra is None else np.ascontiguousarray(extra, dtype=float)
     with _LOCK:
@@ -498,8 +499,8 @@ def systematic(w: np.ndarray, u: float) -> np.ndarray:
     """Systematic resampling indices from normalised weights and one uniform (the indices of
     :func:`tmaplan.estimators.pf_kernels.systematic_indices` for the same u, bit for bit)."""
     n = w.shape[0]
-    c = np.empty(n)
-    idx = np.empty(n, dtype=np.intp)
+    c = pf_buffers.empty(n)
+    idx = pf_buffers.empty(n, np.intp)
     with _LOCK:
         _cumsum_kernel(w, c)
         _systematic_kernel(n, c, float(u), idx)
@@ -510,7 +511,7 @@ def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,
            rng: np.random.Generator | np.ndarray | None) -> np.ndarray:
     """``A[:, idx]``, plus ``L z`` per particle (4 Philox normals; ``rng`` a Generator or a
     key) when L is given."""
-    out = np.empty((4, idx.shape[0]))
+    out = pf_buffers.empty((4, idx.shape[0]))
     jitter = L is not None and rng is not None
     Lm = np.ascontiguousarray(L, dtype=float) if jitter else np.zeros((4, 4))
     key = (np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray)
@@ -518,6 +519,13 @@ def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,
     with _LOCK:
         _gather_kernel(idx.shape[0], A, np.ascontiguousarray(idx, dtype=np.intp), Lm, key,
                        jitter, out)
+    return out
+
+
+def full(n: int, value: float) -> np.ndarray:
+    """``numpy.full(n, value)`` in recycled memory (:func:`pf_buffers.empty`)."""
+    out = pf_buffers.empty(n)
+    out.fill(value)
     return out
 
 

@@ -1,0 +1,131 @@
+"""Recycled memory for the large arrays of the particle filter's numba kernels.
+
+Why: a step of the filter at N = 10⁵ particles asks for about 12 MB of fresh arrays (the
+predicted and the resampled cloud, the log-weights, weights, resampling CDF and indices), and
+frees as much. glibc hands arrays of that size from the top of its heap and gives the freed
+top back to the system (its trim threshold), so the next step faults the same pages in again:
+about 430 page faults a step, 9 ns of system time per particle-step on the 2-core KVM machine
+of ``docs/results/particle-filter-speed.md``, a third of the whole step. :func:`empty` hands
+out arrays whose memory this module keeps and reuses once nothing sees it any more.
+
+How it knows: each array is made (``numpy.asarray``) from a fresh *lease*, a small object that
+exposes a pooled buffer through ``__array_interface__``. numpy keeps the lease as the array's
+``base``, and every view of the array (a transpose, a slice, a view of a view) keeps the array
+or the lease alive, so the lease lives exactly as long as some array that sees the buffer. The
+pool holds the buffer and a weak reference to the lease; the buffer is handed out again only
+when that reference is dead. No reference counting is read: the weak reference is exact in any
+Python.
+
+Bounds: at most :data:`MAX_BYTES` of buffers are pooled (free buffers of other sizes are
+dropped first, oldest first); beyond, :func:`empty` returns a plain ``numpy.empty``. The memory
+pooled stays with the process (as a heap that is not trimmed would): at most the largest set
+of arrays the filter held at once, up to that bound.
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MAX_BYTES", "empty", "pooled_bytes"]
+
+#: Upper bound of the memory pooled per process [bytes].
+MAX_BYTES = 1 << 29
+#: Smallest array pooled [bytes]: below, malloc reuses memory without page faults anyway.
+MIN_BYTES = 1 << 17
+_ALIGN = 64  # bytes: a cache line, the width of an AVX-512 vector
+
+
+class _Lease:
+    """A view of a pooled buffer, alive while some array sees it (see the module docstring)."""
+
+    __slots__ = ("__array_interface__", "__weakref__", "buffer")
+
+    def __init__(self, buffer: np.ndarray, offset: int, shape: tuple[int, ...],
+                 dtype: np.dtype[Any]) -> None:
+        self.buffer = buffer
+        self.__array_interface__ = {"shape": shape, "typestr": dtype.str, "version": 3,
+                                    "data": (buffer.ctypes.data + offset, False)}
+
+
+class _Slot:
+    """A pooled buffer and the lease that holds it (None: never handed out)."""
+
+    __slots__ = ("buffer", "lease", "offset")
+
+    def __init__(self, nbytes: int) -> None:
+        self.buffer = np.empty(nbytes + _ALIGN, dtype=np.uint8)
+        self.offset = -self.buffer.ctypes.data % _ALIGN
+        self.lease: weakref.ref[_Lease] | None = None
+
+    @property
+    def nbytes(self) -> int:
+        return self.buffer.nbytes - _ALIGN
+
+    def free(self) -> bool:
+        return self.lease is None or self.lease() is None
+
+
+_SLOTS: list[_Slot] = []  # oldest first
+_LOCK = threading.Lock()
+
+
+def pooled_bytes() -> int:
+    """Memory held by the pool [bytes] (handed out or free)."""
+    with _LOCK:
+        return sum(s.nbytes for s in _SLOTS)
+
+
+def empty(shape: int | tuple[int, ...], dtype: Any = float) -> np.ndarray:
+    """An uninitialised C-contiguous array, its memory reused from earlier arrays of the same
+    size that are no longer referenced (a plain ``numpy.empty`` below :data:`MIN_BYTES` or when
+    the pool is full).
+
+    Parameters
+    ----------
+    shape : int or tuple of int
+    dtype : numpy dtype, default float64
+
+    Returns
+    -------
+    ndarray, shape ``shape``
+        Writeable, aligned to 64 bytes when pooled.
+    """
+    shp = (shape,) if isinstance(shape, int | np.integer) else tuple(shape)
+    shp = tuple(int(s) for s in shp)
+    dt = np.dtype(dtype)
+    nbytes = int(np.prod(shp, dtype=np.int64)) * dt.itemsize
+    if nbytes < MIN_BYTES or nbytes > MAX_BYTES:
+        return np.empty(shp, dtype=dt)
+    with _LOCK:
+        slot = next((s for s in _SLOTS if s.nbytes == nbytes and s.free()), None)
+        if slot is None:
+            slot = _new_slot(nbytes)
+            if slot is None:
+                return np.empty(shp, dtype=dt)
+        else:  # most recently used last: the others age out first
+            _SLOTS.remove(slot)
+            _SLOTS.append(slot)
+        lease = _Lease(slot.buffer, slot.offset, shp, dt)
+        slot.lease = weakref.ref(lease)
+        return np.asarray(lease)
+
+
+def _new_slot(nbytes: int) -> _Slot | None:
+    """A new pooled buffer of ``nbytes``, dropping free ones of other sizes (oldest first) to
+    stay within :data:`MAX_BYTES`; None when the handed-out ones leave no room."""
+    total = sum(s.nbytes for s in _SLOTS)
+    for s in list(_SLOTS):
+        if total + nbytes <= MAX_BYTES:
+            break
+        if s.free():
+            _SLOTS.remove(s)
+            total -= s.nbytes
+    if total + nbytes > MAX_BYTES:
+        return None
+    slot = _Slot(nbytes)
+    _SLOTS.append(slot)
+    return slot

@@ -24,6 +24,7 @@ of arrays the filter held at once, up to that bound.
 
 from __future__ import annotations
 
+import math
 import threading
 import weakref
 from typing import Any
@@ -44,26 +45,24 @@ class _Lease:
 
     __slots__ = ("__array_interface__", "__weakref__", "buffer")
 
-    def __init__(self, buffer: np.ndarray, offset: int, shape: tuple[int, ...],
+    def __init__(self, buffer: np.ndarray, address: int, shape: tuple[int, ...],
                  dtype: np.dtype[Any]) -> None:
         self.buffer = buffer
         self.__array_interface__ = {"shape": shape, "typestr": dtype.str, "version": 3,
-                                    "data": (buffer.ctypes.data + offset, False)}
+                                    "data": (address, False)}
 
 
 class _Slot:
     """A pooled buffer and the lease that holds it (None: never handed out)."""
 
-    __slots__ = ("buffer", "lease", "offset")
+    __slots__ = ("address", "buffer", "lease", "nbytes")
 
     def __init__(self, nbytes: int) -> None:
         self.buffer = np.empty(nbytes + _ALIGN, dtype=np.uint8)
-        self.offset = -self.buffer.ctypes.data % _ALIGN
+        base = self.buffer.__array_interface__["data"][0]
+        self.address = base - base % _ALIGN + (_ALIGN if base % _ALIGN else 0)
+        self.nbytes = nbytes
         self.lease: weakref.ref[_Lease] | None = None
-
-    @property
-    def nbytes(self) -> int:
-        return self.buffer.nbytes - _ALIGN
 
     def free(self) -> bool:
         return self.lease is None or self.lease() is None
@@ -94,10 +93,9 @@ def empty(shape: int | tuple[int, ...], dtype: Any = float) -> np.ndarray:
     ndarray, shape ``shape``
         Writeable, aligned to 64 bytes when pooled.
     """
-    shp = (shape,) if isinstance(shape, int | np.integer) else tuple(shape)
-    shp = tuple(int(s) for s in shp)
+    shp = (int(shape),) if isinstance(shape, int | np.integer) else tuple(int(s) for s in shape)
     dt = np.dtype(dtype)
-    nbytes = int(np.prod(shp, dtype=np.int64)) * dt.itemsize
+    nbytes = math.prod(shp) * dt.itemsize
     if nbytes < MIN_BYTES or nbytes > MAX_BYTES:
         return np.empty(shp, dtype=dt)
     with _LOCK:
@@ -109,7 +107,7 @@ def empty(shape: int | tuple[int, ...], dtype: Any = float) -> np.ndarray:
         else:  # most recently used last: the others age out first
             _SLOTS.remove(slot)
             _SLOTS.append(slot)
-        lease = _Lease(slot.buffer, slot.offset, shp, dt)
+        lease = _Lease(slot.buffer, slot.address, shp, dt)
         slot.lease = weakref.ref(lease)
         return np.asarray(lease)
 

@@ -138,7 +138,8 @@ class PFConfig:
         :mod:`tmaplan.estimators.pf_numba`
         (multi-threaded over fixed blocks of particles, bit-identical for any thread count;
         process and jitter noise from Philox4x32-10 keyed by the injected Generator, Box–Muller
-        in float64). "numpy" (the default for now: stored campaigns and the demo's stored result
+        in float32; large arrays recycled, :mod:`tmaplan.estimators.pf_buffers`). "numpy"
+        (the default for now: stored campaigns and the demo's stored result
         were flown with it): the batched numpy kernels, kept as the reference they are tested
         against (same model, same resampling; other random numbers, so the same results in
         distribution, not bit for bit). ``noise`` applies to "numpy" only.

@@ -1,4 +1,4 @@
-"""Numba kernels of the particle filter (``PFConfig.kernel = "numba"``, the default).
+"""Numba kernels of the particle filter (``PFConfig.kernel = "numba"``).
 
 Private helpers of :mod:`tmaplan.estimators.particle_filter`; the numpy kernels of
 :mod:`tmaplan.estimators.pf_kernels` stay the reference (``kernel="numpy"``).
@@ -20,7 +20,12 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   whole fused step (``benchmarks/particle_filter.py`` reports it). The normals are Box–Muller
   on the 32-bit words, computed in float32 like the numpy kernel's default noise (radius at
   most 5.89: the Gaussian mass beyond, 3·10⁻⁸ per pair, is not drawn); the particles stay
-  float64.
+  float64. A ziggurat (Marsaglia & Tsang 2000) on the same words was measured no faster here
+  (its fast path alone, vectorised, costs what Box–Muller does: the table lookups become
+  gathers, slow on AMD Zen 4), so Box–Muller stays, its polynomials in fused multiply-adds.
+* **Recycled arrays.** The kernels' outputs come from :mod:`tmaplan.estimators.pf_buffers`,
+  which reuses the memory of arrays nothing sees any more: fresh arrays cost ~430 page faults
+  a step at N = 10⁵ (glibc returns the freed heap to the system), a third of the step.
 * **Branch-free elementary functions** (float64 ``log``, ``atan``, ``exp``; float32 ``log``
   and ``sin``/``cos`` of a turn fraction) from fdlibm / Cephes polynomials, accurate to about
   1 ulp (tested against numpy), so that the loops vectorise without a vector math library:

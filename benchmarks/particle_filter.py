@@ -146,11 +146,12 @@ def paired_z(a: list[float], b: list[float]) -> float:
     return float(d.mean() / (d.std(ddof=1) / np.sqrt(d.size))) if d.size > 1 else np.nan
 
 
-def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
-    """ns per particle-step (wall) of 4 normals: the numba kernel's (Philox4x32-10 and float32
-    Box–Muller, on numba's threads from PARALLEL_MIN particles on: a prediction of the zero
-    cloud, its output recycled), the Generator's (float64 and float32 ziggurat, one thread,
-    into a preallocated buffer)."""
+def noise_costs(n: int, repeat: int = 20) -> list[tuple[float, float]]:
+    """(wall, CPU) ns per particle-step of 4 normals: the numba kernel's (Philox4x32-10 and
+    float32 Box–Muller, on numba's threads from PARALLEL_MIN particles on: a prediction of the
+    zero cloud, its output recycled), the Generator's (float64 and float32 ziggurat, one
+    thread, into a preallocated buffer). The CPU time (all threads) is the sturdier figure on
+    a loaded machine."""
     from tmaplan.estimators import pf_numba as _pf_numba  # deferred: numba, compiled on first use
 
     rng = np.random.default_rng(0)
@@ -162,11 +163,12 @@ def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
               lambda: rng.standard_normal(out=buf64),
               lambda: rng.standard_normal(out=buf32, dtype=np.float32)):
         f()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for _ in range(repeat):
             f()
-        out.append((time.perf_counter() - t0) / repeat / n * 1e9)
-    return out[0], out[1], out[2]
+        out.append(((time.perf_counter() - t0) / repeat / n * 1e9,
+                    (time.process_time() - c0) / repeat / n * 1e9))
+    return out
 
 
 def _load() -> str:
@@ -237,10 +239,11 @@ def _main(argv: list[str] | None) -> int:
               f"{r['numba'][0]:>11.1f} ± {r['numba'][1]:<6.1f} {r['numpy'][0]:>7.1f} ± "
               f"{r['numpy'][1]:<4.1f} {r['ss'][0]:>7.1f} ± {r['ss'][1]:<4.1f} {z_np:>7.2f} "
               f"{z_ss:>7.2f}")
-    print("noise, ns per particle-step (4 normals): " + "; ".join(
-        "N={}: numba Philox + Box–Muller {:.2f}, Generator float64 {:.2f}, float32 {:.2f}".format(
-            n, *noise_costs(n))
-        for n in sizes))
+    for n in sizes:
+        (nw, nc), (gw, gc), (fw, fc) = noise_costs(n)
+        print(f"noise, ns per particle-step (4 normals), wall / CPU, N={n}: numba Philox + "
+              f"Box–Muller {nw:.2f} / {nc:.2f}; Generator float64 {gw:.2f} / {gc:.2f}, "
+              f"float32 {fw:.2f} / {fc:.2f}")
     print(f"load average after: {_load()}")
     return 0
 

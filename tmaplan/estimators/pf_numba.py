@@ -277,13 +277,19 @@ def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
     for blk in prange(nb):
         lo = blk * BLOCK
         hi = min(lo + BLOCK, n)
+        m = hi - lo
         p0 = 0 if lo == 0 else max(math.ceil(c[lo - 1] * scale - u), 0)
         p1 = n if hi == n else max(math.ceil(c[hi - 1] * scale - u), 0)
         if p1 > p0:
+            cb = c[lo:hi]
+            slot = np.empty(m, dtype=np.intp)  # min(c'_i, p1) − p0, in a loop that vectorises
+            for j in range(m):
+                slot[j] = min(max(np.intp(np.ceil(cb[j] * scale - u)), 0), p1) - p0
+            if hi == n:
+                slot[m - 1] = p1 - p0  # c'_{N−1} = N
             mark = np.zeros(p1 - p0 + 1, dtype=np.intp)  # the last slot takes c'_i ≥ p1
-            for i in range(lo, hi):
-                ci = n if i == n - 1 else max(math.ceil(c[i] * scale - u), 0)
-                mark[min(ci, p1) - p0] = i + 1
+            for j in range(m):
+                mark[slot[j]] = lo + j + 1
             run = lo
             out = idx[p0:p1]
             for t in range(p1 - p0):

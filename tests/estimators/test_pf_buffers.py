@@ -93,3 +93,12 @@ def test_states_kept_by_the_caller_are_not_overwritten() -> None:
     for s, x, lw, w in kept:
         assert np.array_equal(s.particles, x) and np.array_equal(s.log_weights, lw)
         assert np.array_equal(s.weights, w)
+
+
+def test_few_free_buffers_of_one_size_are_kept() -> None:
+    kept = [pf_buffers.empty(N) for _ in range(pf_buffers.MAX_FREE + 5)]  # a burst
+    assert pf_buffers.pooled_bytes() == (pf_buffers.MAX_FREE + 5) * N * 8
+    del kept
+    a = pf_buffers.empty(N)  # reuses one, drops the free ones beyond MAX_FREE
+    assert pf_buffers.pooled_bytes() == pf_buffers.MAX_FREE * N * 8
+    assert a.base is not None

@@ -17,9 +17,10 @@ when that reference is dead. No reference counting is read: the weak reference i
 Python.
 
 Bounds: at most :data:`MAX_BYTES` of buffers are pooled (free buffers of other sizes are
-dropped first, oldest first); beyond, :func:`empty` returns a plain ``numpy.empty``. The memory
-pooled stays with the process (as a heap that is not trimmed would): at most the largest set
-of arrays the filter held at once, up to that bound.
+dropped first, oldest first); beyond, :func:`empty` returns a plain ``numpy.empty``. Of one
+size, at most :data:`MAX_FREE` free buffers are kept (a caller that kept many states and let
+them go does not leave their memory pooled). The memory pooled stays with the process, as a
+heap that is not trimmed would: about the arrays of one filter step.
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ __all__ = ["MAX_BYTES", "empty", "pooled_bytes"]
 
 #: Upper bound of the memory pooled per process [bytes].
 MAX_BYTES = 1 << 29
+#: Free buffers of one size kept (more are dropped at the next hand-out of that size).
+MAX_FREE = 8
 #: Smallest array pooled [bytes]: below, malloc reuses memory without page faults anyway.
 MIN_BYTES = 1 << 17
 _ALIGN = 64  # bytes: a cache line, the width of an AVX-512 vector
@@ -99,7 +102,10 @@ def empty(shape: int | tuple[int, ...], dtype: Any = float) -> np.ndarray:
     if nbytes < MIN_BYTES or nbytes > MAX_BYTES:
         return np.empty(shp, dtype=dt)
     with _LOCK:
-        slot = next((s for s in _SLOTS if s.nbytes == nbytes and s.free()), None)
+        free = [s for s in _SLOTS if s.nbytes == nbytes and s.free()]
+        for extra in free[MAX_FREE:]:  # after a burst (a caller that kept many states)
+            _SLOTS.remove(extra)
+        slot = free[0] if free else None
         if slot is None:
             slot = _new_slot(nbytes)
             if slot is None:

@@ -102,3 +102,10 @@ def test_few_free_buffers_of_one_size_are_kept() -> None:
     a = pf_buffers.empty(N)  # reuses one, drops the free ones beyond MAX_FREE
     assert pf_buffers.pooled_bytes() == pf_buffers.MAX_FREE * N * 8
     assert a.base is not None
+
+
+def test_the_most_recently_used_free_buffer_is_handed_out() -> None:
+    a, b = pf_buffers.empty(N), pf_buffers.empty(N)  # b handed out last
+    addr_b = b.ctypes.data
+    del a, b
+    assert pf_buffers.empty(N).ctypes.data == addr_b  # likeliest in the cache

@@ -103,16 +103,17 @@ def empty(shape: int | tuple[int, ...], dtype: Any = float) -> np.ndarray:
         return np.empty(shp, dtype=dt)
     with _LOCK:
         free = [s for s in _SLOTS if s.nbytes == nbytes and s.free()]
-        for extra in free[MAX_FREE:]:  # after a burst (a caller that kept many states)
+        for extra in free[:-MAX_FREE]:  # after a burst (a caller that kept many states)
             _SLOTS.remove(extra)
-        slot = free[0] if free else None
-        if slot is None:
-            slot = _new_slot(nbytes)
-            if slot is None:
-                return np.empty(shp, dtype=dt)
-        else:  # most recently used last: the others age out first
+        if free:  # the most recently used: its memory is the likeliest still in the cache
+            slot = free[-1]
             _SLOTS.remove(slot)
-            _SLOTS.append(slot)
+            _SLOTS.append(slot)  # most recently used last: the others age out first
+        else:
+            new = _new_slot(nbytes)
+            if new is None:
+                return np.empty(shp, dtype=dt)
+            slot = new
         lease = _Lease(slot.buffer, slot.address, shp, dt)
         slot.lease = weakref.ref(lease)
         return np.asarray(lease)

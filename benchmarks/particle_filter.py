@@ -2,7 +2,7 @@
 
 On ristic-bot-moderate, three bootstrap particle filters with systematic resampling when
 ESS < N/2 run on the same measurements (R seeded simulations), from the same prior particles,
-with N = 10³, 10⁴, 10⁵ particles: tmaplan with ``PFConfig(kernel="numba")`` (the default),
+with N = 10³, 10⁴, 10⁵ particles: tmaplan with ``PFConfig(kernel="numba")``,
 tmaplan with ``kernel="numpy"`` (the reference kernel) and Stone Soup. Prints, per N, in one
 run (so the ratios compare like with like on a shared machine):
 
@@ -17,7 +17,8 @@ run (so the ratios compare like with like on a shared machine):
 BLAS runs on one thread (as in the campaigns); each N starts with one untimed run of each
 kernel. Also printed: the load average before and after (other processes share the cores),
 numba's thread count, and what the random numbers cost per particle-step at each N: the
-numba kernel's Philox4x32-10 normals against drawing the 4 normals with the numpy Generator.
+numba kernel's normals (Philox4x32-10, float32 Box–Muller) against drawing the 4 normals with
+the numpy Generator.
 
 Stone Soup's state order is [x, vx, y, vy] and its bearing model measures atan2(Δy, Δx)
 (counter-clockwise from +x), so the measured bearings are converted with
@@ -145,23 +146,29 @@ def paired_z(a: list[float], b: list[float]) -> float:
     return float(d.mean() / (d.std(ddof=1) / np.sqrt(d.size))) if d.size > 1 else np.nan
 
 
-def noise_costs(n: int, repeat: int = 20) -> tuple[float, float, float]:
-    """ns per particle-step of 4 normals: Philox in the kernel, the Generator (float64 and
-    float32 ziggurat into a preallocated buffer)."""
+def noise_costs(n: int, repeat: int = 20) -> list[tuple[float, float]]:
+    """(wall, CPU) ns per particle-step of 4 normals: the numba kernel's (Philox4x32-10 and
+    float32 Box–Muller, on numba's threads from PARALLEL_MIN particles on: a prediction of the
+    zero cloud, its output recycled), the Generator's (float64 and float32 ziggurat, one
+    thread, into a preallocated buffer). The CPU time (all threads) is the sturdier figure on
+    a loaded machine."""
     from tmaplan.estimators import pf_numba as _pf_numba  # deferred: numba, compiled on first use
 
     rng = np.random.default_rng(0)
     key = np.arange(4, dtype=np.uint64)
     buf64, buf32 = np.empty(4 * n), np.empty(4 * n, dtype=np.float32)
+    zero, no_dv = np.zeros((4, n)), np.zeros(2)
     out = []
-    for f in (lambda: _pf_numba.normals(key, n), lambda: rng.standard_normal(out=buf64),
+    for f in (lambda: _pf_numba.predict_rows(zero, 0.0, (1.0, 0.0, 1.0), no_dv, key),
+              lambda: rng.standard_normal(out=buf64),
               lambda: rng.standard_normal(out=buf32, dtype=np.float32)):
         f()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for _ in range(repeat):
             f()
-        out.append((time.perf_counter() - t0) / repeat / n * 1e9)
-    return out[0], out[1], out[2]
+        out.append(((time.perf_counter() - t0) / repeat / n * 1e9,
+                    (time.process_time() - c0) / repeat / n * 1e9))
+    return out
 
 
 def _load() -> str:
@@ -232,9 +239,11 @@ def _main(argv: list[str] | None) -> int:
               f"{r['numba'][0]:>11.1f} ± {r['numba'][1]:<6.1f} {r['numpy'][0]:>7.1f} ± "
               f"{r['numpy'][1]:<4.1f} {r['ss'][0]:>7.1f} ± {r['ss'][1]:<4.1f} {z_np:>7.2f} "
               f"{z_ss:>7.2f}")
-    print("noise, ns per particle-step (4 normals): " + "; ".join(
-        "N={}: Philox {:.2f}, Generator float64 {:.2f}, float32 {:.2f}".format(n, *noise_costs(n))
-        for n in sizes))
+    for n in sizes:
+        (nw, nc), (gw, gc), (fw, fc) = noise_costs(n)
+        print(f"noise, ns per particle-step (4 normals), wall / CPU, N={n}: numba Philox + "
+              f"Box–Muller {nw:.2f} / {nc:.2f}; Generator float64 {gw:.2f} / {gc:.2f}, "
+              f"float32 {fw:.2f} / {fc:.2f}")
     print(f"load average after: {_load()}")
     return 0
 

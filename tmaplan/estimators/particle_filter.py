@@ -138,7 +138,8 @@ class PFConfig:
         :mod:`tmaplan.estimators.pf_numba`
         (multi-threaded over fixed blocks of particles, bit-identical for any thread count;
         process and jitter noise from Philox4x32-10 keyed by the injected Generator, Box–Muller
-        in float64). "numpy" (the default for now: stored campaigns and the demo's stored result
+        in float32; large arrays recycled, :mod:`tmaplan.estimators.pf_buffers`). "numpy"
+        (the default for now: stored campaigns and the demo's stored result
         were flown with it): the batched numpy kernels, kept as the reference they are tested
         against (same model, same resampling; other random numbers, so the same results in
         distribution, not bit for bit). ``noise`` applies to "numpy" only.
@@ -502,12 +503,12 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         X = A.T
         if fm is not None and fv is not None:
             fm, fv = fm[idx], fv[idx]
-        lw = np.full(n, -np.log(n))
+        lw = _fast().full(n, -np.log(n)) if fast else np.full(n, -np.log(n))
         resampled = True
     new = PFState(step=state.step, particles=X, log_weights=lw, freq_mean=fm, freq_var=fv,
                   ess=ess, resampled=resampled, degenerate=degenerate, kernel=config.kernel)
     if fast:
-        return _with_weights(new, np.full(n, 1.0 / n) if resampled else w)
+        return _with_weights(new, _fast().full(n, 1.0 / n) if resampled else w)
     return new
 
 

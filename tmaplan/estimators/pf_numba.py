@@ -1,4 +1,4 @@
-"""Numba kernels of the particle filter (``PFConfig.kernel = "numba"``, the default).
+"""Numba kernels of the particle filter (``PFConfig.kernel = "numba"``).
 
 Private helpers of :mod:`tmaplan.estimators.particle_filter`; the numpy kernels of
 :mod:`tmaplan.estimators.pf_kernels` stay the reference (``kernel="numpy"``).
@@ -20,7 +20,12 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   whole fused step (``benchmarks/particle_filter.py`` reports it). The normals are Box–Muller
   on the 32-bit words, computed in float32 like the numpy kernel's default noise (radius at
   most 5.89: the Gaussian mass beyond, 3·10⁻⁸ per pair, is not drawn); the particles stay
-  float64.
+  float64. A ziggurat (Marsaglia & Tsang 2000) on the same words was measured no faster here
+  (its fast path alone, vectorised, costs what Box–Muller does: the table lookups become
+  gathers, slow on AMD Zen 4), so Box–Muller stays, its polynomials in fused multiply-adds.
+* **Recycled arrays.** The kernels' outputs come from :mod:`tmaplan.estimators.pf_buffers`,
+  which reuses the memory of arrays nothing sees any more: fresh arrays cost ~430 page faults
+  a step at N = 10⁵ (glibc returns the freed heap to the system), a third of the step.
 * **Branch-free elementary functions** (float64 ``log``, ``atan``, ``exp``; float32 ``log``
   and ``sin``/``cos`` of a turn fraction) from fdlibm / Cephes polynomials, accurate to about
   1 ulp (tested against numpy), so that the loops vectorise without a vector math library:
@@ -49,6 +54,7 @@ from typing import Any
 
 import numpy as np
 
+from tmaplan.estimators import pf_buffers
 from tmaplan.estimators.pf_kernels import (
     clutter_floor,
     frequency_update,
@@ -83,24 +89,27 @@ _FLAGS: dict[str, Any] = {"cache": True, "fastmath": False, "error_model": "nump
 
 class _Kernel:
     """A parallel and a serial build of one kernel, called as ``kernel(n, *args)``: the
-    parallel one from :data:`PARALLEL_MIN` particles on when numba has more than one thread."""
+    parallel one from ``grain`` × :data:`PARALLEL_MIN` particles on when numba has more than
+    one thread (``grain`` > 1 for a kernel so cheap per particle that waking the threads costs
+    more than it saves below that: both builds give the same bits)."""
 
-    def __init__(self, fn: Any, flags: dict[str, Any]) -> None:
+    def __init__(self, fn: Any, flags: dict[str, Any], grain: int = 1) -> None:
         serial = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial",
                                     fn.__defaults__, fn.__closure__)
         serial.__qualname__ = fn.__qualname__ + "_serial"  # its own cache file
         self.par = njit(parallel=True, **flags)(fn)
         self.ser = njit(**flags)(serial)
+        self.grain = grain
         self.__doc__ = fn.__doc__
 
     def __call__(self, n: int, *args: Any) -> None:
-        par = n >= PARALLEL_MIN and numba.get_num_threads() > 1
+        par = n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
         (self.par if par else self.ser)(*args)
 
 
-def _kernel(**flags: Any) -> Any:
+def _kernel(grain: int = 1, **flags: Any) -> Any:
     """Decorator: :class:`_Kernel` with :data:`_FLAGS` updated by ``flags``."""
-    return lambda fn: _Kernel(fn, _FLAGS | flags)
+    return lambda fn: _Kernel(fn, _FLAGS | flags, grain)
 
 # --------------------------------------------------------------------------------------------
 # Kernels (blocks in a prange; see the module docstring)
@@ -233,7 +242,9 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
             part[blk, 2], part[blk, 3] = 0.0, 0.0
 
 
-@_kernel()
+# 0.2 ns a particle: waking the threads (~40 µs on the 2-core VM of the speed record) pays
+# from about half a million particles on
+@_kernel(grain=32)
 def _scale_kernel(lw: np.ndarray, w: np.ndarray, shift: float, scale: np.ndarray) -> None:
     """``lw −= shift``, ``w *= scale[b]`` in block b (normalisation)."""
     n = lw.shape[0]
@@ -271,13 +282,19 @@ def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
     for blk in prange(nb):
         lo = blk * BLOCK
         hi = min(lo + BLOCK, n)
+        m = hi - lo
         p0 = 0 if lo == 0 else max(math.ceil(c[lo - 1] * scale - u), 0)
         p1 = n if hi == n else max(math.ceil(c[hi - 1] * scale - u), 0)
         if p1 > p0:
+            cb = c[lo:hi]
+            slot = np.empty(m, dtype=np.intp)  # min(c'_i, p1) − p0, in a loop that vectorises
+            for j in range(m):
+                slot[j] = min(max(np.intp(np.ceil(cb[j] * scale - u)), 0), p1) - p0
+            if hi == n:
+                slot[m - 1] = p1 - p0  # c'_{N−1} = N
             mark = np.zeros(p1 - p0 + 1, dtype=np.intp)  # the last slot takes c'_i ≥ p1
-            for i in range(lo, hi):
-                ci = n if i == n - 1 else max(math.ceil(c[i] * scale - u), 0)
-                mark[min(ci, p1) - p0] = i + 1
+            for j in range(m):
+                mark[slot[j]] = lo + j + 1
             run = lo
             out = idx[p0:p1]
             for t in range(p1 - p0):
@@ -375,7 +392,7 @@ def _key(rng: np.random.Generator) -> np.ndarray:
 def predict_rows(A: np.ndarray, dt: float, chol: tuple[float, float, float], dv: np.ndarray,
                  rng: np.random.Generator | np.ndarray) -> np.ndarray:
     """The predicted (4, N) cloud (see :func:`_predict_kernel`); ``rng`` may be a key."""
-    out = np.empty_like(A)
+    out = pf_buffers.empty(A.shape)
     l11, l21, l22 = chol
     key = np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray) else _key(rng)
     with _LOCK:
@@ -445,7 +462,7 @@ def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
     """``lw`` plus the log-likelihoods, and the parts (w, per-block table) of
     :func:`_loglik_kernel`."""
     n = lw.shape[0]
-    out, w = np.empty(n), np.empty(n)
+    out, w = pf_buffers.empty(n), pf_buffers.empty(n)
     part = np.zeros((_n_blocks(n), 4))
     ex = np.empty(0) if extra is None else np.ascontiguousarray(extra, dtype=float)
     with _LOCK:
@@ -498,8 +515,8 @@ def systematic(w: np.ndarray, u: float) -> np.ndarray:
     """Systematic resampling indices from normalised weights and one uniform (the indices of
     :func:`tmaplan.estimators.pf_kernels.systematic_indices` for the same u, bit for bit)."""
     n = w.shape[0]
-    c = np.empty(n)
-    idx = np.empty(n, dtype=np.intp)
+    c = pf_buffers.empty(n)
+    idx = pf_buffers.empty(n, np.intp)
     with _LOCK:
         _cumsum_kernel(w, c)
         _systematic_kernel(n, c, float(u), idx)
@@ -510,7 +527,7 @@ def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,
            rng: np.random.Generator | np.ndarray | None) -> np.ndarray:
     """``A[:, idx]``, plus ``L z`` per particle (4 Philox normals; ``rng`` a Generator or a
     key) when L is given."""
-    out = np.empty((4, idx.shape[0]))
+    out = pf_buffers.empty((4, idx.shape[0]))
     jitter = L is not None and rng is not None
     Lm = np.ascontiguousarray(L, dtype=float) if jitter else np.zeros((4, 4))
     key = (np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray)
@@ -518,6 +535,13 @@ def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,
     with _LOCK:
         _gather_kernel(idx.shape[0], A, np.ascontiguousarray(idx, dtype=np.intp), Lm, key,
                        jitter, out)
+    return out
+
+
+def full(n: int, value: float) -> np.ndarray:
+    """``numpy.full(n, value)`` in recycled memory (:func:`pf_buffers.empty`)."""
+    out = pf_buffers.empty(n)
+    out.fill(value)
     return out
 
 

@@ -428,7 +428,7 @@ def test_compiled_kernels_are_cached_in_numba_cache_dir(tmp_path: Any) -> None:
             "st = pf.update(pf.predict(st, None, rng),"
             " [Measurement(kind='bearing', value=0.7, sigma=0.5)], rng)\n"
             "_ = st.cov\n"
-            "k = [nb._fused_kernel.ser, nb._scale_kernel.ser, nb._moments_kernel.ser]\n"
+            "k = [nb._predict_kernel.ser, nb._loglik_kernel.ser, nb._scale_kernel.ser]\n"
             "print(sum(sum(d.stats.cache_hits.values()) for d in k),"
             " sum(sum(d.stats.cache_misses.values()) for d in k))\n")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))

@@ -99,9 +99,12 @@ class _Kernel:
         self.grain = grain
         self.__doc__ = fn.__doc__
 
+    def parallel(self, n: int) -> bool:
+        """Whether a call for ``n`` particles runs the parallel build."""
+        return n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
+
     def __call__(self, n: int, *args: Any) -> None:
-        par = n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
-        (self.par if par else self.ser)(*args)
+        (self.par if self.parallel(n) else self.ser)(*args)
 
 
 def _kernel(grain: int = 1, **flags: Any) -> Any:
@@ -224,10 +227,10 @@ def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray, A: np.ndarray,
                 run = max(run, mark[t])
                 ib[t] = run
             if out.shape[1] == n:
-                for r in range(4):
-                    a, o = A[r], out[r, p0:p1]
-                    for t in range(p1 - p0):
-                        o[t] = a[ib[t]]
+                a0, a1, a2, a3 = A[0], A[1], A[2], A[3]
+                o0, o1, o2, o3 = out[0, p0:p1], out[1, p0:p1], out[2, p0:p1], out[3, p0:p1]
+                for t in range(p1 - p0):
+                    o0[t], o1[t], o2[t], o3[t] = a0[ib[t]], a1[ib[t]], a2[ib[t]], a3[ib[t]]
 
 
 @_kernel()
@@ -449,9 +452,14 @@ def _predict_and_weigh(pending: Prediction, lw: np.ndarray, bear: np.ndarray,
     cloud = pf_buffers.empty(A.shape)
     out, w = pf_buffers.empty(n), pf_buffers.empty(n)
     part = np.zeros((_n_blocks(n), 4))
+    lw = np.ascontiguousarray(lw, dtype=float)
     with _LOCK:
-        _fused_kernel(n, A, cloud, *pending.args, pending.key,
-                      np.ascontiguousarray(lw, dtype=float), bear, ranges, out, w, part)
+        if _fused_kernel.parallel(n):
+            _fused_kernel.par(A, cloud, *pending.args, pending.key, lw, bear, ranges, out, w,
+                              part)
+        else:  # no launch to save: the two serial kernels, faster one after the other
+            _predict_kernel.ser(A, cloud, *pending.args, pending.key)
+            _loglik_kernel.ser(cloud, lw, bear, ranges, lw[:0], out, w, part)
     pending.result = cloud
     pending.A = _NO_CLOUD
     return cloud, out, (w, part)

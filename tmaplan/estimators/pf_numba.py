@@ -11,6 +11,12 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   thread. The arithmetic done for a particle, and the order of every sum, depend only on N,
   never on the number of threads or their schedule: results are bit-identical for any
   ``numba.set_num_threads`` (and between the parallel and the serial build).
+* **Few launches.** Waking numba's threads costs 50–100 µs a parallel launch on the 2-core VM
+  of the speed record (passive OpenMP), so a step makes one (two when it resamples): the
+  prediction is lazy (:class:`PredictedState`) and :func:`_fused_kernel` runs it with the
+  likelihoods block by block (:mod:`tmaplan.estimators.pf_blocks`), and the resampling
+  indices come with the gather. The serial build runs the kernels one after the other (the
+  fused body is slower there). The same bits either way.
 * **Counter-based random numbers.** The noise of particle i is Philox4x32-10 (Salmon et al.
   2011, "Parallel random numbers: as easy as 1, 2, 3"; Random123's known-answer vectors are
   tested) at counter ``(i, 0, s0, s1)`` under key ``(k0, k1)``, where (k0, k1, s0, s1) are four

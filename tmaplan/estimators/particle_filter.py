@@ -326,9 +326,10 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
         raise ArgumentError("dv", "a finite observer velocity increment of shape (2,) [m/s]",
                             dv)
     d = d.reshape(2)
-    if config.kernel == "numba" and config.q > 0:
-        # the arithmetic below in one compiled pass, with Philox normals
-        An = _fast().predict_rows(A, dt, (l11, l21, l22), d, rng)
+    lazy = config.kernel == "numba" and config.q > 0
+    if lazy:  # the arithmetic below in one compiled pass (Philox normals), when the particles
+        # are first read or by the update with the likelihoods (pf_numba.PredictedState)
+        An: Any = _fast().Prediction(A, dt, (l11, l21, l22), d, rng)
     else:
         An = np.empty_like(A)
         pos, vel = An[:2], An[2:]
@@ -354,10 +355,11 @@ def predict(state: PFState, dv: np.ndarray | None, rng: np.random.Generator,
             pos -= (dt * d)[:, None]
             vel -= d[:, None]
     move = config.variant == "resample-move"
-    new = PFState(step=state.step + 1, particles=An.T, log_weights=state.log_weights,
-                  freq_mean=state.freq_mean, freq_var=state.freq_var, ess=state.ess,
-                  parent=state.particles if move else None,
-                  parent_dv=d.copy() if move else None, kernel=config.kernel)
+    new = (_fast().PredictedState if lazy else PFState)(
+        step=state.step + 1, particles=An if lazy else An.T, log_weights=state.log_weights,
+        freq_mean=state.freq_mean, freq_var=state.freq_var, ess=state.ess,
+        parent=state.particles if move else None, parent_dv=d.copy() if move else None,
+        kernel=config.kernel)
     return _with_weights(new, state.weights) if "weights" in state.__dict__ else new
 
 
@@ -414,7 +416,6 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
     if not measurements:
         return dataclasses.replace(state, resampled=False, degenerate=False)
     fast = config.kernel == "numba"
-    X = state.particles
     move = (config.variant == "resample-move" and state.parent is not None and config.q > 0
             and config.move_steps > 0 and all(m.kind != "frequency" for m in measurements))
     ll: np.ndarray | None = None
@@ -423,8 +424,9 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
     fm, fv = state.freq_mean, state.freq_var
     if fast:  # the same log-weights, one compiled pass for bearings and ranges
         lw, mx, fm, fv, ll_keep, parts = _fast().log_weights(state, measurements, config,
-                                                             move)
-    else:
+                                                             move, _fast().pending(state))
+    X = state.particles
+    if not fast:
         for m in measurements:  # validated by update (check_measurement)
             if m.kind in ("bearing", "range"):
                 c = measurement_ll(X, m, config.bearing_clutter)
@@ -478,7 +480,10 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
         resampled = True
     elif ess < config.ess_threshold * n or config.ess_threshold >= 1.0:
         A = particle_rows(X)
-        idx = _fast().systematic(w, rng.random()) if fast else systematic_indices(w, rng)
+        if fast and config.variant != "regularised":  # indices and gather in one launch
+            idx, A = _fast().resample(w, rng.random(), A)
+        else:
+            idx = _fast().systematic(w, rng.random()) if fast else systematic_indices(w, rng)
         if config.variant == "regularised":
             d = A.shape[0]
             h = config.bandwidth_scale * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4))
@@ -496,7 +501,7 @@ def _assimilate(state: PFState, measurements: Sequence[Measurement], rng: np.ran
                             np.multiply(Z[j], Lc[i, j], out=tmp)
                             A[i] += tmp
         else:
-            A = _fast().gather(A, idx, None, None) if fast else np.take(A, idx, axis=1)
+            A = A if fast else np.take(A, idx, axis=1)  # fast: gathered with the indices
             if move and ll_keep is not None and state.parent is not None:
                 A = mh_move(A, np.take(particle_rows(state.parent), idx, axis=1), state.parent_dv,
                              ll_keep[idx], measurements, rng, config)

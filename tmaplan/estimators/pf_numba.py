@@ -11,6 +11,12 @@ Design (issue 42: ≥ 10⁸ particle-steps/s at N = 10⁵ on 2 cores):
   thread. The arithmetic done for a particle, and the order of every sum, depend only on N,
   never on the number of threads or their schedule: results are bit-identical for any
   ``numba.set_num_threads`` (and between the parallel and the serial build).
+* **Few launches.** Waking numba's threads costs 50–100 µs a parallel launch on the 2-core VM
+  of the speed record (passive OpenMP), so a step makes one (two when it resamples): the
+  prediction is lazy (:class:`PredictedState`) and :func:`_fused_kernel` runs it with the
+  likelihoods block by block (:mod:`tmaplan.estimators.pf_blocks`), and the resampling
+  indices come with the gather. The serial build runs the kernels one after the other (the
+  fused body is slower there). The same bits either way.
 * **Counter-based random numbers.** The noise of particle i is Philox4x32-10 (Salmon et al.
   2011, "Parallel random numbers: as easy as 1, 2, 3"; Random123's known-answer vectors are
   tested) at counter ``(i, 0, s0, s1)`` under key ``(k0, k1)``, where (k0, k1, s0, s1) are four
@@ -55,6 +61,8 @@ from typing import Any
 import numpy as np
 
 from tmaplan.estimators import pf_buffers
+from tmaplan.estimators.particle_filter import PFState
+from tmaplan.estimators.pf_blocks import BLOCK, loglik_block, predict_block
 from tmaplan.estimators.pf_kernels import (
     clutter_floor,
     frequency_update,
@@ -65,10 +73,7 @@ from tmaplan.estimators.pf_math import (
     MASK32,
     SH32,
     U64,
-    abs_atan2,
     box_muller_f32,
-    fast_exp,
-    fast_log,
     njit,
     numba,
     philox,
@@ -77,8 +82,6 @@ from tmaplan.estimators.pf_math import (
 
 __all__ = ["BLOCK"]
 
-#: Particles per block: the unit of work of a thread and of every partial sum.
-BLOCK = 2048
 #: From this many particles on, the parallel build runs (with numba's thread count); below,
 #: the serial build (a parallel launch costs more than it saves, and campaign workers would
 #: oversubscribe the cores). Both give the same bits.
@@ -102,9 +105,12 @@ class _Kernel:
         self.grain = grain
         self.__doc__ = fn.__doc__
 
+    def parallel(self, n: int) -> bool:
+        """Whether a call for ``n`` particles runs the parallel build."""
+        return n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
+
     def __call__(self, n: int, *args: Any) -> None:
-        par = n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
-        (self.par if par else self.ser)(*args)
+        (self.par if self.parallel(n) else self.ser)(*args)
 
 
 def _kernel(grain: int = 1, **flags: Any) -> Any:
@@ -124,63 +130,14 @@ def _n_blocks(n: int) -> int:
 # the block (``x = A[0, lo:lo + m]``, index j from 0): the form that LLVM vectorises.
 
 
-@njit(fastmath={"reassoc"}, error_model="numpy", nogil=True)
-def _block_sums(v: np.ndarray) -> tuple[float, float]:
-    """(Σv, Σv²) of one block, reassociated so that LLVM vectorises them: the order is then
-    fixed by the compiled code and the block's length, not by the threads."""
-    a = 0.0
-    b = 0.0
-    for j in range(v.shape[0]):
-        a += v[j]
-        b += v[j] * v[j]
-    return a, b
-
-
-@njit(inline="always")
-def _max_bad(o: np.ndarray) -> tuple[float, int]:
-    """(maximum, number of NaN or +inf values) of one block; the maximum in 8 interleaved
-    lanes, a NaN never selected (−inf for a block of NaN or −inf only)."""
-    m = o.shape[0]
-    m8 = m - m % 8
-    l0 = l1 = l2 = l3 = l4 = l5 = l6 = l7 = -np.inf
-    for j in range(0, m8, 8):
-        v0, v1, v2, v3 = o[j], o[j + 1], o[j + 2], o[j + 3]
-        v4, v5, v6, v7 = o[j + 4], o[j + 5], o[j + 6], o[j + 7]
-        l0, l1 = (v0 if v0 > l0 else l0), (v1 if v1 > l1 else l1)
-        l2, l3 = (v2 if v2 > l2 else l2), (v3 if v3 > l3 else l3)
-        l4, l5 = (v4 if v4 > l4 else l4), (v5 if v5 > l5 else l5)
-        l6, l7 = (v6 if v6 > l6 else l6), (v7 if v7 > l7 else l7)
-    mx = max(max(max(l0, l1), max(l2, l3)), max(max(l4, l5), max(l6, l7)))
-    for j in range(m8, m):
-        mx = o[j] if o[j] > mx else mx
-    bad = 0
-    for j in range(m):
-        bad += 0 if o[j] < np.inf else 1
-    return mx, bad
-
-
 @_kernel()
 def _predict_kernel(A: np.ndarray, out: np.ndarray, dt: float, l11: float, l21: float,
                     l22: float, dvx: float, dvy: float, key: np.ndarray) -> None:
     """``out = F A − H Δv + w`` on (4, N) rows, w the NCV noise from 4 Philox normals."""
     n = A.shape[1]
-    nb = (n + BLOCK - 1) // BLOCK
-    k0, k1, s0, s1 = key[0], key[1], key[2], key[3]
-    pdx, pdy = dt * dvx, dt * dvy
-    for blk in prange(nb):
+    for blk in prange((n + BLOCK - 1) // BLOCK):
         lo = blk * BLOCK
-        m = min(BLOCK, n - lo)
-        x, y, vx, vy = A[0, lo:lo + m], A[1, lo:lo + m], A[2, lo:lo + m], A[3, lo:lo + m]
-        ox, oy = out[0, lo:lo + m], out[1, lo:lo + m]
-        ovx, ovy = out[2, lo:lo + m], out[3, lo:lo + m]
-        for j in range(m):
-            r0, r1, r2, r3 = philox(U64(lo + j), U64(0), s0, s1, k0, k1)
-            z1x, z1y = box_muller_f32(r0, r1)
-            z2x, z2y = box_muller_f32(r2, r3)
-            ox[j] = ((x[j] + dt * vx[j]) + l11 * z1x) - pdx
-            oy[j] = ((y[j] + dt * vy[j]) + l11 * z1y) - pdy
-            ovx[j] = (vx[j] + (l21 * z1x + l22 * z2x)) - dvx
-            ovy[j] = (vy[j] + (l21 * z1y + l22 * z2y)) - dvy
+        predict_block(A, out, lo, min(BLOCK, n - lo), dt, l11, l21, l22, dvx, dvy, key)
 
 
 @_kernel()
@@ -195,51 +152,23 @@ def _loglik_kernel(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, rng_: np.nda
     wrapped residual ``|d| = |atan2(sin(z − β), cos(z − β))|``, optionally mixed with clutter;
     ``rng_`` rows (z, 1/(√2 σ)): Gaussian range; ``extra`` (N,) or (0,): added as is.
     """
+    for blk in prange((A.shape[1] + BLOCK - 1) // BLOCK):
+        loglik_block(A, lw, bear, rng_, extra, out, w, part, blk)
+
+
+@_kernel()
+def _fused_kernel(A: np.ndarray, cloud: np.ndarray, dt: float, l11: float, l21: float,
+                  l22: float, dvx: float, dvy: float, key: np.ndarray, lw: np.ndarray,
+                  bear: np.ndarray, rng_: np.ndarray, out: np.ndarray, w: np.ndarray,
+                  part: np.ndarray) -> None:
+    """:func:`_predict_kernel` (``A`` → ``cloud``) and :func:`_loglik_kernel` (``cloud`` →
+    ``out``, ``w``, ``part``; no ``extra``) in one launch, block by block: the same bits as
+    the two kernels one after the other, one parallel launch and one pass over memory."""
     n = A.shape[1]
-    nb = (n + BLOCK - 1) // BLOCK
-    has_extra = extra.shape[0] == n
-    for blk in prange(nb):
+    for blk in prange((n + BLOCK - 1) // BLOCK):
         lo = blk * BLOCK
-        m = min(BLOCK, n - lo)
-        x, y, o, p = A[0, lo:lo + m], A[1, lo:lo + m], out[lo:lo + m], lw[lo:lo + m]
-        if has_extra:
-            e = extra[lo:lo + m]
-            for j in range(m):
-                o[j] = p[j] + e[j]
-        else:
-            for j in range(m):
-                o[j] = p[j]
-        for k in range(bear.shape[0]):
-            sz, cz, g, d0, fl = bear[k, 0], bear[k, 1], bear[k, 2], bear[k, 3], bear[k, 4]
-            if fl == -np.inf:
-                for j in range(m):
-                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
-                    d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
-                    o[j] = o[j] - d * d
-            else:  # log(e^ll + e^fl) = max + log(1 + e^(min − max))
-                for j in range(m):
-                    d = abs_atan2(sz * y[j] - cz * x[j], cz * y[j] + sz * x[j])
-                    d = (d0 if (x[j] == 0.0 and y[j] == 0.0) else d) * g
-                    ll = -(d * d)
-                    hi = max(ll, fl)
-                    o[j] = o[j] + (hi + fast_log(1.0 + fast_exp(min(ll, fl) - hi)))
-        for k in range(rng_.shape[0]):
-            z, g = rng_[k, 0], rng_[k, 1]
-            for j in range(m):
-                d = (z - math.sqrt(x[j] * x[j] + y[j] * y[j])) * g
-                o[j] = o[j] - d * d
-        mx, bad = _max_bad(o)
-        part[blk, 0] = mx
-        part[blk, 1] = bad
-        wb = w[lo:lo + m]
-        if bad == 0 and mx > -np.inf:
-            for j in range(m):
-                wb[j] = fast_exp(o[j] - mx)
-            part[blk, 2], part[blk, 3] = _block_sums(wb)
-        else:
-            for j in range(m):
-                wb[j] = 0.0
-            part[blk, 2], part[blk, 3] = 0.0, 0.0
+        predict_block(A, cloud, lo, min(BLOCK, n - lo), dt, l11, l21, l22, dvx, dvy, key)
+        loglik_block(cloud, lw, bear, rng_, lw[:0], out, w, part, blk)
 
 
 # 0.2 ns a particle: waking the threads (~40 µs on the 2-core VM of the speed record) pays
@@ -268,13 +197,16 @@ def _cumsum_kernel(w: np.ndarray, c: np.ndarray) -> None:
 
 
 @_kernel()
-def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
+def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray, A: np.ndarray,
+                       out: np.ndarray) -> None:
     """Systematic resampling indices from the CDF ``c`` of normalised weights and one uniform
     u: the arithmetic of :func:`tmaplan.estimators.pf_kernels.systematic_indices`, so the same
     indices bit for bit. With ``c'_i = max(⌈(N / c_{N−1}) c_i − u⌉, 0)`` (``c'_{N−1} = N``),
     non-decreasing, output position j takes ``#{i : c'_i ≤ j}``. Block b owns the positions
     ``[c'_{lo−1}, c'_{hi−1})``; each of its particles marks ``t = c'_i`` with i + 1 (the last
     one wins), and a running maximum over the marks gives the count: no branch per particle.
+    When ``out`` has N columns, block b also copies ``A[:, idx[j]]`` to ``out[:, j]`` for its
+    positions j (the gather of :func:`_gather_kernel` without jitter, in the same launch).
     """
     n = c.shape[0]
     nb = (n + BLOCK - 1) // BLOCK
@@ -296,10 +228,15 @@ def _systematic_kernel(c: np.ndarray, u: float, idx: np.ndarray) -> None:
             for j in range(m):
                 mark[slot[j]] = lo + j + 1
             run = lo
-            out = idx[p0:p1]
+            ib = idx[p0:p1]
             for t in range(p1 - p0):
                 run = max(run, mark[t])
-                out[t] = run
+                ib[t] = run
+            if out.shape[1] == n:
+                a0, a1, a2, a3 = A[0], A[1], A[2], A[3]
+                o0, o1, o2, o3 = out[0, p0:p1], out[1, p0:p1], out[2, p0:p1], out[3, p0:p1]
+                for t in range(p1 - p0):
+                    o0[t], o1[t], o2[t], o3[t] = a0[ib[t]], a1[ib[t]], a2[ib[t]], a3[ib[t]]
 
 
 @_kernel()
@@ -392,13 +329,59 @@ def _key(rng: np.random.Generator) -> np.ndarray:
 def predict_rows(A: np.ndarray, dt: float, chol: tuple[float, float, float], dv: np.ndarray,
                  rng: np.random.Generator | np.ndarray) -> np.ndarray:
     """The predicted (4, N) cloud (see :func:`_predict_kernel`); ``rng`` may be a key."""
-    out = pf_buffers.empty(A.shape)
-    l11, l21, l22 = chol
-    key = np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray) else _key(rng)
-    with _LOCK:
-        _predict_kernel(A.shape[1], A, out, float(dt), float(l11), float(l21), float(l22),
-                        float(dv[0]), float(dv[1]), key)
-    return out
+    return Prediction(A, dt, chol, dv, rng).rows()
+
+
+class Prediction:
+    """A prediction of the (4, N) cloud ``A`` (:func:`_predict_kernel`), its random key drawn
+    from ``rng`` now, computed when :meth:`rows` is first called, or together with the
+    update's log-weights by :func:`log_weights` (one parallel launch for both)."""
+
+    __slots__ = ("A", "args", "key", "result")
+
+    def __init__(self, A: np.ndarray, dt: float, chol: tuple[float, float, float],
+                 dv: np.ndarray, rng: np.random.Generator | np.ndarray) -> None:
+        self.A = A
+        l11, l21, l22 = chol
+        self.args = (float(dt), float(l11), float(l21), float(l22), float(dv[0]), float(dv[1]))
+        self.key = (np.asarray(rng, dtype=np.uint64) if isinstance(rng, np.ndarray)
+                    else _key(rng))
+        self.result: np.ndarray | None = None
+
+    def rows(self) -> np.ndarray:
+        """The predicted (4, N) cloud."""
+        if self.result is None:
+            out = pf_buffers.empty(self.A.shape)
+            with _LOCK:
+                _predict_kernel(self.A.shape[1], self.A, out, *self.args, self.key)
+            self.result = out
+            self.A = _NO_CLOUD  # the source cloud is no longer needed
+        return self.result
+
+
+class PredictedState(PFState):
+    """A :class:`~tmaplan.estimators.particle_filter.PFState` made with ``particles`` a
+    :class:`Prediction`: the particles are computed when first read, or by the update together
+    with the log-weights (:func:`log_weights`, one parallel launch)."""
+
+    @property
+    def particles(self) -> np.ndarray:
+        d = self.__dict__
+        if d.get("particles") is None:
+            d["particles"] = d["pending"].rows().T
+        return d["particles"]
+
+    @particles.setter
+    def particles(self, value: np.ndarray | Prediction) -> None:
+        pending = isinstance(value, Prediction)
+        self.__dict__["pending"] = value if pending else None
+        self.__dict__["particles"] = None if pending else value
+
+
+def pending(state: Any) -> Prediction | None:
+    """The prediction of a :class:`PredictedState` not computed yet, else None."""
+    d = state.__dict__
+    return d.get("pending") if d.get("particles") is None else None
 
 
 def normals(key: np.ndarray, n: int) -> np.ndarray:
@@ -408,13 +391,16 @@ def normals(key: np.ndarray, n: int) -> np.ndarray:
     return predict_rows(np.zeros((4, n)), 0.0, (1.0, 0.0, 1.0), np.zeros(2), np.asarray(key))
 
 
-def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
+def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool,
+                pending: Prediction | None = None
                 ) -> tuple[np.ndarray, float, Any, Any, np.ndarray | None, Any]:
     """The unnormalised updated log-weights ``log w + Σ log p(z | x)`` of ``state`` (a
     :class:`~tmaplan.estimators.particle_filter.PFState`), as the numpy kernel computes them.
 
     Plain and clutter-mixture bearings and ranges go through :func:`_loglik_kernel`;
-    π-ambiguous bearings and frequency lines through their numpy kernels.
+    π-ambiguous bearings and frequency lines through their numpy kernels. When the state's
+    particles are the ``pending`` prediction, not yet computed, and there are no others, the
+    prediction and these log-weights are computed in one launch (:func:`_fused_kernel`).
 
     Returns
     -------
@@ -428,13 +414,10 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
     parts : tuple
         What :func:`normalise` needs of this pass (when mx is finite).
     """
-    X = state.particles
-    A = particle_rows(X)
     clutter = float(config.bearing_clutter)
     bear: list[tuple[float, ...]] = []
     ranges: list[tuple[float, float]] = []
-    extra: np.ndarray | None = None
-    fm, fv = state.freq_mean, state.freq_var
+    others: list[Any] = []
     for m in measurements:
         if m.kind == "bearing" and m.ambiguity == "none":
             z, sigma = float(m.value), float(m.sigma)
@@ -444,17 +427,48 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
         elif m.kind == "range":
             ranges.append((float(m.value), math.sqrt(0.5) / float(m.sigma)))
         else:
+            others.append(m)
+    B = np.array(bear, dtype=float).reshape(-1, 5)
+    R = np.array(ranges, dtype=float).reshape(-1, 2)
+    fm, fv = state.freq_mean, state.freq_var
+    extra: np.ndarray | None = None
+    if pending is not None and pending.result is None and not others:
+        A, lw, parts = _predict_and_weigh(pending, state.log_weights, B, R)
+    else:
+        X = state.particles
+        A = particle_rows(X)
+        for m in others:
             if m.kind == "frequency":
                 c, fm, fv = frequency_update(X, m, fm, fv)
             else:
                 c = measurement_ll(X, m, clutter)
             extra = c if extra is None else extra + c
-    B = np.array(bear, dtype=float).reshape(-1, 5)
-    R = np.array(ranges, dtype=float).reshape(-1, 2)
-    lw, parts = _weigh(A, state.log_weights, B, R, extra)
+        lw, parts = _weigh(A, state.log_weights, B, R, extra)
     ll = _weigh(A, np.zeros(A.shape[1]), B, R, extra)[0] if move else None
     mx = math.nan if parts[1][:, 1].any() else float(parts[1][:, 0].max())
     return lw, mx, fm, fv, ll, parts
+
+
+def _predict_and_weigh(pending: Prediction, lw: np.ndarray, bear: np.ndarray,
+                       ranges: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The predicted cloud of ``pending`` and :func:`_weigh` of it, in one launch."""
+    A = pending.A
+    n = A.shape[1]
+    cloud = pf_buffers.empty(A.shape)
+    out, w = pf_buffers.empty(n), pf_buffers.empty(n)
+    part = np.zeros((_n_blocks(n), 4))
+    lw = np.ascontiguousarray(lw, dtype=float)
+    with _LOCK:
+        if _fused_kernel.parallel(n):
+            _fused_kernel.par(A, cloud, *pending.args, pending.key, lw, bear, ranges, out, w,
+                              part)
+        else:  # no launch to save: the two serial kernels, faster one after the other
+            _predict_kernel.ser(A, cloud, *pending.args, pending.key)
+            _loglik_kernel.ser(cloud, lw, bear, ranges, lw[:0], out, w, part)
+    pending.result = cloud
+    pending.A = _NO_CLOUD
+    return cloud, out, (w, part)
 
 
 def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
@@ -472,6 +486,7 @@ def _weigh(A: np.ndarray, lw: np.ndarray, bear: np.ndarray, ranges: np.ndarray,
 
 
 _NO_ROWS = (np.zeros((0, 5)), np.zeros((0, 2)))
+_NO_CLOUD = np.zeros((4, 0))
 
 
 def normalise(lw: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
@@ -514,13 +529,21 @@ def _weights_finish(part: np.ndarray) -> tuple[float, np.ndarray, float]:
 def systematic(w: np.ndarray, u: float) -> np.ndarray:
     """Systematic resampling indices from normalised weights and one uniform (the indices of
     :func:`tmaplan.estimators.pf_kernels.systematic_indices` for the same u, bit for bit)."""
+    return resample(w, u, None)[0]
+
+
+def resample(w: np.ndarray, u: float, A: np.ndarray | None
+             ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Systematic resampling indices (:func:`systematic`) and, when the (4, N) cloud ``A``
+    is given, the resampled cloud ``A[:, idx]``, in one parallel launch."""
     n = w.shape[0]
     c = pf_buffers.empty(n)
     idx = pf_buffers.empty(n, np.intp)
+    out = _NO_CLOUD if A is None else pf_buffers.empty((4, n))
     with _LOCK:
         _cumsum_kernel(w, c)
-        _systematic_kernel(n, c, float(u), idx)
-    return idx
+        _systematic_kernel(n, c, float(u), idx, _NO_CLOUD if A is None else A, out)
+    return idx, None if A is None else out
 
 
 def gather(A: np.ndarray, idx: np.ndarray, L: np.ndarray | None,

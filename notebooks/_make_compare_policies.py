@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import nbformat
-from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
+from _notebook import write
 
 CELLS = [
     ("md", """# Comparing tactical policies by Monte Carlo
@@ -54,15 +51,5 @@ assert p["pings_used"] == 4 and s["pings_used"] == 0"""),
 ]
 
 
-def main() -> None:
-    """Write the notebook next to this script."""
-    nb = new_notebook()
-    nb.cells = [new_markdown_cell(src) if kind == "md" else new_code_cell(src)
-                for kind, src in CELLS]
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
-    nbformat.write(nb, Path(__file__).with_name("compare_policies.ipynb"))
-
-
 if __name__ == "__main__":
-    main()
+    write("compare_policies", CELLS)

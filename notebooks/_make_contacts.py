@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import nbformat
-from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
+from _notebook import write
 
 CELLS = [
     ("md", """# One own ship, two contacts: the joint plan against each contact's own plan
@@ -102,17 +99,5 @@ along it."""),
 ]
 
 
-def build() -> nbformat.NotebookNode:
-    """The notebook object (no outputs)."""
-    nb = new_notebook()
-    nb.cells = [new_markdown_cell(src) if kind == "md" else new_code_cell(src)
-                for kind, src in CELLS]
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
-    return nb
-
-
 if __name__ == "__main__":
-    path = Path(__file__).with_name("plan_contacts.ipynb")
-    nbformat.write(build(), path)
-    print(f"wrote {path}")
+    write("plan_contacts", CELLS)

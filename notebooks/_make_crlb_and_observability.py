@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import nbformat
-from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
+from _notebook import write
 
 CELLS = [
     ("md", """# Batch CRLB and observability
@@ -101,17 +98,5 @@ assert not observability(load_problem("default")).observable"""),
 ]
 
 
-def build() -> nbformat.NotebookNode:
-    """The notebook object (no outputs)."""
-    nb = new_notebook()
-    nb.cells = [new_markdown_cell(src) if kind == "md" else new_code_cell(src)
-                for kind, src in CELLS]
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
-    return nb
-
-
 if __name__ == "__main__":
-    path = Path(__file__).with_name("crlb_and_observability.ipynb")
-    nbformat.write(build(), path)
-    print(f"wrote {path}")
+    write("crlb_and_observability", CELLS)

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import nbformat as nbf
+from _notebook import write
 
 cells = [
     nbf.v4.new_markdown_cell("# Estimators: MLE vs CRLB, PF vs PCRB, range-only vs PF\n"
@@ -75,7 +74,4 @@ cells = [
         "assert ro.rmse_position[-1] < 0.8 * paper.rmse_position[-1]\n"
         "assert ro.rmse_position[-1] <= 1.3 * pfr.rmse_position[-1]"),
 ]
-nb = nbf.v4.new_notebook(cells=cells, metadata={"kernelspec": {"name": "python3",
-                                                               "display_name": "Python 3",
-                                                               "language": "python"}})
-Path(__file__).with_name("estimators.ipynb").write_text(nbf.writes(nb), encoding="utf-8")
+write("estimators", cells)

@@ -3,9 +3,8 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import nbformat as nbf
+from _notebook import write
 
 cells = [
     nbf.v4.new_markdown_cell(
@@ -77,7 +76,4 @@ cells = [
         "plt.legend(); plt.title('κ'); plt.show()\n"
         "assert k2[455] > 0.5 and k1[:200].max() < 1e-3"),
 ]
-nb = nbf.v4.new_notebook(cells=cells, metadata={"kernelspec": {"name": "python3",
-                                                               "display_name": "Python 3",
-                                                               "language": "python"}})
-Path(__file__).with_name("pcrb_closed_form.ipynb").write_text(nbf.writes(nb), encoding="utf-8")
+write("pcrb_closed_form", cells)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import nbformat as nbf
+from _notebook import write
 
 HERE = Path(__file__).resolve().parent
 
@@ -120,8 +121,4 @@ sched_cells = [
 ]
 
 for name, cells in (("plan_manoeuvre", plan_cells), ("schedule_pings", sched_cells)):
-    nb = nbf.v4.new_notebook()
-    nb["cells"] = cells
-    nb["metadata"]["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                    "language": "python"}
-    nbf.write(nb, HERE / f"{name}.ipynb")
+    write(name, cells)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import DATA
 
 from tmaplan.cli import main
 from tmaplan.scenario import load_problem
@@ -120,6 +121,19 @@ def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
     for name, c in got["contacts"].items():
         assert c["costs"] and c["candidates"] == 3
         assert Path(c["report"]).name == f"{PROBLEM}-{name}_rank-costs.html"
+
+
+def test_rank_costs_refuses_a_contact_without_prior_before_ranking_any(tmp_path, capsys):
+    # contacts[1] has no prior: refused before contact 0's ranking runs (no header, no runs
+    # stored), not after it, in one line naming the contact
+    path = DATA / "invalid_cli" / "contacts_one_without_prior.toml"
+    assert main(["rank-costs", str(path), "--candidates", "3", "--runs", "2", "--particles",
+                 "50", "--plans", "none", "--cost-samples", "20", "--resamples", "0",
+                 "--no-figure", "--out", str(tmp_path)]) == 1
+    got = capsys.readouterr()
+    assert "== " not in got.out and not list(tmp_path.iterdir()), got.out
+    err = got.err.strip().splitlines()
+    assert len(err) == 1 and "field 'contacts[1].prior'" in err[0] and "'bravo'" in err[0]
 
 
 def test_one_contact_schedule_keeps_its_shape(tmp_path):

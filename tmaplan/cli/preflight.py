@@ -202,6 +202,16 @@ def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
                               "straight[+PING] only", None, scenario)
 
 
+def _check_rank_costs(args: argparse.Namespace, scenario: Any) -> None:
+    # with several contacts this runs on every contact's view before the first ranking: a
+    # contact without a prior is refused before hours of runs on the contacts before it
+    if scenario.prior is None:
+        raise _scenario_error("prior", "a [prior] table: every candidate is flown against "
+                              "the particle filter, which starts from the prior, and the "
+                              "truths are drawn from it", None, scenario)
+    check_truth_source(scenario, True)
+
+
 #: Verbs whose results depend on the prior (the others do not read it).
 _PRIOR_VERBS = frozenset({"bound", "track", "plan", "schedule", "compare", "demo"})
 
@@ -245,7 +255,7 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     check_memory(args, scenario)  # first: the verbs' checks below may allocate per step
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
-             "rank-costs": lambda a, s: check_truth_source(s, True),
+             "rank-costs": _check_rank_costs,
              "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)

@@ -123,6 +123,18 @@ def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
         assert Path(c["report"]).name == f"{PROBLEM}-{name}_rank-costs.html"
 
 
+def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
+    # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
+    # which a contact's own required_accuracy overrides, as in compare); was 10 % for all
+    argv = ["rank-costs", "three-contacts-screen", "--candidates", "3", "--runs", "1",
+            "--particles", "50", "--plans", "none", "--cost-samples", "20", "--resamples",
+            "0", "--no-figure"]
+    for extra, want in (([], {"alpha": 0.1, "bravo": 0.1, "charlie": 0.05}),
+                        (["--accuracy", "0.2"], {"alpha": 0.2, "bravo": 0.2, "charlie": 0.05})):
+        got, _ = _run([*argv, *extra], tmp_path)
+        assert {n: c["accuracy"] for n, c in got["contacts"].items()} == want
+
+
 def test_rank_costs_refuses_a_contact_without_prior_before_ranking_any(tmp_path, capsys):
     # contacts[1] has no prior: refused before contact 0's ranking runs (no header, no runs
     # stored), not after it, in one line naming the contact

@@ -103,6 +103,22 @@ def test_planning_required_accuracy_is_the_scenario_default():
     assert s.required_accuracy == 0.2 and loads(dump(s)) == s
 
 
+def test_one_contacts_table_keeps_its_required_accuracy():
+    # a single [[contacts]] table is a one-contact scenario: its own required_accuracy is the
+    # scenario's (it was dropped for planning.required_accuracy / 10 %, and the one-contact
+    # verbs localised it at 10 %)
+    d = _two(required_accuracy=0.07)
+    d["contacts"] = d["contacts"][1:]
+    d["planning"]["required_accuracy"] = 0.2
+    s = from_dict(d)
+    assert s.required_accuracy == 0.07 and loads(dump(s)) == s
+    assert s.contact_view("bravo").required_accuracy == 0.07
+    del d["contacts"][0]["required_accuracy"]
+    assert from_dict(d).required_accuracy == 0.2  # the scenario's, as before
+    del d["planning"]["required_accuracy"]
+    assert from_dict(d).required_accuracy == DEFAULT_REQUIRED_ACCURACY
+
+
 @pytest.mark.parametrize(("change", "field", "text"), [
     ({"weight": 0.0}, "contacts[1].weight", "greater than 0 (contact 'bravo')"),
     ({"weight": -1.0}, "contacts[1].weight", "(contact 'bravo')"),
@@ -390,3 +406,24 @@ def test_replace_takes_target_and_prior_of_one_contact_only():
     two = from_dict(_two())
     moved = two.replace(contacts=tuple(reversed(two.contacts)))
     assert moved.contact_names == ("bravo", "alpha")
+
+
+def test_compare_localises_at_the_files_required_accuracy(tmp_path):
+    """``compare --accuracy`` not given: the file's required accuracy (a single contact's
+    own, else planning.required_accuracy, else 10 % as before); a contact's own is kept over
+    the flag, planning.required_accuracy is not."""
+    d = _default_dict()
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    argv = ["--policies", "straight", "--runs", "1", "--particles", "50"]
+    path = tmp_path / "p.toml"
+    d["planning"]["required_accuracy"] = 0.2
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert _run(["compare", str(path), *argv], tmp_path)["accuracy"] == 0.2
+    assert _run(["compare", str(path), *argv, "--accuracy", "0.3"], tmp_path)["accuracy"] == 0.3
+    del d["planning"]["required_accuracy"]
+    d["contacts"] = [{"name": "solo", "target": d.pop("target"), "prior": d.pop("prior"),
+                      "required_accuracy": 0.07}]
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    for extra in ([], ["--accuracy", "0.3"]):
+        assert _run(["compare", str(path), *argv, *extra], tmp_path)["accuracy"] == 0.07
+    assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before

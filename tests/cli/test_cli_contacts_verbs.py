@@ -123,6 +123,15 @@ def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
         assert Path(c["report"]).name == f"{PROBLEM}-{name}_rank-costs.html"
 
 
+def test_plan_warns_when_no_plan_can_localise_every_contact(tmp_path, capsys):
+    # within 10 min neither contact of two-contacts-crossing is localised on any plan: the
+    # all-contacts objective is the horizon on all of them, said in one line
+    got, _ = _run(["plan", PROBLEM, "--horizon", "10 min", "--no-figure"], tmp_path)
+    err = [x for x in capsys.readouterr().err.splitlines() if "SaturatedObjectiveWarning" in x]
+    assert len(err) == 1 and "2 of 2 contacts ('alpha', 'bravo')" in err[0], err
+    assert all(c["expected_time_to_accuracy"] >= 600.0 for c in got["contacts"].values())
+
+
 def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
     # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
     # which a contact's own required_accuracy overrides, as in compare); was 10 % for all

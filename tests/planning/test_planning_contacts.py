@@ -361,3 +361,23 @@ def test_named_time_to_accuracy_objectives_use_the_scenarios_required_accuracy()
     assert planner.objective.name == "expected-time-to-accuracy"
     assert ObjectiveEvaluator(tight, planner.objective, samples=SAMPLES)(track)[0] == \
         pytest.approx(t05, rel=1e-12)
+
+
+def test_a_saturated_min_max_objective_is_warned():
+    """The latest contact's time is about the horizon on every plan once a contact cannot be
+    localised in it: warned for the min-max objectives, naming the contacts; not for the
+    weighted mean, nor when every contact is localised within the horizon."""
+    import warnings
+
+    from tmaplan.planning.contacts import SaturatedObjectiveWarning, warn_if_saturated
+
+    with pytest.warns(SaturatedObjectiveWarning, match=r"1 of 2 contacts \('b'\) are not "
+                      r"expected to be localised within the 30 min horizon") as rec:
+        warn_if_saturated("all-contacts-time-to-accuracy", {"a": 1500.0, "b": 1830.0}, 1800.0)
+    assert len(rec) == 1 and "\n" not in str(rec[0].message)
+    with pytest.warns(SaturatedObjectiveWarning, match="worst-contact"):
+        warn_if_saturated("worst-contact", {"a": 1800.0, "b": 900.0}, 1800.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_if_saturated("weighted-time-to-accuracy", {"a": 1830.0, "b": 1830.0}, 1800.0)
+        warn_if_saturated("all-contacts-time-to-accuracy", {"a": 1500.0, "b": 1790.0}, 1800.0)

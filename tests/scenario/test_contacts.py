@@ -427,3 +427,39 @@ def test_compare_localises_at_the_files_required_accuracy(tmp_path):
     for extra in ([], ["--accuracy", "0.3"]):
         assert _run(["compare", str(path), *argv, *extra], tmp_path)["accuracy"] == 0.07
     assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before
+
+
+def test_preflight_warnings_name_the_contact(tmp_path, capsys):
+    """The checks every verb runs per contact before it starts warn on the contact's view: a
+    truth outside its own prior named ``prior.range_max`` without saying which contact, a
+    keep-out range on which contact's prior neither; now as the errors, the contact's table
+    and name (``in_contact``)."""
+    import argparse
+    import warnings
+
+    from tmaplan.cli.contacts import preflight_per_contact
+    from tmaplan.errors import ScenarioWarning, warn_field
+
+    d = _two()
+    d["contacts"][1]["prior"]["range_max"] = "12 km"  # bravo starts at 14 km
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path / "two.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["bound", str(path), "--no-figure", "--samples", "50", "--out",
+                 str(tmp_path)]) == 0
+    err = [x for x in capsys.readouterr().err.splitlines() if "ScenarioWarning" in x]
+    assert len(err) == 1, err
+    assert "field 'contacts[1].prior.range_max'" in err[0] and "(contact 'bravo'), received" \
+        in err[0] and "outside its own prior" in err[0]
+
+    def stub(args, view):  # a shared field's warning raised on a contact's view
+        warn_field("planning.keep_out_range", "23% of the prior's mass lies inside, received 2 km",
+                   source=view.name)
+
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        preflight_per_contact(argparse.Namespace(), from_dict(_two()), stub)
+    got = [str(w.message) for w in rec if issubclass(w.category, ScenarioWarning)]
+    assert got == [f"{s0}: field 'planning.keep_out_range': 23% of the prior's mass lies inside "
+                   f"(contact '{n}'), received 2 km" for s0, n in
+                   ((from_dict(_two()).name, "alpha"), (from_dict(_two()).name, "bravo"))]

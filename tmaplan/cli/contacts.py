@@ -15,13 +15,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import re
 import sys
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
-from tmaplan.errors import ArgumentError, ScenarioError, TmaplanError
+from tmaplan.errors import ArgumentError, ScenarioError, ScenarioWarning, TmaplanError
 from tmaplan.scenario import Scenario, load
-from tmaplan.scenario.contacts import in_contact
+from tmaplan.scenario.contacts import contact_field, in_contact
 
 __all__ = ["per_contact", "preflight_per_contact", "refuse_several", "require_priors",
            "run_per_contact", "scenario_of", "takes_several"]
@@ -62,6 +65,29 @@ def _view(scenario: Scenario, name: str) -> Scenario:
     return dataclasses.replace(scenario.contact_view(name), name=f"{scenario.name}-{name}")
 
 
+@contextmanager
+def _warnings_name(scenario: Scenario, i: int) -> Iterator[None]:
+    """Re-issue the :class:`ScenarioWarning` s raised inside on contact ``i``'s view as
+    :func:`in_contact` re-raises its errors: a contact field as its table
+    (``contacts[1].prior…``), and the contact's name after the text (a warning on a shared
+    field, ``planning.keep_out_range``, otherwise did not say whose prior it was about)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ScenarioWarning)
+        yield
+    name = scenario.contacts[i].name
+    for w in caught:
+        text = str(w.message)
+        if issubclass(w.category, ScenarioWarning) and f"(contact '{name}')" not in text:
+            m = re.match(r"(.*?field ')([^']+)(': )(.*)$", text)
+            if m is not None:
+                head, field, sep, rest = m.groups()
+                body, cut, received = rest.rpartition(", received ")
+                rest = (f"{body} (contact '{name}'){cut}{received}" if cut else
+                        f"{rest} (contact '{name}')")
+                text = f"{head}{contact_field(scenario, i, field)}{sep}{rest}"
+        warnings.warn_explicit(text, w.category, w.filename, w.lineno)
+
+
 def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
                           preflight: Callable[[argparse.Namespace, Any], None]) -> None:
     """``preflight(args, view)`` of each contact's view; a scenario error on a contact field
@@ -70,7 +96,7 @@ def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
     (contact 'bravo')``."""
     for i, c in enumerate(scenario.contacts):
         try:
-            with in_contact(scenario, i):
+            with in_contact(scenario, i), _warnings_name(scenario, i):
                 preflight(args, scenario.contact_view(c.name))
         except ArgumentError as exc:  # a flag that does not suit this contact says whose
             if exc.field.startswith("contacts") or not exc.field.startswith("-"):

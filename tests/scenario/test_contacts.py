@@ -429,6 +429,17 @@ def test_compare_localises_at_the_files_required_accuracy(tmp_path):
     assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before
 
 
+def _bound_stderr(d, tmp_path, capsys, text):
+    """The stderr lines holding ``text`` of ``tmaplan bound`` on the scenario dict ``d`` with
+    an own-ship turn at 15 min."""
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path / "two.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["bound", str(path), "--no-figure", "--samples", "50", "--out",
+                 str(tmp_path)]) == 0
+    return [x for x in capsys.readouterr().err.splitlines() if text in x]
+
+
 def test_preflight_warnings_name_the_contact(tmp_path, capsys):
     """The checks every verb runs per contact before it starts warn on the contact's view: a
     truth outside its own prior named ``prior.range_max`` without saying which contact, a
@@ -442,12 +453,7 @@ def test_preflight_warnings_name_the_contact(tmp_path, capsys):
 
     d = _two()
     d["contacts"][1]["prior"]["range_max"] = "12 km"  # bravo starts at 14 km
-    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
-    path = tmp_path / "two.toml"
-    path.write_text(dump(from_dict(d)), encoding="utf-8")
-    assert main(["bound", str(path), "--no-figure", "--samples", "50", "--out",
-                 str(tmp_path)]) == 0
-    err = [x for x in capsys.readouterr().err.splitlines() if "ScenarioWarning" in x]
+    err = _bound_stderr(d, tmp_path, capsys, "ScenarioWarning")
     assert len(err) == 1, err
     assert "field 'contacts[1].prior.range_max'" in err[0] and "(contact 'bravo'), received" \
         in err[0] and "outside its own prior" in err[0]
@@ -463,3 +469,14 @@ def test_preflight_warnings_name_the_contact(tmp_path, capsys):
     assert got == [f"{s0}: field 'planning.keep_out_range': 23% of the prior's mass lies inside "
                    f"(contact '{n}'), received 2 km" for s0, n in
                    ((from_dict(_two()).name, "alpha"), (from_dict(_two()).name, "bravo"))]
+
+
+def test_a_prior_centred_on_the_truth_names_its_contact(tmp_path, capsys):
+    # the note every prior verb prints said "prior.bearing_mean from the truth" of the view,
+    # not whose prior
+    d = _two()
+    del d["contacts"][1]["prior"]["bearing_mean"]
+    d["contacts"][1]["prior"]["centred_on_truth"] = True
+    err = _bound_stderr(d, tmp_path, capsys, "centred on the target")
+    assert len(err) == 1 and err[0].startswith("tmaplan bound: warning: "), err
+    assert err[0].endswith("(contacts[1].prior.bearing_mean from the truth) (contact 'bravo')")

@@ -97,7 +97,8 @@ def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
     for i, c in enumerate(scenario.contacts):
         try:
             with in_contact(scenario, i), _warnings_name(scenario, i):
-                preflight(args, scenario.contact_view(c.name))
+                preflight(argparse.Namespace(**vars(args), contact_of=(scenario, i)),
+                          scenario.contact_view(c.name))
         except ArgumentError as exc:  # a flag that does not suit this contact says whose
             if exc.field.startswith("contacts") or not exc.field.startswith("-"):
                 raise

@@ -27,6 +27,7 @@ from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.parse import check_policy
+from tmaplan.scenario.contacts import contact_field
 from tmaplan.simulate import check_truth_source
 
 __all__ = ["preflight"]
@@ -216,14 +217,19 @@ def _check_rank_costs(args: argparse.Namespace, scenario: Any) -> None:
 _PRIOR_VERBS = frozenset({"bound", "track", "plan", "schedule", "compare", "demo"})
 
 
-def _truth_note(verb: str, scenario: Any) -> None:
+def _truth_note(verb: str, scenario: Any, whose: tuple[Any, int] | None = None) -> None:
+    # ``whose``: (the several-contact scenario, the index of the contact ``scenario`` is the
+    # view of), to name the contact's table and the contact as its errors do
     if verb not in _PRIOR_VERBS:
         return
     p = scenario.prior
     fields = p.truth_fields if p is not None else ()
     if fields:
+        names = [f"prior.{f}" if whose is None else contact_field(*whose, f"prior.{f}")
+                 for f in fields]
+        tail = "" if whose is None else f" (contact '{whose[0].contacts[whose[1]].name}')"
         print(f"tmaplan {verb}: warning: {scenario.name}: the prior is centred on the target's "
-              f"true initial state ({', '.join('prior.' + f for f in fields)} from the truth)",
+              f"true initial state ({', '.join(names)} from the truth){tail}",
               file=sys.stderr)
 
 
@@ -260,5 +266,5 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     if check is not None:
         check(args, scenario)
     check_feasible(args, scenario, prior_verb=args.verb in _PRIOR_VERBS)
-    _truth_note(args.verb, scenario)
+    _truth_note(args.verb, scenario, getattr(args, "contact_of", None))
 

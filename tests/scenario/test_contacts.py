@@ -267,6 +267,17 @@ def test_per_contact_figures_are_named_after_the_contact(two_file, tmp_path):
     assert names == ["crlb_default-alpha.png", "crlb_default-bravo.png"]
 
 
+def test_simulate_draws_every_contacts_bearings(two_file, tmp_path):
+    # one contact's simulate draws its bearings and bearing rate; several contacts had the
+    # geometry figure only
+    got = _run(["simulate", str(two_file)], tmp_path)
+    one = _run(["simulate", "default"], tmp_path)
+    assert Path(one["bearings_figure"]).name == "default_bearings.png"
+    for c in ("alpha", "bravo"):
+        path = Path(got["contacts"][c]["bearings_figure"])
+        assert path.name == f"default-{c}_bearings.png" and path.stat().st_size > 0
+
+
 def test_a_verb_without_several_contacts_refuses_them(two_file):
     # the one refusal (tmaplan.cli.contacts) for a verb that does not declare SEVERAL_CONTACTS
     import types

@@ -20,7 +20,7 @@ import pytest
 from repo_paths import DATA
 
 from tmaplan.cli import main
-from tmaplan.scenario import load_problem
+from tmaplan.scenario import dump, from_dict, load_problem
 
 PROBLEM = "two-contacts-crossing"
 
@@ -130,6 +130,26 @@ def test_plan_warns_when_no_plan_can_localise_every_contact(tmp_path, capsys):
     err = [x for x in capsys.readouterr().err.splitlines() if "SaturatedObjectiveWarning" in x]
     assert len(err) == 1 and "2 of 2 contacts ('alpha', 'bravo')" in err[0], err
     assert all(c["expected_time_to_accuracy"] >= 600.0 for c in got["contacts"].values())
+
+
+def test_weighted_means_take_weights_at_any_scale(tmp_path):
+    # weights are relative: both 1e308 is both 1 (their sum overflowed to inf: the shared
+    # schedule's objective printed 0 m with a NaN gap, compare's weighted mean NaN)
+    import tomllib
+
+    from tmaplan.scenario import problems_dir
+
+    d = tomllib.loads((problems_dir() / f"{PROBLEM}.toml").read_text(encoding="utf-8"))
+    for c in d["contacts"]:
+        c["weight"] = 1e308
+    path = tmp_path / "heavy.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    argv = ["--method", "greedy", "--budget", "1", "--no-figure"]
+    huge, _ = _run(["schedule", str(path), *argv], tmp_path)
+    one, _ = _run(["schedule", PROBLEM, *argv], tmp_path)
+    assert huge["ping_steps"] == one["ping_steps"]
+    for key in ("objective", "lower_bound", "no_ping_objective"):
+        assert np.isfinite(huge[key]) and huge[key] == pytest.approx(one[key], rel=1e-12), key
 
 
 def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):

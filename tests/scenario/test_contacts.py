@@ -491,3 +491,13 @@ def test_a_prior_centred_on_the_truth_names_its_contact(tmp_path, capsys):
     err = _bound_stderr(d, tmp_path, capsys, "centred on the target")
     assert len(err) == 1 and err[0].startswith("tmaplan bound: warning: "), err
     assert err[0].endswith("(contacts[1].prior.bearing_mean from the truth) (contact 'bravo')")
+
+
+def test_weight_fractions_are_the_shares_of_the_weights():
+    from tmaplan.scenario.contacts import weight_fractions
+
+    assert weight_fractions([0.1, 10.0]) == pytest.approx((0.1 / 10.1, 10.0 / 10.1), rel=1e-15)
+    assert weight_fractions([1e308, 1e308, 2e307]) == pytest.approx((1 / 2.2, 1 / 2.2, 0.2 / 2.2),
+                                                                     rel=1e-15)
+    assert weight_fractions([5e-324, 5e-324]) == (0.5, 0.5)  # the smallest float: no 0/0
+    assert weight_fractions([3.0]) == (1.0,)

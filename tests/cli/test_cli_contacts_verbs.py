@@ -113,6 +113,28 @@ def _check_schedule(got):
         assert len(c["bound"]) == len(got["times"]) == len(c["reach"])
 
 
+def test_track_flies_the_joint_plan_for_every_contact(planned, tmp_path):
+    # `tmaplan plan P` then `tmaplan track P --observer-plan PLAN.json`: each contact's view
+    # refused the plan as one of another problem ('P-alpha'); now every contact flies it, as
+    # a one-contact problem of that contact whose own ship flies the plan
+    import dataclasses
+
+    from tmaplan.cli.observer_plan import with_observer_plan
+
+    _, _, plan_path = planned
+    argv = ["--runs", "1", "--particles", "50", "--no-figure"]
+    got, _ = _run(["track", PROBLEM, "--observer-plan", str(plan_path), *argv], tmp_path)
+    flown = with_observer_plan(load_problem(PROBLEM), plan_path)
+    for name in ("alpha", "bravo"):
+        view = dataclasses.replace(flown.contact_view(name), name=f"{PROBLEM}-{name}")
+        path = tmp_path / f"{name}.toml"
+        path.write_text(dump(view), encoding="utf-8")
+        one, _ = _run(["track", str(path), *argv], tmp_path)
+        for key in ("bound_range", "rmse_range"):
+            np.testing.assert_allclose(got["contacts"][name][key], one[key], rtol=1e-12,
+                                       err_msg=f"{name} {key}")
+
+
 def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
     got, _ = _run(["rank-costs", PROBLEM, "--candidates", "3", "--runs", "2", "--particles",
                    "50", "--plans", "none", "--cost-samples", "20", "--resamples", "0",

@@ -127,7 +127,7 @@ def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario
             print(f"== {scenario.name}: contact {c.name} ({i + 1} of "
                   f"{len(scenario.contacts)}) ==", file=sys.stdout)
         sub = argparse.Namespace(**vars(args), contact_view=_view(scenario, c.name),
-                                 contact=c)
+                                 contact=c, problem_scenario=scenario)
         try:
             with in_contact(scenario, i, source=scenario.name):
                 payload = module.run(sub)

@@ -142,7 +142,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         raise ArgumentError("--particles", ">= 2", particles)
     scenario = _with_lines(scenario_of(args), getattr(args, "frequencies", 0))
     if getattr(args, "observer_plan", None) is not None:
-        scenario = with_observer_plan(scenario, args.observer_plan)
+        # a contact's view flies the plan of its problem (`tmaplan plan P`, the own ship's
+        # for every contact; the view, "<problem>-<contact>", refused it as another's)
+        whole = getattr(args, "problem_scenario", None)
+        flown = with_observer_plan(scenario if whole is None else whole, args.observer_plan)
+        scenario = scenario.replace(observer=flown.observer)
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
 

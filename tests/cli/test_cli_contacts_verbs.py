@@ -174,6 +174,18 @@ def test_weighted_means_take_weights_at_any_scale(tmp_path):
         assert np.isfinite(huge[key]) and huge[key] == pytest.approx(one[key], rel=1e-12), key
 
 
+@pytest.mark.parametrize(("argv", "field"), [
+    (["schedule", PROBLEM, "--budget", "500"], "--budget"),
+    (["bound", PROBLEM, "--ping-steps", "500", "--no-figure"], "--ping-steps"),
+    (["plan", PROBLEM, "--control-interval", "2 min"], "--control-interval")])
+def test_a_flag_against_what_the_contacts_share_names_no_contact(argv, field, tmp_path, capsys):
+    # the horizon and the planning grid are every contact's: the refusal named the first
+    # contact, as if it were about alpha
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"field '{field}'" in err[0] and "(contact '" not in err[0], err
+
+
 def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
     # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
     # which a contact's own required_accuracy overrides, as in compare); was 10 % for all

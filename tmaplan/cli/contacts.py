@@ -14,12 +14,13 @@ exactly as before.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
+import io
 import re
 import sys
 import warnings
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from typing import Any
 
 from tmaplan.errors import ArgumentError, ScenarioError, ScenarioWarning, TmaplanError
@@ -65,7 +66,7 @@ def _view(scenario: Scenario, name: str) -> Scenario:
     return dataclasses.replace(scenario.contact_view(name), name=f"{scenario.name}-{name}")
 
 
-@contextmanager
+@contextlib.contextmanager
 def _warnings_name(scenario: Scenario, i: int) -> Iterator[None]:
     """Re-issue the :class:`ScenarioWarning` s raised inside on contact ``i``'s view as
     :func:`in_contact` re-raises its errors: a contact field as its table
@@ -94,16 +95,39 @@ def preflight_per_contact(args: argparse.Namespace, scenario: Scenario,
     names the contact (:func:`tmaplan.scenario.contacts.in_contact`), e.g. a contact without
     the prior that the verb needs: ``field 'contacts[1].prior': expected a [prior] table: ...
     (contact 'bravo')``."""
+    def check(i: int) -> None:
+        preflight(argparse.Namespace(**vars(args), contact_of=(scenario, i)),
+                  scenario.contact_view(scenario.contacts[i].name))
+
     for i, c in enumerate(scenario.contacts):
         try:
             with in_contact(scenario, i), _warnings_name(scenario, i):
-                preflight(argparse.Namespace(**vars(args), contact_of=(scenario, i)),
-                          scenario.contact_view(c.name))
+                check(i)
         except ArgumentError as exc:  # a flag that does not suit this contact says whose
-            if exc.field.startswith("contacts") or not exc.field.startswith("-"):
+            if (exc.field.startswith("contacts") or not exc.field.startswith("-")
+                    or _refused_by_all(check, len(scenario.contacts), exc)):
                 raise
             raise ArgumentError(exc.field, f"{exc.expected} (contact '{c.name}')",
                                 exc.received, source=exc.source) from None
+
+
+def _refused_by_all(check: Callable[[int], None], n: int, exc: ArgumentError) -> bool:
+    """Whether ``check(j)`` refuses every contact ``j`` with ``exc``'s very error: a flag
+    against what the contacts share (``--budget`` over the steps of the horizon,
+    ``--control-interval`` not whole in the planning horizon), not against one contact, so
+    the error names no contact (it named the first). The checks run quietly."""
+    for j in range(n):
+        try:
+            with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+                    contextlib.redirect_stderr(io.StringIO()):
+                warnings.simplefilter("ignore")
+                check(j)
+        except ArgumentError as other:
+            if str(other) != str(exc):
+                return False
+        else:
+            return False
+    return True
 
 
 def require_priors(scenario: Scenario, why: str) -> None:

@@ -186,6 +186,16 @@ def test_a_flag_against_what_the_contacts_share_names_no_contact(argv, field, tm
     assert len(err) == 1 and f"field '{field}'" in err[0] and "(contact '" not in err[0], err
 
 
+@pytest.mark.parametrize("argv", [
+    ["track", PROBLEM, "--estimator", "mle", "--particles", "500"],
+    ["rank-costs", PROBLEM, "--plans", "worst-contact"]])
+def test_a_bad_flag_is_refused_before_the_first_contacts_block(argv, tmp_path, capsys):
+    # the refusal came after "== P: contact alpha (1 of 2) ==" on stdout
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    got = capsys.readouterr()
+    assert got.out == "" and len(got.err.strip().splitlines()) == 1, got
+
+
 def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
     # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
     # which a contact's own required_accuracy overrides, as in compare); was 10 % for all

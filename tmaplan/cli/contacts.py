@@ -146,6 +146,9 @@ def run_per_contact(module: Any, args: argparse.Namespace, scenario: Scenario
     """Run the verb ``module`` on each contact's view: ``{problem, contacts: {name:
     payload}}``; on the console a header line per contact before its output."""
     out: dict[str, Any] = {}
+    check = getattr(module, "check_arguments", None)
+    if check is not None:  # a bad flag refused before the first contact's header
+        check(args)
     for i, c in enumerate(scenario.contacts):
         if args.json != "-":
             print(f"== {scenario.name}: contact {c.name} ({i + 1} of "

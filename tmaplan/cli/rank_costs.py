@@ -86,6 +86,11 @@ def _plans(text: str) -> tuple[str, ...] | None:
     return names
 
 
+def check_arguments(args: argparse.Namespace) -> None:
+    """The flags' own rules (no scenario needed): run before any contact's block."""
+    _plans(args.plans)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run (or resume) the ranking; write the figure and ``<problem>_rank-costs.html``."""
     scenario = scenario_of(args)

@@ -196,6 +196,25 @@ def test_a_bad_flag_is_refused_before_the_first_contacts_block(argv, tmp_path, c
     assert got.out == "" and len(got.err.strip().splitlines()) == 1, got
 
 
+def test_policies_whose_names_read_alike_in_a_file_name_keep_their_own_files(tmp_path):
+    # "planned:a b" and "planned:a_b" were both written to planned_a_b_run0_*: the second
+    # policy's flown track overwrote the first's, and the JSON named one file for both
+    import tomllib
+
+    from tmaplan.scenario import problems_dir
+
+    d = tomllib.loads((problems_dir() / f"{PROBLEM}.toml").read_text(encoding="utf-8"))
+    d["contacts"][0]["name"], d["contacts"][1]["name"] = "a b", "a_b"
+    path = tmp_path / "alike.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    got, _ = _run(["compare", str(path), "--policies", "planned:a b,planned:a_b", "--runs",
+                   "1", "--particles", "50"], tmp_path)
+    files = [got["flown"][p]["exports"]["legs"] for p in ("planned:a b", "planned:a_b")]
+    assert files[0] != files[1], files
+    texts = [Path(f).read_text(encoding="utf-8") for f in files]
+    assert texts[0] != texts[1]  # each contact's own plan, flown
+
+
 def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
     # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
     # which a contact's own required_accuracy overrides, as in compare); was 10 % for all

@@ -185,12 +185,21 @@ def flown_legs(result: Any, scenario: Scenario, out_dir: Path, *,
     dt = float(times[1] - times[0])
     heading0 = float(course_speed(initial_velocity(scenario.observer))[0])
     out: dict[str, Any] = {}
+    stems: set[str] = set()
     for name in result.policies:
         pos = np.asarray(result.examples[name].observer, float)
         rates, courses, speed = flown_turn_rates(pos, heading0, dt)
         legs = legs_from_track(times - times[0], courses, turn_rates=rates)
         nav = navigator_legs(legs, pos, speed=speed, dt=dt)
-        stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) + "_run0"
+        base = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
+        # two names may read alike in a file name ("planned:a b", "planned:a_b"): number the
+        # later ones, never overwrite an earlier policy's files
+        stem, k = base, 1
+        while stem in stems:
+            k += 1
+            stem = f"{base}-{k}"
+        stems.add(stem)
+        stem += "_run0"
         if not quiet:
             print(f"{name}, flown on run 0:")
         out[name] = navigator_exports(legs, nav, times, pos, scenario, out_dir, stem,

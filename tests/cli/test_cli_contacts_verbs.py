@@ -17,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from repo_paths import DATA
 
 from tmaplan.cli import main
-from tmaplan.scenario import load_problem
+from tmaplan.scenario import dump, from_dict, load_problem
 
 PROBLEM = "two-contacts-crossing"
 
@@ -112,6 +113,28 @@ def _check_schedule(got):
         assert len(c["bound"]) == len(got["times"]) == len(c["reach"])
 
 
+def test_track_flies_the_joint_plan_for_every_contact(planned, tmp_path):
+    # `tmaplan plan P` then `tmaplan track P --observer-plan PLAN.json`: each contact's view
+    # refused the plan as one of another problem ('P-alpha'); now every contact flies it, as
+    # a one-contact problem of that contact whose own ship flies the plan
+    import dataclasses
+
+    from tmaplan.cli.observer_plan import with_observer_plan
+
+    _, _, plan_path = planned
+    argv = ["--runs", "1", "--particles", "50", "--no-figure"]
+    got, _ = _run(["track", PROBLEM, "--observer-plan", str(plan_path), *argv], tmp_path)
+    flown = with_observer_plan(load_problem(PROBLEM), plan_path)
+    for name in ("alpha", "bravo"):
+        view = dataclasses.replace(flown.contact_view(name), name=f"{PROBLEM}-{name}")
+        path = tmp_path / f"{name}.toml"
+        path.write_text(dump(view), encoding="utf-8")
+        one, _ = _run(["track", str(path), *argv], tmp_path)
+        for key in ("bound_range", "rmse_range"):
+            np.testing.assert_allclose(got["contacts"][name][key], one[key], rtol=1e-12,
+                                       err_msg=f"{name} {key}")
+
+
 def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
     got, _ = _run(["rank-costs", PROBLEM, "--candidates", "3", "--runs", "2", "--particles",
                    "50", "--plans", "none", "--cost-samples", "20", "--resamples", "0",
@@ -120,6 +143,101 @@ def test_rank_costs_ranks_each_contact_on_its_view(tmp_path):
     for name, c in got["contacts"].items():
         assert c["costs"] and c["candidates"] == 3
         assert Path(c["report"]).name == f"{PROBLEM}-{name}_rank-costs.html"
+
+
+def test_plan_warns_when_no_plan_can_localise_every_contact(tmp_path, capsys):
+    # within 10 min neither contact of two-contacts-crossing is localised on any plan: the
+    # all-contacts objective is the horizon on all of them, said in one line
+    got, _ = _run(["plan", PROBLEM, "--horizon", "10 min", "--no-figure"], tmp_path)
+    err = [x for x in capsys.readouterr().err.splitlines() if "SaturatedObjectiveWarning" in x]
+    assert len(err) == 1 and "2 of 2 contacts ('alpha', 'bravo')" in err[0], err
+    assert all(c["expected_time_to_accuracy"] >= 600.0 for c in got["contacts"].values())
+
+
+def test_weighted_means_take_weights_at_any_scale(tmp_path):
+    # weights are relative: both 1e308 is both 1 (their sum overflowed to inf: the shared
+    # schedule's objective printed 0 m with a NaN gap, compare's weighted mean NaN)
+    import tomllib
+
+    from tmaplan.scenario import problems_dir
+
+    d = tomllib.loads((problems_dir() / f"{PROBLEM}.toml").read_text(encoding="utf-8"))
+    for c in d["contacts"]:
+        c["weight"] = 1e308
+    path = tmp_path / "heavy.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    argv = ["--method", "greedy", "--budget", "1", "--no-figure"]
+    huge, _ = _run(["schedule", str(path), *argv], tmp_path)
+    one, _ = _run(["schedule", PROBLEM, *argv], tmp_path)
+    assert huge["ping_steps"] == one["ping_steps"]
+    for key in ("objective", "lower_bound", "no_ping_objective"):
+        assert np.isfinite(huge[key]) and huge[key] == pytest.approx(one[key], rel=1e-12), key
+
+
+@pytest.mark.parametrize(("argv", "field"), [
+    (["schedule", PROBLEM, "--budget", "500"], "--budget"),
+    (["bound", PROBLEM, "--ping-steps", "500", "--no-figure"], "--ping-steps"),
+    (["plan", PROBLEM, "--control-interval", "2 min"], "--control-interval")])
+def test_a_flag_against_what_the_contacts_share_names_no_contact(argv, field, tmp_path, capsys):
+    # the horizon and the planning grid are every contact's: the refusal named the first
+    # contact, as if it were about alpha
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"field '{field}'" in err[0] and "(contact '" not in err[0], err
+
+
+@pytest.mark.parametrize("argv", [
+    ["track", PROBLEM, "--estimator", "mle", "--particles", "500"],
+    ["rank-costs", PROBLEM, "--plans", "worst-contact"]])
+def test_a_bad_flag_is_refused_before_the_first_contacts_block(argv, tmp_path, capsys):
+    # the refusal came after "== P: contact alpha (1 of 2) ==" on stdout
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    got = capsys.readouterr()
+    assert got.out == "" and len(got.err.strip().splitlines()) == 1, got
+
+
+def test_policies_whose_names_read_alike_in_a_file_name_keep_their_own_files(tmp_path):
+    # "planned:a b" and "planned:a_b" were both written to planned_a_b_run0_*: the second
+    # policy's flown track overwrote the first's, and the JSON named one file for both
+    import tomllib
+
+    from tmaplan.scenario import problems_dir
+
+    d = tomllib.loads((problems_dir() / f"{PROBLEM}.toml").read_text(encoding="utf-8"))
+    d["contacts"][0]["name"], d["contacts"][1]["name"] = "a b", "a_b"
+    path = tmp_path / "alike.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    got, _ = _run(["compare", str(path), "--policies", "planned:a b,planned:a_b", "--runs",
+                   "1", "--particles", "50"], tmp_path)
+    files = [got["flown"][p]["exports"]["legs"] for p in ("planned:a b", "planned:a_b")]
+    assert files[0] != files[1], files
+    texts = [Path(f).read_text(encoding="utf-8") for f in files]
+    assert texts[0] != texts[1]  # each contact's own plan, flown
+
+
+def test_rank_costs_localises_each_contact_at_its_required_accuracy(tmp_path):
+    # three-contacts-screen: charlie requires 5 %, the others the default 10 % (or --accuracy,
+    # which a contact's own required_accuracy overrides, as in compare); was 10 % for all
+    argv = ["rank-costs", "three-contacts-screen", "--candidates", "3", "--runs", "1",
+            "--particles", "50", "--plans", "none", "--cost-samples", "20", "--resamples",
+            "0", "--no-figure"]
+    for extra, want in (([], {"alpha": 0.1, "bravo": 0.1, "charlie": 0.05}),
+                        (["--accuracy", "0.2"], {"alpha": 0.2, "bravo": 0.2, "charlie": 0.05})):
+        got, _ = _run([*argv, *extra], tmp_path)
+        assert {n: c["accuracy"] for n, c in got["contacts"].items()} == want
+
+
+def test_rank_costs_refuses_a_contact_without_prior_before_ranking_any(tmp_path, capsys):
+    # contacts[1] has no prior: refused before contact 0's ranking runs (no header, no runs
+    # stored), not after it, in one line naming the contact
+    path = DATA / "invalid_cli" / "contacts_one_without_prior.toml"
+    assert main(["rank-costs", str(path), "--candidates", "3", "--runs", "2", "--particles",
+                 "50", "--plans", "none", "--cost-samples", "20", "--resamples", "0",
+                 "--no-figure", "--out", str(tmp_path)]) == 1
+    got = capsys.readouterr()
+    assert "== " not in got.out and not list(tmp_path.iterdir()), got.out
+    err = got.err.strip().splitlines()
+    assert len(err) == 1 and "field 'contacts[1].prior'" in err[0] and "'bravo'" in err[0]
 
 
 def test_one_contact_schedule_keeps_its_shape(tmp_path):

@@ -140,3 +140,25 @@ def test_declared_minimum_is_what_the_estimator_needs(name, fewest):
     assert name not in applicable_estimators(short(fewest - 1))
     with pytest.raises(ArgumentError, match=f"needs at least {fewest} bearing"):
         check_applicable(name, short(fewest - 1))
+
+
+def test_range_only_counts_the_ranges_within_the_sensors_reach():
+    """A range sensor's ``max_range`` returns no reading beyond it: range-only tracking of a
+    contact out of reach has no measurement and is refused (it ran on the prior alone, with a
+    bound, before); a reach beyond every range changes nothing."""
+    sc = load_problem("sharma2024-range-only")
+    rng_sensor = sc.sensors[0]
+    assert rng_sensor.kind == "range"
+
+    def reach(m):
+        return dataclasses.replace(sc, sensors=(dataclasses.replace(rng_sensor, max_range=m),
+                                                *sc.sensors[1:]))
+
+    check_applicable("range-only", reach(50e3))  # every range within 50 km
+    assert applicable_estimators(reach(50e3)) == applicable_estimators(sc)
+    with pytest.raises(ArgumentError) as exc:
+        check_applicable("range-only", reach(100.0), cli=True)  # the contact stays beyond 384 m
+    msg = str(exc.value)
+    assert "needs at least 3 range measurements" in msg and "\n" not in msg
+    assert "has 0 within max_range on the true track" in msg
+    assert "range-only" not in applicable_estimators(reach(100.0))

@@ -336,3 +336,48 @@ def test_keep_out_holds_for_every_contact(views):
 
     assert closest(1.0) < keep
     assert closest(keep) >= keep * (1 - 1e-3)
+
+
+def test_named_time_to_accuracy_objectives_use_the_scenarios_required_accuracy():
+    """``expected-time-to-accuracy`` by name localises at the scenario's required accuracy
+    (``planning.required_accuracy``, a single contact's own; 10 % by default, as before): the
+    same as the objective built at that accuracy, and later at 5 % than at 10 % (a tighter
+    accuracy takes longer on the same track)."""
+    sc = _short(load_problem("default"))
+    K, dt = sc.time.n_steps, sc.time.dt
+    om = np.zeros(K)
+    om[20:30] = sc.observer.turn_rate_max  # a turn to starboard: the range is observable
+    track = turn_rate_track(np.zeros(2), 0.0, sc.observer.speed, om, dt)
+    tight = sc.replace(planning=dataclasses.replace(sc.planning, required_accuracy=0.05))
+    t10 = ObjectiveEvaluator(sc, "expected-time-to-accuracy", samples=SAMPLES)(track)[0]
+    t05 = ObjectiveEvaluator(tight, "expected-time-to-accuracy", samples=SAMPLES)(track)[0]
+    # by name: at least 128 draws (make_objective)
+    built = ObjectiveEvaluator(sc, expected_time_to_accuracy(0.05, 128))(track)[0]
+    assert t05 == pytest.approx(built, rel=1e-12)
+    assert t10 == pytest.approx(ObjectiveEvaluator(sc, expected_time_to_accuracy(
+        0.1, 128))(track)[0], rel=1e-12)
+    assert t05 > t10 + dt  # at least one step later
+    planner = HeadingPlanner(tight, objective="expected-time-to-accuracy")
+    assert planner.objective.name == "expected-time-to-accuracy"
+    assert ObjectiveEvaluator(tight, planner.objective, samples=SAMPLES)(track)[0] == \
+        pytest.approx(t05, rel=1e-12)
+
+
+def test_a_saturated_min_max_objective_is_warned():
+    """The latest contact's time is about the horizon on every plan once a contact cannot be
+    localised in it: warned for the min-max objectives, naming the contacts; not for the
+    weighted mean, nor when every contact is localised within the horizon."""
+    import warnings
+
+    from tmaplan.planning.contacts import SaturatedObjectiveWarning, warn_if_saturated
+
+    with pytest.warns(SaturatedObjectiveWarning, match=r"1 of 2 contacts \('b'\) are not "
+                      r"expected to be localised within the 30 min horizon") as rec:
+        warn_if_saturated("all-contacts-time-to-accuracy", {"a": 1500.0, "b": 1830.0}, 1800.0)
+    assert len(rec) == 1 and "\n" not in str(rec[0].message)
+    with pytest.warns(SaturatedObjectiveWarning, match="worst-contact"):
+        warn_if_saturated("worst-contact", {"a": 1800.0, "b": 900.0}, 1800.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_if_saturated("weighted-time-to-accuracy", {"a": 1830.0, "b": 1830.0}, 1800.0)
+        warn_if_saturated("all-contacts-time-to-accuracy", {"a": 1500.0, "b": 1790.0}, 1800.0)

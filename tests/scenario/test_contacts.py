@@ -103,6 +103,22 @@ def test_planning_required_accuracy_is_the_scenario_default():
     assert s.required_accuracy == 0.2 and loads(dump(s)) == s
 
 
+def test_one_contacts_table_keeps_its_required_accuracy():
+    # a single [[contacts]] table is a one-contact scenario: its own required_accuracy is the
+    # scenario's (it was dropped for planning.required_accuracy / 10 %, and the one-contact
+    # verbs localised it at 10 %)
+    d = _two(required_accuracy=0.07)
+    d["contacts"] = d["contacts"][1:]
+    d["planning"]["required_accuracy"] = 0.2
+    s = from_dict(d)
+    assert s.required_accuracy == 0.07 and loads(dump(s)) == s
+    assert s.contact_view("bravo").required_accuracy == 0.07
+    del d["contacts"][0]["required_accuracy"]
+    assert from_dict(d).required_accuracy == 0.2  # the scenario's, as before
+    del d["planning"]["required_accuracy"]
+    assert from_dict(d).required_accuracy == DEFAULT_REQUIRED_ACCURACY
+
+
 @pytest.mark.parametrize(("change", "field", "text"), [
     ({"weight": 0.0}, "contacts[1].weight", "greater than 0 (contact 'bravo')"),
     ({"weight": -1.0}, "contacts[1].weight", "(contact 'bravo')"),
@@ -251,6 +267,17 @@ def test_per_contact_figures_are_named_after_the_contact(two_file, tmp_path):
     assert names == ["crlb_default-alpha.png", "crlb_default-bravo.png"]
 
 
+def test_simulate_draws_every_contacts_bearings(two_file, tmp_path):
+    # one contact's simulate draws its bearings and bearing rate; several contacts had the
+    # geometry figure only
+    got = _run(["simulate", str(two_file)], tmp_path)
+    one = _run(["simulate", "default"], tmp_path)
+    assert Path(one["bearings_figure"]).name == "default_bearings.png"
+    for c in ("alpha", "bravo"):
+        path = Path(got["contacts"][c]["bearings_figure"])
+        assert path.name == f"default-{c}_bearings.png" and path.stat().st_size > 0
+
+
 def test_a_verb_without_several_contacts_refuses_them(two_file):
     # the one refusal (tmaplan.cli.contacts) for a verb that does not declare SEVERAL_CONTACTS
     import types
@@ -390,3 +417,87 @@ def test_replace_takes_target_and_prior_of_one_contact_only():
     two = from_dict(_two())
     moved = two.replace(contacts=tuple(reversed(two.contacts)))
     assert moved.contact_names == ("bravo", "alpha")
+
+
+def test_compare_localises_at_the_files_required_accuracy(tmp_path):
+    """``compare --accuracy`` not given: the file's required accuracy (a single contact's
+    own, else planning.required_accuracy, else 10 % as before); a contact's own is kept over
+    the flag, planning.required_accuracy is not."""
+    d = _default_dict()
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    argv = ["--policies", "straight", "--runs", "1", "--particles", "50"]
+    path = tmp_path / "p.toml"
+    d["planning"]["required_accuracy"] = 0.2
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert _run(["compare", str(path), *argv], tmp_path)["accuracy"] == 0.2
+    assert _run(["compare", str(path), *argv, "--accuracy", "0.3"], tmp_path)["accuracy"] == 0.3
+    del d["planning"]["required_accuracy"]
+    d["contacts"] = [{"name": "solo", "target": d.pop("target"), "prior": d.pop("prior"),
+                      "required_accuracy": 0.07}]
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    for extra in ([], ["--accuracy", "0.3"]):
+        assert _run(["compare", str(path), *argv, *extra], tmp_path)["accuracy"] == 0.07
+    assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before
+
+
+def _bound_stderr(d, tmp_path, capsys, text):
+    """The stderr lines holding ``text`` of ``tmaplan bound`` on the scenario dict ``d`` with
+    an own-ship turn at 15 min."""
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path / "two.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["bound", str(path), "--no-figure", "--samples", "50", "--out",
+                 str(tmp_path)]) == 0
+    return [x for x in capsys.readouterr().err.splitlines() if text in x]
+
+
+def test_preflight_warnings_name_the_contact(tmp_path, capsys):
+    """The checks every verb runs per contact before it starts warn on the contact's view: a
+    truth outside its own prior named ``prior.range_max`` without saying which contact, a
+    keep-out range on which contact's prior neither; now as the errors, the contact's table
+    and name (``in_contact``)."""
+    import argparse
+    import warnings
+
+    from tmaplan.cli.contacts import preflight_per_contact
+    from tmaplan.errors import ScenarioWarning, warn_field
+
+    d = _two()
+    d["contacts"][1]["prior"]["range_max"] = "12 km"  # bravo starts at 14 km
+    err = _bound_stderr(d, tmp_path, capsys, "ScenarioWarning")
+    assert len(err) == 1, err
+    assert "field 'contacts[1].prior.range_max'" in err[0] and "(contact 'bravo'), received" \
+        in err[0] and "outside its own prior" in err[0]
+
+    def stub(args, view):  # a shared field's warning raised on a contact's view
+        warn_field("planning.keep_out_range", "23% of the prior's mass lies inside, received 2 km",
+                   source=view.name)
+
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        preflight_per_contact(argparse.Namespace(), from_dict(_two()), stub)
+    got = [str(w.message) for w in rec if issubclass(w.category, ScenarioWarning)]
+    assert got == [f"{s0}: field 'planning.keep_out_range': 23% of the prior's mass lies inside "
+                   f"(contact '{n}'), received 2 km" for s0, n in
+                   ((from_dict(_two()).name, "alpha"), (from_dict(_two()).name, "bravo"))]
+
+
+def test_a_prior_centred_on_the_truth_names_its_contact(tmp_path, capsys):
+    # the note every prior verb prints said "prior.bearing_mean from the truth" of the view,
+    # not whose prior
+    d = _two()
+    del d["contacts"][1]["prior"]["bearing_mean"]
+    d["contacts"][1]["prior"]["centred_on_truth"] = True
+    err = _bound_stderr(d, tmp_path, capsys, "centred on the target")
+    assert len(err) == 1 and err[0].startswith("tmaplan bound: warning: "), err
+    assert err[0].endswith("(contacts[1].prior.bearing_mean from the truth) (contact 'bravo')")
+
+
+def test_weight_fractions_are_the_shares_of_the_weights():
+    from tmaplan.scenario.contacts import weight_fractions
+
+    assert weight_fractions([0.1, 10.0]) == pytest.approx((0.1 / 10.1, 10.0 / 10.1), rel=1e-15)
+    assert weight_fractions([1e308, 1e308, 2e307]) == pytest.approx((1 / 2.2, 1 / 2.2, 0.2 / 2.2),
+                                                                     rel=1e-15)
+    assert weight_fractions([5e-324, 5e-324]) == (0.5, 0.5)  # the smallest float: no 0/0
+    assert weight_fractions([3.0]) == (1.0,)

@@ -58,6 +58,8 @@ __all__ = [
     "PLAN_STARTS",
     "OneLineParser",
     "UsageError",
+    "accuracy_of",
+    "add_accuracy_argument",
     "add_figure_arguments",
     "add_problem_argument",
     "add_seed_argument",
@@ -252,6 +254,31 @@ def add_seed_argument(parser: argparse.ArgumentParser, help: str = "random seed 
                       ) -> None:
     """``--seed S`` (an integer >= 0, default 0)."""
     parser.add_argument("--seed", type=seed, default=0, help=help)
+
+
+def add_accuracy_argument(parser: argparse.ArgumentParser) -> None:
+    """``--accuracy A``: the relative range error that counts as localised (default None:
+    the problem's, :func:`accuracy_of`)."""
+    parser.add_argument("--accuracy", type=open_fraction, default=None,
+                        help="relative range error that counts as localised (default: the "
+                             "contact's required_accuracy, else planning.required_accuracy, "
+                             "else 0.1)")
+
+
+def accuracy_of(args: argparse.Namespace, scenario: Any) -> float:
+    """The ``--accuracy`` a verb runs with: the flag if given, else the scenario's
+    :attr:`~tmaplan.scenario.Scenario.required_accuracy` (its one contact's own, else
+    ``planning.required_accuracy``, else 0.1: a file that sets none runs as it always did).
+    A contact's own ``required_accuracy`` is kept over the flag (the several-contact
+    campaigns, :func:`tmaplan.evaluation.contacts_campaign.contact_accuracy`; a contact's view
+    under :func:`tmaplan.cli.contacts.run_per_contact`, ``args.contact``)."""
+    own = getattr(getattr(args, "contact", None), "required_accuracy", None)
+    if own is not None:
+        return float(own)
+    if len(scenario.contacts) == 1 and scenario.contacts[0].required_accuracy is not None:
+        return float(scenario.contacts[0].required_accuracy)
+    flag = getattr(args, "accuracy", None)
+    return float(scenario.required_accuracy if flag is None else flag)
 
 
 class _DeprecatedNoPlot(argparse.Action):

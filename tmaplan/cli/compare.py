@@ -27,12 +27,13 @@ from tmaplan.cli.args import (
     MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
+    accuracy_of,
+    add_accuracy_argument,
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
     command_line,
     integer,
-    open_fraction,
     repeated,
 )
 from tmaplan.cli.contacts import preflight_per_contact
@@ -80,8 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed_argument(parser, help="root seed (default 0)")
     parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
                         help="particle-filter size (default 3000)")
-    parser.add_argument("--accuracy", type=open_fraction, default=0.1,
-                        help="relative range error that counts as localised (default 0.1)")
+    add_accuracy_argument(parser)
     parser.add_argument("--truth", choices=("prior", "scenario"), default="prior",
                         help="draw each run's target from the prior (default) or use the "
                              "scenario's")
@@ -126,16 +126,17 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run or resume the campaign, write figures and ``<out>/<problem>_compare/report.html``."""
     scenario = load(args.problem)
     policies = tuple(p.strip() for p in args.policies.split(",") if p.strip())
+    accuracy = accuracy_of(args, scenario)
     spec = CampaignSpec(scenario=scenario, policies=policies, runs=args.runs,
                         seed=args.seed, n_particles=args.particles, truth=args.truth,
-                        accuracy=args.accuracy)
+                        accuracy=accuracy)
     quiet = args.json == "-"
     result = run_campaign(spec, out_dir=args.out, workers=args.workers,
                           scheduler=args.scheduler,
                           progress=(not quiet) and sys.stderr.isatty())
     cmd = command_line("compare", f"tmaplan compare {shlex.quote(args.problem)} --policies "
                        f"{shlex.quote(args.policies)} --runs {args.runs} --seed {args.seed} "
-                       f"--particles {args.particles} --accuracy {args.accuracy} "
+                       f"--particles {args.particles} --accuracy {accuracy} "
                        f"--truth {args.truth}")
     # the report's figures need matplotlib (~0.8 s), not the checks before the runs
     from tmaplan import report_contacts  # deferred: matplotlib
@@ -184,12 +185,21 @@ def flown_legs(result: Any, scenario: Scenario, out_dir: Path, *,
     dt = float(times[1] - times[0])
     heading0 = float(course_speed(initial_velocity(scenario.observer))[0])
     out: dict[str, Any] = {}
+    stems: set[str] = set()
     for name in result.policies:
         pos = np.asarray(result.examples[name].observer, float)
         rates, courses, speed = flown_turn_rates(pos, heading0, dt)
         legs = legs_from_track(times - times[0], courses, turn_rates=rates)
         nav = navigator_legs(legs, pos, speed=speed, dt=dt)
-        stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) + "_run0"
+        base = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
+        # two names may read alike in a file name ("planned:a b", "planned:a_b"): number the
+        # later ones, never overwrite an earlier policy's files
+        stem, k = base, 1
+        while stem in stems:
+            k += 1
+            stem = f"{base}-{k}"
+        stems.add(stem)
+        stem += "_run0"
         if not quiet:
             print(f"{name}, flown on run 0:")
         out[name] = navigator_exports(legs, nav, times, pos, scenario, out_dir, stem,

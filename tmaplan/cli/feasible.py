@@ -22,6 +22,7 @@ from typing import Any
 
 from tmaplan.cli.args import DEMO_POLICIES
 from tmaplan.display import seconds_text
+from tmaplan.errors import ScenarioError
 from tmaplan.memory import check_steps
 from tmaplan.models.plausibility import warn_suspicious
 from tmaplan.planning.feasibility import check_keep_out, check_planning_horizon
@@ -109,10 +110,29 @@ def check_memory(args: argparse.Namespace, scenario: Any, *,
                 received=seconds_text(value), source=scenario.name, available=available)
 
 
+def _closed_form(args: argparse.Namespace) -> bool:
+    """Whether the verb evaluates the closed-form LPC bound (brehard2005): the planners'
+    objectives, the baseline grids, the ping scheduler, the ranked cost functionals."""
+    if args.verb in ("plan", "schedule", "rank-costs"):
+        return True
+    if args.verb in ("compare", "demo"):
+        manoeuvres, pings = _policy_names(args)
+        return bool(manoeuvres & _BASELINES or pings & _SCHEDULING)
+    return False
+
+
 def check_feasible(args: argparse.Namespace, scenario: Any, *, prior_verb: bool = True) -> None:
     """The planning checks and the motion model's warnings of the module notes for
-    ``args.verb`` on ``scenario`` (``prior_verb``: the verb reads the prior)."""
+    ``args.verb`` on ``scenario`` (``prior_verb``: the verb reads the prior); a target
+    without process noise where the closed-form bound is evaluated (it failed deep inside
+    with "Singular matrix")."""
     warn_suspicious(scenario, prior=prior_verb)
+    q = float(scenario.target.q)
+    if _closed_form(args) and not q > 0.0:
+        raise ScenarioError("target.q", f"> 0 for tmaplan {args.verb}: its closed-form bound "
+                            "(brehard2005) propagates the belief through the target's process "
+                            "noise, e.g. q = \"1e-5 m^2/s^3\" in the target's table", q,
+                            source=scenario.name)
     if not _plans(args):
         return
     if args.verb != "plan" or (args.horizon is None and args.control_interval is None):

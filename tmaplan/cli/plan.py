@@ -39,7 +39,12 @@ from tmaplan.io.plans import Leg, legs_from_track, legs_json, write_plan
 from tmaplan.models.leg_table import NavigatorLegs, track_navigator_legs
 from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner
+from tmaplan.planning.contacts import (
+    ContactSet,
+    ContactsPlan,
+    ContactsPlanner,
+    warn_if_saturated,
+)
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 from tmaplan.planning.joint import plan_joint
 from tmaplan.planning.joint_ocp import plan_joint_ocp
@@ -207,6 +212,8 @@ def _run_several(args: argparse.Namespace, scenario: Scenario) -> dict[str, Any]
                                      **{f"alone:{n}": p for n, p in res.alone.items()}}
     each = dict(zip(plans, planner.per_contact(bel, [p.observer for p in plans.values()]),
                     strict=True))
+    warn_if_saturated(res.objective_name, {n: t for n, (t, _) in each["joint"].items()},
+                      float(res.plan.times[-1] - res.plan.times[0]))
     ev = planner.joint.evaluator(cast(Any, bel))  # the joint objective, settings and all
     base = evaluate_baselines(cs.views[0], evaluator=ev)
     plan = res.plan

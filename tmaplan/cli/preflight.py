@@ -27,6 +27,7 @@ from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES
 from tmaplan.planning.objectives import OBJECTIVE_NAMES
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.parse import check_policy
+from tmaplan.scenario.contacts import contact_field
 from tmaplan.simulate import check_truth_source
 
 __all__ = ["preflight"]
@@ -202,18 +203,33 @@ def _check_compare(args: argparse.Namespace, scenario: Any) -> None:
                               "straight[+PING] only", None, scenario)
 
 
+def _check_rank_costs(args: argparse.Namespace, scenario: Any) -> None:
+    # with several contacts this runs on every contact's view before the first ranking: a
+    # contact without a prior is refused before hours of runs on the contacts before it
+    if scenario.prior is None:
+        raise _scenario_error("prior", "a [prior] table: every candidate is flown against "
+                              "the particle filter, which starts from the prior, and the "
+                              "truths are drawn from it", None, scenario)
+    check_truth_source(scenario, True)
+
+
 #: Verbs whose results depend on the prior (the others do not read it).
 _PRIOR_VERBS = frozenset({"bound", "track", "plan", "schedule", "compare", "demo"})
 
 
-def _truth_note(verb: str, scenario: Any) -> None:
+def _truth_note(verb: str, scenario: Any, whose: tuple[Any, int] | None = None) -> None:
+    # ``whose``: (the several-contact scenario, the index of the contact ``scenario`` is the
+    # view of), to name the contact's table and the contact as its errors do
     if verb not in _PRIOR_VERBS:
         return
     p = scenario.prior
     fields = p.truth_fields if p is not None else ()
     if fields:
+        names = [f"prior.{f}" if whose is None else contact_field(*whose, f"prior.{f}")
+                 for f in fields]
+        tail = "" if whose is None else f" (contact '{whose[0].contacts[whose[1]].name}')"
         print(f"tmaplan {verb}: warning: {scenario.name}: the prior is centred on the target's "
-              f"true initial state ({', '.join('prior.' + f for f in fields)} from the truth)",
+              f"true initial state ({', '.join(names)} from the truth){tail}",
               file=sys.stderr)
 
 
@@ -245,10 +261,10 @@ def preflight(args: argparse.Namespace, scenario: Any) -> None:
     check_memory(args, scenario)  # first: the verbs' checks below may allocate per step
     check = {"plan": _check_plan, "bound": _check_bound, "track": _check_track,
              "schedule": _check_schedule, "compare": _check_compare,
-             "rank-costs": lambda a, s: check_truth_source(s, True),
+             "rank-costs": _check_rank_costs,
              "crlb": _check_frequencies}.get(args.verb)
     if check is not None:
         check(args, scenario)
     check_feasible(args, scenario, prior_verb=args.verb in _PRIOR_VERBS)
-    _truth_note(args.verb, scenario)
+    _truth_note(args.verb, scenario, getattr(args, "contact_of", None))
 

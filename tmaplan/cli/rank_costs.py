@@ -19,12 +19,13 @@ from tmaplan.cli.args import (
     MAX_RUNS,
     MAX_SAMPLES,
     MAX_WORKERS,
+    accuracy_of,
+    add_accuracy_argument,
     add_figure_arguments,
     add_problem_argument,
     add_seed_argument,
     command_line,
     integer,
-    open_fraction,
     repeated,
 )
 from tmaplan.cli.contacts import scenario_of
@@ -53,8 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed_argument(parser, help="root seed (default 0)")
     parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
                         help="particle-filter size (default 3000)")
-    parser.add_argument("--accuracy", type=open_fraction, default=0.1,
-                        help="relative range error that counts as localised (default 0.1)")
+    add_accuracy_argument(parser)
     parser.add_argument("--plans", default="all", metavar="all|none|OBJ,OBJ,..",
                         help="objectives whose offline plans are candidates (default all)")
     parser.add_argument("--cost-samples", type=integer(20, MAX_SAMPLES), default=1000,
@@ -86,12 +86,18 @@ def _plans(text: str) -> tuple[str, ...] | None:
     return names
 
 
+def check_arguments(args: argparse.Namespace) -> None:
+    """The flags' own rules (no scenario needed): run before any contact's block."""
+    _plans(args.plans)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Run (or resume) the ranking; write the figure and ``<problem>_rank-costs.html``."""
     scenario = scenario_of(args)
     quiet = args.json == "-"
+    accuracy = accuracy_of(args, scenario)
     res = rank_costs(scenario, candidates=args.candidates, runs=args.runs, seed=args.seed,
-                     n_particles=args.particles, accuracy=args.accuracy,
+                     n_particles=args.particles, accuracy=accuracy,
                      plan_objectives=_plans(args.plans), cost_samples=args.cost_samples,
                      n_resamples=args.resamples, workers=args.workers,
                      scheduler=args.scheduler, out_dir=args.out,
@@ -110,7 +116,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         del fig
     cmd = command_line("rank-costs", f"tmaplan rank-costs {shlex.quote(args.problem)} "
                        f"--candidates {args.candidates} --runs {args.runs} --seed {args.seed} "
-                       f"--particles {args.particles} --accuracy {args.accuracy} --plans "
+                       f"--particles {args.particles} --accuracy {accuracy} --plans "
                        f"{shlex.quote(args.plans)} --cost-samples {args.cost_samples} "
                        f"--resamples {args.resamples}")
     report = write_ranking_report(res, args.out, command=cmd, figure=None if args.no_figure

@@ -228,9 +228,9 @@ def _summary(name: str, sim: Simulation, seed: int) -> str:
 
 def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
     """``simulate`` of a several-contact scenario: one run of every contact
-    (:class:`ContactsSimulation`), a console line and a geometry figure per contact
-    (``<out>/<problem>-<contact>_geometry.png``); ``--export`` writes every contact's
-    bearings, each row naming its contact."""
+    (:class:`ContactsSimulation`), a console line, a geometry figure and a bearings figure
+    per contact (``<out>/<problem>-<contact>_geometry.png``, ``_bearings.png``, as one
+    contact's); ``--export`` writes every contact's bearings, each row naming its contact."""
     sim: ContactsSimulation = simulate_contacts(scenario, np.random.default_rng(args.seed))
     payload = sim.to_json()
     payload["seed"] = args.seed
@@ -243,11 +243,14 @@ def _run_several(args: argparse.Namespace, scenario: Any) -> dict[str, Any]:
         if args.json != "-":
             print(_summary(f"{scenario.name} contact {name}", run, args.seed))
         if not args.no_figure:
-            from tmaplan.plotting import plot_geometry  # deferred: matplotlib
+            from tmaplan.plotting import plot_bearings, plot_geometry  # deferred: matplotlib
 
             path = Path(args.out) / f"{scenario.name}-{name}_geometry.png"
             plot_geometry(run, path)
             payload["contacts"][name]["figure"] = str(path)
+            bearings = plot_bearings(run, Path(args.out) / f"{scenario.name}-{name}_bearings.png")
+            if bearings is not None:
+                payload["contacts"][name]["bearings_figure"] = str(bearings)
             if args.json != "-":
-                print(f"wrote {path}")
+                print(f"wrote {path}" + (f", {bearings}" if bearings is not None else ""))
     return payload

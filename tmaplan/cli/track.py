@@ -132,17 +132,26 @@ def _check_estimator_options(args: argparse.Namespace) -> None:
                                       f"ignored by {args.estimator})", value)
 
 
-def run(args: argparse.Namespace) -> dict[str, Any]:
-    """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
+def check_arguments(args: argparse.Namespace) -> None:
+    """The flags' own rules (no scenario needed): run before any contact's block."""
     if args.runs < 1:
         raise ArgumentError("--runs", ">= 1", args.runs)
     _check_estimator_options(args)
+    if getattr(args, "particles", None) is not None and args.particles < 2:
+        raise ArgumentError("--particles", ">= 2", args.particles)
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run the Monte Carlo and return the docs/cli.md ``track`` fields."""
+    check_arguments(args)
     particles = 10_000 if getattr(args, "particles", None) is None else args.particles
-    if particles < 2:
-        raise ArgumentError("--particles", ">= 2", particles)
     scenario = _with_lines(scenario_of(args), getattr(args, "frequencies", 0))
     if getattr(args, "observer_plan", None) is not None:
-        scenario = with_observer_plan(scenario, args.observer_plan)
+        # a contact's view flies the plan of its problem (`tmaplan plan P`, the own ship's
+        # for every contact; the view, "<problem>-<contact>", refused it as another's)
+        whole = getattr(args, "problem_scenario", None)
+        flown = with_observer_plan(scenario if whole is None else whole, args.observer_plan)
+        scenario = scenario.replace(observer=flown.observer)
     quiet = args.json == "-"
     show = not quiet and sys.stderr.isatty()
 

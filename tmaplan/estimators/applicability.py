@@ -100,8 +100,27 @@ _PREFERENCE = ("range-only", "pf", "pf-bearings", "mle")
 
 
 def _count(scenario: Scenario, kinds: frozenset[str]) -> int:
-    return sum(int(measurement_steps(s, scenario.time).size) for s in scenario.sensors
-               if s.kind in kinds)
+    """Measurements of ``kinds`` over the horizon; a range sensor's with a ``max_range`` only
+    where the noise-free true range is within it (a reading beyond the reach returns nothing,
+    :func:`tmaplan.simulate.simulate`)."""
+    sensors = [s for s in scenario.sensors if s.kind in kinds]
+    r = None
+    if any(getattr(s, "max_range", None) is not None for s in sensors):
+        rel = simulate(scenario, None).relative
+        r = np.hypot(rel[:, 0], rel[:, 1])
+    n = 0
+    for s in sensors:
+        steps = measurement_steps(s, scenario.time)
+        reach = getattr(s, "max_range", None)
+        n += int(steps.size if reach is None or r is None else np.sum(r[steps] <= reach))
+    return n
+
+
+def _reach_note(scenario: Scenario, kinds: frozenset[str]) -> str:
+    """`` within max_range on the true track`` when a counted sensor has a reach."""
+    reach = any(getattr(s, "max_range", None) is not None for s in scenario.sensors
+                if s.kind in kinds)
+    return " within max_range on the true track" if reach else ""
 
 
 def _resolution(scenario: Scenario) -> tuple[float, str]:
@@ -129,7 +148,7 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         kinds = " or ".join(sorted(decl.needs))
         why = f" ({decl.why_min})" if decl.why_min else ""
         return (f"{name} ({decl.what}) needs at least {decl.min_measurements} {kinds} "
-                f"measurements{why}, {scenario.name} has {n}")
+                f"measurements{why}, {scenario.name} has {n}{_reach_note(scenario, decl.needs)}")
     if scenario.prior is None and (decl.needs_prior == "always" or (
             decl.needs_prior == "bound" and bound is not False)):
         what = ("starts from the prior" if decl.needs_prior == "always" else

@@ -37,6 +37,7 @@ from tmaplan.evaluation.metrics import (
     run_metrics,
 )
 from tmaplan.evaluation.records import PolicyRun, RunRecord
+from tmaplan.scenario.contacts import weight_fractions
 
 if TYPE_CHECKING:
     from tmaplan.evaluation.campaigns import CampaignSpec
@@ -148,8 +149,8 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
     first = next(iter(views.values()))
     summary, diffs = aggregate(dataclasses.replace(spec, scenario=first), runs, times)
     censor = censor_time(times)
-    weights = {c.name: float(c.weight) for c in sc.contacts}
-    wsum = sum(weights.values())
+    share = dict(zip(sc.contact_names, weight_fractions([c.weight for c in sc.contacts]),
+                     strict=True))
     wtta: dict[str, np.ndarray] = {}
     for n in names:
         s = summary[n]
@@ -157,7 +158,7 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
             s[key] = np.max(np.stack([per[n][c][key] for c in views]), axis=0)
         t = {c: np.where(np.isposinf(per[n][c]["time_to_accuracy_runs"]), censor,
                          per[n][c]["time_to_accuracy_runs"]) for c in views}
-        wtta[n] = np.asarray(sum(weights[c] * t[c] for c in views), float) / wsum
+        wtta[n] = np.asarray(sum(share[c] * t[c] for c in views), float)
         s.update({"time_to_accuracy_all": s["time_to_accuracy"],
                   "time_to_accuracy_all_runs": s["time_to_accuracy_runs"],
                   "weighted_time_to_accuracy": float(np.mean(wtta[n])),

@@ -20,14 +20,16 @@ bit for bit as before.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError
-from tmaplan.estimators.particle_filter import PFConfig
+from tmaplan.estimators.particle_filter import DegeneracyWarning, PFConfig
 from tmaplan.evaluation.closed_loop import ClosedLoopRun, read_only
 from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.seeding import run_streams
@@ -40,6 +42,22 @@ from tmaplan.scenario import Scenario
 from tmaplan.simulate import draw_common_noise, draw_truth, measure_step
 
 __all__ = ["paired_contacts_run", "run_contacts_loop"]
+
+
+@contextmanager
+def _whose_warnings(contact: str, seen: dict[Any, Any]) -> Iterator[None]:
+    """Re-issue a filter's :class:`DegeneracyWarning` raised inside with the contact's name in
+    front (with several filters, "particle filter degenerate at step 24" alone does not say
+    whose); any other warning passes unchanged, once per run and place (``seen``: the
+    registry of this run's warnings)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DegeneracyWarning)
+        yield
+    for w in caught:
+        named = issubclass(w.category, DegeneracyWarning)
+        warnings.warn_explicit(f"contact '{contact}': {w.message}" if named else w.message,
+                               w.category, w.filename, w.lineno,
+                               registry=None if named else seen)
 
 
 def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, np.ndarray], *,
@@ -111,11 +129,13 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
     est = {n: np.full((K + 1, 4), np.nan) for n in names}
     cov = {n: np.full((K + 1, 4, 4), np.nan) for n in names}
     states: dict[str, Any] = {}
+    seen: dict[Any, Any] = {}
     for n in names:
-        st = filters[n].init(views[n], filter_rng)
-        if meas0 := measure_step(views[n], 0, tracks[n][0] - np.concatenate([pos, v0]),
-                                 noises[n]):
-            st = filters[n].update(st, meas0, filter_rng)
+        with _whose_warnings(n, seen):
+            st = filters[n].init(views[n], filter_rng)
+            if meas0 := measure_step(views[n], 0, tracks[n][0] - np.concatenate([pos, v0]),
+                                     noises[n]):
+                st = filters[n].update(st, meas0, filter_rng)
         states[n] = st
         est[n][0], cov[n][0] = st.mean, st.cov
 
@@ -141,8 +161,9 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
         for n in names:
             meas = measure_step(views[n], k + 1, tracks[n][k + 1] - own, noises[n],
                                 ping=bool(act.ping))
-            st = filters[n].predict(states[n], vbar[k + 1] - vbar[k], filter_rng)
-            states[n] = st = filters[n].update(st, meas, filter_rng)
+            with _whose_warnings(n, seen):
+                st = filters[n].predict(states[n], vbar[k + 1] - vbar[k], filter_rng)
+                states[n] = st = filters[n].update(st, meas, filter_rng)
             est[n][k + 1], cov[n][k + 1] = st.mean, st.cov
 
     obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,

@@ -23,7 +23,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Sequence
+import warnings
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -47,7 +48,8 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["JOINT_STARTS", "WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan",
-           "ContactsPlanner", "plan_contacts"]
+           "ContactsPlanner", "SaturatedObjectiveWarning", "plan_contacts",
+           "warn_if_saturated"]
 
 #: IPOPT options of the ``worst-contact`` joint NLP (under the caller's ``solver_options``):
 #: without second-order corrections (``max_soc`` 0): with the limited-memory Hessian they
@@ -60,6 +62,33 @@ WORST_CONTACT_IPOPT: dict[str, Any] = {"acceptable_tol": 1e-4, "acceptable_iter"
 #: solved (at least two are tried while none converged).
 JOINT_STARTS: dict[str, int] = {"all-contacts-time-to-accuracy": 2,
                                 "weighted-time-to-accuracy": 2, "worst-contact": 1}
+
+
+class SaturatedObjectiveWarning(UserWarning):
+    """A min-max joint objective (``all-contacts-time-to-accuracy``, ``worst-contact``) whose
+    latest contact is not expected to be localised within the horizon on the joint plan: it
+    then scores every plan at about the horizon and cannot rank them by what they localise."""
+
+
+def warn_if_saturated(objective: str, times: Mapping[str, float], horizon: float) -> None:
+    """Warn (:class:`SaturatedObjectiveWarning`, one line) when ``objective`` takes the latest
+    contact's time and contacts' expected times to accuracy ``times`` [s] on the joint plan
+    reach the plan's ``horizon`` [s]: with two contacts localised at 25 min and one never
+    within 30 min, every plan scores about 30 min plus its turn penalty, and the least turning
+    plan wins (on a five-contact problem the joint plan flew straight, localising none, where
+    each contact's own plan localised four of five)."""
+    if objective not in ("all-contacts-time-to-accuracy", "worst-contact"):
+        return
+    late = [n for n, t in times.items() if t >= horizon]
+    if late:
+        names = ", ".join(f"'{n}'" for n in late)
+        warnings.warn(f"{objective}: on the joint plan {len(late)} of {len(times)} contacts "
+                      f"({names}) are not expected to be localised within the "
+                      f"{horizon / 60:.4g} min horizon, so the objective (the latest "
+                      "contact's time) is about the horizon on every plan and cannot rank "
+                      "them by what they localise; --objective weighted-time-to-accuracy or "
+                      "a longer --horizon scores the contacts that can be localised",
+                      SaturatedObjectiveWarning, stacklevel=2)
 
 
 def _shared(view: Scenario, field: str) -> Any:

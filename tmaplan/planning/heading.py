@@ -168,7 +168,8 @@ class HeadingPlanner:
         self.scenario = scenario
         if objective is None:
             objective = pl.objective if pl is not None else DEFAULT_OBJECTIVE
-        self.objective = make_objective(objective, samples=logdet_samples)
+        self.objective = make_objective(objective, samples=logdet_samples,
+                                        accuracy=scenario.required_accuracy)
         if transcription not in ("direct", "bang-bang"):
             raise PlanningError(f"transcription: expected 'direct' or 'bang-bang', received "
                                 f"{transcription!r}")

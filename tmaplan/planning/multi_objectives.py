@@ -47,6 +47,7 @@ from tmaplan.planning.objectives import (
     horizon_turn_penalty,
     not_localised_graph,
 )
+from tmaplan.scenario.contacts import weight_fractions
 from tmaplan.scenario.names import (
     CONTACTS_OBJECTIVE_NAMES,
     DEFAULT_CONTACTS_OBJECTIVE,
@@ -270,8 +271,8 @@ class ContactsObjective(Objective):
         if self.kind == "worst-contact":
             return ca.DM(0.0)
         if self.kind == "weighted-time-to-accuracy":
-            tot = sum(w * e for w, e in zip(self.weights, self.expected_times(ctx), strict=True))
-            return tot / sum(self.weights)
+            return sum(f * e for f, e in zip(weight_fractions(self.weights),
+                                             self.expected_times(ctx), strict=True))
         sigs = self.indicators(ctx)
         if len(sigs) == 1:  # exactly the terms of expected-time-to-accuracy
             return expected_time_of(self.contexts(ctx)[0], sigs[0])

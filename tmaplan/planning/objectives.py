@@ -49,7 +49,12 @@ from tmaplan.planning.objective_graphs import (
     position_bound_graph,
     relative_range_crlb_graph,
 )
-from tmaplan.scenario.names import DEFAULT_OBJECTIVE, OBJECTIVE_NAMES, ObjectiveName
+from tmaplan.scenario.names import (
+    DEFAULT_OBJECTIVE,
+    DEFAULT_REQUIRED_ACCURACY,
+    OBJECTIVE_NAMES,
+    ObjectiveName,
+)
 
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
@@ -370,8 +375,11 @@ def turn_penalty(weight: float = 1.0) -> Objective:
     return Objective("turn-penalty", ((float(weight), term),))
 
 
-def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
-    """Objective from a name of :data:`OBJECTIVE_NAMES` (or pass an :class:`Objective`)."""
+def make_objective(name: str | Objective, *, samples: int = 1,
+                   accuracy: float = DEFAULT_REQUIRED_ACCURACY) -> Objective:
+    """Objective from a name of :data:`OBJECTIVE_NAMES` (or pass an :class:`Objective`);
+    ``accuracy`` [-] is the relative range accuracy of the time-to-accuracy objectives (the
+    scenario's :attr:`~tmaplan.scenario.Scenario.required_accuracy`, 10 % by default)."""
     if isinstance(name, Objective):
         return name
     table: dict[str, Callable[[], Objective]] = {
@@ -386,8 +394,9 @@ def make_objective(name: str | Objective, *, samples: int = 1) -> Objective:
         "mean-relative-range-bound": lambda: relative_range_bound("mean"),
         "relative-range-crlb": lambda: relative_range_crlb("terminal", max(samples, 16)),
         "mean-relative-range-crlb": lambda: relative_range_crlb("mean", max(samples, 16)),
-        "time-to-accuracy": lambda: time_to_accuracy(0.1, max(samples, 16)),
-        "expected-time-to-accuracy": lambda: expected_time_to_accuracy(0.1, max(samples, 128)),
+        "time-to-accuracy": lambda: time_to_accuracy(accuracy, max(samples, 16)),
+        "expected-time-to-accuracy": lambda: expected_time_to_accuracy(accuracy,
+                                                                       max(samples, 128)),
     }
     if name not in OBJECTIVE_NAMES:
         raise ArgumentError("objective", f"one of {', '.join(OBJECTIVE_NAMES)}", name)
@@ -433,7 +442,8 @@ class ObjectiveEvaluator:
         if turn_rate_max is not None:
             finite_real("turn_rate_max", turn_rate_max, "a finite value >= 0 rad/s", lower=0.0)
         self.scenario = scenario
-        self.objective = make_objective(objective, samples=samples)
+        self.objective = make_objective(objective, samples=samples,
+                                        accuracy=scenario.required_accuracy)
         self.belief = belief if belief is not None else Belief.from_prior(scenario)
         K = scenario.time.n_steps if n_steps is None else int(n_steps)
         self.n_steps = K

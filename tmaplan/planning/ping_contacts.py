@@ -41,6 +41,7 @@ from tmaplan.planning.pings import (
     schedule_pings,
 )
 from tmaplan.scenario import RangeSensor
+from tmaplan.scenario.contacts import weight_fractions
 
 if TYPE_CHECKING:
     from tmaplan.planning.belief import Belief
@@ -86,11 +87,10 @@ class ContactsPingEvaluator:
                  objective: str = "mean-range-bound", max_range: float | None = None) -> None:
         evs = [PingEvaluator(v, observer, b, objective)
                for v, b in zip(contacts.views, beliefs.beliefs, strict=True)]
-        tot = float(sum(contacts.weights))
         reach = [np.ones(ev.K + 1, bool) if max_range is None else
                  np.sqrt(np.asarray(ev.engine.er2, float)) <= float(max_range) for ev in evs]
-        self.parts = tuple((ev, w / tot, r)
-                           for ev, w, r in zip(evs, contacts.weights, reach, strict=True))
+        self.parts = tuple((ev, w, r) for ev, w, r in zip(
+            evs, weight_fractions(contacts.weights), reach, strict=True))
         self.names = contacts.names
         ev0 = evs[0]
         self.objective, self.K, self.dt, self.times = ev0.objective, ev0.K, ev0.dt, ev0.times

@@ -12,13 +12,14 @@ its single-contact verbs per contact the same way.
 from __future__ import annotations
 
 import types
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
 from tmaplan.errors import ScenarioError
 
-__all__ = ["CONTACT_FIELDS", "contact_field", "contact_parts", "in_contact", "single_form"]
+__all__ = ["CONTACT_FIELDS", "contact_field", "contact_parts", "in_contact", "single_form",
+           "weight_fractions"]
 
 #: top-level fields of a file that belong to a contact (the rest is shared)
 CONTACT_FIELDS = ("target", "prior")
@@ -65,3 +66,15 @@ def contact_parts(s: Any) -> Iterator[tuple[int, Any]]:
                                                   "planning", "estimation", "faults")}
     for i, c in enumerate(s.contacts):
         yield i, types.SimpleNamespace(**shared, target=c.target, prior=c.prior)
+
+
+def weight_fractions(weights: Sequence[float]) -> tuple[float, ...]:
+    """Each contact's share ``w_c / Σ w`` [-] of the weights ``w`` (> 0, finite): the weights
+    of the weighted means (``weighted-time-to-accuracy``, the shared ping schedule's
+    objective, the campaigns' ``weighted_time_to_accuracy``). Scaled by the largest weight
+    first, so that weights near the float limit (two of 1e308) do not overflow the sum into
+    inf and every mean into NaN."""
+    top = max(float(w) for w in weights)
+    scaled = [float(w) / top for w in weights]
+    total = sum(scaled)
+    return tuple(w / total for w in scaled)

@@ -111,6 +111,11 @@ def _with_contacts(data: Mapping[str, Any], source: str | None) -> tuple[dict[st
             raise ScenarioError(given[0], "either [[contacts]] tables or a bare [target]/"
                                 "[prior], not both (move it into a [[contacts]] table)",
                                 "{" + ", ".join(given) + "}", source=source)
+        contacts = data["contacts"]
+        if isinstance(contacts, Mapping):  # `[contacts]` for `[[contacts]]`
+            raise ScenarioError("contacts", "[[contacts]] tables, one per contact (an array of "
+                                "tables: double brackets)", "a single [contacts] table {"
+                                + ", ".join(map(str, contacts)) + "}", source=source)
         return data, False
     contact: dict[str, Any] = {"name": DEFAULT_CONTACT}
     for key in given:

@@ -530,13 +530,13 @@ class Scenario:
 
     @property
     def required_accuracy(self) -> float:
-        """Relative range accuracy [-] at which the (one) contact counts as localised:
-        ``planning.required_accuracy`` or 10 % (a contact's own value in its
-        :meth:`contact_view`)."""
+        """Relative range accuracy [-] at which the (one) contact counts as localised: its
+        own ``required_accuracy`` (one contact), else ``planning.required_accuracy``, else
+        10 % (a contact's own value in its :meth:`contact_view`)."""
+        own = self.contacts[0].required_accuracy if len(self.contacts) == 1 else None
         pl = self.planning
-        if pl is None or pl.required_accuracy is None:
-            return DEFAULT_REQUIRED_ACCURACY
-        return pl.required_accuracy
+        return own if own is not None else DEFAULT_REQUIRED_ACCURACY if (
+            pl is None or pl.required_accuracy is None) else pl.required_accuracy
 
     def contact(self, name: str) -> Contact:
         """The contact called ``name``.

@@ -215,6 +215,28 @@ def test_worst_contact_plan_bounds_each_contact_alone(views):
     assert max(r.expected_times.values()) <= worst_alone + 0.01 * span
 
 
+def test_worst_contact_takes_a_dominant_contacts_own_plan_certified(views):
+    """A contact latest on its own plan (here the one localised at 4 % instead of 10 %):
+    ``max_c E[T_c] + pen ≥ E[T_a] + pen ≥`` a's own optimum on every plan, met on a's own
+    plan, which is then the min-max's optimum and returned without the epigraph NLP (which
+    IPOPT failed to solve from that start on contacts of different accuracies)."""
+    cs = ContactSet(views=views[:2], names=("d", "a"), required_accuracies=(0.1, 0.04))
+    planner = ContactsPlanner(cs, objective="worst-contact", samples=SAMPLES)
+    r = planner.solve()
+    assert r.plan.success and r.start == "alone:a (dominant)"
+    assert r.solves == (("alone:a (dominant)", r.alone["a"].iterations, r.alone["a"].status),)
+    # the certificate: a is the latest on its own plan, and the value is its own optimum
+    assert r.expected_times["a"] >= r.expected_times["d"]
+    assert r.objective == pytest.approx(r.alone["a"].objective, rel=1e-9)
+    ev = planner.joint.evaluator(cs.beliefs())
+    assert ev(r.plan.observer)[0] == pytest.approx(r.objective, rel=1e-9)
+    # a lower bound of the min-max: no plan beats any contact's own optimum
+    assert r.objective >= max(p.objective for p in r.alone.values()) - 1e-9 * r.objective
+    # a plan of the joint NLP (its epigraph variable included): a re-plan starts from it
+    assert r.plan.warm["x"].size == planner.joint.nlp["x"].numel()
+    np.testing.assert_allclose(r.plan.turn_rate, r.alone["a"].turn_rate, atol=1e-9)
+
+
 _OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
@@ -256,7 +278,8 @@ def test_worst_contact_solve_costs_a_few_weighted_solves():
     r = worst.solve()
     assert r.plan.success and len(r.solves) == 1
     j = worst.joint
-    u = (np.clip(r.alone[r.start[6:]].turn_rate / j.u_max, -1, 1) if r.start.startswith(
+    own = r.start[6:].removesuffix(" (dominant)")  # a contact's own plan: alone:NAME
+    u = (np.clip(r.alone[own].turn_rate / j.u_max, -1, 1) if r.start.startswith(
         "alone:") else j.start_programs()[int(r.start.split()[-1]) if " " in r.start else 0])
     weighted = ContactsPlanner(cs, objective="weighted-time-to-accuracy").joint.solve(
         cs.beliefs(), starts=[u])

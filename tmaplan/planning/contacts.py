@@ -423,6 +423,12 @@ class ContactsPlanner:
                                 max(self.joint_starts, 2), kw)
             labels = {id(u): lab for lab, u in cands.items()}
             best, start, solves = None, "built-in", []
+            dominant = self._dominant_own_plan(bel, alone, kw)
+            if dominant is not None:  # the min-max's optimum, certified: no NLP to solve
+                name, best = dominant
+                start = f"alone:{name} (dominant)"
+                solves.append((start, best.iterations, best.status))
+                keep = []
             for i, u in enumerate(keep):
                 if i >= self.joint_starts and best is not None and best.success:
                     break  # the next start only while none converged
@@ -441,6 +447,49 @@ class ContactsPlanner:
                             alone_times={n: t[n] for n, t in zip(alone, times[1:], strict=True)},
                             start=start, seconds=time.perf_counter() - t0,
                             solves=tuple(solves))
+
+    def _dominant_own_plan(self, bel: ContactBeliefs, alone: Mapping[str, HeadingPlan],
+                           kw: dict[str, Any]) -> tuple[str, HeadingPlan] | None:
+        """``worst-contact``: a contact's own plan on which that contact is the latest, as a
+        plan of the joint NLP, or None.
+
+        ``max_c E[T_c](x) + pen(x) ≥ E[T_c](x) + pen(x) ≥ E[T_c](x_c) + pen(x_c)`` for every
+        plan x, x_c contact c's own plan (its ``expected-time-to-accuracy`` optimum, the same
+        draws and turn penalty). Where c is the latest contact on x_c (``E[T_c'](x_c) ≤
+        E[T_c](x_c)`` for every c') and x_c keeps out of every contact, the two sides meet
+        at x_c: it is the min-max's optimum (as far as x_c is c's; a KKT point of the
+        epigraph NLP with multiplier 1 on c's constraint), which IPOPT's limited-memory
+        epigraph NLP can fail to find from that very start (contacts with different
+        required accuracies; docs/several-contacts.md).
+        """
+        if self.objective_name != "worst-contact" or not alone:
+            return None
+        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
+
+        j = self.joint
+        names = [n for n, p in alone.items() if p.success]
+        times = self.expected_times(bel, [alone[n] for n in names])
+        hd0, spd0, p0 = j.start_state(kw["heading0"], kw["speed0"], kw["position0"])
+        for name, t in zip(names, times, strict=True):
+            if t[name] < max(t.values()):
+                continue
+            u = np.clip(alone[name].turn_rate / max(j.u_max, 1e-12), -1, 1)
+            P = np.concatenate([j.parameter_vector(cast(Any, bel), ()), [hd0, spd0, 1.0, 1.0]])
+            x = j.with_epigraph_start(j.decision_vector(u, hd0, spd0), P)
+            _, _, lbg, ubg = j.bounds(hd0)
+            g = np.asarray(ca.Function("joint_g", [j.nlp["x"], j.nlp["p"]],
+                                       [j.nlp["g"]])(x, P)).reshape(-1)
+            tol = 1e-6 * (1.0 + np.abs(np.where(np.isfinite(ubg), ubg, lbg)))
+            if not (np.all(g <= ubg + tol) and np.all(g >= lbg - tol)):
+                continue  # inside another contact's keep-out range
+            own = alone[name]
+            warm = {"x": x, "lam_x": np.zeros_like(x), "lam_g": np.zeros(lbg.size),
+                    "sign": 1.0, "shape": (j.transcription, j.n, j.n_arcs), "scale": 1.0}
+            return name, j.make_plan(
+                x, P, bel.t, p0, spd0, own.status, True, own.iterations, own.seconds, warm,
+                f"{name}'s own plan: the latest contact on it, so the worst-contact optimum "
+                "(no joint solve)")
+        return None
 
     def wrap(self, beliefs: ContactBeliefs | Sequence[Belief] | None, plan: HeadingPlan, *,
              start: str, t0: float) -> ContactsPlan:

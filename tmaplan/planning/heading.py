@@ -425,13 +425,13 @@ class HeadingPlanner:
         else:
             duals, guesses = None, self._guesses(heading0, speed0)
         P0 = np.concatenate([pvec, [heading0, speed0, 1.0, guesses[0][1]]])
-        f0 = self.plan_function(self._with_epigraph(guesses[0][0], P0), P0)[0].item()
+        f0 = self.plan_function(self.with_epigraph_start(guesses[0][0], P0), P0)[0].item()
         scale = max(abs(f0), 1e-3) if np.isfinite(f0) else 1.0
         best: tuple[float, Any, str, float] | None = None
         iters, statuses = 0, []
         for x0, sgn in guesses:
             P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
-            x0 = self._with_epigraph(x0, P)
+            x0 = self.with_epigraph_start(x0, P)
             use_warm = duals is not None
             solver = self._solver(use_warm, tol)
             kw: dict[str, Any] = {"x0": x0, "p": P, "lbx": lbw, "ubx": ubw, "lbg": lbg,
@@ -467,14 +467,14 @@ class HeadingPlanner:
                                   f"not converge from {len(guesses)} start(s)")
         P = np.concatenate([pvec, [heading0, speed0, scale, sgn]])
         # a min-max's epigraph variable at its tightest: the objective is the largest term's
-        x = self._with_epigraph(np.asarray(sol["x"]).reshape(-1)[: self._n_w], P)
+        x = self.with_epigraph_start(np.asarray(sol["x"]).reshape(-1)[: self._n_w], P)
         warm = {"x": x, "lam_x": np.asarray(sol["lam_x"]).reshape(-1),
                 "lam_g": np.asarray(sol["lam_g"]).reshape(-1), "sign": sgn,
                 "shape": (self.transcription, self.n, self.n_arcs), "scale": scale}
         return self.make_plan(x, P, belief.t, p0, speed0, status, success, iters, seconds, warm,
                               ", ".join(statuses))
 
-    def _with_epigraph(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+    def with_epigraph_start(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """A start ``x`` of the transcription's variables with the epigraph variable appended
         at its tightest value (max of the terms), when the objective has one."""
         if x.size != self._n_w or self._epi_guess is None:

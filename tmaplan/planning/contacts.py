@@ -464,22 +464,20 @@ class ContactsPlanner:
         """
         if self.objective_name != "worst-contact" or not alone:
             return None
-        import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
-
         j = self.joint
         names = [n for n, p in alone.items() if p.success]
         times = self.expected_times(bel, [alone[n] for n in names])
         hd0, spd0, p0 = j.start_state(kw["heading0"], kw["speed0"], kw["position0"])
+        P = np.concatenate([j.parameter_vector(cast(Any, bel), ()), [hd0, spd0, 1.0, 1.0]])
+        _, _, lbg, ubg = j.bounds(hd0)
+        tol = 1e-6 * (1.0 + np.abs(np.where(np.isfinite(ubg), ubg, lbg)))
         for name, t in zip(names, times, strict=True):
             if t[name] < max(t.values()):
                 continue
             u = np.clip(alone[name].turn_rate / max(j.u_max, 1e-12), -1, 1)
-            P = np.concatenate([j.parameter_vector(cast(Any, bel), ()), [hd0, spd0, 1.0, 1.0]])
             x = j.with_epigraph_start(j.decision_vector(u, hd0, spd0), P)
-            _, _, lbg, ubg = j.bounds(hd0)
-            g = np.asarray(ca.Function("joint_g", [j.nlp["x"], j.nlp["p"]],
-                                       [j.nlp["g"]])(x, P)).reshape(-1)
-            tol = 1e-6 * (1.0 + np.abs(np.where(np.isfinite(ubg), ubg, lbg)))
+            outs = j.plan_function(x, P)  # the plan's outputs and, last, the constraints
+            g = np.asarray(outs[-1]).reshape(-1)
             if not (np.all(g <= ubg + tol) and np.all(g >= lbg - tol)):
                 continue  # inside another contact's keep-out range
             own = alone[name]
@@ -488,7 +486,7 @@ class ContactsPlanner:
             return name, j.make_plan(
                 x, P, bel.t, p0, spd0, own.status, True, own.iterations, own.seconds, warm,
                 f"{name}'s own plan: the latest contact on it, so the worst-contact optimum "
-                "(no joint solve)")
+                "(no joint solve)", evaluated=outs)
         return None
 
     def wrap(self, beliefs: ContactBeliefs | Sequence[Belief] | None, plan: HeadingPlan, *,

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import warnings
 
 import numpy as np
 import pytest
 
-from tmaplan.errors import ArgumentError, PlanningError
+from tmaplan.errors import ArgumentError, PlanningError, ScenarioWarning
 from tmaplan.evaluation.closed_loop import run_closed_loop
 from tmaplan.evaluation.contacts_campaign import aggregate_metrics
 from tmaplan.evaluation.contacts_loop import run_contacts_loop
@@ -104,9 +105,25 @@ def test_nearest_contact_is_the_one_of_least_prior_mean_range(near):
 
 
 def test_heaviest_contact_is_the_one_of_largest_weight():
-    assert heaviest_contact(load("three-contacts-screen")) == "charlie"
-    # equal weights: the first
-    assert heaviest_contact(load("two-contacts-crossing")) == "alpha"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert heaviest_contact(load("three-contacts-screen")) == "charlie"
+    # equal weights: the first, said
+    with pytest.warns(ScenarioWarning, match="heaviest-contact: contacts 'alpha', 'bravo' are "
+                      "equally heavy.*flying the plan for 'alpha'"):
+        assert heaviest_contact(load("two-contacts-crossing")) == "alpha"
+
+
+def test_nearest_contact_says_when_contacts_are_equally_near():
+    # the built-in's two priors are the same uniform 5-25 km ranges: their sampled means
+    # differ by 0.2 %, no tactical choice
+    with pytest.warns(ScenarioWarning, match="nearest-contact: contacts 'alpha', 'bravo' are "
+                      r"equally near .*within 1 %.*flying the plan for 'alpha'"):
+        assert nearest_contact(load("two-contacts-crossing")) == "alpha"
+    sc = _prior_range(load("two-contacts-crossing"), "bravo", 3000.0, 8000.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert nearest_contact(sc) == "bravo"
 
 
 def test_policy_names_for_several_contacts():

@@ -15,7 +15,11 @@ import pytest
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.planning import schedule_pings
 from tmaplan.planning.contacts import ContactSet
-from tmaplan.planning.ping_contacts import ContactsPingEvaluator, schedule_contact_pings
+from tmaplan.planning.ping_contacts import (
+    ContactsPingEvaluator,
+    PingReachWarning,
+    schedule_contact_pings,
+)
 from tmaplan.scenario import load_problem
 
 
@@ -82,11 +86,44 @@ def test_ping_out_of_reach_does_not_inform(pair):
         assert np.array_equal(r.reach[n], r.reach[n].astype(bool))
     # the median range reaches one contact and not the other
     assert sorted(bool(r.reach[n].any()) for n in cs.names) == [False, True]
-    far = schedule_contact_pings(cs, budget=2, method="greedy", max_range=1.0)
+    with pytest.warns(PingReachWarning):
+        far = schedule_contact_pings(cs, budget=2, method="greedy", max_range=1.0)
     assert far.objectives == far.no_ping_objectives
     js = r.contacts_json()
     assert set(js) == set(cs.names)
     assert {k: v["pings_in_reach"] for k, v in js.items()} == r.pings_in_reach
+
+
+@pytest.mark.parametrize("method", ["exact", "relaxed", "greedy"])
+def test_pings_only_where_a_contact_is_in_reach(pair, method):
+    """A ping out of every contact's reach informs nobody: the schedule keeps to the steps
+    in reach, with fewer pings than the budget (and a warning) when fewer fit there, at the
+    optimum of every schedule of the full budget on every step (brute force)."""
+    d = pair[0]
+    cs = ContactSet(views=(d,), names=("d",))
+    _, ev = _brute(cs, 1, None)
+    r_hat = np.sqrt(ev.parts[0][0].engine.er2)[1:]  # steps 1..K
+    m = 3
+    mr = float(np.sort(r_hat)[m - 1]) * (1 + 1e-9)  # exactly m steps in reach
+    budget = m + 2
+    best, _ = _brute(cs, budget, mr)
+    with pytest.warns(PingReachWarning, match=f"{budget} pings asked.*at only {m} of the"):
+        r = schedule_contact_pings(cs, budget=budget, method=method, max_range=mr)
+    s = r.schedule
+    assert len(s.steps) == m and r.pings_in_reach["d"] == m
+    assert np.all(r_hat[np.asarray(s.steps) - 1] <= mr)
+    assert s.objective == pytest.approx(best, rel=1e-9)
+    if method != "greedy":
+        assert s.status == "optimal" and s.lower_bound <= s.objective * (1 + 1e-9)
+    # nobody in reach anywhere: no ping at all, certified, the no-ping objective
+    with pytest.warns(PingReachWarning, match="at none of the"):
+        far = schedule_contact_pings(ContactSet(views=pair, names=("d", "a")), budget=2,
+                                     method=method, max_range=1.0)
+    assert len(far.schedule.steps) == 0
+    assert far.schedule.objective == pytest.approx(far.schedule.no_ping_objective, rel=1e-12)
+    assert far.objectives == far.no_ping_objectives
+    if method != "greedy":
+        assert far.schedule.status == "optimal"
 
 
 def test_invariant_to_contact_order(pair):

@@ -32,6 +32,7 @@ __all__ = [
     "StepInformation",
     "closed_form_model",
     "closed_form_pcrb",
+    "require_process_noise",
     "side_assumption_density",
     "side_density_gaussian",
 ]
@@ -100,10 +101,37 @@ def _inputs(scenario: Scenario, **kw: Any) -> PCRBInputs:
         raise ScenarioError("sensors", "bearing and range sensors only (frequency lines have "
                             "no LPC closed form; use method monte-carlo)",
                             [s.kind for s in scenario.sensors], source=scenario.name)
-    if float(scenario.target.q) <= 0.0:
-        raise ScenarioError("target.q", "> 0 (the LPC transition density needs process noise)",
-                            scenario.target.q, source=scenario.name)
+    require_process_noise(scenario)
     return prepare(scenario, **kw)
+
+
+def require_process_noise(scenario: Scenario, field: str = "target.q", who: str = "") -> None:
+    """Refuse a target without process noise where the closed-form bound is evaluated.
+
+    The LPC transition density of brehard2005 (eq. 16) is Gaussian with covariance Q(q):
+    with q = 0 it has no density and the bound's recursion inverts a singular Q. Every user
+    of the closed form (the bound, the planners' objectives, the baseline grids, the ping
+    scheduler) calls this before building anything.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A one-contact scenario (a contact's view).
+    field : str
+        The field to name (``contacts[1].target.q`` for a contact of several).
+    who : str
+        Appended to the message, e.g. ``" (contact 'bravo')"``.
+
+    Raises
+    ------
+    ScenarioError
+        ``q`` not > 0, naming ``field``, the expected and the received value.
+    """
+    q = float(scenario.target.q)
+    if not q > 0.0:
+        raise ScenarioError(field, "> 0: the closed-form bound (brehard2005) propagates the "
+                            "belief through the target's process noise, e.g. q = "
+                            f"\"1e-5 m^2/s^3\"{who}", q, source=scenario.name)
 
 
 def _engine(inp: PCRBInputs, q: float, backend: str = "auto") -> ClosedFormEngine:

@@ -262,8 +262,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     }
     if args.json != "-":
         along = f"along {args.observer_plan}" if args.observer_plan else "along the scripted track"
-        print(f"{scenario.name}: {res.objective_name} = {res.objective:.4g} m with pings at "
-              f"{minute_list(res.times)} {along} ({res.method}, {res.status}, "
+        print(f"{scenario.name}: {res.objective_name} = {res.objective:.4g} m with "
+              f"{_pings_at(res.times)} {along} ({res.method}, {res.status}, "
               f"lower bound {res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); "
               f"no pings {res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
     if not args.no_figure:
@@ -306,8 +306,8 @@ def _run_several(args: argparse.Namespace, scenario: Scenario, budget: int,
     if not quiet:
         along = f"along {args.observer_plan}" if args.observer_plan else "along the scripted track"
         print(f"{scenario.name}: {len(cs)} contacts, weighted mean of their "
-              f"{res.objective_name} = {res.objective:.4g} m with pings at "
-              f"{minute_list(res.times)} {along} ({res.method}, {res.status}, lower bound "
+              f"{res.objective_name} = {res.objective:.4g} m with "
+              f"{_pings_at(res.times)} {along} ({res.method}, {res.status}, lower bound "
               f"{res.lower_bound:.4g} m, gap {100 * res.gap:.2f} %); no pings "
               f"{res.no_ping_objective:.4g} m, uniform {res.uniform_objective:.4g} m")
         for c in cs.names:
@@ -325,3 +325,8 @@ def _run_several(args: argparse.Namespace, scenario: Scenario, budget: int,
         if not quiet:
             print(f"wrote {path}")
     return payload
+
+
+def _pings_at(times: Any) -> str:
+    """``"pings at 3.0, 9.0 min"``, or ``"no pings"`` for an empty schedule."""
+    return f"pings at {minute_list(times)}" if len(times) else "no pings"

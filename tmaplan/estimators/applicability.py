@@ -20,7 +20,7 @@ from typing import Any, Literal
 import numpy as np
 
 from tmaplan.display import timespan
-from tmaplan.errors import ArgumentError
+from tmaplan.errors import ArgumentError, ScenarioError
 from tmaplan.scenario import Scenario, measurement_steps
 from tmaplan.simulate import simulate
 
@@ -149,8 +149,7 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         why = f" ({decl.why_min})" if decl.why_min else ""
         return (f"{name} ({decl.what}) needs at least {decl.min_measurements} {kinds} "
                 f"measurements{why}, {scenario.name} has {n}{_reach_note(scenario, decl.needs)}")
-    if scenario.prior is None and (decl.needs_prior == "always" or (
-            decl.needs_prior == "bound" and bound is not False)):
+    if _lacks_prior(decl, scenario, bound):
         what = ("starts from the prior" if decl.needs_prior == "always" else
                 "is compared with the PCRB, which starts from the prior (J₀ = P₀⁻¹)")
         return f"{name} ({decl.what}) {what}, {scenario.name} has no [prior] table"
@@ -170,6 +169,12 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
                     f"limit {MLE_DRIFT_RATIO_MAX:g}×): its χ² test would reject every run "
                     f"(NaN RMSE)")
     return None
+
+
+def _lacks_prior(decl: Applicability, scenario: Scenario, bound: Any) -> bool:
+    """Whether the estimator (with ``bound``) needs the prior that ``scenario`` lacks."""
+    return scenario.prior is None and (decl.needs_prior == "always" or (
+        decl.needs_prior == "bound" and bound is not False))
 
 
 def applicable_estimators(scenario: Scenario) -> tuple[str, ...]:
@@ -209,6 +214,10 @@ def check_applicable(estimator: Any, scenario: Scenario, *, bound: Any = None,
     reason = _reason(name, decl, scenario, bound)
     if reason is not None:
         alts = [a for a in applicable_estimators(scenario) if a != name]
+        if not alts and _lacks_prior(decl, scenario, bound):  # the file is at fault
+            raise ScenarioError("prior", f"a [prior] table: {reason.rsplit(', ', 1)[0]} "
+                                "(and no estimator applies without one)", None,
+                                source=scenario.name)
         use = (f"use {opt_e} {' or '.join(alts)}" if alts else
                "no estimator applies to this scenario")
         raise ArgumentError(opt_e, f"an estimator that applies: {reason}; {use}", name,

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, SolverError, is_integer
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
@@ -166,6 +167,16 @@ class ContactSet:
                     raise ArgumentError(f"contacts[{name}].{field}", f"the {field} of the "
                                         f"other contacts (one own ship)", getattr(v, field))
 
+    def require_process_noise(self) -> None:
+        """Refuse a contact without process noise (the closed-form bound of every planner and
+        scheduler needs q > 0), naming ``contacts[i].target.q`` and the contact (one contact:
+        ``target.q``); :func:`tmaplan.bounds.closed_form.require_process_noise`."""
+        for i, (name, view) in enumerate(zip(self.names, self.views, strict=True)):
+            if len(self.views) == 1:
+                require_process_noise(view)
+            else:
+                require_process_noise(view, f"contacts[{i}].target.q", f" (contact '{name}')")
+
     def __len__(self) -> int:
         return len(self.views)
 
@@ -295,6 +306,7 @@ class ContactsPlanner:
         if name not in CONTACTS_OBJECTIVE_NAMES:
             raise ArgumentError("objective", f"one of {', '.join(CONTACTS_OBJECTIVE_NAMES)}",
                                 name)
+        contacts.require_process_noise()
         self.contacts, self.objective_name = contacts, name
         acc = contacts.required_accuracies
         self.single = len(contacts) == 1

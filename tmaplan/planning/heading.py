@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.errors import ArgumentError, InfeasibleError, PlanningError, SolverError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
@@ -210,6 +211,7 @@ class HeadingPlanner:
         self.heading_limits = None if lim[0] is None or lim[1] is None else (
             float(lim[0]), float(lim[1]))
         self.n_arcs = max(1, int(n_arcs))
+        require_process_noise(scenario)
         A, Q = ncv_matrices(dt, float(scenario.target.q))
         self.layout = self.objective.param_layout(self.K)
         sig = ping_sigma(scenario)

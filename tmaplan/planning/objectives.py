@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 
+from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.bounds.inputs import information_rates
 from tmaplan.errors import ArgumentError, PlanningError, finite_real
 from tmaplan.models.observer import ObserverTrack
@@ -448,6 +449,7 @@ class ObjectiveEvaluator:
         K = scenario.time.n_steps if n_steps is None else int(n_steps)
         self.n_steps = K
         dt = float(scenario.time.dt)
+        require_process_noise(scenario)
         A, Q = ncv_matrices(dt, float(scenario.target.q))
         self.layout = self.objective.param_layout(K)
         v = ca.MX.sym("v_obs", K + 1, 2)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -48,8 +49,14 @@ if TYPE_CHECKING:
     from tmaplan.planning.contacts import ContactSet
     from tmaplan.scenario import Scenario
 
-__all__ = ["ContactsPingEvaluator", "ContactsPingSchedule", "ping_max_range",
-           "schedule_contact_pings"]
+__all__ = ["ContactsPingEvaluator", "ContactsPingSchedule", "PingReachWarning",
+           "ping_max_range", "schedule_contact_pings"]
+
+
+class PingReachWarning(UserWarning):
+    """Fewer pings are scheduled than the budget because no contact is within the range
+    sensor's ``max_range`` at enough candidate steps (a ping out of every contact's reach
+    informs nobody and reveals the own ship)."""
 
 
 def ping_max_range(scenario: Scenario) -> float | None:
@@ -85,6 +92,7 @@ class ContactsPingEvaluator:
 
     def __init__(self, contacts: ContactSet, observer: ObserverTrack, beliefs: ContactBeliefs,
                  objective: str = "mean-range-bound", max_range: float | None = None) -> None:
+        contacts.require_process_noise()
         evs = [PingEvaluator(v, observer, b, objective)
                for v, b in zip(contacts.views, beliefs.beliefs, strict=True)]
         reach = [np.ones(ev.K + 1, bool) if max_range is None else
@@ -162,6 +170,30 @@ class ContactsPingSchedule:
                     "reach": self.reach[n]} for n in self.names}
 
 
+def _within_reach(ev: ContactsPingEvaluator, cand: np.ndarray, gap: int, budget: int,
+                  reach_m: float | None) -> tuple[np.ndarray, int]:
+    """The candidate steps where a ping reaches at least one contact, and the budget that
+    fits in them (with a :class:`PingReachWarning` when it is less than ``budget``).
+
+    A ping at a step where no contact is in reach informs nobody (its information is zero
+    for every contact) and reveals the own ship: dropping it leaves every contact's
+    objective unchanged and keeps the spacing, so the optimum over these candidates with
+    the budget that fits in them is the optimum over all candidates, and a lower bound of
+    the one is a lower bound of the other.
+    """
+    reachable = np.any([p[2] for p in ev.parts], axis=0)
+    kept = cand[reachable[cand]]
+    fits = max_pings(kept, gap)
+    if fits < budget:
+        reach = "unlimited" if reach_m is None else f"{reach_m:g} m"
+        where = "at none" if kept.size == 0 else f"at only {kept.size}"
+        warnings.warn(f"ping_budget: {budget} pings asked, but a contact is within the ping's "
+                      f"reach ({reach}) {where} of the {cand.size} candidate steps along this "
+                      f"track: {fits} scheduled (a ping out of every contact's reach only "
+                      "reveals the own ship)", PingReachWarning, stacklevel=3)
+    return kept, min(budget, fits)
+
+
 def schedule_contact_pings(contacts: ContactSet, *, budget: int,
                            method: Literal["exact", "relaxed", "greedy"] = "relaxed",
                            objective: str = "mean-range-bound",
@@ -235,6 +267,7 @@ def schedule_contact_pings(contacts: ContactSet, *, budget: int,
             raise PlanningError(f"budget K = {budget} pings cannot be met: at most "
                                 f"{max_pings(cand, gap)} fit in the {cand.size} candidate "
                                 f"steps with min_spacing {spacing:g} s")
+        cand, budget = _within_reach(ev, cand, gap, int(budget), reach_m)
         sched = certified_schedule(ev, cand, gap, int(budget), method=method,
                                    objective=objective, gap_reference=gap_reference,
                                    max_enumerate=max_enumerate, time_limit=time_limit,

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.bounds.closed_form_engine import ClosedFormEngine, lpc_position_bound_graph
 from tmaplan.bounds.inputs import check_ping_steps
 from tmaplan.display import seconds_text, short_repr
@@ -163,6 +164,7 @@ class PingEvaluator:
         if sig is None:
             raise PlanningError(f"{scenario.name}: no range sensor to ping with (add a "
                                 "[[sensors]] kind = 'range' or planning.ping_sigma)")
+        require_process_noise(scenario)
         K = observer.position.shape[0] - 1
         self.engine = ClosedFormEngine.from_belief(
             belief, observer, dt=float(scenario.time.dt), q=float(scenario.target.q),

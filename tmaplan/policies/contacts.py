@@ -44,6 +44,7 @@ from tmaplan.errors import (
     PlanningError,
     SolverError,
     finite_real,
+    warn_field,
 )
 from tmaplan.planning.baselines import course_program_track, evaluate_baselines
 from tmaplan.planning.belief import Belief
@@ -115,16 +116,35 @@ class ContactsBeliefView(BeliefView):
 
 def nearest_contact(scenario: Scenario) -> str:
     """Name of the contact nearest by prior mean range (the range of its prior's mean
-    relative position, :meth:`tmaplan.planning.Belief.mean_range`; the first of equals)."""
+    relative position, :meth:`tmaplan.planning.Belief.mean_range`; the first of equals).
+
+    Contacts within 1 % of the least range get a :class:`ScenarioWarning` naming them: the
+    choice between them is then no tactical choice (a sampled prior's mean moves by about
+    that much with its seed: two uniform 5–25 km priors read 14976 and 15008 m).
+    """
 
     ranges = {n: Belief.from_prior(v).mean_range() for n, v in scenario.contact_views().items()}
-    return min(ranges, key=lambda n: ranges[n])
+    order = sorted(ranges, key=lambda n: ranges[n])
+    near = [n for n in order if ranges[n] <= ranges[order[0]] * 1.01]
+    return _first_of_equals("nearest-contact", "equally near by prior mean range (within 1 %)",
+                            near, ", ".join(f"{ranges[n]:.0f} m" for n in near))
 
 
 def heaviest_contact(scenario: Scenario) -> str:
     """Name of the contact of largest weight (the first of equal weights)."""
     best = max(c.weight for c in scenario.contacts)
-    return next(c.name for c in scenario.contacts if c.weight == best)
+    return _first_of_equals("heaviest-contact", "equally heavy",
+                            [c.name for c in scenario.contacts if c.weight == best],
+                            f"weight {best:g}")
+
+
+def _first_of_equals(policy: str, what: str, names: list[str], value: str) -> str:
+    """The first of ``names`` (the policy's choice), with a :class:`ScenarioWarning` naming
+    them all when there are several: a choice between equals, said."""
+    if len(names) > 1:
+        warn_field("contacts", f"{policy}: contacts {', '.join(repr(n) for n in names)} are "
+                   f"{what} ({value}): flying the plan for {names[0]!r}", stacklevel=3)
+    return names[0]
 
 
 #: Joint planners by scenario (their NLP built once), the 8 most recently used.

@@ -417,6 +417,7 @@ class ContactsPlanner:
             # a re-plan from the previous plan; or the bang-bang transcription, whose starts
             # are not turn-rate programs: its built-in ones only
             alone: dict[str, HeadingPlan] = {}
+            alone_times: dict[str, dict[str, float]] = {}
             best = j.solve(cast(Any, bel), raise_on_failure=False, warm_start=None if
                            warm_start is None else warm_start.plan, **kw)
             start = "built-in" if warm_start is None else "warm"
@@ -425,22 +426,25 @@ class ContactsPlanner:
             alone = {name: p.solve(b, raise_on_failure=False, starts=self._screen(
                 p, p.evaluator(b), p.start_programs(), self.alone_starts, kw), **kw)
                 for name, p, b in zip(cs.names, self.alone, bel.beliefs, strict=True)}
+            alone_times = dict(zip(alone, self.expected_times(bel, list(alone.values())),
+                                   strict=True))
             cands = {f"alone:{n}": np.clip(p.turn_rate / max(j.u_max, 1e-12), -1, 1)
                      for n, p in alone.items() if p.success}
             cands.update({"straight" if i == 0 else f"built-in {i}": u
                           for i, u in enumerate(j.start_programs())})
             # the planner reads the beliefs' t, assimilated, mean and mean_range(), and its
             # layout (ContactsLayout) packs one block per contact
-            keep = self._screen(j, j.evaluator(cast(Any, bel)), list(cands.values()),
-                                max(self.joint_starts, 2), kw)
             labels = {id(u): lab for lab, u in cands.items()}
             best, start, solves = None, "built-in", []
-            dominant = self._dominant_own_plan(bel, alone, kw)
+            dominant = self._dominant_own_plan(bel, alone, alone_times, kw)
             if dominant is not None:  # the min-max's optimum, certified: no NLP to solve
                 name, best = dominant
                 start = f"alone:{name} (dominant)"
                 solves.append((start, best.iterations, best.status))
                 keep = []
+            else:
+                keep = self._screen(j, j.evaluator(cast(Any, bel)), list(cands.values()),
+                                    max(self.joint_starts, 2), kw)
             for i, u in enumerate(keep):
                 if i >= self.joint_starts and best is not None and best.success:
                     break  # the next start only while none converged
@@ -453,15 +457,15 @@ class ContactsPlanner:
             raise SolverError("ipopt", best.status, f"heading plan for {len(cs)} contacts "
                               f"({self.objective_name}) did not converge from any of "
                               f"{len(solves)} start(s)")
-        times = self.expected_times(bel, [best, *alone.values()])
         return ContactsPlan(plan=best, objective_name=self.objective_name, names=cs.names,
-                            expected_times=times[0], alone=alone,
-                            alone_times={n: t[n] for n, t in zip(alone, times[1:], strict=True)},
+                            expected_times=self.expected_times(bel, [best])[0], alone=alone,
+                            alone_times={n: t[n] for n, t in alone_times.items()},
                             start=start, seconds=time.perf_counter() - t0,
                             solves=tuple(solves))
 
     def _dominant_own_plan(self, bel: ContactBeliefs, alone: Mapping[str, HeadingPlan],
-                           kw: dict[str, Any]) -> tuple[str, HeadingPlan] | None:
+                           alone_times: Mapping[str, Mapping[str, float]], kw: dict[str, Any],
+                           ) -> tuple[str, HeadingPlan] | None:
         """``worst-contact``: a contact's own plan on which that contact is the latest, as a
         plan of the joint NLP, or None.
 
@@ -478,7 +482,7 @@ class ContactsPlanner:
             return None
         j = self.joint
         names = [n for n, p in alone.items() if p.success]
-        times = self.expected_times(bel, [alone[n] for n in names])
+        times = [alone_times[n] for n in names]
         hd0, spd0, p0 = j.start_state(kw["heading0"], kw["speed0"], kw["position0"])
         P = np.concatenate([j.parameter_vector(cast(Any, bel), ()), [hd0, spd0, 1.0, 1.0]])
         _, _, lbg, ubg = j.bounds(hd0)

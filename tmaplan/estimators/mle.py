@@ -536,8 +536,9 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     rel_sd = _relative_range_std(data, x, cov)
     if status == "converged" and not rel_sd <= cfg.max_relative_range_std:
         status = "unobservable"
-        message = (f"range not determined: relative range std {rel_sd:.3g} > "
-                   f"{cfg.max_relative_range_std:g} at the end of the data ({message})")
+        message = ("range not determined: relative range std " + (
+            f"{rel_sd:.3g} > {cfg.max_relative_range_std:g}" if np.isfinite(rel_sd)
+            else "not a number") + " at the end of the data")
     return MLEResult(model=data.model, names=_names(data), params=x, covariance=cov,
                      cost=cost, threshold=thr, accepted=bool(cost < thr), iterations=total_it,
                      nfev=total_fev, status=status, message=message,
@@ -595,6 +596,5 @@ def _relative_range_std(data: TMAData, x: np.ndarray, cov: np.ndarray) -> float:
     assert C is not None
     rel = S[0, :2] - obs
     r = float(np.hypot(*rel))
-    u = rel / r if r > 0 else np.zeros(2)
-    var = float(u @ C[0, :2, :2] @ u)
-    return float(np.sqrt(var) / r) if r > 0 and var >= 0 else np.nan
+    var = float(rel @ C[0, :2, :2] @ rel)  # r² σ_r²
+    return float(np.sqrt(var)) / (r * r) if r > 0 and var >= 0 else np.nan

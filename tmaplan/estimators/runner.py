@@ -377,7 +377,8 @@ class MLEEstimator:
         return Track(estimator="mle", times=scenario.times, estimates=rel,
                      covariances=C if C is not None else np.full((rel.shape[0], 4, 4), np.nan),
                      ess=None, seconds=0.0, status=status,
-                     message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}",
+                     message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}"
+                     + (f"; {res.message}" if res.status == "unobservable" else ""),
                      first_step=0, details=res)
 
 

@@ -34,8 +34,9 @@ tests/estimators/test_mle.py).
 Range not determined. Far out, a bearings-only estimate fits the bearings about as well at any
 range along the lines of sight, and LM can walk off to absurd ranges (1e20 m) with an accepted
 cost. A converged estimate must have its range fixed by its own CRLB at the end of the data,
-``σ_r / r̂ <= MLEConfig.max_relative_range_std`` (default 1: beyond it the 1σ interval reaches
-zero range, the order of magnitude is not fixed); otherwise the status is "unobservable".
+``σ_r / r̂ <= MLEConfig.max_relative_range_std`` (default 10: beyond, the 1σ range interval spans
+over an order of magnitude; rightly ranged clavard2013 acw half-turn estimates reach 5, runs off
+to absurd ranges 1e5 or a non-finite CRLB); otherwise the status is "unobservable".
 
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
@@ -196,10 +197,8 @@ class MLEConfig:
         refined and a refinement that crosses ω = 0 is discarded (status "failed" if no start
         stays in the sense).
     max_relative_range_std : float
-        Largest relative range std ``σ_r / r̂`` of the estimate's own CRLB at the end of the
-        data for a converged estimate (default 1.0, see the module notes); above it, or when
-        it is not a number, the status is "unobservable".
-    """
+        Largest ``σ_r / r̂`` (own CRLB, end of the data) of a converged estimate; above it, or
+        not a number: status "unobservable" (default 10, see the module notes)."""
 
     model: Literal["auto", "ncv", "multi-leg", "constant-turn"] = "auto"
     gn_iterations: int = 10
@@ -213,7 +212,7 @@ class MLEConfig:
     init: Literal["multistart", "paper"] = "multistart"
     ambiguity_margin: float = 6.63
     turn_direction: Literal["auto", "either", "clockwise", "anticlockwise"] = "auto"
-    max_relative_range_std: float = 1.0
+    max_relative_range_std: float = 10.0
 
     def __post_init__(self) -> None:
         if self.turn_direction not in ("auto", "either", "clockwise", "anticlockwise"):

@@ -55,7 +55,7 @@ class Estimate:
     estimator : str
         "mle" or "pf".
     status : str
-        The estimator's status ("ok", "recovered", "rejected", "failed").
+        The estimator's status ("ok", "recovered", "rejected", "unobservable", "failed").
     time : float
         [s] since the recording's origin.
     state : ndarray, shape (4,)

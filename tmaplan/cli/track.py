@@ -196,14 +196,20 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         _figure(res, fig)
         payload["figure"] = str(fig)
     counts = {s: res.statuses.count(s) for s in dict.fromkeys(res.statuses)}
+    n_unobs = counts.get("unobservable", 0)
+    limit = (estimator if isinstance(estimator, MLEConfig) else MLEConfig()).max_relative_range_std
+    undetermined = f"range not determined: relative range std > {limit:g}"
     require_finite(payload, FINITE, source=scenario.name,
-                   why="run statuses: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
+                   why="run statuses: " + ", ".join(f"{n} {s}" for s, n in counts.items())
+                   + (f" ({undetermined})" if n_unobs else ""))
     if not quiet:
         runs = f"{res.runs} run{'s' if res.runs != 1 else ''}"
         print(f"{scenario.name}: {args.estimator}, {runs}, {res.seconds:.1f} s")
         print(f"  final position RMSE {res.rmse_position[-1]:.1f} m, bound "
               f"{res.bound_position[-1]:.1f} m, divergence rate {res.divergence_rate:.3f}")
         print(f"  final range RMSE {res.rmse_range[-1]:.1f} m, bound {res.bound_range[-1]:.1f} m")
+        if n_unobs:
+            print(f"  {n_unobs} of {runs}: {undetermined}; left out of the RMSE")
         if args.estimator == "mle" and scenario.target.model == "constant-turn":
             print(f"  sense of turn searched: {payload['turn_direction']}; "
                   f"{res.ambiguous_runs} run(s) with an indistinguishable alternative "

@@ -31,6 +31,13 @@ had (σ̂_ω = σ_CRLB leaves no room for a single mirror estimate), while its T
 those of a both-senses search (a 21 % mixture with the clockwise mirror;
 tests/estimators/test_mle.py).
 
+Range not determined. Far out, a bearings-only estimate fits the bearings about as well at any
+range along the lines of sight, and LM can walk off to absurd ranges (1e20 m) with an accepted
+cost. A converged estimate must have its range fixed by its own CRLB at the end of the data,
+``σ_r / r̂ <= MLEConfig.max_relative_range_std`` (default 10: beyond, the 1σ range interval spans
+over an order of magnitude; rightly ranged clavard2013 acw half-turn estimates reach 5, runs off
+to absurd ranges 1e5 or a non-finite CRLB); otherwise the status is "unobservable".
+
 Parametrisations (absolute target, time origin ``t = 0`` of the scenario clock):
 
 * ``ncv``: ``[x, y, v_x, v_y]`` at t0;
@@ -144,7 +151,6 @@ def state_track(data: TMAData, params: np.ndarray, covariance: np.ndarray | None
     return S, J @ C @ J.transpose(0, 2, 1)
 
 
-
 # --------------------------------------------------------------------------------------------
 # Estimation
 # --------------------------------------------------------------------------------------------
@@ -190,7 +196,9 @@ class MLEConfig:
         the scenario says nothing). With a given sense only grid nodes of that sense are
         refined and a refinement that crosses ω = 0 is discarded (status "failed" if no start
         stays in the sense).
-    """
+    max_relative_range_std : float
+        Largest ``σ_r / r̂`` (own CRLB, end of the data) of a converged estimate; above it, or
+        not a number: status "unobservable" (default 10, see the module notes)."""
 
     model: Literal["auto", "ncv", "multi-leg", "constant-turn"] = "auto"
     gn_iterations: int = 10
@@ -204,6 +212,7 @@ class MLEConfig:
     init: Literal["multistart", "paper"] = "multistart"
     ambiguity_margin: float = 6.63
     turn_direction: Literal["auto", "either", "clockwise", "anticlockwise"] = "auto"
+    max_relative_range_std: float = 10.0
 
     def __post_init__(self) -> None:
         if self.turn_direction not in ("auto", "either", "clockwise", "anticlockwise"):
@@ -233,6 +242,9 @@ class MLEConfig:
                 raise ArgumentError(name, f"a non-empty sequence of finite values "
                                     f"{'> 0' if positive else '>= 0'} [{unit}]",
                                     getattr(self, name))
+        if not 0 < self.max_relative_range_std < np.inf:
+            raise ArgumentError("max_relative_range_std", "a finite relative std > 0",
+                                self.max_relative_range_std)
         if not self.ambiguity_margin >= 0:
             raise ArgumentError("ambiguity_margin", "a cost difference >= 0",
                                 self.ambiguity_margin)
@@ -260,7 +272,9 @@ class MLEResult:
         Gauss–Newton iterations plus LM Jacobian evaluations.
     nfev : int
     status : str
-        "converged", "max-iterations" or "failed".
+        "converged", "max-iterations", "failed" or "unobservable" (converged, but the range
+        is not determined: ``relative_range_std`` above ``MLEConfig.max_relative_range_std``
+        or not a number).
     message : str
     seconds : float
     alternatives : tuple of (ndarray, float)
@@ -268,6 +282,9 @@ class MLEResult:
         estimate (final positions more than 3 CRLB std apart) and with a cost within
         ``MLEConfig.ambiguity_margin`` of it: bearings cannot tell them apart (e.g. the
         mirror-turn near-ambiguity of the clavard2013 half turn, noise-free cost 0.10).
+    relative_range_std : float
+        ``σ_r / r̂`` at the end of the data, ``σ_r`` the range std of ``covariance`` along the
+        estimated line of sight (delta method); NaN when it cannot be computed.
     """
 
     __repr__ = short_repr
@@ -285,6 +302,7 @@ class MLEResult:
     message: str
     seconds: float
     alternatives: tuple[tuple[np.ndarray, float], ...] = ()
+    relative_range_std: float = np.nan
 
     @property
     def ambiguous(self) -> bool:
@@ -514,10 +532,17 @@ def mle(data: TMAData, config: MLEConfig | None = None, *,
     thr = acceptance_threshold(data)
     alts = _alternatives(data, x, cov, [r for r in ok if r is not best], cost,
                          cfg.ambiguity_margin)
+    rel_sd = _relative_range_std(data, x, cov)
+    if status == "converged" and not rel_sd <= cfg.max_relative_range_std:
+        status = "unobservable"
+        message = ("range not determined: relative range std " + (
+            f"{rel_sd:.3g} > {cfg.max_relative_range_std:g}" if np.isfinite(rel_sd)
+            else "not a number") + " at the end of the data")
     return MLEResult(model=data.model, names=_names(data), params=x, covariance=cov,
                      cost=cost, threshold=thr, accepted=bool(cost < thr), iterations=total_it,
                      nfev=total_fev, status=status, message=message,
-                     seconds=_time.perf_counter() - t_start, alternatives=alts)
+                     seconds=_time.perf_counter() - t_start, alternatives=alts,
+                     relative_range_std=rel_sd)
 
 
 def _canonical(data: TMAData, x: np.ndarray) -> np.ndarray:
@@ -534,8 +559,7 @@ def _canonical(data: TMAData, x: np.ndarray) -> np.ndarray:
 def _alternatives(data: TMAData, x: np.ndarray, cov: np.ndarray, others: list, cost: float,
                   margin: float) -> tuple[tuple[np.ndarray, float], ...]:
     """Distinct local minima within ``margin`` of the best cost (see MLEResult)."""
-    t_end = np.array([max(data.b_times.max(initial=-np.inf), data.r_times.max(initial=-np.inf),
-                          data.f_times.max(initial=-np.inf))])
+    t_end, _ = _end_of_data(data)
     S, C = state_track(data, x, cov if np.isfinite(cov).all() else None, t_end)
     # a covariance of a nearly singular information can have a negative trace by round-off
     sd = float(np.sqrt(max(np.trace(C[0, :2, :2]), 0.0))) if C is not None else 0.0
@@ -552,3 +576,24 @@ def _alternatives(data: TMAData, x: np.ndarray, cov: np.ndarray, others: list, c
             continue
         found.append((r[0], float(r[1])))
     return tuple(found)
+
+
+def _end_of_data(data: TMAData) -> tuple[np.ndarray, np.ndarray]:
+    """Last measurement time [s], shape (1,), and the observer position there [m], (2,)."""
+    t, o = max(((t, o) for t, o in ((data.b_times, data.b_obs), (data.r_times, data.r_obs),
+                                    (data.f_times, data.f_obs)) if t.size),
+               key=lambda s: s[0].max())
+    return np.array([t.max()]), np.asarray(o)[int(np.argmax(t))]
+
+
+def _relative_range_std(data: TMAData, x: np.ndarray, cov: np.ndarray) -> float:
+    """``σ_r / r̂`` at the end of the data (see MLEResult); NaN when not computable."""
+    if not (np.isfinite(x).all() and np.isfinite(cov).all()):
+        return np.nan
+    t_end, obs = _end_of_data(data)
+    S, C = state_track(data, x, cov, t_end)
+    assert C is not None
+    rel = S[0, :2] - obs
+    r = float(np.hypot(*rel))
+    var = float(rel @ C[0, :2, :2] @ rel)  # r² σ_r²
+    return float(np.sqrt(var)) / (r * r) if r > 0 and var >= 0 else np.nan

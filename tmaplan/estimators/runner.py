@@ -87,7 +87,8 @@ class Track:
         Wall time [s].
     status : str
         "ok", "recovered" (a degeneracy was recovered by roughening), "rejected" (MLE failed
-        the acceptance test), "failed".
+        the acceptance test), "unobservable" (MLE whose range the data do not determine,
+        :attr:`tmaplan.estimators.mle.MLEResult.relative_range_std`), "failed".
     message : str
     first_step : int
         First step with an estimate.
@@ -370,11 +371,14 @@ class MLEEstimator:
         res = mle(data, config)
         S, C = state_track(data, res.params, res.covariance, scenario.times)
         rel = S - obs.state
-        status = "ok" if res.success else ("rejected" if res.status == "converged" else "failed")
+        status = "ok" if res.success else ("rejected" if res.status == "converged" else
+                                           "unobservable" if res.status == "unobservable"
+                                           else "failed")
         return Track(estimator="mle", times=scenario.times, estimates=rel,
                      covariances=C if C is not None else np.full((rel.shape[0], 4, 4), np.nan),
                      ess=None, seconds=0.0, status=status,
-                     message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}",
+                     message=f"{res.status}; cost {res.cost:.1f} vs threshold {res.threshold:.1f}"
+                     + (f"; {res.message}" if res.status == "unobservable" else ""),
                      first_step=0, details=res)
 
 

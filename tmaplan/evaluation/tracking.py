@@ -36,7 +36,7 @@ from tmaplan.geometry import range_of
 from tmaplan.scenario import Scenario
 from tmaplan.simulate import simulate
 
-__all__ = ["MonteCarloResult", "monte_carlo"]
+__all__ = ["NOT_USED", "MonteCarloResult", "monte_carlo"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -73,6 +73,12 @@ def _crlb_bounds(scenario: Scenario, config: MLEConfig) -> tuple[np.ndarray, np.
 # --------------------------------------------------------------------------------------------
 
 
+#: Run statuses left out of the RMSE and NEES and counted as divergent: the MLE's "rejected"
+#: (acceptance test) and "unobservable" (range not determined by the data, see
+#: :class:`tmaplan.estimators.mle.MLEConfig`), and "failed".
+NOT_USED = ("rejected", "failed", "unobservable")
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class MonteCarloResult:
     """Monte Carlo evaluation of an estimator (docs/cli.md ``track`` fields).
@@ -84,7 +90,8 @@ class MonteCarloResult:
     times : ndarray, shape (K + 1,)
         [s].
     rmse_position, rmse_range : ndarray, shape (K + 1,)
-        Over the runs that were not rejected or failed [m]; NaN where no estimate.
+        Over the runs that were not rejected, failed or unobservable (:data:`NOT_USED`) [m];
+        NaN where no estimate.
     bound_position : ndarray, shape (K + 1,)
         PCRB (filters: along the runs' truths, or prior-averaged, see ``bound_kind``) or CRLB
         (MLE) position std [m].
@@ -94,7 +101,8 @@ class MonteCarloResult:
     bound_kind : str
         "truth", "prior", "crlb" or "none".
     divergence_rate : float
-        Fraction of runs rejected, failed, or ending with a position error > 5× the bound.
+        Fraction of runs rejected, failed, unobservable, or ending with a position error > 5×
+        the bound.
     nees : ndarray, shape (K + 1,)
         Average normalised estimation error squared (4-D) over the used runs.
     position_errors : ndarray, shape (runs, K + 1)
@@ -135,6 +143,7 @@ class MonteCarloResult:
                 "bound_kind": self.bound_kind, "divergence_rate": self.divergence_rate,
                 "nees": self.nees,
                 "rejected": sum(s in ("rejected", "failed") for s in self.statuses),
+                "unobservable": self.statuses.count("unobservable"),
                 "ambiguous_runs": self.ambiguous_runs,
                 "seconds": self.seconds}
 
@@ -240,7 +249,7 @@ def monte_carlo(scenario: Scenario, estimator: EstimatorName | Estimator | PFCon
             raise ArgumentError("bound", "True, False, 'truth' or 'prior'", bound)
     else:
         b = br = np.full(K + 1, np.nan)
-    used = np.array([s not in ("rejected", "failed") for s in statuses])
+    used = np.array([s not in NOT_USED for s in statuses])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         rmse_p = np.sqrt(np.nanmean(err_pos[used] ** 2, axis=0)) if used.any() \

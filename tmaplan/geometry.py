@@ -85,6 +85,22 @@ def _range_squared(X: FloatArray) -> FloatArray:
     return r2
 
 
+def _lpc_rates(X: FloatArray) -> tuple[FloatArray, ...]:
+    """``(r_x, r_y, v_x, v_y, r², β̇, ṙ/r)`` of states ``X`` (..., 4); raise if any range is 0."""
+    r2 = _range_squared(X)
+    rx, ry, vx, vy = np.moveaxis(X, -1, 0)
+    return rx, ry, vx, vy, r2, (vx * ry - vy * rx) / r2, (vx * rx + vy * ry) / r2
+
+
+def _polar_to_cart(r: FloatArray, beta: FloatArray, beta_dot: FloatArray,
+                   rho: FloatArray) -> FloatArray:
+    """``r·[sin β, cos β, β̇ cos β + ρ sin β, −β̇ sin β + ρ cos β]``, shape (..., 4)."""
+    s, c = np.sin(beta), np.cos(beta)
+    return np.stack(
+        [r * s, r * c, r * (beta_dot * c + rho * s), r * (-beta_dot * s + rho * c)], axis=-1
+    )
+
+
 def _check_inverse_range(u: FloatArray) -> None:
     if np.any(u <= 0.0):
         raise ValueError(
@@ -289,17 +305,8 @@ def cart_to_lpc(X: ArrayLike, ambiguity: Ambiguity = "none") -> FloatArray:
         If any range is zero.
     """
     X = _as_state(X)
-    r2 = _range_squared(X)
-    rx, ry, vx, vy = np.moveaxis(X, -1, 0)
-    return np.stack(
-        [
-            bearing_of(X, ambiguity),
-            np.log(np.hypot(rx, ry)),
-            (vx * ry - vy * rx) / r2,
-            (vx * rx + vy * ry) / r2,
-        ],
-        axis=-1,
-    )
+    rx, ry, _, _, _, omega, rho = _lpc_rates(X)
+    return np.stack([bearing_of(X, ambiguity), np.log(np.hypot(rx, ry)), omega, rho], axis=-1)
 
 
 def lpc_to_cart(Y: ArrayLike) -> FloatArray:
@@ -319,11 +326,7 @@ def lpc_to_cart(Y: ArrayLike) -> FloatArray:
     """
     Y = _as_state(Y, "Y")
     beta, log_r, beta_dot, rho = np.moveaxis(Y, -1, 0)
-    r = np.exp(log_r)
-    s, c = np.sin(beta), np.cos(beta)
-    return np.stack(
-        [r * s, r * c, r * (beta_dot * c + rho * s), r * (-beta_dot * s + rho * c)], axis=-1
-    )
+    return _polar_to_cart(np.exp(log_r), beta, beta_dot, rho)
 
 
 def jacobian_cart_wrt_lpc_from_cart(X: ArrayLike) -> FloatArray:
@@ -408,11 +411,7 @@ def jacobian_lpc_wrt_cart(X: ArrayLike) -> FloatArray:
     ValueError
         If any range is zero.
     """
-    X = _as_state(X)
-    r2 = _range_squared(X)
-    rx, ry, vx, vy = np.moveaxis(X, -1, 0)
-    omega = (vx * ry - vy * rx) / r2
-    rho = (vx * rx + vy * ry) / r2
+    rx, ry, vx, vy, r2, omega, rho = _lpc_rates(_as_state(X))
     zero = np.zeros_like(rx)
     rows = [
         [ry, -rx, zero, zero],
@@ -472,11 +471,7 @@ def mp_to_cart(Y: ArrayLike) -> FloatArray:
     Y = _as_state(Y, "Y")
     beta_dot, rho, beta, u = np.moveaxis(Y, -1, 0)
     _check_inverse_range(u)
-    r = 1.0 / u
-    s, c = np.sin(beta), np.cos(beta)
-    return np.stack(
-        [r * s, r * c, r * (beta_dot * c + rho * s), r * (-beta_dot * s + rho * c)], axis=-1
-    )
+    return _polar_to_cart(1.0 / u, beta, beta_dot, rho)
 
 
 def jacobian_cart_wrt_mp(Y: ArrayLike) -> FloatArray:

@@ -256,6 +256,33 @@ def add_seed_argument(parser: argparse.ArgumentParser, help: str = "random seed 
     parser.add_argument("--seed", type=seed, default=0, help=help)
 
 
+def add_particles_argument(parser: argparse.ArgumentParser) -> None:
+    """``--particles N``: the particle-filter size (2 .. :data:`MAX_PARTICLES`, default 3000).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The verb's parser.
+    """
+    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
+                        help="particle-filter size (default 3000)")
+
+
+def add_workers_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--workers W`` (local worker processes, 1 .. :data:`MAX_WORKERS`, default 1) or
+    ``--scheduler ADDR`` (the address of a Dask scheduler, default None), not both.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The verb's parser; the two options form one mutually exclusive group.
+    """
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
+                   help="local worker processes (default 1)")
+    g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
+
+
 def add_accuracy_argument(parser: argparse.ArgumentParser) -> None:
     """``--accuracy A``: the relative range error that counts as localised (default None:
     the problem's, :func:`accuracy_of`)."""

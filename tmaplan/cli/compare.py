@@ -24,14 +24,14 @@ from typing import Any
 import numpy as np
 
 from tmaplan.cli.args import (
-    MAX_PARTICLES,
     MAX_RUNS,
-    MAX_WORKERS,
     accuracy_of,
     add_accuracy_argument,
     add_figure_arguments,
+    add_particles_argument,
     add_problem_argument,
     add_seed_argument,
+    add_workers_arguments,
     command_line,
     integer,
     repeated,
@@ -79,16 +79,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="Monte Carlo runs (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
-    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
-                        help="particle-filter size (default 3000)")
+    add_particles_argument(parser)
     add_accuracy_argument(parser)
     parser.add_argument("--truth", choices=("prior", "scenario"), default="prior",
                         help="draw each run's target from the prior (default) or use the "
                              "scenario's")
-    g = parser.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
-                   help="local worker processes (default 1)")
-    g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
+    add_workers_arguments(parser)
     add_figure_arguments(parser, report=True)
 
 

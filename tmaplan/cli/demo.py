@@ -30,10 +30,10 @@ from typing import Any
 
 from tmaplan.cli.args import (
     DEMO_POLICIES,
-    MAX_PARTICLES,
     MAX_RUNS,
     MAX_WORKERS,
     add_figure_arguments,
+    add_particles_argument,
     add_seed_argument,
     integer,
 )
@@ -84,8 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "illustrative, most differences are not decided at that size; "
                              "the demo prints first the stored result of 2000 and 300 runs "
                              "that decides them)")
-    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
-                        help="particle-filter size (default 3000)")
+    add_particles_argument(parser)
     parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2,
                         help="worker processes (default 2)")
 

@@ -15,15 +15,15 @@ from pathlib import Path
 from typing import Any
 
 from tmaplan.cli.args import (
-    MAX_PARTICLES,
     MAX_RUNS,
     MAX_SAMPLES,
-    MAX_WORKERS,
     accuracy_of,
     add_accuracy_argument,
     add_figure_arguments,
+    add_particles_argument,
     add_problem_argument,
     add_seed_argument,
+    add_workers_arguments,
     command_line,
     integer,
     repeated,
@@ -52,8 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=50,
                         help="paired Monte Carlo runs per candidate (default 50)")
     add_seed_argument(parser, help="root seed (default 0)")
-    parser.add_argument("--particles", type=integer(2, MAX_PARTICLES), default=3000,
-                        help="particle-filter size (default 3000)")
+    add_particles_argument(parser)
     add_accuracy_argument(parser)
     parser.add_argument("--plans", default="all", metavar="all|none|OBJ,OBJ,..",
                         help="objectives whose offline plans are candidates (default all)")
@@ -61,10 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="prior draws behind the Monte Carlo bounds (default 1000)")
     parser.add_argument("--resamples", type=integer(0, 100_000), default=999,
                         help="bootstrap resamples of the intervals (default 999)")
-    g = parser.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
-                   help="local worker processes (default 1)")
-    g.add_argument("--scheduler", default=None, help="address of a Dask scheduler")
+    add_workers_arguments(parser)
     add_figure_arguments(parser)
 
 

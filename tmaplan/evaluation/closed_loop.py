@@ -33,7 +33,7 @@ from tmaplan.policies import BeliefView, Policy
 from tmaplan.scenario import Scenario
 from tmaplan.simulate import Measurement, draw_common_noise, draw_truth, measure_step
 
-__all__ = ["ClosedLoopRun", "fly", "paired_run", "run_closed_loop"]
+__all__ = ["ClosedLoopRun", "OwnShipFlight", "fly", "paired_run", "run_closed_loop"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -101,6 +101,85 @@ def read_only(a: np.ndarray) -> np.ndarray:
     return v
 
 
+class OwnShipFlight:
+    """The own ship of a closed loop, flown one step at a time at its initial speed on the
+    exact arcs of the turn rates a controller commands (:func:`run_closed_loop`,
+    :func:`tmaplan.evaluation.contacts_loop.run_contacts_loop`).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Its observer gives the start (position, initial velocity) and the turn-rate limit;
+        its time grid the ``K`` steps of ``dt``.
+
+    Attributes
+    ----------
+    heading : float
+        Current heading [rad], not wrapped.
+    speed : float
+        Constant speed [m/s].
+    position : ndarray, shape (2,)
+        Current position [m].
+    v0 : ndarray, shape (2,)
+        Initial velocity [m/s].
+    positions, velocity, mean_velocity : ndarray, shape (K + 1, 2)
+        Position [m], instantaneous velocity [m/s] and mean velocity over the step ending at
+        each time [m/s] (row 0: the initial velocity), filled up to the last step flown.
+    headings : ndarray, shape (K + 1,)
+        Heading at each time [rad], not wrapped.
+    turn_rate : ndarray, shape (K,)
+        Applied (clipped) turn rate of each step flown [rad/s].
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        K = scenario.n_steps
+        self.dt = scenario.time.dt
+        self.u_max = scenario.observer.turn_rate_max
+        self.v0 = initial_velocity(scenario.observer)
+        self.heading, self.speed = (float(x) for x in course_speed(self.v0))
+        self.position = np.asarray(scenario.observer.position, float).copy()
+        self.positions = np.empty((K + 1, 2))
+        self.velocity = np.empty((K + 1, 2))
+        self.mean_velocity = np.empty((K + 1, 2))
+        self.headings = np.empty(K + 1)
+        self.positions[0], self.velocity[0], self.mean_velocity[0], self.headings[0] = (
+            self.position, self.v0, self.v0, self.heading)
+        self.turn_rate = np.zeros(K)
+
+    def advance(self, k: int, turn_rate: float) -> None:
+        """Fly step ``k`` (from t_k to t_{k+1}) at ``turn_rate`` clipped to the limit.
+
+        Parameters
+        ----------
+        k : int
+            Step index, 0 <= k < K, flown in order.
+        turn_rate : float
+            Commanded turn rate [rad/s].
+        """
+        u = float(turn_rate)
+        if self.u_max is not None:
+            u = float(np.clip(u, -self.u_max, self.u_max))
+        self.turn_rate[k] = u
+        dt = self.dt
+        disp = arc_displacement(np.array(self.heading), np.array(u), np.array(self.speed), dt)
+        self.position = self.position + disp
+        self.heading = self.heading + u * dt
+        self.mean_velocity[k + 1] = disp / dt
+        self.velocity[k + 1] = self.speed * np.array([np.sin(self.heading), np.cos(self.heading)])
+        self.positions[k + 1], self.headings[k + 1] = self.position, self.heading
+
+    def state(self, k: int) -> np.ndarray:
+        """The own ship's state ``[x, y, v_x, v_y]`` [m, m/s] at step ``k`` (flown), shape (4,)."""
+        return np.concatenate([self.positions[k], self.velocity[k]])
+
+    def track(self, times: np.ndarray) -> ObserverTrack:
+        """The track flown, at ``times`` [s] (shape (K + 1,), all steps flown)."""
+        return ObserverTrack(times=times, position=self.positions, velocity=self.velocity,
+                             mean_velocity=self.mean_velocity,
+                             heading=wrap_angle(self.headings),
+                             speed=np.full(self.headings.size, self.speed))
+
+
 def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
                     noise_rng: np.random.Generator, filter_rng: np.random.Generator,
                     n_particles: int = 5000, filter_q: float | None = None,
@@ -148,15 +227,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     if filter_q is not None:
         finite_real("filter_q", filter_q, "a finite intensity >= 0 [m²/s³]", lower=0.0)
     noise = draw_common_noise(scenario, noise_rng)
-    v0 = initial_velocity(scenario.observer)
-    heading, speed = (float(x) for x in course_speed(v0))
-    pos = np.asarray(scenario.observer.position, float).copy()
-    u_max = scenario.observer.turn_rate_max
-    positions = np.empty((K + 1, 2))
-    vel_inst = np.empty((K + 1, 2))
-    vbar = np.empty((K + 1, 2))
-    headings = np.empty(K + 1)
-    positions[0], vel_inst[0], vbar[0], headings[0] = pos, v0, v0, heading
+    own = OwnShipFlight(scenario)
 
     q = scenario.target.q if filter_q is None else filter_q
     opts = FilterOptions.monitored() if options is None else options
@@ -166,42 +237,31 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         ctrl = opts.alarm_response.wrap(ctrl, scenario)
     pings: list[int] = []
     active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
-    rates = np.zeros(K)
 
     def step(k: int, state: Any) -> tuple[np.ndarray, list[Measurement]]:
-        nonlocal heading, pos
-        belief = BeliefView(step=k, t=float(times[k]), heading=heading, position=pos.copy(),
+        belief = BeliefView(step=k, t=float(times[k]), heading=own.heading,
+                            position=own.position.copy(),
                             particles=read_only(state.particles),
                             weights=read_only(state.weights),
                             pings_used=len(pings), alarms=len(getattr(state, "log", ())))
         act = ctrl.act(belief, float(times[k]))
-        u = float(act.turn_rate)
-        if u_max is not None:
-            u = float(np.clip(u, -u_max, u_max))
-        rates[k] = u
-        disp = arc_displacement(np.array(heading), np.array(u), np.array(speed), dt)
-        pos = pos + disp
-        heading = heading + u * dt
-        vbar[k + 1] = disp / dt
-        vel_inst[k + 1] = speed * np.array([np.sin(heading), np.cos(heading)])
-        positions[k + 1], headings[k + 1] = pos, heading
-        meas = measure_step(scenario, k + 1, target[k + 1] - np.concatenate([pos, vel_inst[k + 1]]),
-                            noise, ping=bool(act.ping))
+        own.advance(k, act.turn_rate)
+        meas = measure_step(scenario, k + 1, target[k + 1] - own.state(k + 1), noise,
+                            ping=bool(act.ping))
         # a ping counts when transmitted, echo or not (a missed echo, tmaplan.models.faults)
         pings.extend([k + 1] if act.ping and active else [])
-        return vbar[k + 1] - vbar[k], meas
+        return own.mean_velocity[k + 1] - own.mean_velocity[k], meas
 
     state0 = pf.init(scenario, filter_rng)
     # the sensors that measure at step 0 (e.g. a first bearing at t0) are assimilated before
     # the controller's first action; with none there, nothing is drawn or changed
-    if meas0 := measure_step(scenario, 0, target[0] - np.concatenate([pos, v0]), noise):
+    if meas0 := measure_step(scenario, 0, target[0] - own.state(0), noise):
         state0 = pf.update(state0, meas0, filter_rng)
     fr = drive(pf, state0, K, step, filter_rng)
-    obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
-                        heading=wrap_angle(headings), speed=np.full(K + 1, speed))
+    obs = own.track(times)
     return ClosedLoopRun(times=times, truth=target - obs.state, target=target, observer=obs,
                          estimate=fr.estimates, covariance=fr.covariances,
-                         ping_steps=np.asarray(pings, dtype=int), turn_rate=rates,
+                         ping_steps=np.asarray(pings, dtype=int), turn_rate=own.turn_rate,
                          replans=tuple(getattr(ctrl, "log", [])),
                          seconds=time.perf_counter() - t_start,
                          recoveries=int(getattr(fr.state, "recoveries", 0)),

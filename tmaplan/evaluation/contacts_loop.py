@@ -30,12 +30,9 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.particle_filter import DegeneracyWarning, PFConfig
-from tmaplan.evaluation.closed_loop import ClosedLoopRun, read_only
+from tmaplan.evaluation.closed_loop import ClosedLoopRun, OwnShipFlight, read_only
 from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.seeding import run_streams
-from tmaplan.geometry import course_speed, wrap_angle
-from tmaplan.models.observer import ObserverTrack, arc_displacement
-from tmaplan.models.target import initial_velocity
 from tmaplan.policies import BeliefView, Policy
 from tmaplan.policies.contacts import ContactsBeliefView
 from tmaplan.scenario import Scenario
@@ -113,19 +110,12 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
                             "alarms are flown for one contact only)", opts.alarm_response)
     views = scenario.contact_views()
     noises = {n: draw_common_noise(views[n], noise_rng) for n in names}
-    v0 = initial_velocity(scenario.observer)
-    heading, speed = (float(x) for x in course_speed(v0))
-    pos = np.asarray(scenario.observer.position, float).copy()
-    u_max = scenario.observer.turn_rate_max
-    positions, vel_inst, vbar = np.empty((K + 1, 2)), np.empty((K + 1, 2)), np.empty((K + 1, 2))
-    headings = np.empty(K + 1)
-    positions[0], vel_inst[0], vbar[0], headings[0] = pos, v0, v0, heading
+    own = OwnShipFlight(scenario)
     filters = {n: opts.build(PFConfig(n_particles=n_particles, dt=dt,
                                       q=max(views[n].target.q, 1e-8))) for n in names}
     ctrl = policy.controller(scenario)
     active = any(getattr(s, "active", False) for s in scenario.sensors_of("range"))
     pings: list[int] = []
-    rates = np.zeros(K)
     est = {n: np.full((K + 1, 4), np.nan) for n in names}
     cov = {n: np.full((K + 1, 4, 4), np.nan) for n in names}
     states: dict[str, Any] = {}
@@ -133,45 +123,35 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
     for n in names:
         with _whose_warnings(n, seen):
             st = filters[n].init(views[n], filter_rng)
-            if meas0 := measure_step(views[n], 0, tracks[n][0] - np.concatenate([pos, v0]),
-                                     noises[n]):
+            if meas0 := measure_step(views[n], 0, tracks[n][0] - own.state(0), noises[n]):
                 st = filters[n].update(st, meas0, filter_rng)
         states[n] = st
         est[n][0], cov[n][0] = st.mean, st.cov
 
     for k in range(K):
-        beliefs = {n: BeliefView(step=k, t=float(times[k]), heading=heading,
-                                 position=pos.copy(), particles=read_only(s.particles),
+        beliefs = {n: BeliefView(step=k, t=float(times[k]), heading=own.heading,
+                                 position=own.position.copy(), particles=read_only(s.particles),
                                  weights=read_only(s.weights), pings_used=len(pings),
                                  alarms=len(getattr(s, "log", ())))
                    for n, s in states.items()}
         act = ctrl.act(ContactsBeliefView.of(beliefs), float(times[k]))
-        u = float(act.turn_rate)
-        if u_max is not None:
-            u = float(np.clip(u, -u_max, u_max))
-        rates[k] = u
-        disp = arc_displacement(np.array(heading), np.array(u), np.array(speed), dt)
-        pos = pos + disp
-        heading = heading + u * dt
-        vbar[k + 1] = disp / dt
-        vel_inst[k + 1] = speed * np.array([np.sin(heading), np.cos(heading)])
-        positions[k + 1], headings[k + 1] = pos, heading
+        own.advance(k, act.turn_rate)
         pings.extend([k + 1] if act.ping and active else [])
-        own = np.concatenate([pos, vel_inst[k + 1]])
+        own_state = own.state(k + 1)
+        vbar = own.mean_velocity
         for n in names:
-            meas = measure_step(views[n], k + 1, tracks[n][k + 1] - own, noises[n],
+            meas = measure_step(views[n], k + 1, tracks[n][k + 1] - own_state, noises[n],
                                 ping=bool(act.ping))
             with _whose_warnings(n, seen):
                 st = filters[n].predict(states[n], vbar[k + 1] - vbar[k], filter_rng)
                 states[n] = st = filters[n].update(st, meas, filter_rng)
             est[n][k + 1], cov[n][k + 1] = st.mean, st.cov
 
-    obs = ObserverTrack(times=times, position=positions, velocity=vel_inst, mean_velocity=vbar,
-                        heading=wrap_angle(headings), speed=np.full(K + 1, speed))
+    obs = own.track(times)
     seconds = time.perf_counter() - t_start
     return {n: ClosedLoopRun(times=times, truth=tracks[n] - obs.state, target=tracks[n],
                              observer=obs, estimate=est[n], covariance=cov[n],
-                             ping_steps=np.asarray(pings, dtype=int), turn_rate=rates,
+                             ping_steps=np.asarray(pings, dtype=int), turn_rate=own.turn_rate,
                              replans=tuple(getattr(ctrl, "log", [])), seconds=seconds,
                              recoveries=int(getattr(states[n], "recoveries", 0)),
                              alarms=tuple(getattr(states[n], "log", ())))

@@ -22,8 +22,8 @@ import gpxpy.gpx
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tmaplan.errors import ArgumentError, DataError
-from tmaplan.io.nav import NavTrack, check_latlon, finish_nav
+from tmaplan.errors import DataError
+from tmaplan.io.nav import NavTrack, check_latlon, finish_nav, fixes_to_write
 from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC
 
@@ -120,10 +120,7 @@ def write_gpx(path: str | Path, times: ArrayLike, lat: ArrayLike, lon: ArrayLike
     -------
     Path
     """
-    if start.utcoffset() is None:
-        raise ArgumentError("start", "an aware datetime (with a time zone)", start)
-    t = np.asarray(times, float).ravel()
-    la, lo = np.asarray(lat, float).ravel(), np.asarray(lon, float).ravel()
+    t, la, lo = fixes_to_write(times, lat, lon, start)
     cut = set(np.asarray(breaks if breaks is not None else [], int).tolist())
     doc = gpxpy.gpx.GPX()
     trk = gpxpy.gpx.GPXTrack(name=name)

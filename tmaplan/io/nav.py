@@ -21,12 +21,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tmaplan.errors import DataError
+from tmaplan.errors import ArgumentError, DataError
 from tmaplan.io.faults import check_not_backwards, warn, warn_gaps
 from tmaplan.io.table import read_table, write_csv
 from tmaplan.io.times import format_time, parse_stamps, time_text
 
-__all__ = ["NavTrack", "check_latlon", "finish_nav", "read_nav_csv", "write_ownship_csv"]
+__all__ = ["NavTrack", "check_latlon", "finish_nav", "fixes_to_write", "read_nav_csv",
+           "write_ownship_csv"]
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -150,6 +151,35 @@ def check_latlon(lat: np.ndarray, lon: np.ndarray, lines: np.ndarray, *, source:
                             f"received {float(v[i])!r}", int(lines[i]) or None, name,
                             float(v[i]))
     return np.where(lon > 180.0, lon - 360.0, lon)
+
+
+def fixes_to_write(times: ArrayLike, lat: ArrayLike, lon: ArrayLike, start: dt.datetime
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fixes a track writer writes (:func:`tmaplan.io.gpx.write_gpx`,
+    :func:`tmaplan.io.nmea.write_nmea`), once ``start`` is checked to be aware.
+
+    Parameters
+    ----------
+    times, lat, lon : array_like, shape (m,)
+        Times [s] after ``start``; latitudes and longitudes [deg].
+    start : datetime.datetime
+        Aware time of ``times == 0``.
+
+    Returns
+    -------
+    times, lat, lon : ndarray, shape (m,)
+        Flat float arrays [s], [deg], [deg].
+
+    Raises
+    ------
+    ArgumentError
+        ``start`` without a time zone.
+    """
+    if start.utcoffset() is None:
+        raise ArgumentError("start", "an aware datetime (with a time zone)", start)
+    t = np.asarray(times, float).ravel()
+    la, lo = np.asarray(lat, float).ravel(), np.asarray(lon, float).ravel()
+    return t, la, lo
 
 
 def read_nav_csv(path: str | Path, *, gap: float | None = None) -> NavTrack:

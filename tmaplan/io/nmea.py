@@ -31,9 +31,9 @@ import numpy as np
 import pynmea2
 from numpy.typing import ArrayLike
 
-from tmaplan.errors import ArgumentError, DataError
+from tmaplan.errors import DataError
 from tmaplan.io.faults import warn
-from tmaplan.io.nav import NavTrack, check_latlon, finish_nav
+from tmaplan.io.nav import NavTrack, check_latlon, finish_nav, fixes_to_write
 from tmaplan.io.table import read_text
 from tmaplan.io.times import UTC
 from tmaplan.units import KNOT
@@ -234,13 +234,8 @@ def write_nmea(path: str | Path, times: ArrayLike, lat: ArrayLike, lon: ArrayLik
 
     Parameters
     ----------
-    path : str or Path
-    times : array_like, shape (m,)
-        [s] after ``start``.
-    lat, lon : array_like, shape (m,)
-        [deg].
-    start : datetime.datetime
-        Aware time of ``times == 0``.
+    path, times, lat, lon, start
+        As for :func:`tmaplan.io.gpx.write_gpx`.
     course : array_like, shape (m,), optional
         Course over ground [rad], clockwise from North (RMC); empty fields without it.
     speed : array_like, shape (m,), optional
@@ -252,10 +247,7 @@ def write_nmea(path: str | Path, times: ArrayLike, lat: ArrayLike, lon: ArrayLik
     -------
     Path
     """
-    if start.utcoffset() is None:
-        raise ArgumentError("start", "an aware datetime (with a time zone)", start)
-    t = np.asarray(times, float).ravel()
-    la, lo = np.asarray(lat, float).ravel(), np.asarray(lon, float).ravel()
+    t, la, lo = fixes_to_write(times, lat, lon, start)
     cog = None if course is None else np.rad2deg(np.mod(np.asarray(course, float), 2 * np.pi))
     sog = None if speed is None else np.asarray(speed, float) / KNOT
     base = start.astimezone(UTC)

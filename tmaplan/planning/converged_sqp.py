@@ -41,7 +41,7 @@ import numpy as np
 from tmaplan.errors import ArgumentError, SolverError, is_integer
 from tmaplan.interrupts import solver_call
 from tmaplan.planning.casadi_eval import NumpyFunction
-from tmaplan.planning.rti import RealTimeIteration, RTIModel
+from tmaplan.planning.rti import RealTimeIteration, RTIModel, constraint_violation
 
 if TYPE_CHECKING:
     from tmaplan.planning.belief import Belief
@@ -115,12 +115,9 @@ class ConvergedSQP:
         ----------
         belief : Belief
         warm_start : HeadingPlan, optional
-        heading0, speed0 : float, optional
-            Current heading [rad] and speed [m/s] (default the scenario's).
-        position0 : ndarray, shape (2,), optional
-            Current position [m] (places the returned track).
-        ping_steps : sequence of int
-            Plan steps with a range ping.
+        heading0, speed0, position0, ping_steps
+            The start state and the pings, as for
+            :meth:`tmaplan.planning.rti.RealTimeIteration.solve`.
         tol : float, optional
             Stationarity tolerance on the scaled objective (default 1e-7, as IPOPT's).
         raise_on_failure : bool
@@ -143,15 +140,12 @@ class ConvergedSQP:
         t_start = time.perf_counter()
         tol = 1e-7 if tol is None else float(tol)
         prev = warm_start if warm_start is not None else self.model.plan
-        heading0, speed0, p0 = pl.start_state(heading0, speed0, position0)
-        pl.check_start(belief, heading0, speed0)
-        pvec = pl.parameter_vector(belief, ping_steps)
-        lbw, ubw, lbg, ubg = pl.bounds(heading0)
-        iu = self._rti.turn_rate_index
-        x_prev, _ = pl.shifted_start(prev, belief.t, heading0, speed0)
-        u = np.clip(np.asarray(x_prev)[iu], -1, 1)
-        x = pl.decision_vector(u, heading0, speed0)
-        P = np.concatenate([pvec, [heading0, speed0, 1.0, 1.0]])
+        start = self._rti.replan_start(belief, prev, heading0=heading0, speed0=speed0,
+                                       position0=position0, ping_steps=ping_steps)
+        heading0, speed0, p0, u, x = (start.heading0, start.speed0, start.position0, start.u,
+                                      start.x)
+        P = np.concatenate([start.parameters, [heading0, speed0, 1.0, 1.0]])
+        lbw, ubw, lbg, ubg = start.bounds
         f_start = self._merit_eval(x, P)[0].item()
         scale = max(abs(f_start), 1e-3) if np.isfinite(f_start) else 1.0
         P[-2] = scale
@@ -183,7 +177,7 @@ class ConvergedSQP:
                 break
             d = np.asarray(sol["x"]).reshape(-1)
             lam = np.asarray(sol["lam_a"]).reshape(-1)
-            v0 = _violation(g0, lbg, ubg)
+            v0 = constraint_violation(g0, lbg, ubg)
             if np.max(np.abs(B @ d), initial=0.0) <= tol and v0 <= self.constraint_tol:
                 converged, status = True, "Solve_Succeeded"
                 break
@@ -200,7 +194,7 @@ class ConvergedSQP:
                 else:
                     evaluated = None
                     f1, g1 = self._merit_eval(x1, P)
-                phi1 = f1.item() + mu * _violation(g1.reshape(-1), lbg, ubg)
+                phi1 = f1.item() + mu * constraint_violation(g1.reshape(-1), lbg, ubg)
                 if np.isfinite(phi1) and phi1 <= phi0 + 1e-4 * alpha * min(slope, 0.0):
                     accepted = True
                     break
@@ -240,10 +234,6 @@ def _shifted_hessian(B: np.ndarray, prev: HeadingPlan, t: float, Tc: float,
     out[:, : n - k] = 0.0
     out[: n - k, : n - k] = np.asarray(old)[k:, k:] * (float(warm["hessian_scale"]) / scale)
     return out
-
-
-def _violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
-    return float(max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0)))
 
 
 def _bfgs(B: np.ndarray, s: np.ndarray, y: np.ndarray) -> np.ndarray:

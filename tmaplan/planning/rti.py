@@ -56,8 +56,8 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
 
-__all__ = ["QP_SOLVERS", "RTIModel", "RealTimeIteration", "hessian_columns",
-           "reference_model"]
+__all__ = ["QP_SOLVERS", "RTIModel", "RealTimeIteration", "ReplanStart", "constraint_violation",
+           "hessian_columns", "reference_model"]
 
 #: QP solvers of the step (casadi ``conic`` plugins).
 QP_SOLVERS = ("daqp", "qrqp", "osqp")
@@ -82,6 +82,58 @@ class RTIModel:
     hessian: np.ndarray
     scale: float
     plan: Any
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ReplanStart:
+    """The start of a warm-started heading re-plan (:meth:`RealTimeIteration.replan_start`).
+
+    Attributes
+    ----------
+    heading0 : float
+        Start heading [rad].
+    speed0 : float
+        Start speed [m/s].
+    position0 : ndarray, shape (2,)
+        Start position [m].
+    parameters : ndarray, shape (n_p,)
+        The objective's parameters (:meth:`HeadingPlanner.parameter_vector`, the head of the
+        NLP's ``P``).
+    bounds : tuple of ndarray
+        ``(lbw, ubw, lbg, ubg)`` of the decision vector and the constraints for a start at
+        ``heading0`` (:meth:`HeadingPlanner.bounds`).
+    u : ndarray, shape (m,)
+        The previous plan's turn rates shifted to the belief's time, fractions of ``u_max``
+        clipped to [−1, 1].
+    x : ndarray, shape (n_w,)
+        The NLP's decision vector of ``u`` flown from ``heading0`` at ``speed0``
+        (:meth:`HeadingPlanner.decision_vector`).
+    """
+
+    heading0: float
+    speed0: float
+    position0: np.ndarray
+    parameters: np.ndarray
+    bounds: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    u: np.ndarray
+    x: np.ndarray
+
+
+def constraint_violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
+    """The largest violation of the bounds ``lbg <= g <= ubg`` (0 when all hold).
+
+    Parameters
+    ----------
+    g, lbg, ubg : ndarray, shape (n_g,)
+        Constraint values and their lower and upper bounds [dimensionless for the keep-out
+        rows: (range/keep-out)² − 1].
+
+    Returns
+    -------
+    float
+        ``max(max(lbg − g), max(g − ubg), 0)``.
+    """
+    return float(max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0)))
 
 
 def reference_model(planner: HeadingPlanner, plan: HeadingPlan, belief: Belief, *,
@@ -301,8 +353,43 @@ class RealTimeIteration:
               "lbx": (lbw - x0)[xu], "ubx": (ubw - x0)[xu]}
         return f0.item(), g0, qp
 
-    def _violation(self, g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
-        return float(max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0)))
+    def replan_start(self, belief: Belief, previous: HeadingPlan, *, heading0: float | None,
+                     speed0: float | None, position0: np.ndarray | None,
+                     ping_steps: Sequence[int]) -> ReplanStart:
+        """The start of a re-plan for ``belief``: ``previous`` shifted to ``belief.t``, flown
+        from the start state (the real-time iteration's and
+        :class:`tmaplan.planning.converged_sqp.ConvergedSQP`'s first step).
+
+        Parameters
+        ----------
+        belief : Belief
+        previous : HeadingPlan
+            The plan to start from.
+        heading0, speed0 : float or None
+            Current heading [rad] and speed [m/s] (None: the scenario's).
+        position0 : ndarray, shape (2,), or None
+            Current position [m] (None: the scenario's).
+        ping_steps : sequence of int
+            Plan steps with a range ping.
+
+        Returns
+        -------
+        ReplanStart
+
+        Raises
+        ------
+        PlanningError
+            The estimate inside the keep-out range (:meth:`HeadingPlanner.check_start`).
+        """
+        pl = self.planner
+        heading0, speed0, p0 = pl.start_state(heading0, speed0, position0)
+        pl.check_start(belief, heading0, speed0)
+        pvec = pl.parameter_vector(belief, ping_steps)
+        bounds = pl.bounds(heading0)
+        x_prev, _ = pl.shifted_start(previous, belief.t, heading0, speed0)
+        u = np.clip(np.asarray(x_prev)[self._u], -1, 1)
+        return ReplanStart(heading0=heading0, speed0=speed0, position0=p0, parameters=pvec,
+                           bounds=bounds, u=u, x=pl.decision_vector(u, heading0, speed0))
 
     def solve(self, belief: Belief, *, previous: HeadingPlan | None = None,
               heading0: float | None = None, position0: np.ndarray | None = None,
@@ -342,13 +429,11 @@ class RealTimeIteration:
         t_start = time.perf_counter()
         pl = self.planner
         prev = previous if previous is not None else self.model.plan
-        heading0, speed0, p0 = pl.start_state(heading0, speed0, position0)
-        pl.check_start(belief, heading0, speed0)
-        pvec = pl.parameter_vector(belief, ping_steps)
-        P = np.concatenate([pvec, [heading0, speed0, self.model.scale, 1.0]])
-        lbw, ubw, lbg, ubg = pl.bounds(heading0)
-        x_prev, _ = pl.shifted_start(prev, belief.t, heading0, speed0)
-        x0 = pl.decision_vector(np.clip(np.asarray(x_prev)[self._u], -1, 1), heading0, speed0)
+        start = self.replan_start(belief, prev, heading0=heading0, speed0=speed0,
+                                  position0=position0, ping_steps=ping_steps)
+        heading0, speed0, p0, x0 = start.heading0, start.speed0, start.position0, start.x
+        P = np.concatenate([start.parameters, [heading0, speed0, self.model.scale, 1.0]])
+        lbw, ubw, lbg, ubg = start.bounds
         if self.rescale:
             # the model Hessian belongs to the objective divided by its value at the
             # reference; divide by the value at the start instead (curvature relative to value)
@@ -366,7 +451,7 @@ class RealTimeIteration:
         if accepted is not None and accepted[2] is not None:
             # a step from an infeasible start may only have reduced the violation: that
             # is no plan (the stationary step has no outputs: its start is feasible)
-            v = self._violation(np.asarray(accepted[2][-1]).reshape(-1), lbg, ubg)
+            v = constraint_violation(np.asarray(accepted[2][-1]).reshape(-1), lbg, ubg)
             if v > self.constraint_tol:
                 accepted, reason = None, (f"constraints (keep-out) still violated after the step "
                                           f"({v:.2e} > constraint_tol "
@@ -401,7 +486,7 @@ class RealTimeIteration:
         f0, g0, qp = self.condensed(x0, P, lbw, ubw, lbg, ubg)
         if not np.isfinite(f0):
             return None, "objective not finite at the start", f0
-        v0 = self._violation(g0, lbg, ubg)
+        v0 = constraint_violation(g0, lbg, ubg)
         with solver_call():  # qrqp turns Ctrl-C into a failed QP: an interrupt raises
             sol = self._qp(**qp)
         if not bool(self._qp.stats().get("success", False)):
@@ -416,7 +501,7 @@ class RealTimeIteration:
             u = np.clip(x0[self._u] + alpha * d, -1, 1)
             x1 = pl.decision_vector(u, float(P[-4]), float(P[-3]))
             f1, g1, outs = self._merit(x1, P)
-            v1 = self._violation(g1, lbg, ubg)
+            v1 = constraint_violation(g1, lbg, ubg)
             feasible = v1 <= self.constraint_tol or v1 < v0
             if np.isfinite(f1) and feasible and f1 <= f0 + 1e-12 * abs(f0):
                 return (x1, f"RTI step alpha={alpha:g}", outs), "", f0

@@ -16,12 +16,15 @@ from tmaplan.evaluation.contacts_loop import run_contacts_loop
 from tmaplan.evaluation.metrics import censor_time
 from tmaplan.evaluation.records import without_timings
 from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.planning.contacts import ContactSet
+from tmaplan.planning.ping_contacts import schedule_contact_pings
 from tmaplan.policies import SingleTurn, Straight
 from tmaplan.policies.contacts import (
     Alternate,
     check_contacts_policy,
     heaviest_contact,
     nearest_contact,
+    parse_contacts_policy,
 )
 from tmaplan.scenario import load
 from tmaplan.simulate import draw_truth
@@ -136,8 +139,30 @@ def test_policy_names_for_several_contacts():
     with pytest.raises(ArgumentError, match="receding-realtime flies for one contact"):
         check_contacts_policy("receding-realtime", sc)
     assert check_contacts_policy("receding", sc) == ("receding", None, None)
+    assert check_contacts_policy("straight+scheduled", sc) == ("straight", "scheduled", None)
     with pytest.raises(PlanningError, match="unknown policy"):
-        check_contacts_policy("straight+scheduled", sc)
+        check_contacts_policy("straight+adaptive", sc)
+
+
+@pytest.mark.parametrize("ping", ["scheduled", "scheduled-terminal"])
+def test_scheduled_pings_are_one_schedule_for_every_contact(ping):
+    sc = load("two-contacts-crossing")
+    pol = parse_contacts_policy(f"straight+{ping}", sc)
+    objective = "terminal-range-bound" if ping == "scheduled-terminal" else "mean-range-bound"
+    ref = schedule_contact_pings(ContactSet.from_scenario(sc), budget=sc.planning.ping_budget,
+                                 method="relaxed", objective=objective, gap_reference="none")
+    steps = tuple(int(k) for k in ref.schedule.steps)
+    assert pol.name == f"straight+{ping}" and pol.ping.steps == steps
+    assert len(steps) == sc.planning.ping_budget
+    rng = np.random.default_rng(5)
+    targets = {n: draw_truth(v, rng) for n, v in sc.contact_views().items()}
+    runs = run_contacts_loop(sc, pol, targets, noise_rng=np.random.default_rng(6),
+                             filter_rng=np.random.default_rng(7), n_particles=300)
+    for r in runs.values():  # one ping, every contact
+        np.testing.assert_array_equal(r.ping_steps, steps)
+    silent = dataclasses.replace(sc, sensors=tuple(s for s in sc.sensors if s.kind != "range"))
+    with pytest.raises(ArgumentError, match="no active range sensor"):
+        check_contacts_policy(f"planned+{ping}", silent)
 
 
 def test_alternate_alternates_the_contacts_courses():

@@ -22,7 +22,10 @@ steering one own ship), computed offline from the contacts' priors:
   contacts' posteriors (:class:`ContactsReceding`; each re-plan one IPOPT solve of the joint
   NLP warm-started from the previous plan, its horizon the planner's from the re-plan time).
 
-Pings: ``+no-ping`` or ``+uniform`` (a ping ranges every contact within ``max_range``).
+Pings: ``+no-ping``, ``+uniform`` (a ping ranges every contact within ``max_range``), or
+``+scheduled`` / ``+scheduled-terminal``: the ping budget's one schedule for all the contacts
+(:func:`tmaplan.planning.schedule_contact_pings`, the weighted mean of the contacts' mean or
+terminal range bounds) along the track the manoeuvre nominally flies, computed once.
 The other single-contact manoeuvres (``zigzag``, the other ``receding-*``, the tactics) are
 refused for N > 1 with one line.
 """
@@ -51,6 +54,7 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.contacts import ContactSet, ContactsPlanner
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import ContactBeliefs
+from tmaplan.planning.ping_contacts import schedule_contact_pings
 from tmaplan.policies.base import (
     CLOSED_LOOP_OBJECTIVE,
     Action,
@@ -68,7 +72,7 @@ from tmaplan.policies.manoeuvres import (
     TurnRatePlayback,
     offline_plan,
 )
-from tmaplan.policies.pings import NoPing, UniformPings
+from tmaplan.policies.pings import NoPing, ScheduledPings, UniformPings, resolve_ping_budget
 from tmaplan.policies.receding import multi_start_replan
 from tmaplan.simulate import ping_sensors
 
@@ -80,13 +84,13 @@ if TYPE_CHECKING:
 __all__ = ["CONTACTS_MANOEUVRES", "CONTACTS_PINGS", "Alternate", "ContactsBeliefView",
            "ContactsReceding",
            "check_contacts_policy", "contact_plan", "heaviest_contact", "joint_plan",
-           "nearest_contact", "parse_contacts_policy", "single_turn_all"]
+           "nearest_contact", "parse_contacts_policy", "shared_schedule", "single_turn_all"]
 
 #: Manoeuvres of a several-contact problem by CLI name (``planned:NAME`` names a contact).
 CONTACTS_MANOEUVRES = ("planned", "nearest-contact", "heaviest-contact", "alternate",
                        "single-turn", "straight", "receding")
 #: Ping policies of a several-contact problem.
-CONTACTS_PINGS = ("no-ping", "uniform")
+CONTACTS_PINGS = ("no-ping", "uniform", "scheduled", "scheduled-terminal")
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -277,7 +281,7 @@ def check_contacts_policy(spec: str, scenario: Scenario) -> tuple[str, str | Non
                             f"MANOEUVRE[+PING] with MANOEUVRE in {list(CONTACTS_MANOEUVRES)} "
                             f"or planned:NAME and PING in {list(CONTACTS_PINGS)}")
     ping = parts[1] if len(parts) == 2 else None
-    if ping == "uniform" and not ping_sensors(scenario):
+    if ping not in (None, "no-ping") and not ping_sensors(scenario):
         raise ArgumentError("policy", "no ping policy (+PING): there is no active range "
                             "sensor to ping with", spec, source=scenario.name)
     return man, ping, contact or None
@@ -306,7 +310,44 @@ def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
         m = ContactsReceding(first_plan=_planner(scenario).solve())
     else:
         m = Straight()
+    if ping in ("scheduled", "scheduled-terminal"):
+        return Combined(manoeuvre=m, ping=shared_schedule(scenario, m, ping))
     return Combined(manoeuvre=m, ping=UniformPings() if ping == "uniform" else NoPing())
+
+
+def shared_schedule(scenario: Scenario, manoeuvre: Any, name: str = "scheduled",
+                    budget: int | None = None) -> ScheduledPings:
+    """The ping policy ``+scheduled`` (``name`` ``scheduled-terminal``: the terminal range
+    bound) of several contacts: one schedule of ``budget`` pings (default
+    ``planning.ping_budget``) for all the contacts along ``manoeuvre``'s nominal track, the
+    weighted mean of their range bounds (:func:`tmaplan.planning.schedule_contact_pings`,
+    ``relaxed``; no certificate: the policy needs the steps only), a ping ranging every
+    contact within ``max_range``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Several contacts.
+    manoeuvre : ManoeuvrePolicy
+        Its offline parts computed (``nominal_track``).
+    name : str
+        ``scheduled`` or ``scheduled-terminal``.
+    budget : int, optional
+        Pings at most.
+
+    Returns
+    -------
+    ScheduledPings
+        With its ``steps`` (in [1, K]).
+    """
+    objective = "terminal-range-bound" if name == "scheduled-terminal" else "mean-range-bound"
+    sched = schedule_contact_pings(ContactSet.from_scenario(scenario),
+                                   budget=resolve_ping_budget(scenario, budget),
+                                   method="relaxed", objective=objective,
+                                   observer=manoeuvre.nominal_track(scenario),
+                                   gap_reference="none")
+    return ScheduledPings(objective=cast(Any, objective), name=name,
+                          steps=tuple(int(k) for k in sched.schedule.steps))
 
 
 

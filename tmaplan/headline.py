@@ -59,7 +59,12 @@ STORED_FILE = "data/demo_stored.json"
 
 #: metric -> (words, divisor from SI, display unit, what "smaller" means)
 _METRICS = {"time_to_accuracy": ("time to 10 % range accuracy", 60.0, "min", "sooner"),
-            "final_range_error": ("final range error", 1.0, "m", "smaller")}
+            "final_range_error": ("final range error", 1.0, "m", "smaller"),
+            # several contacts (tmaplan.cli.demo_contacts): the aggregate metrics
+            "time_to_accuracy_all": ("time until every contact is localised", 60.0, "min",
+                                     "sooner"),
+            "worst_final_range_error": ("worst contact's final range error", 1.0, "m",
+                                        "smaller")}
 
 
 def _metric(metric: str) -> tuple[str, float, str, str]:

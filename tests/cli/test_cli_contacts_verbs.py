@@ -262,3 +262,47 @@ def test_weighted_objective_is_the_weighted_mean_of_the_contacts_times(tmp_path)
     assert mean - 1e-3 * span <= got["objective"] <= mean + 0.021 * span
     for name, alone in got["alone_plans"].items():
         assert got["objective"] <= alone["objective"] + 1e-3 * span, name
+
+
+def test_demo_runs_the_three_jobs_for_several_contacts(tmp_path, capsys):
+    """``tmaplan demo P`` on several contacts (issue 40): one joint plan against each
+    contact's own plan, one ping schedule for all of them (certified), one campaign of the
+    several-contact policies with the key differences on the time until all are localised."""
+    from tmaplan.cli.demo_contacts import CONTACTS_KEY_DIFFERENCES, DEMO_CONTACTS_POLICIES
+
+    js = tmp_path / "demo.json"
+    assert main(["demo", "two-contacts-crossing", "--out", str(tmp_path), "--runs", "2",
+                 "--particles", "300", "--workers", "1", "--json", str(js)]) == 0
+    d = json.loads(js.read_text())
+    out = capsys.readouterr().out
+    assert d["problem"] == "two-contacts-crossing"
+    assert set(d["policies"]) == set(DEMO_CONTACTS_POLICIES)
+    assert all("contacts" in d["policies"][p] for p in DEMO_CONTACTS_POLICIES)
+    # the joint plan: better than the baselines in its objective; each contact's time on it
+    # and on its own plan, said on the console
+    assert d["plan"]["objective"] < min(d["plan"]["baselines"].values())
+    for c in ("alpha", "bravo"):
+        t = d["plan"]["contacts"][c]
+        assert 0 < t["expected_time_to_accuracy"] and 0 < t["alone_expected_time_to_accuracy"]
+        assert f"{c}  " in out and "on its own plan" in out
+    s = d["schedule"]
+    assert s["lower_bound"] <= s["objective"] * (1 + 1e-9)
+    assert s["objective"] <= min(s["uniform_objective"], s["no_ping_objective"]) + 1e-9
+    assert set(s["contacts"]) == {"alpha", "bravo"}
+    keys = [(k["a"], k["b"], k["metric"]) for k in d["key_differences"]]
+    assert keys == list(CONTACTS_KEY_DIFFERENCES)
+    for k in d["key_differences"]:
+        assert k["n"] == 2 and (k["decided"] or "not decided at 2 runs" in k["verdict"])
+    assert "time until every contact is localised, a − b, paired 95 % interval" in out
+    assert "planned − nearest-contact" in out and "Stored result" not in out
+    text = Path(d["report"]).read_text()
+    assert Path(d["report"]) == tmp_path / "demo" / "report.html"
+    assert "Joint plan from the priors" in text and "shared by the contacts" in text
+
+
+def test_demo_refuses_another_one_contact_problem(tmp_path, capsys):
+    assert main(["demo", "bow-closing", "--out", str(tmp_path), "--runs", "2"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "field 'problem': expected 'default'" in err and "tmaplan compare P" in err
+    assert "received 'bow-closing'" in err

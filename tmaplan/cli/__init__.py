@@ -203,11 +203,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 warnings.showwarning = _one_line_warning(args.verb)
             # the verb's problem: its positional P, or a fixed one (``PROBLEM``, e.g. demo's)
             fixed = getattr(modules[args.verb], "PROBLEM", None)
-            if getattr(args, "problem", None) is not None or fixed is not None:
-                scenario = load(args.problem) if fixed is None else load_problem(fixed)
+            given = getattr(args, "problem", None)  # (demo's P is optional: else PROBLEM)
+            if given is not None or fixed is not None:
+                scenario = load(given) if given is not None else load_problem(str(fixed))
                 problem = scenario.name
                 # the rules that need the motion model (tmaplan.scenario is below the models)
-                check_scenario(scenario, source=args.problem if fixed is None else None)
+                check_scenario(scenario, source=given)
                 # a verb that cannot handle several contacts says so (tmaplan.cli.contacts)
                 if len(scenario.contacts) > 1 and not takes_several(modules[args.verb]):
                     modules = {**_build_parser()[1], **modules}  # to name the verbs that do

@@ -1,4 +1,5 @@
-"""``tmaplan demo``: the main job on the built-in ``default`` problem.
+"""``tmaplan demo [P]``: the main job on the built-in ``default`` problem (or on a
+several-contact problem P: :mod:`tmaplan.cli.demo_contacts`).
 
 1. Plan a manoeuvre offline from the prior (heading OCP, :data:`CLOSED_LOOP_OBJECTIVE`)
    and compare it with the baselines (straight, best single turn, best zig-zag).
@@ -37,7 +38,8 @@ from tmaplan.cli.args import (
     add_seed_argument,
     integer,
 )
-from tmaplan.errors import PlanningError
+from tmaplan.cli.demo_contacts import run_several
+from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.headline import (
     Comparison,
@@ -57,9 +59,14 @@ from tmaplan.policies import CLOSED_LOOP_OBJECTIVE
 from tmaplan.policies.manoeuvres import offline_plan
 from tmaplan.policies.receding import prefetch_receding_model
 from tmaplan.report_tables import baseline_parameters
-from tmaplan.scenario import load_problem
+from tmaplan.scenario import load, load_problem
 
-HELP = "run the main job on the built-in 'default' problem: plan, schedule, compare, report"
+HELP = ("run the main job on the built-in 'default' problem (or a several-contact problem): "
+        "plan, schedule, compare, report")
+
+#: Several contacts: one plan, one ping schedule and one campaign for all of them
+#: (:mod:`tmaplan.cli.demo_contacts`).
+SEVERAL_CONTACTS = "joint"
 
 #: Results that must be numbers (:mod:`tmaplan.cli.finite`).
 FINITE = ("policies.*.rmse_position[-1]", "policies.*.final_range_rmse")
@@ -77,6 +84,10 @@ REPORT_DIR = "demo"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``demo``."""
+    parser.add_argument("problem", nargs="?", default=None,
+                        help=f"'{PROBLEM}' (the default: its stored decisive campaigns are "
+                             "printed first) or a several-contact problem, built-in name or "
+                             "path to a .toml file")
     add_figure_arguments(parser, report=True)
     add_seed_argument(parser, help="root seed (default 0)")
     parser.add_argument("--runs", type=integer(1, MAX_RUNS), default=40,
@@ -115,9 +126,17 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     from tmaplan.plotting import plot_plan, plot_schedule  # deferred: matplotlib
     from tmaplan.report import efficiency, write_report  # deferred: matplotlib
 
-    scenario = load_problem(PROBLEM)
-    belief = Belief.from_prior(scenario)
+    scenario = load_problem(PROBLEM) if args.problem is None else load(args.problem)
     rep = out / REPORT_DIR  # the report and its figures; the runs stay in `out`
+    if len(scenario.contacts) > 1:
+        rep.mkdir(parents=True, exist_ok=True)
+        return run_several(args, scenario, out, rep, pool, t0)
+    if scenario != load_problem(PROBLEM):
+        raise ArgumentError("problem", f"'{PROBLEM}' (its stored decisive campaigns come "
+                            "first) or a problem with several contacts; compare the policies "
+                            f"on a one-contact problem with `tmaplan compare P --policies "
+                            f"{','.join(DEMO_POLICIES)}`", args.problem, source=scenario.name)
+    belief = Belief.from_prior(scenario)
     rep.mkdir(parents=True, exist_ok=True)
 
     _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")

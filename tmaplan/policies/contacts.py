@@ -51,7 +51,7 @@ from tmaplan.errors import (
 )
 from tmaplan.planning.baselines import course_program_track, evaluate_baselines
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.contacts import ContactSet, ContactsPlanner
+from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import ContactBeliefs
 from tmaplan.planning.ping_contacts import schedule_contact_pings
@@ -82,8 +82,8 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["CONTACTS_MANOEUVRES", "CONTACTS_PINGS", "Alternate", "ContactsBeliefView",
-           "ContactsReceding",
-           "check_contacts_policy", "contact_plan", "heaviest_contact", "joint_plan",
+           "ContactsReceding", "check_contacts_policy", "contact_plan", "contacts_planner",
+           "heaviest_contact", "joint_contacts_plan", "joint_plan",
            "nearest_contact", "parse_contacts_policy", "shared_schedule", "single_turn_all"]
 
 #: Manoeuvres of a several-contact problem by CLI name (``planned:NAME`` names a contact).
@@ -153,25 +153,43 @@ def _first_of_equals(policy: str, what: str, names: list[str], value: str) -> st
 
 #: Joint planners by scenario (their NLP built once), the 8 most recently used.
 _PLANNERS: LRUCache[Scenario, ContactsPlanner] = LRUCache(8)
+#: Their solutions from the contacts' priors (deterministic), the 8 most recently used.
+_PRIOR_PLANS: LRUCache[Scenario, ContactsPlan] = LRUCache(8)
 
 
-def _planner(scenario: Scenario) -> ContactsPlanner:
+def contacts_planner(scenario: Scenario) -> ContactsPlanner:
+    """The joint planner of ``scenario``'s contacts (``all-contacts-time-to-accuracy``), its
+    NLP built once per scenario (cached, the 8 most recently used)."""
     if scenario not in _PLANNERS:
-
         _PLANNERS[scenario] = ContactsPlanner(ContactSet.from_scenario(scenario))
     return _PLANNERS[scenario]
 
 
-def joint_plan(scenario: Scenario) -> Any:
-    """The joint heading plan (``HeadingPlan``) from the contacts' priors
-    (:class:`tmaplan.planning.contacts.ContactsPlanner`, ``all-contacts-time-to-accuracy``).
+def joint_contacts_plan(scenario: Scenario) -> ContactsPlan:
+    """The joint plan from the contacts' priors with each contact's expected time on it and
+    on its own plan (:meth:`tmaplan.planning.contacts.ContactsPlanner.solve`; solved once per
+    scenario, cached: ``planned``, the first plan of ``receding`` and ``demo`` share it).
 
     Raises
     ------
     SolverError
         The joint NLP converged from no start.
     """
-    return _planner(scenario).solve().plan
+    if scenario not in _PRIOR_PLANS:
+        _PRIOR_PLANS[scenario] = contacts_planner(scenario).solve()
+    return _PRIOR_PLANS[scenario]
+
+
+def joint_plan(scenario: Scenario) -> Any:
+    """The joint heading plan (``HeadingPlan``) from the contacts' priors
+    (:func:`joint_contacts_plan`, ``all-contacts-time-to-accuracy``).
+
+    Raises
+    ------
+    SolverError
+        The joint NLP converged from no start.
+    """
+    return joint_contacts_plan(scenario).plan
 
 
 def contact_plan(scenario: Scenario, name: str) -> Any:
@@ -186,7 +204,7 @@ def single_turn_all(scenario: Scenario) -> SingleTurn:
     .evaluate_baselines`) of lowest joint objective (the joint planner's evaluator,
     ``all-contacts-time-to-accuracy`` with its turn penalty, on the contacts' priors)."""
 
-    pl = _planner(scenario)
+    pl = contacts_planner(scenario)
     # the joint planner's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
     ev = pl.joint.evaluator(cast(Any, pl.contacts.beliefs()))
     best = evaluate_baselines(pl.contacts.views[0], evaluator=ev)["single-turn"][0]
@@ -307,7 +325,7 @@ def parse_contacts_policy(spec: str, scenario: Scenario) -> Any:
     elif man == "single-turn":
         m = single_turn_all(scenario)
     elif man == "receding":
-        m = ContactsReceding(first_plan=_planner(scenario).solve())
+        m = ContactsReceding(first_plan=joint_contacts_plan(scenario))
     else:
         m = Straight()
     if ping in ("scheduled", "scheduled-terminal"):
@@ -404,7 +422,8 @@ class ContactsReceding:
 
     def nominal_track(self, scenario: Scenario) -> ObserverTrack:
         """The first plan's track."""
-        first = self.first_plan if self.first_plan is not None else _planner(scenario).solve()
+        first = self.first_plan if self.first_plan is not None else \
+            joint_contacts_plan(scenario)
         return first.plan.observer
 
 
@@ -414,7 +433,7 @@ class _ContactsRecedingController:
         self.policy, self.scenario = policy, scenario
         HeadingPlanner.check_tolerance(policy.fallback_tol, "receding.fallback_tol")
         self.interval = policy._interval(scenario)
-        self.planner = _planner(scenario)
+        self.planner = contacts_planner(scenario)
         self.plan = policy.first_plan
         self.playback = None if self.plan is None else TurnRatePlayback(self.plan.plan, scenario)
         self.next_replan = scenario.time.t0 + self.interval  # the first plan is the priors'

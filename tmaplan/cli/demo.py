@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import html
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -38,9 +37,9 @@ from tmaplan.cli.args import (
     add_seed_argument,
     integer,
 )
-from tmaplan.cli.demo_contacts import run_several
+from tmaplan.cli.demo_contacts import demo_campaign, run_several
 from tmaplan.errors import ArgumentError, PlanningError
-from tmaplan.experiments import CampaignSpec, run_campaign
+from tmaplan.experiments import run_campaign
 from tmaplan.headline import (
     Comparison,
     StoredResult,
@@ -164,14 +163,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                f"range bound {sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m,"
                f" none {sched.no_ping_objective:.0f} m)")
 
-    _say(args, f"[3/3] comparing {len(DEMO_POLICIES)} policies over {args.runs} paired runs "
-               f"({args.particles} particles, {args.workers} workers) ...")
-    spec = CampaignSpec(scenario=scenario, policies=DEMO_POLICIES, runs=args.runs,
-                        seed=args.seed, n_particles=args.particles)
-    result = run_campaign(spec, out_dir=out, workers=args.workers, pool=pool,
-                          progress=args.json != "-" and sys.stderr.isatty())
-    cmd = (f"tmaplan demo --runs {args.runs} --particles {args.particles} --seed {args.seed} "
-           f"--workers {args.workers} --out {args.out}")
+    result, cmd = demo_campaign(args, scenario, DEMO_POLICIES, out, pool)
     stored = load_stored()
     live = Comparison.from_campaign(result, command=cmd)
     extra = stored_html(stored) + live_html(live, stored) + _extra_html(plan, best, sched)

@@ -123,15 +123,8 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
                f"{sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m, none "
                f"{sched.no_ping_objective:.0f} m; {sched.status}, gap {100 * sched.gap:.2f} %)")
 
-    _say(args, f"[3/3] comparing {len(DEMO_CONTACTS_POLICIES)} policies over {args.runs} "
-               f"paired runs ({args.particles} particles per contact, {args.workers} "
-               "workers) ...")
-    spec = CampaignSpec(scenario=scenario, policies=DEMO_CONTACTS_POLICIES, runs=args.runs,
-                        seed=args.seed, n_particles=args.particles)
-    result = run_campaign(spec, out_dir=out, workers=args.workers, pool=pool,
-                          progress=args.json != "-" and sys.stderr.isatty())
-    cmd = (f"tmaplan demo {args.problem} --runs {args.runs} --particles {args.particles} "
-           f"--seed {args.seed} --workers {args.workers} --out {args.out}")
+    result, cmd = demo_campaign(args, scenario, DEMO_CONTACTS_POLICIES, out, pool,
+                                per=" per contact")
     live = _aggregate(Comparison.from_campaign(result, command=cmd))
     extra = (contacts_html(result) + _live_html(live)
              + _plan_html(res, best, sched, cs.names))
@@ -165,6 +158,29 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
                                               "pings_in_reach": shared.pings_in_reach[n]}
                                           for n in cs.names}})
     return payload
+
+
+def demo_campaign(args: argparse.Namespace, scenario: Scenario, policies: tuple[str, ...],
+                  out: Path, pool: Any, per: str = "") -> tuple[Any, str]:
+    """The demo's campaign of ``policies`` on ``scenario`` (step 3 of ``demo``, one contact or
+    several; ``per``: after "particles" in its console line) and the command that reproduces
+    it.
+
+    Returns
+    -------
+    tuple
+        The :class:`tmaplan.experiments.CampaignResult` and the command (str).
+    """
+    _say(args, f"[3/3] comparing {len(policies)} policies over {args.runs} paired runs "
+               f"({args.particles} particles{per}, {args.workers} workers) ...")
+    spec = CampaignSpec(scenario=scenario, policies=policies, runs=args.runs,
+                        seed=args.seed, n_particles=args.particles)
+    result = run_campaign(spec, out_dir=out, workers=args.workers, pool=pool,
+                          progress=args.json != "-" and sys.stderr.isatty())
+    problem = "" if args.problem is None else f" {args.problem}"
+    cmd = (f"tmaplan demo{problem} --runs {args.runs} --particles {args.particles} "
+           f"--seed {args.seed} --workers {args.workers} --out {args.out}")
+    return result, cmd
 
 
 def _aggregate(comparison: Comparison) -> Comparison:

@@ -193,6 +193,23 @@ def test_warnings_name_the_contact_once_per_field():
     assert fields.count("sensors[0].sigma") == 1  # shared: once
 
 
+def test_target_manoeuvres_with_several_contacts_are_warned():
+    """[faults] target_manoeuvres names no contact: with several contacts every contact makes
+    them (it did so silently); one line says so, naming the contacts. One contact: no warning."""
+    import warnings
+
+    from tmaplan.errors import ScenarioWarning
+
+    fault = {"target_manoeuvres": [{"time": "22.5 min", "course_change": "60 deg"}]}
+    with pytest.warns(ScenarioWarning, match=r"field 'faults.target_manoeuvres': a fault names "
+                      r"no contact: every contact \('alpha', 'bravo'\) makes these 1 ") as rec:
+        from_dict({**_two(), "faults": fault})
+    assert len(rec) == 1 and "\n" not in str(rec[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        from_dict({**_default_dict(), "faults": fault})
+
+
 def test_max_range_round_trips_and_is_positive():
     d = _default_dict()
     d["sensors"][1]["max_range"] = "20 km"
@@ -393,7 +410,7 @@ def test_a_contact_without_prior_is_named_where_the_verb_needs_one(capsys, tmp_p
     path.write_text(dump(from_dict(d)), encoding="utf-8")
     assert main(["track", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip()
-    assert "field '--estimator'" in err and "no [prior] table" in err, err
+    assert "field 'contacts[1].prior': expected a [prior] table: pf" in err, err
     assert "(contact 'bravo')" in err, err
     assert main(["bound", str(path), "--no-figure", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip()

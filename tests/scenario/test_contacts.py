@@ -457,6 +457,29 @@ def test_compare_localises_at_the_files_required_accuracy(tmp_path):
     assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before
 
 
+def test_compare_says_each_contacts_own_accuracy(tmp_path, capsys):
+    """A contact with its own required accuracy is localised there, not at --accuracy: the
+    JSON, the console and the report say so for that contact (the report read "Localised =
+    relative range error below 20%" for a contact localised at 5 %, and neither the JSON nor
+    the console gave a contact's accuracy)."""
+    d = _two(required_accuracy=0.05)
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path / "p.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    out = _run(["compare", str(path), "--policies", "straight", "--runs", "1", "--particles",
+                "50", "--accuracy", "0.2"], tmp_path)
+    assert out["accuracy"] == 0.2
+    per = out["policies"]["straight"]["contacts"]
+    assert {c: v["required_accuracy"] for c, v in per.items()} == {"alpha": 0.2, "bravo": 0.05}
+    text = capsys.readouterr().out
+    assert "  alpha" in text and "time to  20% accuracy" in text
+    assert "time to   5% accuracy" in text
+    page = (Path(out["report"]) if Path(out["report"]).is_file()
+            else next(tmp_path.rglob("report.html"))).read_text(encoding="utf-8")
+    assert "relative range error below\n20% (bravo: 5%) and staying there" in page
+    assert "<th>required accuracy</th>" in page and "<td>5%</td>" in page
+
+
 def _bound_stderr(d, tmp_path, capsys, text):
     """The stderr lines holding ``text`` of ``tmaplan bound`` on the scenario dict ``d`` with
     an own-ship turn at 15 min."""

@@ -240,7 +240,9 @@ def warn_scripted_ranges(scenario: Scenario) -> None:
     counts the bearings and the scheduled pings only, so every objective it prints (no
     pings, uniform, the schedule's) lacks them, where ``tmaplan bound`` counts them."""
     for i, sen in enumerate(scenario.sensors):
-        n = measurement_steps(sen, scenario.time).size if isinstance(sen, RangeSensor) else 0
+        if not isinstance(sen, RangeSensor):
+            continue
+        n = measurement_steps(sen, scenario.time).size
         if n:
             what = "pings" if sen.active else "passive range readings (active = false)"
             warn_field(f"sensors[{i}].steps", "no scripted range readings: the schedule's "

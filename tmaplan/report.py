@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from tmaplan.display import scenario_text
+from tmaplan.evaluation.contacts_campaign import accuracy_text
 from tmaplan.experiments import CampaignResult
 from tmaplan.plotting import new_figure, save_figure
 from tmaplan.report_tables import (
@@ -165,7 +166,9 @@ def comparison_figures(result: CampaignResult, out_dir: str | Path) -> dict[str,
         ax.step(grid / 60, frac, where="post", **line_style(i), label=name)
     ax.set_xlabel("time since t0 [min]")
     ax.set_ylabel("fraction of runs localised")
-    ax.set_title(f"time to range accuracy ({100 * result.spec.accuracy:.3g}% of range, for good)")
+    ax.set_title(f"time to range accuracy "
+                 f"({accuracy_text(result.spec.scenario, result.spec.accuracy)} of range, "
+                 "for good)")
     ax.set_ylim(-0.03, 1.03)  # curves at 0 and 1 stay visible
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
@@ -224,7 +227,7 @@ document.body.setAttribute("data-images-total",im.length);}});</script></head>
 {spec.n_particles} particles; truths drawn
 from the {'prior' if spec.truth == 'prior' else 'scenario'}; the same truth and noise for
 every policy in a run (paired comparison). Localised = relative range error below
-{100 * spec.accuracy:.3g}% and staying there. Wall time {result.seconds:.0f} s
+{accuracy_text(spec.scenario, spec.accuracy)} and staying there. Wall time {result.seconds:.0f} s
 ({len(result.computed_runs)} runs computed now, {len(result.loaded_runs)} loaded from disk).</p>
 <p>Reproduce: <code>{html.escape(command)}</code></p>
 {sample_warning(spec.runs)}

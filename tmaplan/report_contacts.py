@@ -45,7 +45,8 @@ def _rows(result: CampaignResult) -> list[tuple[str, list[str], list[tuple[str, 
         s = result.summary[name]
         agg = [_minutes(s["time_to_accuracy_all"]), f"{s['reached_fraction']:.0%}",
                _minutes(s["weighted_time_to_accuracy"]), f"{s['worst_final_range_error']:.0f} m"]
-        per = [(c, [_minutes(v["time_to_accuracy"]), f"{v['reached_fraction']:.0%}",
+        per = [(c, [f"{100 * v['required_accuracy']:.3g}%", _minutes(v["time_to_accuracy"]),
+                    f"{v['reached_fraction']:.0%}",
                     f"{v['final_range_rmse']:.0f} m", f"{v['divergence_rate']:.0%}"])
                for c, v in s["contacts"].items()]
         out.append((name, agg, per))
@@ -55,7 +56,8 @@ def _rows(result: CampaignResult) -> list[tuple[str, list[str], list[tuple[str, 
 #: Column heads of the aggregate and per-contact tables.
 AGGREGATE_HEAD = ("all localised (median)", "runs all localised", "weighted mean time",
                   "worst final range error (mean)")
-CONTACT_HEAD = ("time to accuracy (median)", "localised", "final range RMSE", "diverged")
+CONTACT_HEAD = ("required accuracy", "time to accuracy (median)", "localised",
+                "final range RMSE", "diverged")
 
 
 def contacts_html(result: CampaignResult) -> str:
@@ -80,8 +82,8 @@ def console_lines(result: CampaignResult) -> list[str]:
     for name, agg, per in _rows(result):
         lines.append(f"{name:<28} all localised {agg[0]:>9} ({agg[1]} of runs)  weighted "
                      f"mean {agg[2]:>9}  worst final range error {agg[3]}")
-        lines += [f"  {c:<26} time to accuracy {cells[0]:>9}  localised {cells[1]:>4}  "
-                  f"final range RMSE {cells[2]}" for c, cells in per]
+        lines += [f"  {c:<26} time to {cells[0]:>4} accuracy {cells[1]:>9}  localised "
+                  f"{cells[2]:>4}  final range RMSE {cells[3]}" for c, cells in per]
     return lines
 
 

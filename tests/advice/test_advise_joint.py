@@ -172,6 +172,15 @@ def test_no_plan_means_hold_course_and_says_why(solutions, monkeypatch):
     assert adv.track is adv.hold_track and adv.pings is None
 
 
+def test_no_own_plan_reads_not_planned_not_nan():
+    """A contact's own plan that was never solved (NaN) reads "not planned" on the console and
+    in the page, never "nan min"."""
+    from tmaplan.cli.advise import _alone
+
+    assert _alone(math.nan) == "not planned" and _alone(math.nan, "") == "not planned"
+    assert _alone(90.0) == "1.5 min" and _alone(90.0, "") == "1.5"
+
+
 def test_a_belief_moved_in_time():
     rng = np.random.default_rng(3)
     X = np.array([3000.0, 4000.0, 2.0, -1.0]) + rng.normal(size=(500, 4)) * [300, 300, 1, 1]

@@ -306,3 +306,27 @@ def test_demo_refuses_another_one_contact_problem(tmp_path, capsys):
     assert len(err.splitlines()) == 1
     assert "field 'problem': expected 'default'" in err and "tmaplan compare P" in err
     assert "received 'bow-closing'" in err
+
+
+@pytest.mark.parametrize("active", [True, False])
+def test_schedule_warns_that_it_leaves_out_scripted_ranges(tmp_path, capsys, active):
+    """Range readings scripted in the file (pings at fixed steps, or passive readings) are not
+    in the ping schedule's closed-form bound: its 'no pings' objective was the same with and
+    without them, silently (``tmaplan bound`` counts them). One line says so, naming the
+    sensor; a file without scripted ranges gets none."""
+    import tomllib
+
+    from tmaplan.scenario import problems_dir
+
+    d = tomllib.loads((problems_dir() / "two-contacts-crossing.toml").read_text("utf-8"))
+    argv = ["--budget", "1", "--method", "greedy", "--no-figure", "--out", str(tmp_path)]
+    assert main(["schedule", "two-contacts-crossing", *argv]) == 0
+    assert "warning" not in capsys.readouterr().err
+    d["sensors"][1].update(steps=[30, 60], active=active)
+    path = tmp_path / "scripted.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    assert main(["schedule", str(path), *argv]) == 0
+    err = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    what = "pings" if active else "passive range readings (active = false)"
+    assert len(err) == 1 and "field 'sensors[1].steps': no scripted range readings" in err[0]
+    assert f"leave out these {what}" in err[0] and "received 2 scripted step(s)" in err[0]

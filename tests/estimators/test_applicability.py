@@ -54,6 +54,24 @@ def test_monte_carlo_refuses_what_cannot_work():
                     bound="prior")
 
 
+def test_the_filters_refuse_a_constant_turn_target():
+    """The particle filters propagate NCV dynamics, and their PCRB too (`tmaplan bound`
+    refuses a constant-turn target for that reason): on a constant-turn target with a prior
+    they ran anyway, diverged in every run and printed an NCV bound beside (`track`: final
+    RMSE 9.6 km against a "bound" of 0.5 km). Refused, pointing to the MLE."""
+    sc = load_problem("default")
+    ct = load_problem("clavard2013-halfturn-cw").target
+    prior = dataclasses.replace(sc.prior, range_distribution="normal", range_mean=12e3,
+                                range_std=3e3)
+    circling = sc.replace(target=ct, prior=prior)
+    for name in ("pf", "pf-bearings"):
+        with pytest.raises(ArgumentError, match=rf"field 'estimator'.*{name} \(.*\) is defined "
+                           r"for multi-leg, ncv targets \(its dynamics are nearly constant "
+                           r"velocity.*is constant-turn; use estimator mle"):
+            monte_carlo(circling, name, runs=1, n_particles=50)
+    assert applicable_estimators(circling) == ("mle",)
+
+
 def test_prior_bound_of_the_filters_stays_available_in_the_api():
     # position-only, documented: refused by the CLI (it would print a NaN range bound), not
     # by the API

@@ -361,6 +361,20 @@ def test_keep_out_holds_for_every_contact(views):
     assert closest(keep) >= keep * (1 - 1e-3)
 
 
+def test_a_start_inside_the_keep_out_names_the_contact(views):
+    """A contact whose estimate already lies inside the keep-out range is refused before any
+    solve, naming that contact (it read 'the target estimate is already inside it' with no
+    contact, so `tmaplan advise` could not say which contact was too close)."""
+    from tmaplan.errors import InfeasibleError
+
+    d = views[0]
+    close = d.replace(name="close", prior=dataclasses.replace(
+        d.prior, bearing_mean=0.0, range_min=1000.0, range_max=1500.0))
+    cs = ContactSet(views=(d, close), names=("far", "close"))
+    with pytest.raises(InfeasibleError, match=r"^contact 'close': keep_out_range 2000 m"):
+        ContactsPlanner(cs, samples=SAMPLES, keep_out_range=2000.0).solve()
+
+
 def test_named_time_to_accuracy_objectives_use_the_scenarios_required_accuracy():
     """``expected-time-to-accuracy`` by name localises at the scenario's required accuracy
     (``planning.required_accuracy``, a single contact's own; 10 % by default, as before): the

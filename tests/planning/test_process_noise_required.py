@@ -47,3 +47,20 @@ def test_a_contact_of_several_without_process_noise_is_named(build):
     with pytest.raises(ScenarioError, match=r"field 'contacts\[1\]\.target\.q'.*"
                        r"\(contact 'bravo'\), received 0\.0"):
         build(ContactSet.from_scenario(sc))
+
+
+def test_a_constant_turn_target_is_refused_naming_its_model():
+    """A constant-turn target has q = 0 by its schema (q > 0 is refused there): the refusal
+    names ``target.model`` rather than advising a q > 0 that the file cannot take."""
+    sc = load_problem("two-contacts-crossing")
+    ct = load_problem("clavard2013-halfturn-cw").target
+    one = sc.contact_view("alpha")
+    with pytest.raises(ScenarioError, match=r"field 'target\.model': expected 'ncv' or "
+                       r"'multi-leg': the closed-form bound.*received 'constant-turn'"):
+        HeadingPlanner(dataclasses.replace(one, contacts=(dataclasses.replace(
+            one.contacts[0], target=ct),)))
+    cs = tuple(dataclasses.replace(c, target=ct) if c.name == "bravo" else c
+               for c in sc.contacts)
+    with pytest.raises(ScenarioError, match=r"field 'contacts\[1\]\.target\.model'.*"
+                       r"\(contact 'bravo'\), received 'constant-turn'"):
+        ContactsPlanner(ContactSet.from_scenario(dataclasses.replace(sc, contacts=cs)))

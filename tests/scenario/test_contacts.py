@@ -193,6 +193,23 @@ def test_warnings_name_the_contact_once_per_field():
     assert fields.count("sensors[0].sigma") == 1  # shared: once
 
 
+def test_target_manoeuvres_with_several_contacts_are_warned():
+    """[faults] target_manoeuvres names no contact: with several contacts every contact makes
+    them (it did so silently); one line says so, naming the contacts. One contact: no warning."""
+    import warnings
+
+    from tmaplan.errors import ScenarioWarning
+
+    fault = {"target_manoeuvres": [{"time": "22.5 min", "course_change": "60 deg"}]}
+    with pytest.warns(ScenarioWarning, match=r"field 'faults.target_manoeuvres': a fault names "
+                      r"no contact: every contact \('alpha', 'bravo'\) makes these 1 ") as rec:
+        from_dict({**_two(), "faults": fault})
+    assert len(rec) == 1 and "\n" not in str(rec[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        from_dict({**_default_dict(), "faults": fault})
+
+
 def test_max_range_round_trips_and_is_positive():
     d = _default_dict()
     d["sensors"][1]["max_range"] = "20 km"
@@ -439,6 +456,29 @@ def test_compare_localises_at_the_files_required_accuracy(tmp_path):
     for extra in ([], ["--accuracy", "0.3"]):
         assert _run(["compare", str(path), *argv, *extra], tmp_path)["accuracy"] == 0.07
     assert _run(["compare", "default", *argv], tmp_path)["accuracy"] == 0.1  # as before
+
+
+def test_compare_says_each_contacts_own_accuracy(tmp_path, capsys):
+    """A contact with its own required accuracy is localised there, not at --accuracy: the
+    JSON, the console and the report say so for that contact (the report read "Localised =
+    relative range error below 20%" for a contact localised at 5 %, and neither the JSON nor
+    the console gave a contact's accuracy)."""
+    d = _two(required_accuracy=0.05)
+    d["observer"]["legs"] = [{"start": "15 min", "course": "90 deg", "turn_rate": "0.5 deg/s"}]
+    path = tmp_path / "p.toml"
+    path.write_text(dump(from_dict(d)), encoding="utf-8")
+    out = _run(["compare", str(path), "--policies", "straight", "--runs", "1", "--particles",
+                "50", "--accuracy", "0.2"], tmp_path)
+    assert out["accuracy"] == 0.2
+    per = out["policies"]["straight"]["contacts"]
+    assert {c: v["required_accuracy"] for c, v in per.items()} == {"alpha": 0.2, "bravo": 0.05}
+    text = capsys.readouterr().out
+    assert "  alpha" in text and "time to  20% accuracy" in text
+    assert "time to   5% accuracy" in text
+    page = (Path(out["report"]) if Path(out["report"]).is_file()
+            else next(tmp_path.rglob("report.html"))).read_text(encoding="utf-8")
+    assert "relative range error below\n20% (bravo: 5%) and staying there" in page
+    assert "<th>required accuracy</th>" in page and "<td>5%</td>" in page
 
 
 def _bound_stderr(d, tmp_path, capsys, text):

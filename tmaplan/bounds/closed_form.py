@@ -125,9 +125,15 @@ def require_process_noise(scenario: Scenario, field: str = "target.q", who: str 
     Raises
     ------
     ScenarioError
-        ``q`` not > 0, naming ``field``, the expected and the received value.
+        ``q`` not > 0, naming ``field``, the expected and the received value; a
+        constant-turn target (``q = 0`` by its schema) naming its ``model`` instead.
     """
     q = float(scenario.target.q)
+    if scenario.target.model == "constant-turn":  # q = 0 by its schema: name the model
+        raise ScenarioError(field.removesuffix("q") + "model", "'ncv' or 'multi-leg': the "
+                            "closed-form bound (brehard2005) propagates the belief through "
+                            "the target's process noise, which the deterministic constant-turn "
+                            f"model has not (q = 0){who}", "constant-turn", source=scenario.name)
     if not q > 0.0:
         raise ScenarioError(field, "> 0: the closed-form bound (brehard2005) propagates the "
                             "belief through the target's process noise, e.g. q = "

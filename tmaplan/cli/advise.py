@@ -124,6 +124,12 @@ def _platform(args: argparse.Namespace) -> Any:
     return p
 
 
+
+def _alone(t: float, unit: str = " min") -> str:
+    """A contact's expected time on its own plan [s] in minutes, or ``"not planned"`` when
+    that plan failed or was never solved (NaN: the joint planner refused the start)."""
+    return f"{t / 60:.1f}{unit}" if math.isfinite(t) else "not planned"
+
 def _navigator(adv: Any) -> NavigatorLegs:
     """The navigator's (merged) table of an advice's plan."""
     return track_navigator_legs(adv.legs, adv.track)
@@ -229,7 +235,7 @@ def _print(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> None:
                 print(f"  {n}: expected time to {ACCURACY:.0%} range accuracy "
                       f"{c['expected_time_to_accuracy'] / 60:.1f} min (holding course "
                       f"{c['hold_course_time_to_accuracy'] / 60:.1f} min; its own plan alone "
-                      f"{c['alone_expected_time_to_accuracy'] / 60:.1f} min)")
+                      f"{_alone(c['alone_expected_time_to_accuracy'])})")
         print(_navigator(adv).text())
         if pings is not None:
             times = ", ".join(rec.time_text(float(t)) for t in pings.times)
@@ -281,7 +287,7 @@ def _tables(rec: Any, solutions: Sequence[Any], advice: Sequence[Any]) -> str:
                 "".join(f"<tr><td>{html.escape(n)}</td>"
                         f"<td>{c['expected_time_to_accuracy'] / 60:.1f}</td>"
                         f"<td>{c['hold_course_time_to_accuracy'] / 60:.1f}</td>"
-                        f"<td>{c['alone_expected_time_to_accuracy'] / 60:.1f}</td></tr>"
+                        f"<td>{_alone(c['alone_expected_time_to_accuracy'], '')}</td></tr>"
                         for n, c in adv.contacts.items()) + "</table>"
         if pings is not None:
             times = ", ".join(rec.time_text(float(t)) for t in pings.times) or "none"

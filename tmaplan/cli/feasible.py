@@ -128,6 +128,12 @@ def check_feasible(args: argparse.Namespace, scenario: Any, *, prior_verb: bool 
     with "Singular matrix")."""
     warn_suspicious(scenario, prior=prior_verb)
     q = float(scenario.target.q)
+    if _closed_form(args) and scenario.target.model == "constant-turn":
+        raise ScenarioError("target.model", f"'ncv' or 'multi-leg' for tmaplan {args.verb}: "
+                            "its closed-form bound (brehard2005) propagates the belief through "
+                            "the target's process noise, which the deterministic constant-turn "
+                            "model has not (q = 0; a q > 0 is refused there)", "constant-turn",
+                            source=scenario.name)
     if _closed_form(args) and not q > 0.0:
         raise ScenarioError("target.q", f"> 0 for tmaplan {args.verb}: its closed-form bound "
                             "(brehard2005) propagates the belief through the target's process "

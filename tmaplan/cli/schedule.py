@@ -28,7 +28,7 @@ from tmaplan.cli.args import (
 )
 from tmaplan.cli.contacts import preflight_per_contact, require_priors
 from tmaplan.display import minute_list, seconds_text
-from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError, warn_field
 from tmaplan.geometry import course_speed
 from tmaplan.models.observer import ObserverTrack, observer_track
 from tmaplan.models.sensors import default_ping_budget
@@ -38,7 +38,7 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.contacts import ContactSet
 from tmaplan.planning.ping_contacts import ping_max_range, schedule_contact_pings
 from tmaplan.planning.pings import PING_OBJECTIVES, schedule_pings
-from tmaplan.scenario import Scenario, load
+from tmaplan.scenario import RangeSensor, Scenario, load, measurement_steps
 
 HELP = "schedule active range pings under a budget (closed-form PCRB)"
 
@@ -234,9 +234,28 @@ def preflight_several(args: argparse.Namespace, scenario: Scenario, preflight: A
     preflight_per_contact(args, scenario, preflight)
 
 
+def warn_scripted_ranges(scenario: Scenario) -> None:
+    """Warn, one line per range sensor with scripted readings (``steps``, ``period``,
+    ``every``; active or passive), that the schedule leaves them out: its closed-form bound
+    counts the bearings and the scheduled pings only, so every objective it prints (no
+    pings, uniform, the schedule's) lacks them, where ``tmaplan bound`` counts them."""
+    for i, sen in enumerate(scenario.sensors):
+        if not isinstance(sen, RangeSensor):
+            continue
+        n = measurement_steps(sen, scenario.time).size
+        if n:
+            what = "pings" if sen.active else "passive range readings (active = false)"
+            warn_field(f"sensors[{i}].steps", "no scripted range readings: the schedule's "
+                       "bound counts the bearings and the scheduled pings only, so its "
+                       f"objectives (no pings, uniform, the schedule's) leave out these {what}"
+                       f" (tmaplan bound counts them), received {n} scripted step(s)",
+                       source=scenario.name)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Schedule, write ``<out>/<problem>_schedule.png`` and return the payload."""
     scenario = load(args.problem)
+    warn_scripted_ranges(scenario)
     budget = args.budget if args.budget is not None else default_ping_budget(scenario)
     if args.observer_plan is not None:
         obs = read_observer_plan(args.observer_plan, scenario)

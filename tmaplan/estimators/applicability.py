@@ -33,6 +33,8 @@ times the finest measurement noise over the horizon (its χ² acceptance test wo
 run)."""
 
 _ALL_MODELS = frozenset({"ncv", "multi-leg", "constant-turn"})
+#: The models of the particle filters' NCV dynamics (and of the PCRB they are compared with).
+_NCV_MODELS = frozenset({"ncv", "multi-leg"})
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -79,12 +81,13 @@ class Applicability:
 #: The declaration of every named estimator.
 APPLICABILITY: dict[str, Applicability] = {
     "pf": Applicability(what="the particle filter of gordon1993",
-                        needs=frozenset({"bearing", "range", "frequency"})),
+                        needs=frozenset({"bearing", "range", "frequency"}),
+                        target_models=_NCV_MODELS),
     "pf-bearings": Applicability(
         what="the particle filter started from bearings, brehard2004",
         needs=frozenset({"bearing"}), min_measurements=7,
         why_min="its batch initialisation fits a track to the first 2k + 1 bearings, k >= 3",
-        needs_prior="bound"),
+        needs_prior="bound", target_models=_NCV_MODELS),
     "mle": Applicability(
         what="the batch MLE of clavard2013", needs=frozenset({"bearing"}), min_measurements=5,
         why_min="its grid start and acceptance test are built on bearings, more of them than "
@@ -155,8 +158,10 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         return f"{name} ({decl.what}) {what}, {scenario.name} has no [prior] table"
     model = scenario.target.model
     if model not in decl.target_models:
+        why = (" (its dynamics are nearly constant velocity, as the PCRB's)"
+               if decl.target_models == _NCV_MODELS else "")
         return (f"{name} ({decl.what}) is defined for {', '.join(sorted(decl.target_models))}"
-                f" targets, {scenario.name}'s is {model}")
+                f" targets{why}, {scenario.name}'s is {model}")
     q = float(scenario.target.q)
     if decl.deterministic and model != "constant-turn" and q > 0:
         t = float(scenario.time.horizon)

@@ -45,8 +45,8 @@ if TYPE_CHECKING:
     from tmaplan.policies import Policy
     from tmaplan.scenario import Scenario
 
-__all__ = ["aggregate_metrics", "contact_accuracy", "contacts_aggregate", "contacts_json",
-           "contacts_run_one", "record_names", "several"]
+__all__ = ["accuracy_text", "aggregate_metrics", "contact_accuracy", "contacts_aggregate",
+           "contacts_json", "contacts_run_one", "record_names", "several"]
 
 #: Aggregate metric names of the paired differences (one-contact name -> several contacts).
 AGGREGATE_METRICS = {"time_to_accuracy": "time_to_accuracy_all",
@@ -71,6 +71,15 @@ def contact_accuracy(scenario: Scenario, accuracy: float) -> dict[str, float]:
     """Each contact's required relative range accuracy: its own, else ``accuracy``."""
     return {c.name: float(accuracy if c.required_accuracy is None else c.required_accuracy)
             for c in scenario.contacts}
+
+
+def accuracy_text(scenario: Scenario, accuracy: float) -> str:
+    """The accuracy at which a campaign counts its contacts localised, for a sentence:
+    ``"20%"``, or with several contacts of their own ``"20% (charlie: 5%)"``."""
+    text = f"{100 * accuracy:.3g}%"
+    own = [f"{c.name}: {100 * c.required_accuracy:.3g}%" for c in scenario.contacts
+           if c.required_accuracy is not None]
+    return text + (f" ({', '.join(own)})" if len(scenario.contacts) > 1 and own else "")
 
 
 def aggregate_metrics(per_contact: Mapping[str, RunMetrics]) -> RunMetrics:
@@ -141,11 +150,13 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
     views = sc.contact_views()
     names = list(spec.policies)
     per: dict[str, dict[str, dict[str, Any]]] = {n: {} for n in names}
+    acc = contact_accuracy(sc, spec.accuracy)
     for c, view in views.items():
         sub = dataclasses.replace(spec, scenario=view, policies=tuple(f"{n}@{c}" for n in names))
         sub_summary, _ = aggregate(sub, runs, times)
         for n in names:
-            per[n][c] = {**sub_summary[f"{n}@{c}"], "example": runs[0].policies[f"{n}@{c}"]}
+            per[n][c] = {**sub_summary[f"{n}@{c}"], "example": runs[0].policies[f"{n}@{c}"],
+                         "required_accuracy": acc[c]}
     first = next(iter(views.values()))
     summary, diffs = aggregate(dataclasses.replace(spec, scenario=first), runs, times)
     censor = censor_time(times)
@@ -174,16 +185,17 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
 
 
 #: Per-contact summary keys of ``compare``'s JSON (scalars; per step: the RMSE arrays).
-CONTACT_KEYS = ("time_to_accuracy", "reached_fraction", "divergence_rate", "final_range_rmse",
-                "recoveries")
+CONTACT_KEYS = ("required_accuracy", "time_to_accuracy", "reached_fraction", "divergence_rate",
+                "final_range_rmse", "recoveries")
 
 
 def contacts_json(summary: Mapping[str, Any]) -> dict[str, Any]:
     """The several-contact keys of one policy in ``compare``'s JSON: ``time_to_accuracy_all``,
     ``time_to_accuracy_all_runs``, ``weighted_time_to_accuracy``,
-    ``worst_final_range_error`` and ``contacts: {name: {time_to_accuracy,
-    time_to_accuracy_runs, reached_fraction, divergence_rate, final_range_rmse, recoveries,
-    rmse_position, rmse_range}}`` (SI units); empty for one contact."""
+    ``worst_final_range_error`` and ``contacts: {name: {required_accuracy (the relative range
+    accuracy it is localised at), time_to_accuracy, time_to_accuracy_runs, reached_fraction,
+    divergence_rate, final_range_rmse, recoveries, rmse_position, rmse_range}}`` (SI units);
+    empty for one contact."""
     if "contacts" not in summary:
         return {}
     return {

@@ -31,9 +31,10 @@ import numpy as np
 
 from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.display import short_repr
-from tmaplan.errors import ArgumentError, SolverError, is_integer
+from tmaplan.errors import ArgumentError, InfeasibleError, SolverError, is_integer
 from tmaplan.models.observer import ObserverTrack, turn_rate_track
 from tmaplan.planning.belief import Belief
+from tmaplan.planning.feasibility import check_start_keep_out
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import (
     CONTACTS_OBJECTIVE_NAMES,
@@ -413,6 +414,12 @@ class ContactsPlanner:
                                 alone_times={}, start=start, seconds=time.perf_counter() - t0,
                                 solves=((start, plan.iterations, plan.status),))
         j = self.joint
+        for name, b in zip(cs.names, bel.beliefs, strict=True):
+            try:  # before any solve, naming the contact (the joint start keeps out of each)
+                check_start_keep_out(b, keep_out=j.keep_out, u_max=j.u_max,
+                                     speed_choice=j.speed_choice, times=j.times)
+            except InfeasibleError as exc:
+                raise InfeasibleError(f"contact '{name}': {exc}") from None
         if warm_start is not None or j.transcription != "direct":
             # a re-plan from the previous plan; or the bang-bang transcription, whose starts
             # are not turn-rate programs: its built-in ones only

@@ -227,3 +227,11 @@ def warn(s: Any, source: str | None) -> None:
             if (field, text) not in seen:
                 seen.add((field, text))
                 warn_field(field, text, source=source, stacklevel=3)
+    manoeuvres = s.faults.target_manoeuvres if s.faults is not None else ()
+    if manoeuvres and len(s.contacts) > 1:
+        names = ", ".join(repr(c.name) for c in s.contacts)
+        warn_field("faults.target_manoeuvres", f"a fault names no contact: every contact "
+                   f"({names}) makes these {len(manoeuvres)} unmodelled course/speed "
+                   "change(s) at the same times, received "
+                   f"{len(manoeuvres)} manoeuvre(s) and {len(s.contacts)} contacts",
+                   source=source, stacklevel=3)

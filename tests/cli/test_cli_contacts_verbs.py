@@ -295,6 +295,7 @@ def test_demo_runs_the_three_jobs_for_several_contacts(tmp_path, capsys):
         assert k["n"] == 2 and (k["decided"] or "not decided at 2 runs" in k["verdict"])
     assert "time until every contact is localised, a − b, paired 95 % interval" in out
     assert "planned − nearest-contact" in out and "Stored result" not in out
+    assert "the decided campaigns, 200+ paired runs each: docs/results/several-contacts-" in out
     text = Path(d["report"]).read_text()
     assert Path(d["report"]) == tmp_path / "demo" / "report.html"
     assert "Joint plan from the priors" in text and "shared by the contacts" in text

@@ -52,6 +52,11 @@ CONTACTS_KEY_DIFFERENCES: tuple[tuple[str, str, str], ...] = (
     ("planned+scheduled", "planned+uniform", "worst_final_range_error"),
 )
 
+#: Where the campaigns that decide these differences on the built-in problems are recorded,
+#: and their least number of paired runs.
+DECIDED_RECORD = "docs/results/several-contacts-decided.md"
+DECIDED_RUNS = 200
+
 #: A one-contact comparison's metric -> its name over several contacts.
 _AGGREGATE = {"time_to_accuracy": "time_to_accuracy_all",
               "final_range_error": "worst_final_range_error"}
@@ -133,7 +138,8 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
                           figures={"contacts": contacts_figure(result, rep),
                                    "ping schedule": rep / "schedule.png"})
     for line in ["", f"This run (illustrative: {live.runs} paired runs, seed {live.seed}; "
-                 "time until every contact is within its required accuracy):",
+                 "time until every contact is within its required accuracy; the decided "
+                 f"campaigns, {DECIDED_RUNS}+ paired runs each: {DECIDED_RECORD}):",
                  *stats_lines(live), *key_lines(live, keys=CONTACTS_KEY_DIFFERENCES), ""]:
         _say(args, line)
     seconds = time.perf_counter() - t0
@@ -196,7 +202,7 @@ def _live_html(live: Comparison) -> str:
     return (f"<h2>This run: illustrative ({live.runs} paired runs, seed {live.seed})</h2>"
             "<p>Key differences over the contacts, each with its paired 95 % interval; one "
             "whose interval holds zero is not decided at this size (the decided campaigns: "
-            "docs/results/several-contacts-decided.md).</p>"
+            f"{DECIDED_RECORD}).</p>"
             + key_table_html(live, keys=CONTACTS_KEY_DIFFERENCES))
 
 

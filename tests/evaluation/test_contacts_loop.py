@@ -321,3 +321,20 @@ def test_a_degenerate_filter_says_whose_it_is():
     assert all(m.startswith(("contact 'alpha': particle filter degenerate at step",
                              "contact 'bravo': particle filter degenerate at step"))
                for m in msgs), msgs
+
+
+def test_planned_says_when_no_plan_can_localise_every_contact():
+    # within 10 min neither contact of two-contacts-crossing is localised on any plan: the
+    # all-contacts objective is about the horizon on all of them, and `planned` flies the
+    # least turning plan; said once where the plan is made, as `tmaplan plan` says it
+    from tmaplan.planning.contacts import SaturatedObjectiveWarning
+
+    sc = load("two-contacts-crossing")
+    short = dataclasses.replace(sc, time=dataclasses.replace(sc.time, horizon=600.0),
+                                planning=dataclasses.replace(sc.planning, horizon=600.0))
+    with pytest.warns(SaturatedObjectiveWarning, match="2 of 2 contacts"):
+        parse_contacts_policy("planned", short)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parse_contacts_policy("receding", short)  # the same plan, solved once
+        assert parse_contacts_policy("planned", sc).name == "planned"  # 45 min: no warning

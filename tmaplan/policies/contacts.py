@@ -51,7 +51,12 @@ from tmaplan.errors import (
 )
 from tmaplan.planning.baselines import course_program_track, evaluate_baselines
 from tmaplan.planning.belief import Belief
-from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner
+from tmaplan.planning.contacts import (
+    ContactSet,
+    ContactsPlan,
+    ContactsPlanner,
+    warn_if_saturated,
+)
 from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.multi_objectives import ContactBeliefs
 from tmaplan.planning.ping_contacts import schedule_contact_pings
@@ -170,13 +175,24 @@ def joint_contacts_plan(scenario: Scenario) -> ContactsPlan:
     on its own plan (:meth:`tmaplan.planning.contacts.ContactsPlanner.solve`; solved once per
     scenario, cached: ``planned``, the first plan of ``receding`` and ``demo`` share it).
 
+    Warns
+    -----
+    SaturatedObjectiveWarning
+        A contact not expected to be localised within the horizon on the joint plan (the
+        min-max objective then cannot rank the plans), once per scenario.
+
     Raises
     ------
     SolverError
         The joint NLP converged from no start.
     """
     if scenario not in _PRIOR_PLANS:
-        _PRIOR_PLANS[scenario] = contacts_planner(scenario).solve()
+        res = contacts_planner(scenario).solve()
+        # as `tmaplan plan` does: a min-max objective that no plan can bring under the
+        # horizon flies the least turning plan (said once, where the plan is made)
+        warn_if_saturated(res.objective_name, res.expected_times,
+                          float(res.plan.times[-1] - res.plan.times[0]))
+        _PRIOR_PLANS[scenario] = res
     return _PRIOR_PLANS[scenario]
 
 

@@ -150,7 +150,8 @@ def test_scheduled_pings_are_one_schedule_for_every_contact(ping):
     pol = parse_contacts_policy(f"straight+{ping}", sc)
     objective = "terminal-range-bound" if ping == "scheduled-terminal" else "mean-range-bound"
     ref = schedule_contact_pings(ContactSet.from_scenario(sc), budget=sc.planning.ping_budget,
-                                 method="relaxed", objective=objective, gap_reference="none")
+                                 method="relaxed", objective=objective, gap_reference="none",
+                                 observer=Straight().nominal_track(sc))
     steps = tuple(int(k) for k in ref.schedule.steps)
     assert pol.name == f"straight+{ping}" and pol.ping.steps == steps
     assert len(steps) == sc.planning.ping_budget

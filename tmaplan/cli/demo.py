@@ -37,7 +37,7 @@ from tmaplan.cli.args import (
     add_seed_argument,
     integer,
 )
-from tmaplan.cli.demo_contacts import demo_campaign, run_several
+from tmaplan.cli.demo_contacts import demo_campaign, run_several, say
 from tmaplan.errors import ArgumentError, PlanningError
 from tmaplan.experiments import run_campaign
 from tmaplan.headline import (
@@ -99,11 +99,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes (default 2)")
 
 
-def _say(args: argparse.Namespace, msg: str) -> None:
-    if args.json != "-":
-        print(msg, flush=True)
-
-
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Plan, schedule, compare and write ``<out>/demo/report.html``."""
     t0 = time.perf_counter()
@@ -138,7 +133,7 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
     belief = Belief.from_prior(scenario)
     rep.mkdir(parents=True, exist_ok=True)
 
-    _say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
+    say(args, f"[1/3] planning a manoeuvre from the prior ({CLOSED_LOOP_OBJECTIVE}) ...")
     planner = HeadingPlanner(scenario, objective=CLOSED_LOOP_OBJECTIVE)
     # the same solve as planner.solve(belief), cached: the campaign's `planned` and
     # `receding-realtime` policies reuse it instead of solving again
@@ -148,18 +143,18 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                          objective=planner.objective.name)
     del plan_fig
     best = {k: v[0] for k, v in base.items()}
-    _say(args, f"      objective {plan.objective:.4g} (straight {best['straight'].objective:.4g}"
+    say(args, f"      objective {plan.objective:.4g} (straight {best['straight'].objective:.4g}"
                f", best single turn {best['single-turn'].objective:.4g}, best zig-zag "
                f"{best['zigzag'].objective:.4g}); {plan.status}, {plan.seconds:.1f} s")
 
     if pool is not None:  # receding-realtime's Hessian model on a worker while we schedule
         prefetch_receding_model(scenario, CLOSED_LOOP_OBJECTIVE, pool)
     budget = default_ping_budget(scenario)
-    _say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
+    say(args, f"[2/3] scheduling {budget} pings along the planned track ...")
     sched = schedule_pings(scenario, budget=budget, method="relaxed", observer=plan.observer,
                            belief=belief)
     plot_schedule(scenario, plan.observer, belief, sched, rep / "schedule.png")
-    _say(args, f"      pings at {', '.join(f'{t / 60:.1f}' for t in sched.times)} min: mean "
+    say(args, f"      pings at {', '.join(f'{t / 60:.1f}' for t in sched.times)} min: mean "
                f"range bound {sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m,"
                f" none {sched.no_ping_objective:.0f} m)")
 
@@ -172,10 +167,10 @@ def _run(args: argparse.Namespace, out: Path, pool: Any, t0: float) -> dict[str,
                           figures={"planned manoeuvre": rep / "plan.png",
                                    "ping schedule": rep / "schedule.png"})
     for line in _headline(stored, live):
-        _say(args, line)
+        say(args, line)
     _say_replans(args, result)
     seconds = time.perf_counter() - t0
-    _say(args, f"wrote {report} ({seconds:.0f} s)")
+    say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
     payload["stored"] = stored_payload(stored)
     payload["key_differences"] = key_json(live, stored=stored)
@@ -202,7 +197,7 @@ def _say_replans(args: argparse.Namespace, result: Any) -> None:
     (:mod:`tmaplan.evaluation.replans`)."""
     for name in result.policies:
         if (counts := result.summary[name]["replans"]).total:
-            _say(args, f"    {name:<28} {counts.text()}")
+            say(args, f"    {name:<28} {counts.text()}")
 
 
 def _extra_html(plan: Any, best: dict[str, Any], sched: Any) -> str:

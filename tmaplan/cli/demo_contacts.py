@@ -36,7 +36,8 @@ from tmaplan.planning.ping_contacts import schedule_contact_pings
 from tmaplan.policies.contacts import contacts_planner, joint_contacts_plan
 from tmaplan.scenario import Scenario
 
-__all__ = ["CONTACTS_KEY_DIFFERENCES", "DEMO_CONTACTS_POLICIES", "run_several"]
+__all__ = ["CONTACTS_KEY_DIFFERENCES", "DEMO_CONTACTS_POLICIES", "demo_campaign", "run_several",
+           "say"]
 
 #: Policies the demo compares on several contacts (manoeuvre[+ping]).
 DEMO_CONTACTS_POLICIES = ("straight", "single-turn", "nearest-contact", "planned",
@@ -62,7 +63,8 @@ _AGGREGATE = {"time_to_accuracy": "time_to_accuracy_all",
               "final_range_error": "worst_final_range_error"}
 
 
-def _say(args: argparse.Namespace, msg: str) -> None:
+def say(args: argparse.Namespace, msg: str) -> None:
+    """Print ``msg`` on the console unless the JSON goes to stdout (``--json -``)."""
     if args.json != "-":
         print(msg, flush=True)
 
@@ -98,7 +100,7 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
     )
 
     cs = ContactSet.from_scenario(scenario)
-    _say(args, f"[1/3] planning one manoeuvre for the {len(cs)} contacts from their priors "
+    say(args, f"[1/3] planning one manoeuvre for the {len(cs)} contacts from their priors "
                "(all-contacts-time-to-accuracy) ...")
     res = joint_contacts_plan(scenario)
     plan = res.plan
@@ -106,25 +108,25 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
     # the joint objective's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
     ev = planner.joint.evaluator(cast(Any, planner.contacts.beliefs()))
     best = {k: v[0] for k, v in evaluate_baselines(cs.views[0], evaluator=ev).items()}
-    _say(args, f"      objective {plan.objective / 60:.1f} min (straight "
+    say(args, f"      objective {plan.objective / 60:.1f} min (straight "
                f"{best['straight'].objective / 60:.1f}, best single turn "
                f"{best['single-turn'].objective / 60:.1f}); {plan.status}, "
                f"{res.seconds:.1f} s")
     for n in cs.names:
         own = res.alone_times.get(n)
-        _say(args, f"      {n:<16} expected time to accuracy {res.expected_times[n] / 60:.1f} "
+        say(args, f"      {n:<16} expected time to accuracy {res.expected_times[n] / 60:.1f} "
                    "min on the joint plan" + ("" if own is None else
                                               f", {own / 60:.1f} min on its own plan"))
 
     budget = default_ping_budget(scenario)
-    _say(args, f"[2/3] scheduling {budget} pings for all the contacts along the joint plan ...")
+    say(args, f"[2/3] scheduling {budget} pings for all the contacts along the joint plan ...")
     shared = schedule_contact_pings(cs, budget=budget, method="relaxed",
                                     observer=plan.observer)
     sched = shared.schedule
     schedule_figure(shared, plan.observer.times, rep / "schedule.png",
                     title=f"{scenario.name}: {budget} pings shared by {len(cs)} contacts")
     pings = ", ".join(f"{t / 60:.1f}" for t in sched.times) or "none"
-    _say(args, f"      pings at {pings} min: the contacts' mean range bound "
+    say(args, f"      pings at {pings} min: the contacts' mean range bound "
                f"{sched.objective:.0f} m (uniform {sched.uniform_objective:.0f} m, none "
                f"{sched.no_ping_objective:.0f} m; {sched.status}, gap {100 * sched.gap:.2f} %)")
 
@@ -141,9 +143,9 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
                  "time until every contact is within its required accuracy; the decided "
                  f"campaigns, {DECIDED_RUNS}+ paired runs each: {DECIDED_RECORD}):",
                  *stats_lines(live), *key_lines(live, keys=CONTACTS_KEY_DIFFERENCES), ""]:
-        _say(args, line)
+        say(args, line)
     seconds = time.perf_counter() - t0
-    _say(args, f"wrote {report} ({seconds:.0f} s)")
+    say(args, f"wrote {report} ({seconds:.0f} s)")
     payload = result.to_json()
     for name, e in efficiency(result).items():
         payload["policies"][name]["efficiency"] = e
@@ -177,7 +179,7 @@ def demo_campaign(args: argparse.Namespace, scenario: Scenario, policies: tuple[
     tuple
         The :class:`tmaplan.experiments.CampaignResult` and the command (str).
     """
-    _say(args, f"[3/3] comparing {len(policies)} policies over {args.runs} paired runs "
+    say(args, f"[3/3] comparing {len(policies)} policies over {args.runs} paired runs "
                f"({args.particles} particles{per}, {args.workers} workers) ...")
     spec = CampaignSpec(scenario=scenario, policies=policies, runs=args.runs,
                         seed=args.seed, n_particles=args.particles)

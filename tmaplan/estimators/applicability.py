@@ -153,9 +153,7 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
         return (f"{name} ({decl.what}) needs at least {decl.min_measurements} {kinds} "
                 f"measurements{why}, {scenario.name} has {n}{_reach_note(scenario, decl.needs)}")
     if _lacks_prior(decl, scenario, bound):
-        what = ("starts from the prior" if decl.needs_prior == "always" else
-                "is compared with the PCRB, which starts from the prior (J₀ = P₀⁻¹)")
-        return f"{name} ({decl.what}) {what}, {scenario.name} has no [prior] table"
+        return f"{_prior_need(name, decl)}, {scenario.name} has no [prior] table"
     model = scenario.target.model
     if model not in decl.target_models:
         why = (" (its dynamics are nearly constant velocity, as the PCRB's)"
@@ -174,6 +172,13 @@ def _reason(name: str, decl: Applicability, scenario: Scenario, bound: Any) -> s
                     f"limit {MLE_DRIFT_RATIO_MAX:g}×): its χ² test would reject every run "
                     f"(NaN RMSE)")
     return None
+
+
+def _prior_need(name: str, decl: Applicability) -> str:
+    """Why estimator ``name`` needs the prior (``decl.needs_prior`` "always" or "bound")."""
+    what = ("starts from the prior" if decl.needs_prior == "always" else
+            "is compared with the PCRB, which starts from the prior (J₀ = P₀⁻¹)")
+    return f"{name} ({decl.what}) {what}"
 
 
 def _lacks_prior(decl: Applicability, scenario: Scenario, bound: Any) -> bool:
@@ -220,7 +225,7 @@ def check_applicable(estimator: Any, scenario: Scenario, *, bound: Any = None,
     if reason is not None:
         alts = [a for a in applicable_estimators(scenario) if a != name]
         if not alts and _lacks_prior(decl, scenario, bound):  # the file is at fault
-            raise ScenarioError("prior", f"a [prior] table: {reason.rsplit(', ', 1)[0]} "
+            raise ScenarioError("prior", f"a [prior] table: {_prior_need(name, decl)} "
                                 "(and no estimator applies without one)", None,
                                 source=scenario.name)
         use = (f"use {opt_e} {' or '.join(alts)}" if alts else

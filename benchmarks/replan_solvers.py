@@ -20,6 +20,8 @@ machine does not inflate as it does the wall time of the longer calls).
 
 Run: OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py --harvest --problem default --runs 4
      OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py [--candidates a,b] [--repeat 1]
+       (candidates: ipopt-compiled, sqp-daqp[-model][-compiled], sqpmethod-daqp, ipopt-ma;
+       ``-compiled``: the objective by its compiled kernel, HeadingPlanner(compiled=True))
      OMP_NUM_THREADS=1 python benchmarks/replan_solvers.py --gradient [--repeat 20]
      python benchmarks/replan_solvers.py --pair out/campaign-... --problem bow-closing
 """
@@ -140,15 +142,21 @@ def candidates(sc, names):
 
     out["ipopt"] = planner_solve(pl.solve)
     model = None
+    plc = None  # the planner whose objective is the compiled kernel
     for name in names:
-        if name.startswith("sqp-"):
+        if name.endswith("-compiled") and plc is None:
+            plc = receding._planner(sc, CLOSED_LOOP_OBJECTIVE, None, compiled=True)
+        if name == "ipopt-compiled":
+            out[name] = planner_solve(plc.solve)
+        elif name.startswith("sqp-"):
             if model is None:
                 t = time.perf_counter()
                 model = receding._rti_model(sc, CLOSED_LOOP_OBJECTIVE, None)
                 print(f"RTI model (offline plan and Hessian): {time.perf_counter() - t:.1f} s")
-            qpsol, carry = name[4:].removesuffix("-model"), not name.endswith("-model")
-            out[name] = planner_solve(ConvergedSQP(pl, model, qpsol=qpsol,
-                                                   carry_hessian=carry).solve)
+            base = name.removesuffix("-compiled")
+            qpsol, carry = base[4:].removesuffix("-model"), not base.endswith("-model")
+            out[name] = planner_solve(ConvergedSQP(plc if base != name else pl, model,
+                                                   qpsol=qpsol, carry_hessian=carry).solve)
         elif name.startswith("sqpmethod-"):
             out[name] = _casadi_nlp(pl, "sqpmethod", {
                 "qpsol": name.split("-", 1)[1], "hessian_approximation": "limited-memory",

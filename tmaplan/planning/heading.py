@@ -14,14 +14,10 @@ Transcriptions
     bang-bang optima) whose *durations* are the variables; positions on the dt grid are exact
     sums of arcs clipped at the grid instants, so the switch times are exact.
 
-The NLP is built once; the belief, the initial heading and speed, the bearing and ping
-information and the objective scale are casadi parameters, so :meth:`HeadingPlanner.solve`
-re-solves for a new belief (receding horizon) with a warm start. The graphs and the layout
-of the decision vector are :mod:`tmaplan.planning.heading_transcription`'s. The real-time
-iteration (:mod:`tmaplan.planning.rti`) and the joint OCP (:mod:`tmaplan.planning.joint_ocp`)
-solve the same NLP through the planner's public hooks (``nlp``, ``plan_function``,
-``start_state``, ``check_start``, ``parameter_vector``, ``bounds``, ``shifted_start``,
-``decision_vector``, ``make_plan``).
+The NLP is built once (belief, initial heading and speed, bearing and ping information and the
+objective scale are casadi parameters): :meth:`HeadingPlanner.solve` re-solves a new belief
+with a warm start. The decision vector's layout is :mod:`tmaplan.planning.heading_transcription`'s;
+the real-time iteration and the joint OCP solve the same NLP through the planner's public hooks.
 """
 
 from __future__ import annotations
@@ -117,6 +113,8 @@ class HeadingPlanner:
         :class:`ParamLayout`): a re-plan at time t then optimises the time the mission has
         left, not a full horizon beyond it. The terminal objectives (the value at the
         horizon's last step) do not read the step weights.
+    compiled : bool
+        The objective's compiled kernel where it has one (:class:`PlanContext`): re-plans.
 
     Attributes
     ----------
@@ -161,7 +159,7 @@ class HeadingPlanner:
                  solver_options: dict[str, Any] | None = None,
                  turn_rate_max: float | None = None, keep_out_range: float | None = None,
                  speed_choice: bool = False, n_arcs: int = 5, logdet_samples: int = 1,
-                 until_end: bool = False) -> None:
+                 until_end: bool = False, compiled: bool = False) -> None:
         import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
         pl = scenario.planning
@@ -237,9 +235,10 @@ class HeadingPlanner:
                 heading_limits=self.heading_limits is not None)
         pos, vbar, head, urate = traj
         ctx = PlanContext(dt=dt, times=self.times, A=A, Q=Q, v_obs=vbar, disp=pos,
-                          turn_rate=urate, p=p_obj, layout=self.layout,
+                          turn_rate=urate, p=p_obj, layout=self.layout, compiled=bool(compiled),
                           ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
-        f = self.objective.expression(ctx)
+        f = self.objective.expression(ctx)  # a compiled one's callbacks live as the solvers:
+        self._callbacks = ctx.cache.get("callbacks", [])
         self._n_w = w.shape[0]
         w, f, lbw, ubw, g, lbg, ubg, self._epi_guess = with_epigraph(
             self.objective.epigraph_terms(ctx), scale, w, P, f, lbw, ubw, g, lbg, ubg)
@@ -290,7 +289,8 @@ class HeadingPlanner:
             if tol is not None:
                 ipopt.update({"tol": float(tol), "acceptable_tol": 10 * float(tol)})
             self._solvers[key] = ca.nlpsol(f"heading_{len(self._solvers)}", "ipopt", self.nlp,
-                                           {"print_time": False, "ipopt": ipopt})
+                                           {"print_time": False, "ipopt": ipopt,
+                                            "calc_lam_p": False})  # unused; no ∂/∂p in a kernel
         return self._solvers[key]
 
     def bounds(self, heading0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

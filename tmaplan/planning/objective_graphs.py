@@ -157,6 +157,10 @@ class PlanContext:
         1/σ_r² of a ping [m⁻²] (0 without a range sensor).
     turn_rate_max : float
         [rad/s] (for penalty normalisation).
+    compiled : bool
+        Evaluate the objectives that have one by their compiled kernel
+        (:mod:`tmaplan.planning.compiled_objective`) instead of the casadi graph: the same
+        values and first derivatives, no second derivatives.
     """
 
     dt: float
@@ -170,6 +174,7 @@ class PlanContext:
     layout: ParamLayout
     ping_scale: float
     turn_rate_max: float
+    compiled: bool = False
     cache: dict[str, Any] = dataclasses.field(default_factory=dict, compare=False)
 
     @property

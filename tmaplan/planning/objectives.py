@@ -304,6 +304,12 @@ def expected_time_to_accuracy(accuracy: float = 0.1, samples: int = 128, width: 
     tau = float(accuracy)
 
     def term(ctx: PlanContext) -> Any:
+        if ctx.compiled:
+            from tmaplan.planning.compiled_objective import (  # deferred: numba is slow to import
+                compiled_expected_time,
+            )
+
+            return compiled_expected_time(ctx, tau, width)
         return expected_time_of(ctx, not_localised_graph(ctx, tau, width))
 
     terms: tuple[tuple[float, Term], ...] = ((1.0, term),)

@@ -1,0 +1,359 @@
+"""The expected time to accuracy and its gradient as one compiled kernel (issue 42).
+
+Role: a compiled evaluation of :func:`tmaplan.planning.objectives.expected_time_to_accuracy`'s
+main term, the same formula as its casadi graph (:func:`tmaplan.planning.objectives.
+not_localised_graph` and :func:`tmaplan.planning.objectives.expected_time_of`, which stay the
+reference the tests hold this kernel to, and the form whose second derivatives the real-time
+iteration's model needs). For each belief draw s and step k (lecadre1997 eq. 64–65, the batch
+bearings CRLB with prior information, in the scaled units km and 100 s of
+:func:`tmaplan.planning.objective_graphs.relative_range_crlb_graph`):
+
+* ``r_ks = p₀ₛ + t_k v₀ₛ − d_k`` with ``d_k`` the own ship's displacement beyond constant
+  velocity, ``r²`` floored at (100 m)²;
+* ``F_ks = I₀ + Σ_{j≤k} info_j g_js g_jsᵀ / r⁴_js``, ``g = [r_y, −r_x, t r_y, −t r_x]``;
+* ``ρ_ks = sqrt(q_ksᵀ F_ks⁻¹ q_ks) / r_ks``, ``q = [u, t u]`` (u the line of sight), by the
+  LDLᵀ factorisation of :func:`tmaplan.bounds.lpc_terms.ldl`;
+* the value ``span · Σ_k w_k mean_s σ((ρ_ks − τ)/(wτ)) / (K+1)`` (σ logistic).
+
+The gradient with respect to ``d`` is the hand-written reverse sweep of that recursion
+(``dρ² = 2 aᵀ dq − aᵀ dF a`` with ``a = F⁻¹ q``, the adjoints of the cumulative sums summed
+backwards over the steps): one pass forward, one back, the draws innermost (vectorised), no
+allocation. On ``default`` (121 steps, 128 draws) the value and gradient take about a seventh
+of the casadi graph's time, with the same values to ~1e-13 (docs/findings.md).
+
+:func:`compiled_expected_time` wraps it as a ``casadi.Callback`` with a reverse derivative, so
+IPOPT and the converged SQP use it unchanged; the callback has no derivative with respect to
+the parameter vector (that adjoint is NaN: nothing solves for it) and none of second order.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+__all__ = ["compiled_expected_time", "expected_time_value_grad"]
+
+_L = 1000.0  # length scale [m] (as tmaplan.planning.objective_graphs)
+_T = 100.0  # time scale [s]
+_MIN_RANGE = 100.0  # floor of the range [m]
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
+def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, info: Any,
+                weight: Any, ic: Any, tau: float, width: float, span: float, m2: float,
+                grad: Any, A: Any, V: Any, c: Any, G: Any, Z: Any,
+                need_grad: bool) -> float:  # pragma: no cover - compiled
+    ns = sx.shape[0]
+    K1 = t.shape[0]
+    for i in range(10):
+        for s in range(ns):
+            c[i, s] = 0.0
+    total = 0.0
+    inv_wt = 1.0 / (width * tau)
+    for k in range(K1):
+        tk = t[k]
+        ik = info[k]
+        dxk = dx[k]
+        dyk = dy[k]
+        a_k = A[k]
+        v_k = V[k]
+        for s in range(ns):
+            rx = sx[s] + svx[s] * tk - dxk
+            ry = sy[s] + svy[s] * tk - dyk
+            r2 = max(rx * rx + ry * ry, m2)
+            w = ik / (r2 * r2)
+            g0 = ry
+            g1 = -rx
+            g2 = tk * ry
+            g3 = -tk * rx
+            c0 = c[0, s] + g0 * g0 * w
+            c1 = c[1, s] + g0 * g1 * w
+            c2 = c[2, s] + g0 * g2 * w
+            c3 = c[3, s] + g0 * g3 * w
+            c4 = c[4, s] + g1 * g1 * w
+            c5 = c[5, s] + g1 * g2 * w
+            c6 = c[6, s] + g1 * g3 * w
+            c7 = c[7, s] + g2 * g2 * w
+            c8 = c[8, s] + g2 * g3 * w
+            c9 = c[9, s] + g3 * g3 * w
+            c[0, s] = c0
+            c[1, s] = c1
+            c[2, s] = c2
+            c[3, s] = c3
+            c[4, s] = c4
+            c[5, s] = c5
+            c[6, s] = c6
+            c[7, s] = c7
+            c[8, s] = c8
+            c[9, s] = c9
+            f00 = c0 + ic[0]
+            f01 = c1 + ic[1]
+            f02 = c2 + ic[2]
+            f03 = c3 + ic[3]
+            f11 = c4 + ic[4]
+            f12 = c5 + ic[5]
+            f13 = c6 + ic[6]
+            f22 = c7 + ic[7]
+            f23 = c8 + ic[8]
+            f33 = c9 + ic[9]
+            # LDLᵀ, as tmaplan.bounds.lpc_terms.ldl
+            d0 = f00
+            l10 = f01 / d0
+            l20 = f02 / d0
+            l30 = f03 / d0
+            d1 = f11 - l10 * f01
+            ld21 = f12 - l20 * f01
+            l21 = ld21 / d1
+            ld31 = f13 - l30 * f01
+            l31 = ld31 / d1
+            d2 = f22 - l20 * f02 - l21 * ld21
+            ld32 = f23 - l30 * f02 - l31 * ld21
+            l32 = ld32 / d2
+            d3 = f33 - l30 * f03 - l31 * ld31 - l32 * ld32
+            r = np.sqrt(r2)
+            ux = rx / r
+            uy = ry / r
+            y0 = ux
+            y1 = uy - l10 * y0
+            y2 = tk * ux - l20 * y0 - l21 * y1
+            y3 = tk * uy - l30 * y0 - l31 * y1 - l32 * y2
+            var = y0 * y0 / d0 + y1 * y1 / d1 + y2 * y2 / d2 + y3 * y3 / d3
+            rel = np.sqrt(max(var, 0.0)) / r
+            Z[s] = 0.5 * ((rel - tau) * inv_wt)
+            if need_grad:
+                a3 = y3 / d3
+                a2 = y2 / d2 - l32 * a3
+                a1 = y1 / d1 - l21 * a2 - l31 * a3
+                a0 = y0 / d0 - l10 * a1 - l20 * a2 - l30 * a3
+                a_k[0, s] = a0
+                a_k[1, s] = a1
+                a_k[2, s] = a2
+                a_k[3, s] = a3
+                v_k[0, s] = var
+                v_k[1, s] = r
+                v_k[2, s] = rx
+                v_k[3, s] = ry
+        acc = 0.0
+        for s in range(ns):
+            th = np.tanh(Z[s])
+            Z[s] = th
+            acc += 0.5 * (1.0 + th)
+        if need_grad:
+            for s in range(ns):
+                v_k[4, s] = Z[s]
+        total += weight[k] * acc
+    scale = span / (K1 * ns)
+    value = scale * total
+    if not need_grad:
+        return value
+    # reverse sweep: G holds Σ_{k' ≥ k} ∂value/∂F_k' (symmetric, packed)
+    for i in range(10):
+        for s in range(ns):
+            G[i, s] = 0.0
+    for k in range(K1 - 1, -1, -1):
+        tk = t[k]
+        ik = info[k]
+        ck = scale * weight[k]
+        a_k = A[k]
+        v_k = V[k]
+        for s in range(ns):
+            var = v_k[0, s]
+            r = v_k[1, s]
+            rx = v_k[2, s]
+            ry = v_k[3, s]
+            th = v_k[4, s]
+            a0 = a_k[0, s]
+            a1 = a_k[1, s]
+            a2 = a_k[2, s]
+            a3 = a_k[3, s]
+            adj_rel = ck * 0.25 * (1.0 - th * th) * inv_wt
+            sq = np.sqrt(max(var, 0.0))
+            adj_var = adj_rel / (2.0 * sq * r) if var > 0.0 else 0.0
+            adj_r = -adj_rel * (sq / r) / r
+            adj_ux = 2.0 * adj_var * (a0 + tk * a2)
+            adj_uy = 2.0 * adj_var * (a1 + tk * a3)
+            adj_rx = adj_ux / r
+            adj_ry = adj_uy / r
+            adj_r -= (adj_ux * rx + adj_uy * ry) / (r * r)
+            m = -adj_var
+            G0 = G[0, s] + m * a0 * a0
+            G1 = G[1, s] + m * a0 * a1
+            G2 = G[2, s] + m * a0 * a2
+            G3 = G[3, s] + m * a0 * a3
+            G4 = G[4, s] + m * a1 * a1
+            G5 = G[5, s] + m * a1 * a2
+            G6 = G[6, s] + m * a1 * a3
+            G7 = G[7, s] + m * a2 * a2
+            G8 = G[8, s] + m * a2 * a3
+            G9 = G[9, s] + m * a3 * a3
+            G[0, s] = G0
+            G[1, s] = G1
+            G[2, s] = G2
+            G[3, s] = G3
+            G[4, s] = G4
+            G[5, s] = G5
+            G[6, s] = G6
+            G[7, s] = G7
+            G[8, s] = G8
+            G[9, s] = G9
+            r2raw = rx * rx + ry * ry
+            r2 = max(r2raw, m2)
+            w = ik / (r2 * r2)
+            g0 = ry
+            g1 = -rx
+            g2 = tk * ry
+            g3 = -tk * rx
+            Gg0 = G0 * g0 + G1 * g1 + G2 * g2 + G3 * g3
+            Gg1 = G1 * g0 + G4 * g1 + G5 * g2 + G6 * g3
+            Gg2 = G2 * g0 + G5 * g1 + G7 * g2 + G8 * g3
+            Gg3 = G3 * g0 + G6 * g1 + G8 * g2 + G9 * g3
+            adj_w = g0 * Gg0 + g1 * Gg1 + g2 * Gg2 + g3 * Gg3
+            adj_ry += 2.0 * w * (Gg0 + tk * Gg2)
+            adj_rx -= 2.0 * w * (Gg1 + tk * Gg3)
+            adj_r2 = adj_r / (2.0 * r) - adj_w * 2.0 * ik / (r2 * r2 * r2)
+            if r2raw <= m2:  # the floored range does not move with r
+                adj_r2 = 0.0
+            Z[s] = -(adj_rx + 2.0 * rx * adj_r2)
+            v_k[0, s] = -(adj_ry + 2.0 * ry * adj_r2)
+        gx = 0.0
+        gy = 0.0
+        for s in range(ns):
+            gx += Z[s]
+            gy += v_k[0, s]
+        grad[0, k] = gx
+        grad[1, k] = gy
+    return value
+
+
+class _Kernel:
+    """Inputs of :func:`_value_grad` taken from the parameter vector, and its workspace."""
+
+    def __init__(self, ctx: Any, accuracy: float, width: float) -> None:
+        layout = ctx.layout
+        self.K1 = ctx.n_steps + 1
+        self.ns = layout.n_samples
+        self.slices = layout.slices()
+        self.t = np.ascontiguousarray(ctx.times / _T)
+        self.span = float(ctx.times[-1]) + float(ctx.dt)
+        self.tau, self.width = float(accuracy), float(width)
+        iu = np.triu_indices(4)
+        dinv = np.array([_L, _L, _L / _T, _L / _T])
+        self.ic_scale = dinv[iu[0]] * dinv[iu[1]]  # prior information in the scaled units
+        K1, ns = self.K1, self.ns
+        self.A = np.empty((K1, 4, ns))
+        self.V = np.empty((K1, 5, ns))
+        self.c = np.empty((10, ns))
+        self.G = np.empty((10, ns))
+        self.Z = np.empty(ns)
+        self.grad = np.zeros((2, K1))
+
+    def __call__(self, d: np.ndarray, p: np.ndarray, need_grad: bool) -> float:
+        sl = self.slices
+        smp = p[sl["samples"]].reshape(self.ns, 4)
+        return float(_value_grad(
+            smp[:, 0] / _L, smp[:, 1] / _L, smp[:, 2] * (_T / _L), smp[:, 3] * (_T / _L),
+            self.t, np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
+            np.ascontiguousarray(p[sl["bearing"]]), np.ascontiguousarray(p[sl["weight"]]),
+            p[sl["icart"]] * self.ic_scale, self.tau, self.width, self.span,
+            (_MIN_RANGE / _L) ** 2, self.grad, self.A, self.V, self.c, self.G, self.Z,
+            need_grad))
+
+
+def expected_time_value_grad(ctx: Any, d: np.ndarray, p: np.ndarray, *, accuracy: float,
+                             width: float) -> tuple[float, np.ndarray]:
+    """The compiled value [s] and its gradient with respect to ``d`` (K+1, 2) [s/km].
+
+    Parameters
+    ----------
+    ctx : PlanContext
+        The plan horizon (times, step, parameter layout); its casadi symbols are not used.
+    d : ndarray, shape (K + 1, 2)
+        Own-ship displacement beyond constant velocity, ``(disp_k − t_k v̄₀)/1 km`` [km].
+    p : ndarray, shape (layout.size,)
+        The parameter vector (:class:`tmaplan.planning.objective_graphs.ParamLayout`).
+    accuracy, width : float
+        τ and the relative width w of :func:`tmaplan.planning.objectives.
+        expected_time_to_accuracy` [-].
+    """
+    k = _Kernel(ctx, accuracy, width)
+    value = k(np.asarray(d, float), np.asarray(p, float).ravel(), True)
+    return value, k.grad.T.copy()
+
+
+@functools.cache
+def _callback_class() -> Any:
+    """A ``casadi.Callback`` of dense inputs and outputs evaluated by a Python function, with
+    an optional reverse derivative (a callback of the inputs, the outputs and one adjoint
+    seed per output, returning one adjoint per input)."""
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
+
+    class Callback(ca.Callback):
+        def __init__(self, name: str, ins: tuple[tuple[int, int], ...],
+                     outs: tuple[tuple[int, int], ...], fn: Callable[[Any], list[Any]],
+                     reverse: Any = None) -> None:
+            ca.Callback.__init__(self)
+            self.ins, self.outs, self.fn, self.adjoint = ins, outs, fn, reverse
+            self.construct(name, {})
+
+        def get_n_in(self) -> int:
+            return len(self.ins)
+
+        def get_n_out(self) -> int:
+            return len(self.outs)
+
+        def get_sparsity_in(self, i: int) -> Any:
+            return ca.Sparsity.dense(*self.ins[i])
+
+        def get_sparsity_out(self, i: int) -> Any:
+            return ca.Sparsity.dense(*self.outs[i])
+
+        def eval(self, arg: Any) -> list[Any]:
+            return self.fn(arg)
+
+        def has_reverse(self, nadj: int) -> bool:
+            return self.adjoint is not None and nadj == 1
+
+        def get_reverse(self, nadj: int, name: str, inames: Any, onames: Any,
+                        opts: Any) -> Any:
+            sym = [ca.MX.sym(f"a{i}", *shape) for i, shape in
+                   enumerate(self.ins + self.outs + self.outs)]
+            return ca.Function(name, sym, self.adjoint(*sym), inames, onames, opts)
+
+    return Callback
+
+
+def compiled_expected_time(ctx: Any, accuracy: float, width: float) -> Any:
+    """The expected-time term of :func:`tmaplan.planning.objectives.expected_time_to_accuracy`
+    [s] as a casadi expression of ``ctx``'s plan, evaluated by the compiled kernel.
+
+    Same value as ``expected_time_of(ctx, not_localised_graph(ctx, accuracy, width))`` (to
+    rounding). The callbacks are kept in ``ctx.cache["callbacks"]``: whoever builds a solver
+    from the expression keeps them alive as long as the solver (casadi does not).
+    """
+    import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
+
+    kernel = _Kernel(ctx, accuracy, width)
+    K1, n_p = kernel.K1, ctx.layout.size
+    Callback = _callback_class()
+
+    def reverse_eval(arg: Any) -> list[Any]:
+        kernel(np.asarray(arg[0], float), np.asarray(arg[1], float).ravel(), True)
+        # no derivative with respect to the parameters: NaN, so a use shows
+        return [ca.DM(float(arg[3]) * kernel.grad.T), ca.DM.nan(n_p, 1)]
+
+    def value_eval(arg: Any) -> list[Any]:
+        return [ca.DM(kernel(np.asarray(arg[0], float), np.asarray(arg[1], float).ravel(),
+                             False))]
+
+    reverse = Callback("expected_time_reverse", ((K1, 2), (n_p, 1), (1, 1), (1, 1)),
+                       ((K1, 2), (n_p, 1)), reverse_eval)
+    value = Callback("expected_time", ((K1, 2), (n_p, 1)), ((1, 1),), value_eval,
+                     reverse=reverse)
+    ctx.cache.setdefault("callbacks", []).extend([reverse, value])
+    v0 = ctx.v_obs[0, :]
+    d = (ctx.disp - ca.mtimes(ca.DM(ctx.times.reshape(-1, 1)), v0)) / _L
+    return value(d, ctx.p)

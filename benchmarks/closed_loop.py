@@ -3,13 +3,14 @@
 Per policy, seconds per run split into planning (the controller's re-plans), filtering (the
 particle filter's init, predict and update) and the rest (simulation, metrics), for
 
-* ``old``: a full IPOPT solve per re-plan, ``Receding(solver="ipopt")`` (when this benchmark
-  was written the first solve was cold, from 4 starts; it now starts from the offline plan,
-  and it is the default again: solved to convergence, the re-plans localise sooner on
-  ``bow-closing``, docs/results/receding-ipopt.md);
-* ``new``: the real-time iteration, one condensed SQP step per re-plan from the shifted
-  previous plan (``Receding(solver="real-time")``, :mod:`tmaplan.planning.rti`), IPOPT only
-  as the fallback.
+* ``old``: a full IPOPT solve per re-plan on the objective's casadi graph,
+  ``Receding(solver="ipopt", compiled=False)``: the path before issue 42 (when this benchmark
+  was written the first solve was cold, from 4 starts; it now starts from the offline plan);
+* ``new``: ``Receding(solver=NEW_SOLVER)``, by default the real-time iteration, one condensed
+  SQP step per re-plan from the shifted previous plan (``"real-time"``,
+  :mod:`tmaplan.planning.rti`), IPOPT only as the fallback; ``--new-solver ipopt``: today's
+  ``receding`` (IPOPT on the compiled objective, :mod:`tmaplan.planning.compiled_objective`);
+  ``--new-solver sqp``: the converged SQP on it (``receding-sqp``).
 
 Both paths run on the same truths and noise (common random numbers, the campaign's seeds), so
 the script also reports the paired difference new − old of the time to accuracy and of the final
@@ -18,6 +19,7 @@ the same process. ``--step`` profiles one re-plan step (objective/gradient/Jacob
 Hessian, condensing, QP per solver) against the IPOPT re-solve.
 
 Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
+     [--new-solver real-time|ipopt|sqp]
      [--particles 3000] [--policies straight,planned,receding] [--step] [--json OUT]
      python benchmarks/closed_loop.py --pair OLD_JSON NEW_JSON
      python benchmarks/closed_loop.py --gaps --runs 3   (seed 1000 unless --seed)
@@ -67,10 +69,10 @@ for _name in ("init", "predict", "update"):
     setattr(ParticleFilter, _name, _timed(getattr(ParticleFilter, _name)))
 
 
-def _policies(scenario, names, path):
+def _policies(scenario, names, path, new_solver="real-time"):
     """Resolved policies (timed: the campaign's once-only work); ``receding``'s re-plans by
-    IPOPT on the ``old`` path, by the real-time iteration on the ``new`` one (the other
-    ``receding-*`` names fly as named on both).
+    IPOPT on the objective's casadi graph on the ``old`` path, by ``new_solver`` on the
+    ``new`` one (the other ``receding-*`` names fly as named on both).
 
     The offline-plan cache is emptied first, so that the second path's setup is not timed
     on the plans the first one solved."""
@@ -80,21 +82,22 @@ def _policies(scenario, names, path):
     for spec in names:
         p = parse_policy(spec, scenario)
         if spec.split("+")[0] == "receding":  # the other receding-* names fly as named
-            solver = "ipopt" if path == "old" else "real-time"
-            p = Combined(manoeuvre=Receding(solver=solver), ping=p.ping)
+            rec = (Receding(solver="ipopt", compiled=False) if path == "old"
+                   else Receding(solver=new_solver))
+            p = Combined(manoeuvre=rec, ping=p.ping)
         pols[spec] = p.resolve(scenario)
     return pols, time.perf_counter() - t
 
 
 def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0,
-                json_out=None):
+                json_out=None, new_solver="real-time"):
     sc = load_problem(problem)
     records = []
     rows = defaultdict(lambda: defaultdict(list))
     metric = defaultdict(lambda: defaultdict(list))
     setup = {}
     for path in paths:
-        pols, setup[path] = _policies(sc, names, path)
+        pols, setup[path] = _policies(sc, names, path, new_solver)
         print(f"[{path}] campaign setup (offline plans, schedules, RTI model): "
               f"{setup[path]:.1f} s")
         for i in range(first_run, first_run + runs):
@@ -274,6 +277,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--path", choices=("old", "new", "both"), default="both")
     ap.add_argument("--runs", type=int, default=4)
+    ap.add_argument("--new-solver", choices=("real-time", "ipopt", "sqp"), default="real-time",
+                    help="how the new path's receding re-plans (the old: IPOPT, casadi graph)")
+    ap.add_argument("--problem", default="default")
     ap.add_argument("--particles", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=None,
                     help="root seed of the runs (default 0; with --gaps 1000, tuning seeds)")
@@ -297,8 +303,8 @@ def main():
         return
     paths = ("old", "new") if a.path == "both" else (a.path,)
     closed_loop(paths, a.policies.split(","), a.runs, a.particles,
-                seed=0 if a.seed is None else a.seed,
-                first_run=a.first_run, json_out=a.json)
+                seed=0 if a.seed is None else a.seed, problem=a.problem,
+                first_run=a.first_run, json_out=a.json, new_solver=a.new_solver)
 
 
 if __name__ == "__main__":

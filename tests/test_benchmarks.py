@@ -122,6 +122,20 @@ def test_closed_loop_times_each_path_setup_from_an_empty_plan_cache(benchmark_sc
         manoeuvres._PLAN_CACHE.pop((sc, "stale"), None)
 
 
+def test_closed_loop_old_path_is_the_graph_before_issue_42(benchmark_script):
+    """The ``old`` path's ``receding`` re-plans on the objective's casadi graph (the path
+    issue 42's ratios are taken against); ``--new-solver ipopt`` on the compiled kernel."""
+    from tmaplan.scenario import load_problem
+
+    bench = benchmark_script("closed_loop")
+    sc = load_problem("bow-closing")
+    old, _ = bench._policies(sc, ["receding"], "old")
+    new, _ = bench._policies(sc, ["receding"], "new", "ipopt")
+    assert not old["receding"].manoeuvre.uses_compiled
+    assert new["receding"].manoeuvre.uses_compiled
+    assert new["receding"].manoeuvre.solver == "ipopt"
+
+
 @pytest.mark.parametrize("runs", [2.5, True, 0, "4"])
 def test_plan_check_refuses_runs_that_are_not_whole(runs):
     from tmaplan.experiments import plan_campaign, select_plan, tune_single_turn

@@ -146,15 +146,48 @@ def test_receding_sqp_in_closed_loop(setup):
     assert all(e["solver"] == "sqp-daqp" for e in res.replans if e["success"] and e not in fell)
 
 
-def test_receding_sqp_failure_falls_back_as_ipopt(setup, monkeypatch):
-    """A re-plan whose SQP solve does not converge is logged as fallen back to the
-    multi-start's other starts (IPOPT), as a failed IPOPT re-plan is."""
+def test_receding_sqp_failure_is_solved_by_ipopt_from_the_same_start(setup, monkeypatch):
+    """A re-plan whose SQP solve does not converge is solved by IPOPT from the same warm
+    start, as ``receding`` would solve it, and logged as fallen back (no other start)."""
     sc = setup[0]
 
     def fail(self, *args, **kw):
         raise SolverError("sqp-daqp", "Maximum_Iterations_Exceeded", "forced")
 
+    warm = []
+    solve = HeadingPlanner.solve
+
+    def recorded(self, *args, **kw):
+        warm.append(kw.get("warm_start"))
+        return solve(self, *args, **kw)
+
     monkeypatch.setattr(ConvergedSQP, "solve", fail)
+    monkeypatch.setattr(HeadingPlanner, "solve", recorded)
+    res = _closed_loop(sc, Receding(horizon=HORIZON, solver="sqp").resolve(sc))
+    assert_replans_accounted(res.replans, None)
+    assert res.replans and all(e["fell_back"] for e in res.replans)
+    assert all("start" not in e for e in res.replans)  # no multi-start
+    assert all(e["solver"] == "ipopt" for e in res.replans if e["success"])
+    assert len(warm) >= len(res.replans) and all(w is not None for w in warm)
+
+
+def test_receding_sqp_and_ipopt_failure_falls_back_to_the_other_starts(setup, monkeypatch):
+    """When IPOPT from the warm start does not converge either, the multi-start's other
+    starts are tried, as after a failed IPOPT re-plan."""
+    sc = setup[0]
+
+    def fail(self, *args, **kw):
+        raise SolverError("sqp-daqp", "Maximum_Iterations_Exceeded", "forced")
+
+    solve = HeadingPlanner.solve
+
+    def warm_fails(self, *args, **kw):
+        if kw.get("warm_start") is not None and kw.get("starts") is None:
+            raise SolverError("ipopt", "Maximum_Iterations_Exceeded", "forced too")
+        return solve(self, *args, **kw)
+
+    monkeypatch.setattr(ConvergedSQP, "solve", fail)
+    monkeypatch.setattr(HeadingPlanner, "solve", warm_fails)
     res = _closed_loop(sc, Receding(horizon=HORIZON, solver="sqp").resolve(sc))
     assert_replans_accounted(res.replans, None, multi_start=range(len(res.replans)))
     assert res.replans and all(e["fell_back"] for e in res.replans)
@@ -162,4 +195,4 @@ def test_receding_sqp_failure_falls_back_as_ipopt(setup, monkeypatch):
         if e["success"]:
             assert e["solver"] == "ipopt" and e["start"] != "multi-start: warm"
         else:
-            assert "sqp-daqp" in e["status"] and "fallback starts" in e["status"]
+            assert "forced too" in e["status"] and "fallback starts" in e["status"]

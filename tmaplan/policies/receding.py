@@ -82,8 +82,9 @@ class Receding:
       quasi-Newton SQP over the turn rates (:class:`tmaplan.planning.converged_sqp.
       ConvergedSQP`: the real-time iteration's Hessian model, BFGS updates carried from
       re-plan to re-plan, ``qpsol`` QPs), warm-started as ``"ipopt"``; a solve that does not
-      converge falls back as IPOPT's does (``fallback_starts``). CLI name ``receding-sqp``;
-      not the default (docs/results/fast-replans.md).
+      converge is solved by IPOPT from the same warm start (what ``"ipopt"`` would have
+      flown), then falls back as IPOPT's does (``fallback_starts``). CLI name
+      ``receding-sqp``; not the default (docs/results/fast-replans.md).
     * ``"multi-start"``: the first re-plan by IPOPT warm-started from the offline plan from
       the prior; every later one by IPOPT from five starts — the previous plan shifted to the
       re-plan time, its mirror image (the same manoeuvre to the other side), straight and
@@ -479,12 +480,16 @@ class _RecedingController:
     def _solve(self, b: Any, n: int, *, heading0: float,
                position0: np.ndarray) -> tuple[Any, bool]:
         """Re-plan ``n`` by the policy's solver: (the plan, whether the real-time iteration's
-        step was rejected and its IPOPT fallback gave the plan)."""
+        step was rejected, or the SQP did not converge, and IPOPT from the same warm start
+        gave the plan)."""
         pol = self.policy
         full = {"heading0": heading0, "position0": position0,
                 "warm_start": self.plan or self.first, "tol": pol.full_tol}
         if self.sqp is not None:
-            return self.sqp.solve(b, **full), False
+            try:
+                return self.sqp.solve(b, **full), False
+            except SolverError:  # IPOPT's re-plan, as "ipopt" would solve it (then the starts)
+                return self.planner.solve(b, **full), True
         if self.rti is None or n in pol.full_solves:  # "ipopt", or a full solve asked
             return self.planner.solve(b, **full), False
         plan = self.rti.solve(b, previous=self.plan, heading0=heading0, position0=position0)

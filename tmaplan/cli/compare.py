@@ -137,6 +137,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     # the report's figures need matplotlib (~0.8 s), not the checks before the runs
     from tmaplan import report_contacts  # deferred: matplotlib
     from tmaplan.report import efficiency, write_report  # deferred: matplotlib
+    from tmaplan.report_tables import censored_lines
 
     console_lines = report_contacts.console_lines
 
@@ -165,6 +166,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                   f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
                   f"recoveries {s['recoveries']:.2f}{replan_cell(s['replans'])}")
         for line in console_lines(result) if several else []:
+            print(line)
+        for line in censored_lines(result):  # a zero difference there is no tie
             print(line)
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")

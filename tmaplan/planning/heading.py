@@ -46,6 +46,7 @@ from tmaplan.planning.feasibility import (
     check_plan_memory,
     check_planning_horizon,
     check_start_keep_out,
+    warn_long_planning_horizon,
 )
 from tmaplan.planning.heading_plan import HeadingPlan
 from tmaplan.planning.heading_transcription import (
@@ -153,6 +154,13 @@ class HeadingPlanner:
         Before any graph is built (:mod:`tmaplan.planning.feasibility`): a planning horizon
         of no whole number of control intervals (an argument ``horizon`` shorter than one),
         more steps than fit in the memory available.
+
+    Warns
+    -----
+    ScenarioWarning
+        Without ``horizon``, a ``planning.horizon`` longer than ``time.horizon``
+        (:func:`tmaplan.planning.feasibility.warn_long_planning_horizon`): a run flies the
+        plan only up to the problem's end.
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,
@@ -183,6 +191,8 @@ class HeadingPlanner:
         Tc = control_interval if control_interval is not None else (
             pl.control_interval if pl and pl.control_interval else dt)
         self.m = max(1, round(float(Tc) / dt))
+        if horizon is None:  # the file's horizon: warned when it runs past the problem's end
+            warn_long_planning_horizon(scenario)
         if horizon is None and control_interval is None:
             check_planning_horizon(scenario)
         elif float(H) < self.m * dt * (1 - 1e-9):  # nothing to plan: refused, not rounded up

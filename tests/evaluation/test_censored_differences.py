@@ -92,3 +92,17 @@ def test_the_demo_lines_say_undetermined():
                               mean=-60.0, ci_low=-90.0, ci_high=-30.0, level=0.95, n=2000)
     d = next(x for x in live.differences if x.metric == "time_to_accuracy")
     assert verdict(d, stored).startswith("undetermined")
+
+
+def test_the_several_contact_metrics_read_in_display_units():
+    """The report printed the aggregate metrics of several contacts in SI without a unit
+    (``+0  ([+0, +0] ,``; a final error of ``-607  ([-3.13e+03, +1.92e+03] ,``)."""
+    tta = {"a": np.array([100.0, 200.0, INF]), "b": np.array([160.0, 230.0, 250.0])}
+    fre = {"a": np.array([900.0, 1100.0, 1000.0]), "b": np.array([1500.0, 1150.0, 1700.0])}
+    fake = SimpleNamespace(policies=("a", "b"), differences=(
+        paired_difference(tta, "a", "b", "time_to_accuracy_all", censor=CENSOR),
+        paired_difference(fre, "a", "b", "worst_final_range_error")))
+    text = differences_html(fake)
+    assert "<strong>time until every contact is localised</strong>" in text
+    assert "<strong>worst contact's final range error</strong>" in text
+    assert "<td>-0.217 min</td>" in text and "<td>-0.45 km</td>" in text, text

@@ -49,6 +49,7 @@ from tmaplan.models.target import initial_velocity
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.policies.parse import check_policy
+from tmaplan.report_tables import censored_lines
 from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
@@ -137,7 +138,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     # the report's figures need matplotlib (~0.8 s), not the checks before the runs
     from tmaplan import report_contacts  # deferred: matplotlib
     from tmaplan.report import efficiency, write_report  # deferred: matplotlib
-    from tmaplan.report_tables import censored_lines
 
     console_lines = report_contacts.console_lines
 

@@ -30,7 +30,7 @@ Memory (:func:`check_plan_memory`)
 from __future__ import annotations
 
 import multiprocessing
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -44,7 +44,8 @@ from tmaplan.planning.belief import Belief
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_memory",
+__all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_inputs",
+           "check_plan_memory",
            "check_planning_horizon", "check_start_keep_out", "keep_out_share",
            "warn_long_planning_horizon"]
 
@@ -212,6 +213,28 @@ def check_plan_memory(scenario: Scenario, n_steps: int, *,
         field, value = "time.horizon", float(scenario.time.horizon)
     check_steps(n_steps, (("heading", copies), *extra), field=field, dt=scenario.time.dt,
                 received=seconds_text(value), source=scenario.name, available=available)
+
+
+def check_plan_inputs(scenario: Scenario, n_steps: int, *, horizon: float | None = None,
+                      **memory: Any) -> None:
+    """A heading planner's inputs, checked before its graph is built: without ``horizon``
+    (the file's ``planning.horizon`` read), a planning horizon past ``time.horizon`` warned
+    (:func:`warn_long_planning_horizon`); then its memory (:func:`check_plan_memory`, with
+    ``horizon`` and the further arguments ``memory``).
+
+    Warns
+    -----
+    ScenarioWarning
+        A ``planning.horizon`` longer than ``time.horizon``.
+
+    Raises
+    ------
+    ScenarioError or ArgumentError
+        If the estimated memory exceeds the memory available.
+    """
+    if horizon is None:
+        warn_long_planning_horizon(scenario)
+    check_plan_memory(scenario, n_steps, horizon=horizon, **memory)
 
 
 def check_start_keep_out(belief: Belief, *, keep_out: float, u_max: float,

@@ -31,7 +31,12 @@ from typing import Any
 import numpy as np
 
 from tmaplan.display import short_repr
-from tmaplan.evaluation.metrics import PairedDifference, censor_time, paired_difference
+from tmaplan.evaluation.metrics import (
+    PairedDifference,
+    censor_time,
+    censored_note,
+    paired_difference,
+)
 from tmaplan.experiments import CampaignResult
 
 __all__ = ["KEY_DIFFERENCES", "STORED_FILE", "Comparison", "StoredResult", "difference_of",
@@ -282,7 +287,18 @@ def verdict(d: PairedDifference, stored: PairedDifference | None = None) -> str:
     excludes zero; ``"not decided at N runs"`` when it holds zero; with ``stored`` (the same
     difference from the stored campaigns) a live verdict is set against it: decided the other
     way round is flagged as chance, decided where the stored runs do not decide is said so.
+    Runs censored on both sides (neither policy localised) are counted after the verdict
+    (:func:`tmaplan.evaluation.metrics.censored_note`); when every run is, the difference is
+    undetermined, whatever the stored runs say.
     """
+    note = censored_note(d)
+    if d.undetermined:
+        return note
+    text = _verdict_text(d, stored)
+    return f"{text}; {note}" if note else text
+
+
+def _verdict_text(d: PairedDifference, stored: PairedDifference | None) -> str:
     if d.n < 2 or not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
         return f"no interval with {d.n} run"
     better = _metric(d.metric)[3]
@@ -310,6 +326,8 @@ def _interval(d: PairedDifference) -> tuple[str, str]:
     def num(x: float) -> str:  # in display units; a value that rounds to zero shows +0
         return f"{round(x / unit, decimals) + 0.0:+.{decimals}f}"
 
+    if d.undetermined:  # every run censored on both sides: zero by construction
+        return "undetermined", "no interval"
     if not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
         return f"{num(d.mean)} {u}", "no interval"
     return f"{num(d.mean)} {u}", f"[{num(d.ci_low)}, {num(d.ci_high)}]"

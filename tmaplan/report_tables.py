@@ -14,12 +14,12 @@ from typing import Any
 import numpy as np
 
 from tmaplan.display import angle, minutes, speed
-from tmaplan.evaluation.metrics import PairedDifference
+from tmaplan.evaluation.metrics import PairedDifference, censored_note
 from tmaplan.evaluation.replans import NOT_CONVERGED_WARNING, ReplanCounts
 from tmaplan.experiments import CampaignResult
 
-__all__ = ["FEW_RUNS", "baseline_parameters", "differences_html", "replan_warning",
-           "results_table", "sample_warning"]
+__all__ = ["FEW_RUNS", "baseline_parameters", "censored_lines", "differences_html",
+           "replan_warning", "results_table", "sample_warning"]
 
 FEW_RUNS = 10
 """Below this many paired runs the report warns that its intervals are wide (t intervals from
@@ -29,6 +29,10 @@ fewer than 10 differences) and, with one run, undefined."""
 _METRICS: dict[str, tuple[str, float, str]] = {
     "time_to_accuracy": ("time to accuracy", 60.0, "min"),
     "final_range_error": ("final range error", 1000.0, "km"),
+    # several contacts (tmaplan.evaluation.contacts_campaign): the aggregate metrics
+    "time_to_accuracy_all": ("time until every contact is localised", 60.0, "min"),
+    "weighted_time_to_accuracy": ("weighted time to accuracy", 60.0, "min"),
+    "worst_final_range_error": ("worst contact's final range error", 1000.0, "km"),
 }
 
 
@@ -60,6 +64,8 @@ def sample_warning(runs: int, *, ranking: bool = False) -> str:
 
 
 def _ci(d: PairedDifference, unit: float, u: str) -> str:
+    if d.undetermined:  # every run censored on both sides: a zero-width interval of nothing
+        return "undetermined"
     if not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
         return f"undefined ({d.n} run)" if d.n < 2 else "undefined"
     return f"[{d.ci_low / unit:+.3g}, {d.ci_high / unit:+.3g}] {u}"
@@ -74,9 +80,13 @@ def _mean(x: float, unit: float, u: str) -> str:
 
 
 def _verdict(d: PairedDifference) -> str:
+    note = censored_note(d)
+    if d.undetermined:
+        return note
     if not (math.isfinite(d.ci_low) and math.isfinite(d.ci_high)):
         return "undefined"
-    return "yes" if d.excludes_zero else f"no: not decided at {d.n} runs"
+    text = "yes" if d.excludes_zero else f"no: not decided at {d.n} runs"
+    return f"{text}; {note}" if note else text
 
 
 def _replans(c: ReplanCounts | None) -> str:
@@ -158,6 +168,9 @@ def _pair(diffs: list[PairedDifference], a: str, b: str) -> tuple[PairedDifferen
 def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metric: str,
                   ) -> str:
     label, unit, u = _metric(metric)
+    if all(d.undetermined for d in diffs):  # nobody localised: no ranking, not a tie
+        return (f"<li><strong>{label}</strong>: undetermined: no policy localised in any of "
+                f"the {min(d.n for d in diffs)} paired runs.</li>")
     rel = {p: m for p, m in _relative_means(diffs, policies).items() if math.isfinite(m)}
     if len(rel) < 2:
         return f"<li><strong>{label}</strong>: no summary (undefined means).</li>"
@@ -171,7 +184,12 @@ def _summary_line(diffs: list[PairedDifference], policies: tuple[str, ...], metr
               if math.isfinite(lo) and math.isfinite(hi) else "interval undefined")
         sig = ("" if not (math.isfinite(lo) and math.isfinite(hi)) else
                ", decided" if d.excludes_zero else f", not decided at {d.n} runs")
-        items.append(f"{html.escape(other)} {_mean(sign * d.mean, unit, u)} ({ci}{sig})")
+        note = censored_note(d)
+        if d.undetermined:
+            items.append(f"{html.escape(other)} {note}")
+            continue
+        items.append(f"{html.escape(other)} {_mean(sign * d.mean, unit, u)} ({ci}{sig}"
+                     + (f"; {note})" if note else ")"))
     n_sig = sum(_pair(diffs, best, o)[0].excludes_zero for o in order[1:])
     n_runs = min(d.n for d in diffs)
     verdict = (f"better than {n_sig} of the {len(order) - 1} other policies at 95 %"
@@ -195,6 +213,15 @@ def _lowest(diffs: list[PairedDifference], best: str, runner_up: str, n_runs: in
             f"{html.escape(runner_up)} within the interval)")
 
 
+def censored_lines(result: CampaignResult) -> list[str]:
+    """Console lines of the paired differences with runs censored on both sides (neither
+    policy localised; :func:`tmaplan.evaluation.metrics.censored_note`), one per difference:
+    ``"straight − single-turn, time to accuracy: undetermined: neither policy localised in
+    any of the 4 paired runs"``; none when no run is."""
+    return [f"{d.a} − {d.b}, {_metric(d.metric)[0]}: {note}" for d in result.differences
+            if (note := censored_note(d))]
+
+
 def differences_html(result: CampaignResult) -> str:
     """Summary of the key paired differences, then the full table in ``<details>``."""
     diffs = list(result.differences)
@@ -207,12 +234,14 @@ def differences_html(result: CampaignResult) -> str:
     for d in diffs:
         label, unit, u = _metric(d.metric)
         rows.append(f"<tr><td>{html.escape(d.a)} − {html.escape(d.b)}</td><td>{label}</td>"
-                    f"<td>{_mean(d.mean, unit, u)}</td><td>{_ci(d, unit, u)}</td>"
+                    f"<td>{'undetermined' if d.undetermined else _mean(d.mean, unit, u)}</td>"
+                    f"<td>{_ci(d, unit, u)}</td>"
                     f"<td>{_verdict(d)}</td></tr>")
     return (f"<h3>Summary</h3><ul>{summary}</ul>"
             "<p>Negative differences favour the first policy named (lower is better). "
             "Time to accuracy is censored at the horizon plus one time step for runs that never "
-            "get there.</p>"
+            "get there; a run where neither policy gets there is censored on both sides and "
+            "decides nothing (a pair censored on both sides in every run is undetermined).</p>"
             f"<details><summary>All {len(diffs)} paired differences (95 % confidence "
             "intervals)</summary><table><tr><th>pair</th><th>metric</th><th>mean</th>"
             "<th>95 % CI</th><th>decided (excludes 0)</th></tr>" + "".join(rows) +

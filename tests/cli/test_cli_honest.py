@@ -292,3 +292,46 @@ def test_observer_plan_must_start_from_the_scenarios_own_ship(tmp_path, one_line
     _refused_up_front(one_line_error, ["schedule", str(f), "--observer-plan", str(plan)],
                       tmp_path, "field '--observer-plan'", "observer.position (3000, 0) m",
                       "observer.position[0] = (0, 0) m in the plan")
+
+
+# ------------------------------------------------------------------ compare: nobody localised
+def _far(tmp_path, name):
+    """``name`` with its contacts at 60 km and prior ranges 30-150 km over 5 min: no policy
+    localises any of them (at 10 %) by the horizon."""
+    text = (problems_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    for old, new in (('horizon = "45 min"', 'horizon = "5 min"'),
+                     ('["8.485 km", "8.485 km"]', '["42.43 km", "42.43 km"]'),
+                     ('["-9.899 km", "9.899 km"]', '["-42.43 km", "42.43 km"]'),
+                     ('range_min = "5 km"', 'range_min = "30 km"'),
+                     ('range_max = "25 km"', 'range_max = "150 km"')):
+        text = text.replace(old, new)
+    f = tmp_path / f"far-{name}.toml"
+    f.write_text(text, encoding="utf-8")
+    return f
+
+
+@pytest.mark.parametrize(("name", "metrics"), [
+    ("default", ["time_to_accuracy"]),
+    ("two-contacts-crossing", ["time_to_accuracy_all", "weighted_time_to_accuracy"])])
+def test_compare_says_a_difference_nobody_localised_is_undetermined(tmp_path, capsys, name,
+                                                                    metrics):
+    """Neither policy localised in any run: the paired difference of the times to accuracy
+    (both censored at the horizon + dt) read ``0 [0, 0]`` min, like a decided tie."""
+    f = _far(tmp_path, name)
+    assert main(["compare", str(f), "--policies", "straight,single-turn", "--runs", "2",
+                 "--particles", "200", "--truth", "scenario", "--out", str(tmp_path / "o"),
+                 "--json", str(tmp_path / "c.json")]) == 0
+    out = capsys.readouterr().out
+    data = json.loads((tmp_path / "c.json").read_text())
+    for metric in metrics:
+        (d,) = [d for d in data["differences"] if d["metric"] == metric]
+        assert d["both_censored"] == d["n"] == 2, d  # the existing keys kept
+        assert {"mean", "ci_low", "ci_high", "level", "n"} <= set(d)
+    assert all(d["both_censored"] == 0 for d in data["differences"]
+               if "time" not in d["metric"])
+    lines = [ln for ln in out.splitlines() if ln.startswith("straight − single-turn, ")]
+    assert len(lines) == len(metrics), out
+    assert all(ln.endswith("undetermined: neither policy localised in any of the 2 paired runs")
+               for ln in lines), lines
+    report = (Path(data["report"])).read_text(encoding="utf-8")
+    assert "undetermined: no policy localised in any of the 2 paired runs" in report

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ from tmaplan.estimators.applicability import (
     APPLICABILITY,
     applicable_estimators,
     check_applicable,
+    warn_filter_model,
 )
 from tmaplan.evaluation.tracking import monte_carlo
 from tmaplan.scenario import load_problem
@@ -180,3 +182,46 @@ def test_range_only_counts_the_ranges_within_the_sensors_reach():
     assert "needs at least 3 range measurements" in msg and "\n" not in msg
     assert "has 0 within max_range on the true track" in msg
     assert "range-only" not in applicable_estimators(reach(100.0))
+
+
+def _circling(name: str = "default"):
+    """``name`` (10 min) with its first contact on clavard2013's constant-turn track, a prior
+    with explicit means (a constant-turn target needs them)."""
+    sc = load_problem(name)
+    sc = sc.replace(time=dataclasses.replace(sc.time, horizon=600.0),
+                    planning=dataclasses.replace(sc.planning, horizon=600.0))
+    ct = load_problem("clavard2013-halfturn-cw").target
+    first = sc.contacts[0]
+    prior = dataclasses.replace(first.prior, range_distribution="normal", range_mean=12e3,
+                                range_std=3e3)
+    return sc.replace(contacts=(dataclasses.replace(first, target=ct, prior=prior),
+                                *sc.contacts[1:]))
+
+
+@pytest.mark.parametrize(("name", "field"), [
+    ("default", "field 'target.model'"),
+    ("two-contacts-crossing", "field 'contacts[0].target.model'")])
+def test_a_campaign_against_a_truth_the_filter_does_not_model_is_warned(name, field):
+    """``compare --truth scenario`` on a constant-turn contact flew the particle filter (NCV
+    dynamics) silently, where ``track`` refuses it: a robustness study, so warned, not
+    refused."""
+    from tmaplan.errors import ScenarioWarning
+    from tmaplan.experiments import CampaignSpec, run_campaign
+
+    sc = _circling(name)
+    spec = CampaignSpec(scenario=sc, policies=("straight",), runs=1, seed=0, n_particles=50,
+                        truth="scenario")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run_campaign(spec)
+    msgs = [str(w.message) for w in caught if issubclass(w.category, ScenarioWarning)
+            and "target.model" in str(w.message)]
+    who = " (contact 'alpha')" if name != "default" else ""
+    assert msgs == [f"{sc.name}: {field}: the particle filter assumes a nearly-constant-velocity "
+                    "target, this contact's truth turns: the runs measure the filter's "
+                    f"robustness to the model mismatch{who}, received 'constant-turn'"], msgs
+    # the contacts the filter models: nothing to say
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warn_filter_model(load_problem(name))
+    assert not caught

@@ -258,6 +258,33 @@ def test_a_planning_horizon_shorter_than_one_control_interval_is_refused(no_solv
     assert exc.value.field == "horizon"
 
 
+def _long_planning_horizon(name: str, planning: float = 900.0):
+    sc = load_problem(name)
+    return sc.replace(time=dataclasses.replace(sc.time, horizon=600.0),
+                      planning=dataclasses.replace(sc.planning, horizon=planning))
+
+
+def test_a_planning_horizon_past_the_problems_end_is_warned():
+    """A 15 min planning.horizon on a 10 min problem: the planners planned 15 min and the runs
+    flew the first 10 silently (issue 40's acceptance sweep)."""
+    from tmaplan.planning import HeadingPlanner
+    from tmaplan.planning.contacts import ContactSet, ContactsPlanner
+
+    for name, build in (("default", HeadingPlanner),
+                        ("two-contacts-crossing",
+                         lambda sc: ContactsPlanner(ContactSet.from_scenario(sc)))):
+        msgs = _warned(build, _long_planning_horizon(name))
+        assert msgs, name
+        assert all(m == (f"{name}: field 'planning.horizon': 900 s (15 min) is longer than "
+                         "time.horizon; 600 s (10 min) used: a plan is made over 900 s (15 "
+                         "min), but a run ends at time.horizon and flies and scores only its "
+                         "first 600 s (10 min) (give planning.horizon <= time.horizon)")
+                   for m in msgs), msgs
+    # within the problem's horizon, or a horizon given to the planner: nothing to say
+    assert _warned(HeadingPlanner, _long_planning_horizon("default", 600.0)) == []
+    assert _warned(HeadingPlanner, _long_planning_horizon("default"), horizon=600.0) == []
+
+
 # ------------------------------------------------------------------ memory
 def test_max_steps_is_the_largest_count_that_fits():
     from tmaplan.memory import MODELS, estimate, max_steps

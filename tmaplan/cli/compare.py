@@ -49,6 +49,7 @@ from tmaplan.models.target import initial_velocity
 from tmaplan.policies.combine import MANOEUVRES, PINGS
 from tmaplan.policies.contacts import CONTACTS_MANOEUVRES, CONTACTS_PINGS
 from tmaplan.policies.parse import check_policy
+from tmaplan.report_tables import censored_lines
 from tmaplan.scenario import Scenario, load
 
 HELP = "compare manoeuvre/ping policies by Monte Carlo (paired runs), with figures and a report"
@@ -165,6 +166,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                   f"{s['final_range_rmse']:8.0f} m  pings {s['pings_used']:.1f}  "
                   f"recoveries {s['recoveries']:.2f}{replan_cell(s['replans'])}")
         for line in console_lines(result) if several else []:
+            print(line)
+        for line in censored_lines(result):  # a zero difference there is no tie
             print(line)
         print(f"wrote {report} ({len(result.computed_runs)} runs computed, "
               f"{len(result.loaded_runs)} loaded from {Path(str(result.directory))})")

@@ -25,15 +25,14 @@ import html
 import sys
 import time
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from tmaplan.experiments import CampaignSpec, run_campaign
 from tmaplan.headline import Comparison, key_json, key_lines, key_table_html, stats_lines
 from tmaplan.models.sensors import default_ping_budget
-from tmaplan.planning.baselines import evaluate_baselines
 from tmaplan.planning.contacts import ContactSet
 from tmaplan.planning.ping_contacts import schedule_contact_pings
-from tmaplan.policies.contacts import contacts_planner, joint_contacts_plan
+from tmaplan.policies.contacts import joint_baselines, joint_contacts_plan
 from tmaplan.scenario import Scenario
 
 __all__ = ["CONTACTS_KEY_DIFFERENCES", "DEMO_CONTACTS_POLICIES", "demo_campaign", "run_several",
@@ -104,10 +103,9 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
                "(all-contacts-time-to-accuracy) ...")
     res = joint_contacts_plan(scenario)
     plan = res.plan
-    planner = contacts_planner(scenario)
-    # the joint objective's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
-    ev = planner.joint.evaluator(cast(Any, planner.contacts.beliefs()))
-    best = {k: v[0] for k, v in evaluate_baselines(cs.views[0], evaluator=ev).items()}
+    # the best baselines on the joint objective, evaluated once: the campaign's single-turn
+    # flies the same turn (joint_baselines is cached per scenario)
+    best = joint_baselines(scenario)
     say(args, f"      objective {plan.objective / 60:.1f} min (straight "
                f"{best['straight'].objective / 60:.1f}, best single turn "
                f"{best['single-turn'].objective / 60:.1f}); {plan.status}, "

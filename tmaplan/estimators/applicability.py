@@ -20,12 +20,13 @@ from typing import Any, Literal
 import numpy as np
 
 from tmaplan.display import timespan
-from tmaplan.errors import ArgumentError, ScenarioError
+from tmaplan.errors import ArgumentError, ScenarioError, warn_field
 from tmaplan.scenario import Scenario, measurement_steps
+from tmaplan.scenario.contacts import contact_field
 from tmaplan.simulate import simulate
 
 __all__ = ["APPLICABILITY", "MLE_DRIFT_RATIO_MAX", "Applicability", "applicable_estimators",
-           "check_applicable"]
+           "check_applicable", "warn_filter_model"]
 
 MLE_DRIFT_RATIO_MAX = 10.0
 """The batch MLE is refused when the target's process noise moves it by more than this many
@@ -244,3 +245,26 @@ def check_applicable(estimator: Any, scenario: Scenario, *, bound: Any = None,
                         f"{opt_b} {own} (the PCRB along each run's truth, ristic2004 ch. 6) or "
                         "`tmaplan bound P --method monte-carlo` for the prior average", bound,
                         source=scenario.name)
+
+
+def warn_filter_model(scenario: Scenario) -> None:
+    """Warn (:class:`tmaplan.errors.ScenarioWarning`, one line per contact naming its
+    ``target.model``) for each contact whose true motion the particle filter does not model
+    (a constant-turn target: the filter assumes nearly-constant velocity).
+
+    A campaign against the scenario's own truths (``compare --truth scenario``) flies the
+    filter there anyway, a legitimate study of its robustness to the mismatch, where
+    ``track`` refuses the filter (:func:`check_applicable`); the warning says that the
+    results are that study's, not the filter's own case.
+    """
+    models = APPLICABILITY["pf"].target_models
+    several = len(scenario.contacts) > 1
+    for i, c in enumerate(scenario.contacts):
+        if c.target.model in models:
+            continue
+        who = f" (contact '{c.name}')" if several else ""
+        warn_field(contact_field(scenario, i, "target.model"),
+                   f"the particle filter assumes a nearly-constant-velocity target, this "
+                   f"contact's truth turns: the runs measure the filter's robustness to the "
+                   f"model mismatch{who}, received '{c.target.model}'",
+                   source=scenario.name, stacklevel=2)

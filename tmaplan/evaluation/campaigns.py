@@ -33,6 +33,7 @@ import numpy as np
 from tmaplan.bounds.truth_bound import closed_loop_truth_bounds
 from tmaplan.display import short_repr
 from tmaplan.errors import ArgumentError, PlanningError, as_real, is_integer
+from tmaplan.estimators.applicability import warn_filter_model
 from tmaplan.estimators.particle_filter import DEFAULT_KERNEL
 from tmaplan.evaluation.closed_loop import ClosedLoopRun, paired_run
 from tmaplan.evaluation.contacts_campaign import (
@@ -524,10 +525,15 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     ReplanWarning
         When more than 1 % of a policy's re-plans did not converge
         (:func:`tmaplan.evaluation.replans.warn_not_converged`).
+    ScenarioWarning
+        With ``spec.truth == "scenario"``, a contact whose target model the particle filter
+        does not model (:func:`tmaplan.estimators.applicability.warn_filter_model`).
     """
     t0 = time.perf_counter()
     _check_arguments(spec, workers, backend, max_new_runs, policies)
     scenario = spec.scenario
+    if spec.truth == "scenario":  # a truth the filter does not model (from the prior: refused)
+        warn_filter_model(scenario)
     backend = backend or ("dask" if scheduler else ("processes" if workers > 1 else "serial"))
     parsed = _parse(scenario, spec.policies) if policies is None else None
     directory = None if out_dir is None else Path(out_dir) / f"campaign-{spec.key(policies)}"

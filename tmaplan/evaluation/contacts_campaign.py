@@ -144,7 +144,8 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
         ``contacts: {name: one-contact summary}``.
     differences : tuple of PairedDifference
         Per pair of policies: ``time_to_accuracy_all`` and ``worst_final_range_error``
-        (censored as the one-contact metrics) and ``weighted_time_to_accuracy``.
+        (censored as the one-contact metrics) and ``weighted_time_to_accuracy`` (its
+        ``both_censored``: the runs in which neither policy localised any contact).
     """
     sc = spec.scenario
     views = sc.contact_views()
@@ -163,6 +164,7 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
     share = dict(zip(sc.contact_names, weight_fractions([c.weight for c in sc.contacts]),
                      strict=True))
     wtta: dict[str, np.ndarray] = {}
+    never: dict[str, np.ndarray] = {}  # per run: no contact localised
     for n in names:
         s = summary[n]
         for key in ("bound_position", "bound_range"):
@@ -170,6 +172,8 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
         t = {c: np.where(np.isposinf(per[n][c]["time_to_accuracy_runs"]), censor,
                          per[n][c]["time_to_accuracy_runs"]) for c in views}
         wtta[n] = np.asarray(sum(share[c] * t[c] for c in views), float)
+        never[n] = np.all([np.isposinf(per[n][c]["time_to_accuracy_runs"]) for c in views],
+                          axis=0)
         s.update({"time_to_accuracy_all": s["time_to_accuracy"],
                   "time_to_accuracy_all_runs": s["time_to_accuracy_runs"],
                   "weighted_time_to_accuracy": float(np.mean(wtta[n])),
@@ -180,7 +184,11 @@ def contacts_aggregate(spec: CampaignSpec, runs: list[RunRecord], times: np.ndar
            for d in diffs]
     for i, a in enumerate(names):
         for b in names[i + 1:]:
-            out.append(paired_difference(wtta, a, b, "weighted_time_to_accuracy"))
+            # its times are censored per contact: both sides censored where no contact was
+            # localised by either policy
+            d = paired_difference(wtta, a, b, "weighted_time_to_accuracy")
+            out.append(dataclasses.replace(
+                d, both_censored=int(np.count_nonzero(never[a] & never[b]))))
     return summary, tuple(out)
 
 

@@ -22,6 +22,7 @@ __all__ = [
     "PairedDifference",
     "RunMetrics",
     "censor_time",
+    "censored_note",
     "paired_difference",
     "run_metrics",
     "runs_to_exclude_zero",
@@ -178,6 +179,11 @@ class PairedDifference:
         Confidence level.
     n : int
         Number of paired runs.
+    both_censored : int or None
+        Paired runs in which neither ``a`` nor ``b`` reached the metric (a time to accuracy
+        never reached by either, both censored): their difference is zero by construction
+        and decides nothing. 0 for a metric without censoring; None when not recorded (a
+        difference stored before the count existed).
     """
 
     a: str
@@ -188,11 +194,32 @@ class PairedDifference:
     ci_high: float
     level: float
     n: int
+    both_censored: int | None = None
 
     @property
     def excludes_zero(self) -> bool:
         """Whether the interval excludes zero."""
         return self.ci_high < 0.0 or self.ci_low > 0.0
+
+    @property
+    def undetermined(self) -> bool:
+        """Whether every paired run is censored on both sides: neither policy ever reached
+        the metric, so the difference (zero, with a zero-width interval) is undetermined,
+        not a tie."""
+        return self.n > 0 and self.both_censored == self.n
+
+
+def censored_note(d: PairedDifference) -> str:
+    """What the censoring of ``d`` leaves undecided, in words ("" if no paired run is censored
+    on both sides, or the count is not recorded): ``"undetermined: neither policy localised in
+    any of the 4 paired runs"`` or ``"3 of 10 paired runs censored on both sides (neither
+    policy localised)"``."""
+    if not d.both_censored:
+        return ""
+    if d.undetermined:
+        return f"undetermined: neither policy localised in any of the {d.n} paired runs"
+    return (f"{d.both_censored} of {d.n} paired runs censored on both sides (neither policy "
+            "localised)")
 
 
 def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: str, *,
@@ -210,7 +237,8 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     censor : float, optional
         Replace ``+inf`` values (never reached) by this value (e.g. the horizon + dt), which
         makes the difference conservative; finite and not below any finite value of ``a`` or
-        ``b`` (a run never localised must not count as sooner than one localised).
+        ``b`` (a run never localised must not count as sooner than one localised). The runs
+        where both are ``+inf`` are counted (``both_censored``).
 
     Raises
     ------
@@ -227,6 +255,7 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     if xa.shape != xb.shape:
         raise ArgumentError(f"values[{b!r}]", f"one value per run of {a!r}, shape {xa.shape}",
                             xb.shape)
+    both = int(np.count_nonzero(np.isposinf(xa) & np.isposinf(xb))) if censor is not None else 0
     if censor is not None:
         finite = np.concatenate([xa[np.isfinite(xa)], xb[np.isfinite(xb)]])
         top = float(finite.max()) if finite.size else -np.inf
@@ -247,12 +276,12 @@ def paired_difference(values: Mapping[str, np.ndarray], a: str, b: str, metric: 
     m = float(d.mean())
     if n < 2:
         return PairedDifference(a=a, b=b, metric=metric, mean=m, ci_low=-np.inf, ci_high=np.inf,
-                                level=level, n=n)
+                                level=level, n=n, both_censored=both)
     from scipy import stats  # deferred: scipy.stats takes ~0.5 s to import
 
     half = float(stats.t.ppf(0.5 + level / 2, n - 1) * d.std(ddof=1) / np.sqrt(n))
     return PairedDifference(a=a, b=b, metric=metric, mean=m, ci_low=m - half, ci_high=m + half,
-                            level=level, n=n)
+                            level=level, n=n, both_censored=both)
 
 
 def runs_to_exclude_zero(d: PairedDifference) -> float:

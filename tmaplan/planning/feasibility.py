@@ -9,7 +9,9 @@ line before any verb that plans (:func:`tmaplan.cli.preflight.preflight`).
 Planning horizon (:func:`check_planning_horizon`)
     ``planning.horizon`` (default ``time.horizon``) is a whole number (>= 1) of control
     intervals (``planning.control_interval``, default dt): shorter than one interval there is
-    nothing to plan, and a fraction was rounded silently.
+    nothing to plan, and a fraction was rounded silently. Longer than ``time.horizon`` it is
+    warned (:func:`warn_long_planning_horizon`): the runs fly and score only the plan's
+    steps up to the problem's end.
 Keep-out range (:func:`check_keep_out`)
     The planner keeps the target *estimate* (the belief mean propagated at constant
     velocity) outside ``planning.keep_out_range`` of the own ship, from t0 on. Refused when
@@ -27,7 +29,8 @@ Memory (:func:`check_plan_memory`)
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import multiprocessing
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,8 +44,10 @@ from tmaplan.planning.belief import Belief
 if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
-__all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_memory",
-           "check_planning_horizon", "check_start_keep_out", "keep_out_share"]
+__all__ = ["KEEP_OUT_REFUSED", "KEEP_OUT_WARNED", "check_keep_out", "check_plan_inputs",
+           "check_plan_memory",
+           "check_planning_horizon", "check_start_keep_out", "keep_out_share",
+           "warn_long_planning_horizon"]
 
 KEEP_OUT_REFUSED = 0.5
 """Share of the prior's mass inside the keep-out range from which a plan is refused."""
@@ -71,6 +76,29 @@ def check_planning_horizon(scenario: Scenario) -> None:
     raise ScenarioError("planning.control_interval", "a whole number of intervals in the "
                         f"planning horizon (time.horizon = {g.horizon:g} s; or give "
                         f"planning.horizon){short}", tc, source=scenario.name)
+
+
+def warn_long_planning_horizon(scenario: Scenario) -> None:
+    """Warn (:class:`tmaplan.errors.ScenarioWarning`, one line naming ``planning.horizon``,
+    the value given and the value used) when ``planning.horizon`` is longer than the
+    problem's ``time.horizon``: the plans are made over ``planning.horizon`` but a run ends
+    at ``time.horizon``, so what is flown and scored is the plan clipped to the problem's end
+    (``tmaplan plan``'s offline plan refuses it up front). Said by the main process only: a
+    campaign's worker processes build the planners of the main process's scenario, which has
+    said it."""
+    pl, g = scenario.planning, scenario.time
+    if pl is None or not pl.horizon or multiprocessing.parent_process() is not None:
+        return
+    given, end = float(pl.horizon), float(g.horizon)
+    if round(given / float(g.dt)) <= scenario.n_steps:
+        return
+    # attributed to this line (stacklevel 1): said once per process by Python's default
+    # filter, however many planners read the file's horizon (a several-contact planner: 1 + N)
+    warn_field("planning.horizon", f"{seconds_text(given)} is longer than time.horizon; "
+               f"{seconds_text(end)} used: a plan is made over {seconds_text(given)}, but a "
+               f"run ends at time.horizon and flies and scores only its first "
+               f"{seconds_text(end)} (give planning.horizon <= time.horizon)",
+               source=scenario.name, stacklevel=1)
 
 
 def keep_out_share(belief: Belief, keep_out: float) -> float:
@@ -185,6 +213,28 @@ def check_plan_memory(scenario: Scenario, n_steps: int, *,
         field, value = "time.horizon", float(scenario.time.horizon)
     check_steps(n_steps, (("heading", copies), *extra), field=field, dt=scenario.time.dt,
                 received=seconds_text(value), source=scenario.name, available=available)
+
+
+def check_plan_inputs(scenario: Scenario, n_steps: int, *, horizon: float | None = None,
+                      **memory: Any) -> None:
+    """A heading planner's inputs, checked before its graph is built: without ``horizon``
+    (the file's ``planning.horizon`` read), a planning horizon past ``time.horizon`` warned
+    (:func:`warn_long_planning_horizon`); then its memory (:func:`check_plan_memory`, with
+    ``horizon`` and the further arguments ``memory``).
+
+    Warns
+    -----
+    ScenarioWarning
+        A ``planning.horizon`` longer than ``time.horizon``.
+
+    Raises
+    ------
+    ScenarioError or ArgumentError
+        If the estimated memory exceeds the memory available.
+    """
+    if horizon is None:
+        warn_long_planning_horizon(scenario)
+    check_plan_memory(scenario, n_steps, horizon=horizon, **memory)
 
 
 def check_start_keep_out(belief: Belief, *, keep_out: float, u_max: float,

@@ -39,7 +39,7 @@ from tmaplan.planning.arcs import arc_displacement_casadi, safe_sinc
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.casadi_eval import NumpyFunction
 from tmaplan.planning.feasibility import (
-    check_plan_memory,
+    check_plan_inputs,
     check_planning_horizon,
     check_start_keep_out,
 )
@@ -73,9 +73,8 @@ __all__ = ["BUILT_IN_STARTS", "HeadingPlan", "HeadingPlanner", "arc_displacement
            "check_planning_horizon", "plan_heading", "safe_sinc"]
 
 #: Built-in initial guesses of a cold solve per transcription: ``n_starts`` takes at most
-#: this many (the direct transcription's straight, two
-#: turn-reverse, two zig-zag and two turn-early patterns; the bang-bang one's equal and
-#: front-loaded arcs to both sides).
+#: this many (the direct transcription's straight, two turn-reverse, two zig-zag and two
+#: turn-early patterns; the bang-bang one's equal and front-loaded arcs to both sides).
 BUILT_IN_STARTS = {"direct": 7, "bang-bang": 4}
 
 _OK = {"Solve_Succeeded", "Solved_To_Acceptable_Level"}
@@ -90,7 +89,7 @@ class HeadingPlanner:
     objective : str or Objective
         Default ``scenario.planning.objective`` or :data:`DEFAULT_OBJECTIVE`.
     horizon : float, optional
-        [s]; default ``planning.horizon`` or the scenario's. Rounded to whole intervals.
+        [s]; default ``planning.horizon`` (warned past the end) or the scenario's; whole intervals.
     control_interval : float, optional
         [s]; default ``planning.control_interval`` or dt. Rounded to whole dt steps.
     transcription : {"direct", "bang-bang"}
@@ -151,6 +150,7 @@ class HeadingPlanner:
         Before any graph is built (:mod:`tmaplan.planning.feasibility`): a planning horizon
         of no whole number of control intervals (an argument ``horizon`` shorter than one),
         more steps than fit in the memory available.
+
     """
 
     def __init__(self, scenario: Scenario, *, objective: str | Objective | None = None,
@@ -190,7 +190,7 @@ class HeadingPlanner:
                                 else control_interval, source=scenario.name)
         self.n = max(1, round(float(H) / (self.m * dt)))
         # refused before any graph is built (a 30-day horizon exhausted the memory)
-        check_plan_memory(scenario, self.n * self.m, horizon=horizon)
+        check_plan_inputs(scenario, self.n * self.m, horizon=horizon)
         self.dt, self.Tc = dt, self.m * dt
         self.K = self.n * self.m
         umax = turn_rate_max if turn_rate_max is not None else obs.turn_rate_max

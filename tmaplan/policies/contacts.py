@@ -49,7 +49,7 @@ from tmaplan.errors import (
     finite_real,
     warn_field,
 )
-from tmaplan.planning.baselines import course_program_track, evaluate_baselines
+from tmaplan.planning.baselines import Baseline, course_program_track, evaluate_baselines
 from tmaplan.planning.belief import Belief
 from tmaplan.planning.contacts import (
     ContactSet,
@@ -88,7 +88,7 @@ if TYPE_CHECKING:
 
 __all__ = ["CONTACTS_MANOEUVRES", "CONTACTS_PINGS", "Alternate", "ContactsBeliefView",
            "ContactsReceding", "check_contacts_policy", "contact_plan", "contacts_planner",
-           "heaviest_contact", "joint_contacts_plan", "joint_plan",
+           "heaviest_contact", "joint_baselines", "joint_contacts_plan", "joint_plan",
            "nearest_contact", "parse_contacts_policy", "shared_schedule", "single_turn_all"]
 
 #: Manoeuvres of a several-contact problem by CLI name (``planned:NAME`` names a contact).
@@ -160,6 +160,8 @@ def _first_of_equals(policy: str, what: str, names: list[str], value: str) -> st
 _PLANNERS: LRUCache[Scenario, ContactsPlanner] = LRUCache(8)
 #: Their solutions from the contacts' priors (deterministic), the 8 most recently used.
 _PRIOR_PLANS: LRUCache[Scenario, ContactsPlan] = LRUCache(8)
+#: The best baseline of each family on the joint objective (deterministic), likewise.
+_BASELINES: LRUCache[Scenario, dict[str, Baseline]] = LRUCache(8)
 
 
 def contacts_planner(scenario: Scenario) -> ContactsPlanner:
@@ -215,15 +217,25 @@ def contact_plan(scenario: Scenario, name: str) -> Any:
     return offline_plan(scenario.contact_view(name), CLOSED_LOOP_OBJECTIVE)
 
 
-def single_turn_all(scenario: Scenario) -> SingleTurn:
-    """The single turn of the baseline grid (:func:`tmaplan.planning.baselines
-    .evaluate_baselines`) of lowest joint objective (the joint planner's evaluator,
-    ``all-contacts-time-to-accuracy`` with its turn penalty, on the contacts' priors)."""
+def joint_baselines(scenario: Scenario) -> dict[str, Baseline]:
+    """The baseline of each family of the grid (``straight``, ``single-turn``, ``zigzag``;
+    :func:`tmaplan.planning.baselines.evaluate_baselines`) of lowest joint objective (the
+    joint planner's evaluator, ``all-contacts-time-to-accuracy`` with its turn penalty, on the
+    contacts' priors); evaluated once per scenario (cached: :func:`single_turn_all` and
+    ``tmaplan demo P`` share it)."""
+    if scenario not in _BASELINES:
+        pl = contacts_planner(scenario)
+        # the joint planner's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
+        ev = pl.joint.evaluator(cast(Any, pl.contacts.beliefs()))
+        _BASELINES[scenario] = {k: v[0] for k, v in
+                                evaluate_baselines(pl.contacts.views[0], evaluator=ev).items()}
+    return _BASELINES[scenario]
 
-    pl = contacts_planner(scenario)
-    # the joint planner's evaluator reads the contacts' beliefs (ContactBeliefs) as a belief
-    ev = pl.joint.evaluator(cast(Any, pl.contacts.beliefs()))
-    best = evaluate_baselines(pl.contacts.views[0], evaluator=ev)["single-turn"][0]
+
+def single_turn_all(scenario: Scenario) -> SingleTurn:
+    """The single turn of the baseline grid of lowest joint objective
+    (:func:`joint_baselines`)."""
+    best = joint_baselines(scenario)["single-turn"]
     return SingleTurn(angle=float(best.params["angle"]),
                       time=scenario.time.t0 + float(best.params["time"]))
 

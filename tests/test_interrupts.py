@@ -144,22 +144,28 @@ def test_an_interrupt_python_ignored_is_raised_at_the_next_checkpoint(capsys):
     assert sys.unraisablehook is before
 
 
-def _solving(frame) -> bool:
-    """Whether ``frame`` is casadi's Python wrapper called from the solver call of a
-    ``with solver_call():`` block (not another casadi call: building a solver, evaluating a
-    function)."""
-    if frame is None or not frame.f_code.co_filename.endswith("casadi.py"):
-        return False
-    while frame is not None and frame.f_code.co_filename.endswith("casadi.py"):
-        frame = frame.f_back
-    return frame is not None and "solver_call()" in linecache.getline(
-        frame.f_code.co_filename, frame.f_lineno - 1)
+def _solving(frame):
+    """The frame of casadi's Python wrapper called from the solver call of a ``with
+    solver_call():`` block (not another casadi call: building a solver, evaluating a
+    function) on the stack that ends in ``frame`` (the innermost frame, or a Python callback
+    the solver calls, e.g. the compiled objective's), else None."""
+    while frame is not None:
+        if frame.f_code.co_filename.endswith("casadi.py"):
+            outer = frame
+            while frame is not None and frame.f_code.co_filename.endswith("casadi.py"):
+                outer, frame = frame, frame.f_back
+            if frame is not None and "solver_call()" in linecache.getline(
+                    frame.f_code.co_filename, frame.f_lineno - 1):
+                return outer
+        else:
+            frame = frame.f_back
+    return None
 
 
 @contextlib.contextmanager
 def _signal_in_solver(sig: int, dwell: float = 0.25):
     """Within the block, a thread sends ``sig`` to this process once the main thread has been
-    inside one solver call (C code: its innermost Python frame unchanged) for ``dwell``
+    inside one solver call (C code or its callbacks: the call's frame unchanged) for ``dwell``
     seconds; never after the block."""
     main = threading.main_thread().ident
     stop, lock = threading.Event(), threading.Lock()
@@ -167,8 +173,9 @@ def _signal_in_solver(sig: int, dwell: float = 0.25):
     def watch() -> None:
         seen, since = None, time.perf_counter()
         while not stop.is_set():
-            frame = sys._current_frames().get(main)
-            here = (id(frame), frame.f_lasti) if _solving(frame) else None
+            solving = _solving(sys._current_frames().get(main))
+            # (the solver call's frame stays put while the solver runs, in C or in callbacks)
+            here = (id(solving), solving.f_lasti) if solving is not None else None
             if here is None or here != seen:
                 seen, since = here, time.perf_counter()
             elif time.perf_counter() - since >= dwell:

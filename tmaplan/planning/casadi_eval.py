@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from tmaplan.errors import ArgumentError
+from tmaplan.interrupts import solver_call
 
 __all__ = ["NumpyFunction"]
 
@@ -75,7 +76,8 @@ class NumpyFunction:
                 raise ArgumentError(f"{self.fn.name()} input {self.fn.name_in(i)}",
                                     f"{a.size} values", v.size)
             a[...] = v
-        trigger()
+        with solver_call():  # a Ctrl-C in a Python callback (a compiled objective) raises
+            trigger()
         res = []
         for nz, (shape, dense, rows, cols) in zip(outs, layout):
             if dense:  # casadi stores column-major

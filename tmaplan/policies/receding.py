@@ -315,7 +315,8 @@ _FIRST_PLAN_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any
 def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Executor) -> None:
     """Start computing the real-time iteration's model of ``Receding(objective=objective)``
     (its SQP's; ``receding-realtime``'s too; the Hessian at the offline plan, about 5 s on
-    ``default``) on a worker of ``pool``, so that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
+    ``default``) on a worker of ``pool``, so that the main process can meanwhile do other
+    work (``tmaplan demo``: the ping schedule);
     :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
     this process. Needs the offline plan
     (:func:`~tmaplan.policies.manoeuvres.offline_plan`), which the worker receives."""

@@ -14,7 +14,9 @@ every paired difference with its 95 % interval, and the first runs' per-run valu
 ``tests/test_headline_stored.py`` recomputes.
 
 Run: python benchmarks/demo_stored.py --out DIR [--workers 2] [--commit SHA]
-     [--write tmaplan/data/demo_stored.json]
+     [--write tmaplan/data/demo_stored.json] [--only 0]
+     (``--only I,J``: fly only those campaigns; the others are kept from the stored file,
+     whose command must be the same)
      (hours on 2 shared cores; interrupted campaigns resume from DIR)
 """
 
@@ -28,7 +30,7 @@ from pathlib import Path
 
 from tmaplan.cli.demo import DEMO_POLICIES, PROBLEM
 from tmaplan.experiments import CampaignSpec, run_campaign
-from tmaplan.headline import STORED_FILE, Comparison, StoredResult, stored_payload
+from tmaplan.headline import STORED_FILE, Comparison, StoredResult, load_stored, stored_payload
 from tmaplan.scenario import load_problem
 
 #: Root seed of both campaigns (fixed before they were run).
@@ -64,11 +66,22 @@ def main() -> None:
     ap.add_argument("--commit", default=None,
                     help="the commit that computed the runs (default: the checkout's HEAD; "
                          "give it when the runs in --out were computed on an earlier commit)")
+    ap.add_argument("--only", default=None,
+                    help="comma-separated indices of CAMPAIGNS to fly (default all); the "
+                         "others are kept from the stored file")
     args = ap.parse_args()
     scenario = load_problem(PROBLEM)
     commit = args.commit or _commit()
+    only = None if args.only is None else {int(i) for i in args.only.split(",")}
+    kept = {c.command: c for c in load_stored().campaigns} if only is not None else {}
     comparisons = []
-    for policies, runs in CAMPAIGNS:
+    for i, (policies, runs) in enumerate(CAMPAIGNS):
+        if only is not None and i not in only:
+            if command(policies, runs) not in kept:
+                raise SystemExit(f"campaign {i} ({command(policies, runs)}) is not stored: "
+                                 "fly it (leave it out of --only)")
+            comparisons.append(kept[command(policies, runs)])
+            continue
         spec = CampaignSpec(scenario=scenario, policies=policies, runs=runs, seed=SEED)
         result = run_campaign(spec, out_dir=args.out, workers=args.workers)
         print(f"{runs} runs of {', '.join(policies)}: {len(result.computed_runs)} computed, "

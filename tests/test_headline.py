@@ -35,8 +35,8 @@ POLICIES = DEMO_POLICIES
 #: mean time to accuracy [min] per policy; per-run spread 13 min, shared by every policy in a
 #: run (paired) plus 4 min of its own; runs never localised: beyond 45 min (inf)
 MEANS = {"straight": 43.0, "single-turn": 29.3, "zigzag": 30.0, "planned": 27.9,
-         "receding-realtime": 23.0, "planned+uniform": 9.0, "planned+scheduled": 3.0,
-         "planned+scheduled-terminal": 26.0, "receding-realtime+scheduled": 3.0}
+         "receding": 23.0, "planned+uniform": 9.0, "planned+scheduled": 3.0,
+         "planned+scheduled-terminal": 26.0, "receding+scheduled": 3.0}
 CENSOR = 45.25 * 60.0
 
 
@@ -153,7 +153,7 @@ def test_stored_result_round_trips_and_decides_with_more_runs(tmp_path):
     # each pair from the largest campaign that flew both
     assert difference_of(merged.differences, "planned", "single-turn",
                          "time_to_accuracy").n == 2000
-    assert difference_of(merged.differences, "receding-realtime", "planned",
+    assert difference_of(merged.differences, "receding", "planned",
                          "time_to_accuracy").n == 300
     assert merged.stats["planned"]["runs"] == 2000 and merged.stats["planned+uniform"][
         "runs"] == 300

@@ -237,7 +237,7 @@ def test_interrupted_receding_replan_raises_and_logs_no_failure(default, prior):
                               solver_options={"max_iter": 0}).solve(prior,
                                                                     raise_on_failure=False)
     # from the straight course at a tight tolerance: seconds of IPOPT uninterrupted
-    ctrl = Receding(first_plan=straight, full_tol=1e-10).controller(default)
+    ctrl = Receding(solver="ipopt", first_plan=straight, full_tol=1e-10).controller(default)
     parts = sample_prior(default, 2000, np.random.default_rng(0))
     view = BeliefView(step=0, t=0.0, heading=0.0, position=np.zeros(2), particles=parts,
                       weights=np.full(len(parts), 1 / len(parts)), pings_used=0)

@@ -51,10 +51,10 @@ KEY_DIFFERENCES: tuple[tuple[str, str, str], ...] = (
     ("planned", "straight", "time_to_accuracy"),
     ("planned", "single-turn", "time_to_accuracy"),
     ("planned", "zigzag", "time_to_accuracy"),
-    ("receding-realtime", "planned", "time_to_accuracy"),
+    ("receding", "planned", "time_to_accuracy"),
     ("planned+uniform", "planned", "time_to_accuracy"),
     ("planned+scheduled", "planned+uniform", "time_to_accuracy"),
-    ("receding-realtime+scheduled", "planned+scheduled", "time_to_accuracy"),
+    ("receding+scheduled", "planned+scheduled", "time_to_accuracy"),
     ("planned+scheduled", "planned+uniform", "final_range_error"),
     ("planned+scheduled-terminal", "planned+uniform", "final_range_error"),
 )

@@ -25,7 +25,8 @@ from tmaplan.policies.base import BeliefView
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
-_KW = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
+_KW = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0,
+       "solver": "ipopt"}
 
 
 @pytest.fixture(scope="module")
@@ -269,7 +270,7 @@ def test_a_re_plan_that_stalled_converges_or_says_so():
                        switch_times=np.zeros(0), observer=None, objective=float("nan"),
                        range_bound=np.zeros(0), transcription="direct", status="recorded",
                        success=True, iterations=0, seconds=0.0)
-    ctrl = Receding(first_plan=prev).controller(sc)
+    ctrl = Receding(solver="ipopt", first_plan=prev).controller(sc)
     ctrl.plan, ctrl.next_replan = prev, t
     samples = d["samples"]
     view = BeliefView(step=int(t // sc.time.dt), t=t, heading=float(d["heading0"]),

@@ -262,7 +262,9 @@ def test_receding_rti_policy_name_takes_only_rti_steps(small):
     assert pol.manoeuvre.solver == "real-time"
     assert pol.name == "receding-rti+uniform"
     default = parse_policy("receding", small[0]).manoeuvre
-    assert default == Receding() and default.solver == "ipopt"
+    assert default == Receding() and default.solver == "sqp"
+    ipopt = parse_policy("receding-ipopt", small[0]).manoeuvre
+    assert (ipopt.solver, ipopt.name) == ("ipopt", "receding-ipopt")
     realtime = parse_policy("receding-realtime", small[0]).manoeuvre
     assert (realtime.solver, realtime.full_above, realtime.full_solves) == ("real-time", 0.01, ())
     assert realtime.name == "receding-realtime"
@@ -414,7 +416,8 @@ def test_default_solver_is_the_measured_full_solve_configuration(small):
     sc = small[0]
     sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
     target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
-    kw = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0}
+    kw = {"objective": "mean-range-bound", "horizon": 900.0, "replan_interval": 300.0,
+          "solver": "ipopt"}
     pol = Receding(**kw).resolve(sc)
     assert pol.solver == "ipopt" and pol.rti is None and pol.resolve(sc) is pol
     assert np.allclose(pol.first_plan.turn_rate, small[3].turn_rate, atol=1e-6)
@@ -439,9 +442,10 @@ def test_receding_says_whether_resolve_needs_the_offline_plan():
         assert Receding(solver=solver).needs_offline_plan
         assert not Receding(solver=solver, horizon=900.0).needs_offline_plan  # its own solve
     assert not Receding(solver="multi-start", first_plan=object()).needs_offline_plan
-    assert not Receding(first_plan=object()).needs_offline_plan
+    assert not Receding(solver="ipopt", first_plan=object()).needs_offline_plan
     assert not Receding(solver="real-time", rti=object()).needs_offline_plan
-    assert Receding(rti=object()).needs_offline_plan  # the model serves the real-time only
+    assert not Receding(rti=object()).needs_offline_plan  # the SQP's model (the default)
+    assert Receding(solver="ipopt", rti=object()).needs_offline_plan  # not IPOPT's
 
 
 def test_receding_solver_is_checked(small):
@@ -483,7 +487,7 @@ def test_real_time_only_fields_are_refused_with_another_solver(small):
             with pytest.raises(ArgumentError, match=rf"receding.{field}.*solver='real-time'"):
                 Receding(**kw, solver=solver, **{field: value}).resolve(sc)
     # the defaults, given explicitly, and every field with the real-time iteration pass
-    Receding(**kw, full_above=0.01, qpsol="daqp").controller(sc)
+    Receding(**kw, solver="ipopt", full_above=0.01, qpsol="daqp").controller(sc)
     Receding(**kw, solver="real-time", full_above=0.5, rti_steps=2).resolve(sc)
 
 
@@ -497,7 +501,7 @@ def test_ipopt_re_plans_take_the_multi_start_where_asked(small):
     sc = sc.replace(time=dataclasses.replace(sc.time, horizon=900.0))
     target = draw_truth(sc, np.random.default_rng(3), from_prior=True)
     pol = Receding(objective="mean-range-bound", horizon=900.0, replan_interval=300.0,
-                   multi_start=(1,)).resolve(sc)
+                   multi_start=(1,), solver="ipopt").resolve(sc)
     res = run_closed_loop(sc, pol, target, noise_rng=np.random.default_rng(1),
                           filter_rng=np.random.default_rng(2), n_particles=300)
     # each re-plan converged or is reported as not converged (IPOPT's path, and so whether
@@ -517,7 +521,7 @@ def test_campaign_key_tells_the_ipopt_receding_from_the_real_time_one(default):
                  ("planned",)):
         spec = CampaignSpec(scenario=default, policies=pols, runs=2, seed=0)
         keys[pols] = (spec._meta().get("replan"), spec.key())
-    assert keys["planned", "receding"][0] == keys["planned", "receding+uniform"][0] == "ipopt"
+    assert keys["planned", "receding"][0] == keys["planned", "receding+uniform"][0] == "sqp"
     assert keys["planned", "receding-realtime"][0] == keys["planned", "receding-rti"][0] == "rti"
     assert keys["planned",][0] is None
     assert len({k for _, k in keys.values()}) == len(keys)

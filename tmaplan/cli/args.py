@@ -85,9 +85,9 @@ MAX_WORKERS = 256
 """Largest ``--workers``."""
 #: The policies ``tmaplan demo`` compares (here, not in the verb's module, so that the up-front
 #: checks of every verb read them without loading the demo's plotting).
-DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding-realtime",
+DEMO_POLICIES = ("straight", "single-turn", "zigzag", "planned", "receding",
                  "planned+uniform", "planned+scheduled", "planned+scheduled-terminal",
-                 "receding-realtime+scheduled")
+                 "receding+scheduled")
 PLAN_STARTS = BUILT_IN_STARTS
 """``plan --starts``: the heading planner's built-in initial guesses by transcription
 (:class:`tmaplan.planning.HeadingPlanner`), the most that a value can start from."""

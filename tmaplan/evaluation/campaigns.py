@@ -136,8 +136,8 @@ class CampaignSpec:
         manoeuvres = {p.split("+")[0] for p in self.policies}
         if "receding" in manoeuvres:
             # by name alone (`tmaplan compare`), runs stored while `receding` flew the
-            # real-time iteration (key "rti") are not reused for its IPOPT re-plans
-            meta["replan"] = "ipopt"
+            # real-time iteration (key "rti") or IPOPT ("ipopt") are not reused for its SQP
+            meta["replan"] = "sqp"
         elif any(m.startswith("receding") for m in manoeuvres):
             # runs stored before re-plans became real-time iterations are not reused
             meta["replan"] = "rti"

@@ -147,6 +147,7 @@ MANOEUVRES: dict[str, Callable[[Scenario], ManoeuvrePolicy]] = {
     "receding-rti": lambda sc: Receding(solver="real-time", full_above=float("inf"),
                                         name="receding-rti"),
     "receding-sqp": lambda sc: Receding(solver="sqp", name="receding-sqp"),
+    "receding-ipopt": lambda sc: Receding(solver="ipopt", name="receding-ipopt"),
     "leg-turn-leg": lambda sc: LegTurnLeg(),
     "lead-lag": lambda sc: LeadLag(),
 }

@@ -72,12 +72,13 @@ def parse_policy(spec: str, scenario: Scenario) -> Combined:
 
     Manoeuvres (:data:`MANOEUVRES`): straight, single-turn and zigzag (the best of the
     baseline grids of :mod:`tmaplan.planning.baselines` for :data:`CLOSED_LOOP_OBJECTIVE`),
-    planned, receding (an IPOPT solve at every re-plan, warm-started from the previous
-    plan), receding-realtime (real-time iteration, a full IPOPT re-solve when the optimum
-    moved far: 5–12 times faster, the default before), receding-rti (real-time-iteration
+    planned, receding (every re-plan solved to IPOPT's tolerance by a condensed
+    quasi-Newton SQP, warm-started from the previous plan; also receding-sqp),
+    receding-ipopt (an IPOPT solve at every re-plan: the default before issue 42),
+    receding-realtime (real-time iteration, a full IPOPT re-solve when the optimum moved
+    far: the default before that), receding-rti (real-time-iteration
     steps only: no full re-solve when the optimum moves far; a rejected step still falls
-    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), receding-sqp
-    (re-plans solved to IPOPT's tolerance by a condensed quasi-Newton SQP), leg-turn-leg,
+    back to IPOPT), receding-multistart (IPOPT re-plans from five starts), leg-turn-leg,
     lead-lag. Several contacts: :mod:`tmaplan.policies.contacts` (``planned`` the joint plan,
     ``nearest-contact``, ``heaviest-contact``, ``alternate``, ``single-turn``, ``straight``).
     Pings (:data:`PINGS`): no-ping, uniform,

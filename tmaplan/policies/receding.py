@@ -58,7 +58,17 @@ class Receding:
 
     How a re-plan is solved (``solver``):
 
-    * ``"ipopt"`` (default): one IPOPT solve at every re-plan (at ``full_tol``), warm-started
+    * ``"sqp"`` (default since issue 42): every re-plan solved to IPOPT's tolerance
+      (``full_tol``) by a condensed quasi-Newton SQP over the turn rates
+      (:class:`tmaplan.planning.converged_sqp.ConvergedSQP`: the real-time iteration's
+      Hessian model, BFGS updates carried from re-plan to re-plan, ``qpsol`` QPs) on the
+      compiled objective, warm-started as ``"ipopt"``; a solve that does not converge is
+      solved by IPOPT from the same warm start (what ``"ipopt"`` would have flown), then falls
+      back as IPOPT's does (``fallback_starts``). 44 ms CPU median per re-plan on harvested
+      re-plans against 213 ms for ``"ipopt"`` before issue 42 and 137 ms on the compiled
+      objective; no later than ``"ipopt"`` in a check fixed before its runs
+      (docs/results/fast-replans.md). CLI names ``receding``, ``receding-sqp``.
+    * ``"ipopt"``: one IPOPT solve at every re-plan (at ``full_tol``), warm-started
       from the previous plan, the first one from the offline plan from the prior (bit for bit
       the former ``Receding(solver="real-time", full_solves=tuple(range(64)))``, the
       ``receding-full`` of docs/results/receding-ipopt.md). It replaced the real-time
@@ -70,7 +80,8 @@ class Receding:
       real-time iteration had tied with it; no later on ``default``
       and ``contact-astern`` (−0.22 [−1.17, +0.74] and −0.85 [−1.86, +0.17] min, 200 runs,
       seed 17), at 0.2–0.4 s (``bow-closing``) to 1 s (``default``) per re-plan instead of
-      0.08 s (docs/results/receding-ipopt.md).
+      0.08 s (docs/results/receding-ipopt.md). The default until issue 42; CLI name
+      ``receding-ipopt``.
     * ``"real-time"``: one warm-started SQP step
       (:class:`tmaplan.planning.rti.RealTimeIteration`, milliseconds) from the previous plan,
       the first one from the offline plan from the prior, with a full IPOPT solve as the
@@ -78,13 +89,6 @@ class Receding:
       ``receding-realtime`` (the default before; the ``receding`` numbers of docs/results/ up
       to the seed-17 campaign were flown with it), ``receding-rti`` without the ``full_above``
       fallback.
-    * ``"sqp"``: every re-plan solved to IPOPT's tolerance (``full_tol``) by a condensed
-      quasi-Newton SQP over the turn rates (:class:`tmaplan.planning.converged_sqp.
-      ConvergedSQP`: the real-time iteration's Hessian model, BFGS updates carried from
-      re-plan to re-plan, ``qpsol`` QPs), warm-started as ``"ipopt"``; a solve that does not
-      converge is solved by IPOPT from the same warm start (what ``"ipopt"`` would have
-      flown), then falls back as IPOPT's does (``fallback_starts``). CLI name
-      ``receding-sqp``; not the default (docs/results/fast-replans.md).
     * ``"multi-start"``: the first re-plan by IPOPT warm-started from the offline plan from
       the prior; every later one by IPOPT from five starts — the previous plan shifted to the
       re-plan time, its mirror image (the same manoeuvre to the other side), straight and
@@ -184,7 +188,7 @@ class Receding:
     horizon: float | None = None
     objective: str | None = CLOSED_LOOP_OBJECTIVE
     max_particles: int = 2000
-    solver: str = "ipopt"
+    solver: str = "sqp"
     qpsol: str = "daqp"
     rti_steps: int = 1
     full_solves: tuple[int, ...] = ()
@@ -309,10 +313,10 @@ _FIRST_PLAN_CACHE: LRUCache[tuple[Scenario, str | None, float | None, bool], Any
 
 
 def prefetch_receding_model(scenario: Scenario, objective: str | None, pool: Executor) -> None:
-    """Start computing the real-time iteration's model of ``Receding(objective=objective,
-    solver="real-time")`` (``receding-realtime``)
-    (the Hessian at the offline plan, about 5 s on ``default``) on a worker of ``pool``, so
-    that the main process can meanwhile do other work (``tmaplan demo``: the ping schedule);
+    """Start computing the real-time iteration's model of ``Receding(objective=objective)``
+    (its SQP's; ``receding-realtime``'s too; the Hessian at the offline plan, about 5 s on
+    ``default``) on a worker of ``pool``, so that the main process can meanwhile do other
+    work (``tmaplan demo``: the ping schedule);
     :meth:`Receding.resolve` then waits for it. The same model, bit for bit, as computed in
     this process. Needs the offline plan
     (:func:`~tmaplan.policies.manoeuvres.offline_plan`), which the worker receives."""

@@ -404,8 +404,9 @@ def test_multi_start_solver_is_the_measured_configuration(small):
     assert not np.array_equal(fast.turn_rate, runs[0].turn_rate)
 
 
-def test_default_solver_is_the_measured_full_solve_configuration(small):
-    """The default re-plan (``solver="ipopt"``) is, bit for bit, the configuration measured
+def test_ipopt_solver_is_the_measured_full_solve_configuration(small):
+    """The IPOPT re-plan (``solver="ipopt"``, the default before issue 42) is, bit for bit,
+    the configuration measured
     in docs/results/receding-ipopt.md as ``receding-full``: ``Receding(solver="real-time",
     full_solves=tuple(range(64)))``, an IPOPT solve at every re-plan at ``full_tol``,
     warm-started from the previous plan, the first one from the plan from the prior."""
@@ -421,7 +422,8 @@ def test_default_solver_is_the_measured_full_solve_configuration(small):
     pol = Receding(**kw).resolve(sc)
     assert pol.solver == "ipopt" and pol.rti is None and pol.resolve(sc) is pol
     assert np.allclose(pol.first_plan.turn_rate, small[3].turn_rate, atol=1e-6)
-    measured = Receding(**kw, solver="real-time", full_solves=tuple(range(64))).resolve(sc)
+    measured = Receding(**{**kw, "solver": "real-time"},
+                        full_solves=tuple(range(64))).resolve(sc)
     runs = [run_closed_loop(sc, p, target, noise_rng=np.random.default_rng(1),
                             filter_rng=np.random.default_rng(2), n_particles=300)
             for p in (pol, measured)]

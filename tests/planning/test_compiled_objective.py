@@ -74,6 +74,38 @@ def test_value_and_gradient_equal_the_graph(setup, seed, through):
     np.testing.assert_allclose(grad / 1000.0, g, rtol=1e-8, atol=1e-10 * np.abs(g).max())
 
 
+def test_callback_value_and_gradient_at_successive_points(setup):
+    """Through casadi (the value, then the reverse sweep alone at the same point, from what
+    the forward pass stored): a fresh evaluation's value bit for bit and its gradient to the
+    rounding of casadi's chain rule, at each of two points in turn and back at the first
+    (nothing stale from the other point)."""
+    from tmaplan.planning.compiled_objective import compiled_expected_time
+
+    sc, planner, ctx, _ = setup
+    K1 = planner.K + 1
+    ctx2 = PlanContext(**{**{f: getattr(ctx, f) for f in ("dt", "times", "A", "Q", "v_obs",
+                                                           "disp", "turn_rate", "p", "layout",
+                                                           "ping_scale", "turn_rate_max")}})
+    f = compiled_expected_time(ctx2, 0.1, 0.25)
+    fn = ca.Function("c", [ctx.disp, ctx.v_obs, ctx.p], [f, ca.gradient(f, ctx.disp)])
+    points = [_inputs(sc, planner, seed) for seed in (5, 6, 5)]
+    for d, disp, v, P in points:
+        value, g = (np.asarray(x) for x in fn(disp, v, P))
+        want, grad = expected_time_value_grad(ctx, d, P, accuracy=0.1, width=0.25)
+        assert float(value.item()) == want
+        np.testing.assert_allclose(g, grad / 1000.0, rtol=1e-14, atol=0)
+        assert g.shape == (K1, 2)
+    # the reverse callback asked at another point than the last value's computes it afresh
+    reverse, value = ctx2.cache["callbacks"]
+    (da, _, _, Pa), (db, _, _, Pb) = points[:2]
+    for (d0, P0), (d1, P1) in (((da, Pa), (db, Pa)), ((da, Pa), (da, Pb))):
+        value(d0, P0)
+        adj_d, adj_p = (np.asarray(x) for x in reverse(d1, P1, 0.0, 1.0))
+        np.testing.assert_array_equal(
+            adj_d, expected_time_value_grad(ctx, d1, P1, accuracy=0.1, width=0.25)[1])
+        assert np.isnan(adj_p).all()  # no derivative with respect to the parameters
+
+
 def test_gradient_matches_central_differences(setup):
     """The hand-written reverse sweep against central differences of the kernel's own value
     (step 1e-6 km, relative agreement 1e-5 on the largest components)."""

@@ -30,8 +30,8 @@ from collections.abc import Iterator
 from types import FrameType
 from typing import Any, TextIO
 
-__all__ = ["Interrupted", "checkpoint", "ignoring_sigint", "interruptible", "signals_interrupt",
-           "solver_call"]
+__all__ = ["Interrupted", "checkpoint", "defer", "ignoring_sigint", "interruptible",
+           "signals_interrupt", "solver_call"]
 
 #: What :func:`signals_interrupt` turns into :class:`Interrupted`.
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -136,6 +136,20 @@ def checkpoint() -> None:
         raise Interrupted(signum)
 
 
+def defer(exc: KeyboardInterrupt) -> None:
+    """Keep an interrupt that Python code called back from C cannot raise through its caller
+    (a ``casadi.Callback``: an exception there leaves casadi's buffer evaluation with a
+    Python error set), for :func:`checkpoint` or the end of the enclosing :func:`solver_call`,
+    which raises it once.
+
+    Parameters
+    ----------
+    exc : KeyboardInterrupt
+        The interrupt caught in the callback (an :class:`Interrupted` keeps its signal).
+    """
+    _Received.swallowed = getattr(exc, "signum", signal.SIGINT)
+
+
 def _in_main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
@@ -164,12 +178,14 @@ def solver_call() -> Iterator[None]:
         yield
     except Exception as exc:
         if _Received.count != before:  # the solver turned the interrupt into an error
+            _Received.swallowed = None  # (the same interrupt, if a callback deferred it)
             raise Interrupted(_Received.last) from exc
         raise
     finally:
         if borrowed:
             signal.signal(signal.SIGINT, signal.default_int_handler)
     if _Received.count != before:  # the solver turned the interrupt into a failed solve
+        _Received.swallowed = None  # (the same interrupt, if a callback deferred it)
         raise Interrupted(_Received.last)
     checkpoint()
 

@@ -166,3 +166,34 @@ def test_receding_compiled_field():
     for bad in (Receding(solver="real-time", compiled=True), Receding(compiled=1)):
         with pytest.raises(ArgumentError, match=r"receding\.compiled"):
             bad.resolve(sc)
+
+
+def test_an_interrupt_in_the_callback_is_raised_once_by_the_evaluation(setup, monkeypatch):
+    """A Ctrl-C that lands in the compiled objective (Python called back from casadi's C++)
+    does not escape through casadi (which left a Python error set: a ``SystemError`` at the
+    next unrelated call); the callback returns NaN and the evaluation raises the interrupt
+    once, as a solve does."""
+    import signal
+
+    from tmaplan.interrupts import Interrupted, checkpoint
+    from tmaplan.planning.compiled_objective import _Kernel
+
+    sc, _, _, _ = setup
+    compiled = HeadingPlanner(sc, objective=CLOSED_LOOP_OBJECTIVE, horizon=HORIZON,
+                              compiled=True)
+    prior = Belief.from_prior(sc)
+    plan = compiled.solve(prior, tol=1e-4)
+    x, P = np.asarray(plan.warm["x"]), compiled.parameter_vector(prior, ())
+    P = np.concatenate([P, [0.0, compiled.speed0, 1.0, 1.0]])
+    before = compiled.plan_function(x, P)
+
+    def interrupted(self, *args, **kw):
+        raise Interrupted(signal.SIGINT)
+
+    with monkeypatch.context() as m:
+        m.setattr(_Kernel, "__call__", interrupted)
+        with pytest.raises(Interrupted):
+            compiled.plan_function(x, P)
+    checkpoint()  # raised once: nothing left over
+    after = compiled.plan_function(x, P)  # and the next evaluation is sound
+    assert float(after[0].item()) == float(before[0].item())

@@ -35,6 +35,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from tmaplan.interrupts import defer
+
 __all__ = ["compiled_expected_time", "expected_time_value_grad"]
 
 _L = 1000.0  # length scale [m] (as tmaplan.planning.objective_graphs)
@@ -327,7 +329,11 @@ def _callback_class() -> Any:
             return ca.Sparsity.dense(*self.outs[i])
 
         def eval(self, arg: Any) -> list[Any]:
-            return self.fn(arg)
+            try:
+                return self.fn(arg)
+            except KeyboardInterrupt as exc:  # NaN out; the solver call raises it after
+                defer(exc)
+                return [ca.DM.nan(*shape) for shape in self.outs]
 
         def has_reverse(self, nadj: int) -> bool:
             return self.adjoint is not None and nadj == 1

@@ -337,9 +337,9 @@ def _rti(policy: Receding, scenario: Scenario) -> Any:
         scenario, policy.objective, policy.horizon, policy.until_end)
     key = (scenario, policy.objective, policy.horizon, policy.until_end, policy.qpsol,
            policy.rti_steps, policy.uses_compiled)
-    if key not in _RTI_CACHE:
-        planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end,
-                           policy.uses_compiled)
+    planner = _planner(scenario, policy.objective, policy.horizon, policy.until_end,
+                       policy.uses_compiled)
+    if key not in _RTI_CACHE or _RTI_CACHE[key].planner is not planner:  # (planner evicted)
         _RTI_CACHE[key] = RealTimeIteration(planner, model, qpsol=policy.qpsol,
                                             steps=policy.rti_steps)
     return _RTI_CACHE[key].with_model(model)

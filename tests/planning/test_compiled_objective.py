@@ -156,6 +156,13 @@ def test_ipopt_finds_the_same_plan(setup):
     np.testing.assert_allclose(c.turn_rate, a.turn_rate, atol=1e-6)
 
 
+@pytest.mark.parametrize("bad", [1, "yes", None])
+def test_heading_planner_refuses_a_compiled_that_is_not_a_bool(bad):
+    with pytest.raises(ArgumentError, match="compiled"):
+        HeadingPlanner(load_problem("bow-closing"), objective=CLOSED_LOOP_OBJECTIVE,
+                       horizon=HORIZON, compiled=bad)
+
+
 def test_receding_compiled_field():
     """`compiled` defaults to the kernel except for the real-time iteration, whose model
     needs second derivatives: True is refused there, as is a non-boolean."""

@@ -235,7 +235,7 @@ class HeadingPlanner:
                 heading_limits=self.heading_limits is not None)
         pos, vbar, head, urate = traj
         ctx = PlanContext(dt=dt, times=self.times, A=A, Q=Q, v_obs=vbar, disp=pos,
-                          turn_rate=urate, p=p_obj, layout=self.layout, compiled=bool(compiled),
+                          turn_rate=urate, p=p_obj, layout=self.layout, compiled=compiled,
                           ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
         f = self.objective.expression(ctx)  # a compiled one's callbacks live as the solvers:
         self._callbacks = ctx.cache.get("callbacks", [])

@@ -177,6 +177,10 @@ class PlanContext:
     compiled: bool = False
     cache: dict[str, Any] = dataclasses.field(default_factory=dict, compare=False)
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.compiled, bool):  # (HeadingPlanner's argument of that name)
+            raise ArgumentError("compiled", "True or False", self.compiled)
+
     @property
     def n_steps(self) -> int:
         """K."""

@@ -65,6 +65,11 @@ class NumpyFunction:
             self._state = (buf, trigger, ins, outs, layout)
         return self._state
 
+    def stats(self) -> dict[str, Any]:
+        """The function's statistics of the last call through these buffers (a solver's
+        ``success``, ``return_status``, ...; ``Function.stats()`` reports another memory)."""
+        return dict(self._buffers()[0].stats())
+
     def __call__(self, *args: Any) -> tuple[np.ndarray, ...]:
         """Evaluate at ``args`` (one array-like per input, any shape with the input's size)."""
         _buf, trigger, ins, outs, layout = self._buffers()

@@ -39,7 +39,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tmaplan.errors import ArgumentError, SolverError, is_integer
-from tmaplan.interrupts import solver_call
 from tmaplan.planning.casadi_eval import NumpyFunction
 from tmaplan.planning.rti import RealTimeIteration, RTIModel, constraint_violation
 
@@ -157,7 +156,8 @@ class ConvergedSQP:
         evaluated: tuple[np.ndarray, ...] | None = None  # evaluate(x, P) of the full step
         while iters < self.max_iter:
             iters += 1
-            f0, g0, qp = self._rti.condensed(x, P, lbw, ubw, lbg, ubg, evaluated)
+            f0, g0, qp = self._rti.condensed(x, P, lbw, ubw, lbg, ubg, evaluated,
+                                             hessian=B is None)
             if not np.isfinite(f0):
                 status = "objective not finite"
                 break
@@ -169,14 +169,10 @@ class ConvergedSQP:
             elif step is not None:
                 B = _bfgs(B, step, qp["g"] + A.T @ lam - grad_l)
             qp["h"] = B
-            with solver_call():  # an interrupt raises, never a failed solve
-                sol = self._rti.qp(**qp)
-            stats = self._rti.qp.stats()
+            d, lam, stats = self._rti.solve_qp(qp)  # an interrupt raises, never a failure
             if not bool(stats.get("success", False)):
                 status = f"QP: {stats.get('return_status', 'failed')}"
                 break
-            d = np.asarray(sol["x"]).reshape(-1)
-            lam = np.asarray(sol["lam_a"]).reshape(-1)
             v0 = constraint_violation(g0, lbg, ubg)
             if np.max(np.abs(B @ d), initial=0.0) <= tol and v0 <= self.constraint_tol:
                 converged, status = True, "Solve_Succeeded"

@@ -139,3 +139,22 @@ def test_bad_input_names_the_field(pair, kw, field):
     cs = ContactSet(views=pair, names=("d", "astern"))
     with pytest.raises(ArgumentError, match=f"'{field}'"):
         plan_contacts_joint(cs, **{"budget": 1, **kw}, **PLAN)
+
+
+def test_a_heading_block_worse_with_its_own_reach_is_rejected(pair, monkeypatch):
+    """The reach changes with the track: a heading block is kept only if the objective with
+    its own track's reach did not increase (here every re-evaluation says it did)."""
+    import tmaplan.planning.joint_contacts as jc
+
+    class Worse(ContactsPingEvaluator):
+        def value(self, steps):
+            return 2.0 * super().value(steps)
+
+    cs = ContactSet(views=pair, names=("d", "astern"))
+    monkeypatch.setattr(jc, "ContactsPingEvaluator", Worse)
+    r = plan_contacts_joint(cs, budget=2, max_range=None, **PLAN)
+    assert r.rounds == 1
+    assert r.heading.objective == r.start_objective  # the pingless start kept
+    assert r.history[2] == r.history[1]  # the rejected block left the schedule's value
+    ev = ContactsPingEvaluator(cs, r.heading.observer, cs.beliefs(), "mean-range-bound", None)
+    assert ev.value(r.pings.schedule.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)

@@ -116,7 +116,8 @@ def contacts_figure(result: CampaignResult, out_dir: str | Path) -> Path:
 
 def plan_figure(views: Sequence[Any], names: Sequence[str], plans: Mapping[str, Any],
                 bounds: Mapping[str, Mapping[str, np.ndarray]], path: str | Path,
-                *, title: str = "") -> Path:
+                *, title: str = "", ping_times: np.ndarray | None = None,
+                bound_label: str = "closed-form PCRB range bound [m]") -> Path:
     """A plan for several contacts against each contact's own plan.
 
     Left: the own-ship track of each plan (the joint plan solid black, contact c's own plan
@@ -139,6 +140,11 @@ def plan_figure(views: Sequence[Any], names: Sequence[str], plans: Mapping[str, 
         PNG file.
     title : str
         Figure title.
+    ping_times : ndarray, optional
+        Times of the joint plan's pings [s] (the scenario clock): vertical lines on the
+        right, squares on the joint track.
+    bound_label : str
+        The right axis' label (what ``bounds`` hold).
     """
     fig, axes = new_figure(1, 2, size=(13.0, 5.5))
     ax, bx = axes[0, 0], axes[0, 1]
@@ -158,6 +164,14 @@ def plan_figure(views: Sequence[Any], names: Sequence[str], plans: Mapping[str, 
             bx.plot(t[: len(curve)], curve, ls=ls, color=colour[n],
                     lw=2.0 if label == "joint" else 1.1, label=f"{n} on {on}")
     joint = plans.get("joint", next(iter(plans.values())))
+    if ping_times is not None and len(ping_times):
+        obs = joint.observer
+        at = np.searchsorted(obs.times, np.asarray(ping_times, float) - 1e-6)
+        at = np.clip(at, 0, obs.times.size - 1)
+        ax.plot(obs.position[at, 0] / 1e3, obs.position[at, 1] / 1e3, "ks", ms=5,
+                label="pings")
+        for t in (np.asarray(ping_times, float) - obs.times[0]) / 60.0:
+            bx.axvline(t, color="0.4", lw=0.8, ls="--")
     for v, n in zip(views, names, strict=True):
         grid = dataclasses.replace(v.time, horizon=float(joint.observer.times[-1] - v.time.t0))
         tr = target_track(v.target, grid, None)[:, :2] / 1e3
@@ -172,7 +186,7 @@ def plan_figure(views: Sequence[Any], names: Sequence[str], plans: Mapping[str, 
     ax.set_title("own-ship plans and the contacts' true tracks")
     bx.set_yscale("log")
     bx.set_xlabel("time [min]")
-    bx.set_ylabel("closed-form PCRB range bound [m]")
+    bx.set_ylabel(bound_label)
     bx.grid(True, alpha=0.3)
     bx.legend(fontsize=7, loc="best", framealpha=0.6)
     bx.set_title("each contact's range bound: joint plan (solid), own plans (dashed/dotted)",

@@ -4,8 +4,9 @@ The joint plan is multi-started from each contact's own plan, so it cannot score
 the joint objective than either (up to the solver's tolerance); the shared ping schedule is
 certified (its lower bound never above its objective) and its objective is the contacts'
 weighted mean; ``rank-costs`` ranks each contact on its own view. A one-contact problem keeps
-its JSON shape (no ``contacts`` key). The refusals (a one-contact objective, ``--pings``,
-``--workers``, a contact without a prior) are in ``tests/data/invalid_cli/cases.toml``.
+its JSON shape (no ``contacts`` key). The refusals (a one-contact objective, ``--pings`` with
+a time-to-accuracy objective or ``--joint ocp``, ``--workers``, a contact without a prior)
+are in ``tests/data/invalid_cli/cases.toml``; ``plan --pings`` in test_cli_contacts_pings.py.
 """
 
 from __future__ import annotations

@@ -383,7 +383,7 @@ def test_joint_ocp_own_pings_keep_a_valid_certificate(short, short_prior):
     from tmaplan.errors import PlanningError
     from tmaplan.models.observer import observer_track
     from tmaplan.planning import PingEvaluator, schedule_pings
-    from tmaplan.planning.joint_ocp import _with_own_pings
+    from tmaplan.planning.joint_ocp import with_own_pings
 
     cert = schedule_pings(short, budget=2, belief=short_prior, method="greedy",
                           gap_reference="none")
@@ -392,16 +392,16 @@ def test_joint_ocp_own_pings_keep_a_valid_certificate(short, short_prior):
     own = [5, 20]
     v = ev.value(own)
     worse = dataclasses.replace(cert, objective=2 * v)
-    ok = _with_own_pings(dataclasses.replace(worse, lower_bound=0.5 * v), ev, own)
+    ok = with_own_pings(dataclasses.replace(worse, lower_bound=0.5 * v), ev, own)
     assert ok.steps.tolist() == own and ok.objective == v
     assert ok.gap == pytest.approx(0.5) and ok.status == "feasible"
     with pytest.raises(PlanningError, match="certificate invalid"):
-        _with_own_pings(dataclasses.replace(worse, lower_bound=1.5 * v), ev, own)
-    none = _with_own_pings(dataclasses.replace(worse, lower_bound=float("nan")), ev, own)
+        with_own_pings(dataclasses.replace(worse, lower_bound=1.5 * v), ev, own)
+    none = with_own_pings(dataclasses.replace(worse, lower_bound=float("nan")), ev, own)
     assert np.isnan(none.gap) and none.status == "no bound"
-    tight = _with_own_pings(dataclasses.replace(worse, lower_bound=v * (1 + 1e-9)), ev, own)
+    tight = with_own_pings(dataclasses.replace(worse, lower_bound=v * (1 + 1e-9)), ev, own)
     assert tight.lower_bound == v and tight.gap == 0.0 and tight.status == "optimal"
-    assert _with_own_pings(cert, ev, [36]) is cert  # the scheduler's pings are better
+    assert with_own_pings(cert, ev, [36]) is cert  # the scheduler's pings are better
 
 
 def test_schedule_results_are_read_only_and_independent_of_call_order(short, short_prior):

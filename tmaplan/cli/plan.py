@@ -10,7 +10,11 @@ counts it from ``t0``); durations (``leg_duration``) are durations.
 Several contacts (docs/several-contacts.md): one joint own-ship plan for all of them
 (:class:`tmaplan.planning.contacts.ContactsPlanner`, ``--objective`` one of
 :data:`tmaplan.planning.multi_objectives.CONTACTS_OBJECTIVE_NAMES`), set against each
-contact's own plan: the JSON adds ``contacts: {name: {...}}`` and ``alone_plans``.
+contact's own plan: the JSON adds ``contacts: {name: {...}}`` and ``alone_plans``. With
+``--pings K``, the headings and K pings shared by the contacts planned together
+(:func:`tmaplan.planning.joint_contacts.plan_contacts_joint`, ``--objective`` one of
+:data:`tmaplan.planning.joint.JOINT_OBJECTIVES`, the contacts' weighted mean): the JSON adds
+``pings`` with one contact's keys and ``pings.contacts``.
 """
 
 from __future__ import annotations
@@ -46,10 +50,15 @@ from tmaplan.planning.contacts import (
     warn_if_saturated,
 )
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner
-from tmaplan.planning.joint import plan_joint
+from tmaplan.planning.joint import JOINT_OBJECTIVES, plan_joint
+from tmaplan.planning.joint_contacts import plan_contacts_joint
 from tmaplan.planning.joint_ocp import plan_joint_ocp
-from tmaplan.planning.multi_objectives import CONTACTS_OBJECTIVE_NAMES, DEFAULT_CONTACTS_OBJECTIVE
-from tmaplan.planning.objectives import OBJECTIVE_NAMES
+from tmaplan.planning.multi_objectives import (
+    CONTACTS_OBJECTIVE_NAMES,
+    DEFAULT_CONTACTS_OBJECTIVE,
+    contacts_bound_objective,
+)
+from tmaplan.planning.objectives import OBJECTIVE_NAMES, ObjectiveEvaluator
 from tmaplan.planning.pings import schedule_pings
 from tmaplan.policies.plan_starts import plan_from_prior
 from tmaplan.scenario import Scenario, load
@@ -63,6 +72,10 @@ FINITE = ("objective",)
 SEVERAL_CONTACTS = "joint"
 
 
+#: ``--pings K`` with several contacts and no ``--objective``, unless the problem's
+#: ``planning.objective`` is one of :data:`JOINT_OBJECTIVES`.
+SEVERAL_PINGS_OBJECTIVE = "mean-range-bound"
+
 #: Defaults of ``--transcription`` and ``--starts`` (a figure's name omits them).
 TRANSCRIPTION = "direct"
 STARTS = 4
@@ -75,7 +88,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=None,
                         help="objective (default: the problem's planning.objective); with "
                              f"several contacts one of {', '.join(CONTACTS_OBJECTIVE_NAMES)} "
-                             f"(default {DEFAULT_CONTACTS_OBJECTIVE})")
+                             f"(default {DEFAULT_CONTACTS_OBJECTIVE}), with several contacts "
+                             f"and --pings one of {', '.join(JOINT_OBJECTIVES)}, the "
+                             "contacts' weighted mean (default the problem's "
+                             f"planning.objective if one of these, else "
+                             f"{SEVERAL_PINGS_OBJECTIVE})")
     parser.add_argument("--horizon", type=duration(), default=None, metavar="T",
                         help="planning horizon, seconds or with a unit ('30 min'; default: "
                              "the problem's; at most its time.horizon)")
@@ -95,10 +112,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "without pings, which starts from straight, the tactics, the best "
                              "single turns and 4 fixed guesses")
     parser.add_argument("--pings", type=integer(0), default=0, metavar="K",
-                        help="plan K range pings with the headings (default 0: headings only)")
+                        help="plan K range pings with the headings (default 0: headings "
+                             "only); with several contacts K pings shared by all, each "
+                             "informing the contacts within the range sensor's max_range")
     parser.add_argument("--joint", choices=("ocp", "alternating"), default=None,
                         help="with --pings: one OCP (relaxed, rounded, polished, certified on "
-                             "its pings) or alternating heading/ping blocks (default ocp)")
+                             "its pings) or alternating heading/ping blocks (default ocp; "
+                             "several contacts: alternating only)")
     parser.add_argument("--ping-stride", type=integer(1), default=None, metavar="N",
                         help="--joint ocp: candidate ping steps every N steps (default 1)")
     add_figure_arguments(parser)
@@ -175,32 +195,59 @@ def _figure(args: argparse.Namespace, scenario: Scenario, objective: str) -> str
                        joint=args.joint, ping_stride=args.ping_stride)
 
 
+def several_ping_objective(args: argparse.Namespace, scenario: Scenario) -> str:
+    """The objective of ``plan --pings K`` on a several-contact problem: ``--objective`` (one
+    of :data:`JOINT_OBJECTIVES`, else :class:`ArgumentError` naming it), default the
+    problem's ``planning.objective`` if it is one of them, else
+    :data:`SEVERAL_PINGS_OBJECTIVE`."""
+    if args.objective is None:
+        pl = scenario.planning
+        own = pl.objective if pl is not None else None
+        return own if own in JOINT_OBJECTIVES else SEVERAL_PINGS_OBJECTIVE
+    if args.objective not in JOINT_OBJECTIVES:
+        raise ArgumentError("--objective", f"with --pings and several contacts one of "
+                            f"{', '.join(JOINT_OBJECTIVES)} (the contacts' weighted mean; "
+                            f"default {SEVERAL_PINGS_OBJECTIVE})", args.objective,
+                            source=scenario.name)
+    return str(args.objective)
+
+
 def preflight_several(args: argparse.Namespace, scenario: Scenario,
                       preflight: Any) -> None:
     """``plan``'s checks on a several-contact problem: ``--objective`` one of
-    :data:`CONTACTS_OBJECTIVE_NAMES` (a one-contact objective is refused, not mapped),
-    no ``--pings`` (the joint plan is heading-only: schedule the pings along it with
-    ``tmaplan schedule P --observer-plan PLAN.json``), then the one-contact checks on each
-    contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: the horizon, the
-    control interval, ``--starts``, the keep-out range from each contact's prior)."""
-    if args.objective is not None and args.objective not in CONTACTS_OBJECTIVE_NAMES:
+    :data:`CONTACTS_OBJECTIVE_NAMES` (a one-contact objective is refused, not mapped); with
+    ``--pings K`` one of :data:`JOINT_OBJECTIVES` instead (:func:`several_ping_objective`),
+    ``--joint`` alternating (the default) and no ``--ping-stride``; then the one-contact
+    checks on each contact's view (:func:`tmaplan.cli.contacts.preflight_per_contact`: the
+    horizon, the control interval, ``--starts``, the keep-out range from each contact's
+    prior)."""
+    objective = None
+    if args.pings:
+        objective = several_ping_objective(args, scenario)
+        if args.joint == "ocp":
+            raise ArgumentError("--joint", "alternating with --pings and several contacts "
+                                "(heading and shared-ping blocks; the one OCP plans one "
+                                "contact)", args.joint, source=scenario.name)
+        if args.ping_stride is not None:
+            raise ArgumentError("--ping-stride", "only with --joint ocp, which plans one "
+                                "contact (the alternating blocks search every step)",
+                                args.ping_stride, source=scenario.name)
+    elif args.objective is not None and args.objective not in CONTACTS_OBJECTIVE_NAMES:
         raise ArgumentError("--objective", f"with several contacts one of "
                             f"{', '.join(CONTACTS_OBJECTIVE_NAMES)} (default "
                             f"{DEFAULT_CONTACTS_OBJECTIVE}; {', '.join(scenario.contact_names)})",
                             args.objective, source=scenario.name)
     require_priors(scenario, "the joint plan starts from every contact's prior")
-    if args.pings:
-        raise ArgumentError("--pings", "0 with several contacts: the joint plan is "
-                            "heading-only; schedule the pings along it with `tmaplan schedule "
-                            "P --observer-plan PLAN.json`", args.pings, source=scenario.name)
-    preflight_per_contact(argparse.Namespace(**{**vars(args), "objective": None}), scenario,
-                          preflight)
+    preflight_per_contact(argparse.Namespace(**{**vars(args), "objective": objective}),
+                          scenario, preflight)
 
 
 def _run_several(args: argparse.Namespace, scenario: Scenario) -> dict[str, Any]:
     """The joint plan of several contacts, each contact's own plan, their per-contact values
     (console table, JSON ``contacts`` and ``alone_plans``), baselines and figure."""
     cs = ContactSet.from_scenario(scenario)
+    if args.pings > 0:
+        return _run_several_pings(args, scenario, cs)
     kw: dict[str, Any] = {"horizon": args.horizon, "control_interval": args.control_interval,
                           "transcription": args.transcription}
     if args.starts is not None:
@@ -218,17 +265,8 @@ def _run_several(args: argparse.Namespace, scenario: Scenario) -> dict[str, Any]
     base = evaluate_baselines(cs.views[0], evaluator=ev)
     plan = res.plan
     payload: dict[str, Any] = {
-        "problem": scenario.name, "objective_name": res.objective_name,
-        "times": plan.times, "heading": plan.heading, "turn_rate": plan.turn_rate,
-        "switch_times": plan.switch_times, "objective": plan.objective,
-        "range_bound_times": plan.observer.times,
-        "baselines": {k: v[0].objective for k, v in base.items()},
-        "baseline_params": {k: _on_clock(v[0].params, scenario.time.t0)
-                            for k, v in base.items()},
-        "solver": {"status": plan.status, "seconds": res.seconds, "message": plan.message,
-                   "iterations": plan.iterations, "transcription": plan.transcription,
-                   "start": res.start},
-        "observer": _observer_json(plan),
+        **_several_json(scenario, res.objective_name, plan, plan.objective, base,
+                        res.seconds, res.start),
         "contacts": _contacts_json(cs, res, each),
         "alone_plans": {n: {"objective": ev(p.observer)[0], "own_objective": p.objective,
                             "status": p.status, "heading": p.heading,
@@ -261,6 +299,89 @@ def _run_several(args: argparse.Namespace, scenario: Scenario) -> dict[str, Any]
         if not quiet:
             print(f"wrote {path}")
     return payload
+
+
+def _run_several_pings(args: argparse.Namespace, scenario: Scenario,
+                       cs: ContactSet) -> dict[str, Any]:
+    """``--pings K`` with several contacts: headings and K shared pings planned together
+    (:func:`tmaplan.planning.joint_contacts.plan_contacts_joint`), certified on its pings;
+    the several-contact JSON (``contacts``: each contact's values with the pings, ``alone_plans``
+    empty) with ``pings`` as for one contact plus ``pings.contacts``."""
+    objective = several_ping_objective(args, scenario)
+    bel = cs.beliefs()
+    r = plan_contacts_joint(cs, budget=args.pings, objective=objective, beliefs=bel,
+                            horizon=args.horizon, control_interval=args.control_interval,
+                            transcription=args.transcription, n_starts=_starts(args))
+    plan, sched = r.heading, r.pings.schedule
+    ev = ObjectiveEvaluator(cs.views[0], contacts_bound_objective(
+        r.objective_name, q=[v.target.q for v in cs.views], weights=cs.weights),
+        n_steps=plan.observer.times.size - 1, belief=cast(Any, bel))  # without pings
+    base = evaluate_baselines(cs.views[0], evaluator=ev)
+    pings = {"method": "alternating", "objective": r.objective,
+             "lower_bound": sched.lower_bound, "gap": sched.gap,
+             "ping_steps": sched.steps, "ping_times": sched.times, "budget": args.pings,
+             "no_ping_objective": r.start_objective,
+             "solver": {"status": r.status, "seconds": r.seconds, "rounds": r.rounds,
+                        "gap_reference": sched.gap_reference},
+             "contacts": {n: {"pings_in_reach": r.pings.pings_in_reach[n],
+                              "ping_steps_in_reach": sched.steps[r.pings.reach[n][sched.steps]]}
+                          for n in cs.names}}
+    payload: dict[str, Any] = {
+        **_several_json(scenario, r.objective_name, plan, r.objective, base, r.seconds,
+                        "built-in"),
+        "contacts": {n: {"weight": w, "required_accuracy": a, **values} for (n, values), w, a
+                     in zip(r.pings.contacts_json().items(), cs.weights,
+                            cs.required_accuracies, strict=True)},
+        "alone_plans": {},
+        "pings": pings,
+    }
+    quiet = args.json == "-"
+    if not quiet:
+        reach = ", ".join(f"{n} {k}" for n, k in r.pings.pings_in_reach.items())
+        print(f"{scenario.name}: {len(cs)} contacts, {sched.steps.size} shared ping(s) at "
+              f"{minute_list(sched.times)} (alternating, in reach: {reach}): objective "
+              f"{r.objective:.4g} m (without pings {r.start_objective:.4g} m), lower bound "
+              f"{sched.lower_bound:.4g} m, gap {100 * sched.gap:.2f} %")
+        print(f"{scenario.name}: {objective_label(r.objective_name)} (the contacts' weighted "
+              f"mean) = {r.objective:.4g} over {minute_list(plan.times[-1] - plan.times[0], 0)} "
+              f"({plan.status}, {r.rounds} heading block(s), {r.seconds:.2f} s)")
+        for k, v in payload["baselines"].items():
+            print(f"  baseline {k:<12} {v:.4g} (no pings)")
+    stem = _figure(args, scenario, r.objective_name)
+    payload.update(_navigator_plan(plan, scenario, Path(args.out), stem[:-4], quiet=quiet))
+    if not args.no_figure:
+        path = Path(args.out) / stem
+        from tmaplan.report_contacts import plan_figure  # deferred: matplotlib
+
+        what = "position" if r.objective_name == "mean-position-bound" else "range"
+        plan_figure(cs.views, cs.names, {"joint": plan}, {"joint": r.pings.bounds}, path,
+                    title=f"{scenario.name}: {r.objective_name} = {r.objective:.4g} m with "
+                          f"{sched.steps.size} shared ping(s)", ping_times=sched.times,
+                    bound_label=f"closed-form PCRB {what} bound with the pings [m]")
+        payload["figure"] = str(path)
+        if not quiet:
+            print(f"wrote {path}")
+    return payload
+
+
+def _several_json(scenario: Scenario, name: str, plan: HeadingPlan, objective: float,
+                  base: dict[str, Any], seconds: float, start: str) -> dict[str, Any]:
+    """The one-contact keys of a several-contact plan's JSON (no top-level
+    ``range_bound``): the plan, its ``objective`` (``name``), the ``baselines`` (from
+    :func:`evaluate_baselines`), ``solver`` (``seconds`` [s], the ``start`` kept) and
+    ``observer``."""
+    return {
+        "problem": scenario.name, "objective_name": name,
+        "times": plan.times, "heading": plan.heading, "turn_rate": plan.turn_rate,
+        "switch_times": plan.switch_times, "objective": objective,
+        "range_bound_times": plan.observer.times,
+        "baselines": {k: v[0].objective for k, v in base.items()},
+        "baseline_params": {k: _on_clock(v[0].params, scenario.time.t0)
+                            for k, v in base.items()},
+        "solver": {"status": plan.status, "seconds": seconds, "message": plan.message,
+                   "iterations": plan.iterations, "transcription": plan.transcription,
+                   "start": start},
+        "observer": _observer_json(plan)}
 
 
 def _observer_json(plan: HeadingPlan) -> dict[str, Any]:

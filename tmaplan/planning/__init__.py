@@ -5,7 +5,7 @@ See :mod:`tmaplan.planning.heading`, :mod:`tmaplan.planning.pings`,
 :mod:`tmaplan.planning.baselines`,
 :mod:`tmaplan.planning.objectives` and :mod:`tmaplan.planning.belief`; several contacts:
 :mod:`tmaplan.planning.contacts`, :mod:`tmaplan.planning.multi_objectives`,
-:mod:`tmaplan.planning.ping_contacts`.
+:mod:`tmaplan.planning.ping_contacts`, :mod:`tmaplan.planning.joint_contacts`.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from tmaplan.planning.belief import Belief
 from tmaplan.planning.contacts import ContactSet, ContactsPlan, ContactsPlanner, plan_contacts
 from tmaplan.planning.heading import HeadingPlan, HeadingPlanner, plan_heading
 from tmaplan.planning.joint import JointPlan, plan_joint
+from tmaplan.planning.joint_contacts import ContactsJointPlan, plan_contacts_joint
 from tmaplan.planning.joint_ocp import JointOCPResult, plan_joint_ocp
 from tmaplan.planning.objectives import (
     OBJECTIVE_NAMES,
@@ -53,6 +54,7 @@ __all__ = [
     "BearingRatePlan",
     "Belief",
     "ContactSet",
+    "ContactsJointPlan",
     "ContactsPingSchedule",
     "ContactsPlan",
     "ContactsPlanner",
@@ -72,6 +74,7 @@ __all__ = [
     "max_pings",
     "ping_candidates",
     "plan_contacts",
+    "plan_contacts_joint",
     "plan_heading",
     "plan_joint",
     "plan_joint_ocp",

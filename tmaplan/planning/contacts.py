@@ -50,7 +50,8 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["JOINT_STARTS", "WORST_CONTACT_IPOPT", "ContactSet", "ContactsPlan",
-           "ContactsPlanner", "SaturatedObjectiveWarning", "plan_contacts",
+           "ContactsPlanner", "SaturatedObjectiveWarning", "check_contacts_start",
+           "plan_contacts",
            "warn_if_saturated"]
 
 #: IPOPT options of the ``worst-contact`` joint NLP (under the caller's ``solver_options``):
@@ -297,7 +298,8 @@ class ContactsPlanner:
     The keep-out range holds from every contact's estimate (its mean propagated at constant
     velocity); ping steps given to :meth:`solve` inform every contact (the reach of a ping,
     ``RangeSensor.max_range``, is modelled by the ping scheduler,
-    :mod:`tmaplan.planning.ping_contacts`, on a fixed track).
+    :mod:`tmaplan.planning.ping_contacts`, on a fixed track, and by the headings and pings
+    planned together, :mod:`tmaplan.planning.joint_contacts`).
     """
 
     def __init__(self, contacts: ContactSet, *, objective: str | None = None,
@@ -414,12 +416,7 @@ class ContactsPlanner:
                                 alone_times={}, start=start, seconds=time.perf_counter() - t0,
                                 solves=((start, plan.iterations, plan.status),))
         j = self.joint
-        for name, b in zip(cs.names, bel.beliefs, strict=True):
-            try:  # before any solve, naming the contact (the joint start keeps out of each)
-                check_start_keep_out(b, keep_out=j.keep_out, u_max=j.u_max,
-                                     speed_choice=j.speed_choice, times=j.times)
-            except InfeasibleError as exc:
-                raise InfeasibleError(f"contact '{name}': {exc}") from None
+        check_contacts_start(j, bel)
         if warm_start is not None or j.transcription != "direct":
             # a re-plan from the previous plan; or the bang-bang transcription, whose starts
             # are not turn-rate programs: its built-in ones only
@@ -535,6 +532,23 @@ class ContactsPlanner:
                             expected_times=self.expected_times(bel, [plan])[0], alone={},
                             alone_times={}, start=start, seconds=time.perf_counter() - t0,
                             solves=((start, plan.iterations, plan.status),))
+
+
+def check_contacts_start(planner: HeadingPlanner, beliefs: ContactBeliefs) -> None:
+    """Refuse, before any solve, a start inside the keep-out range of a contact's estimate
+    (``planner``'s keep-out range, turn rate and speed; the joint start keeps out of each).
+
+    Raises
+    ------
+    InfeasibleError
+        Naming the contact (:func:`tmaplan.planning.feasibility.check_start_keep_out`).
+    """
+    for name, b in zip(beliefs.names, beliefs.beliefs, strict=True):
+        try:
+            check_start_keep_out(b, keep_out=planner.keep_out, u_max=planner.u_max,
+                                 speed_choice=planner.speed_choice, times=planner.times)
+        except InfeasibleError as exc:
+            raise InfeasibleError(f"contact '{name}': {exc}") from None
 
 
 def plan_contacts(contacts: ContactSet, *, beliefs: ContactBeliefs | Sequence[Belief] | None

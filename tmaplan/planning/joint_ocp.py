@@ -97,6 +97,7 @@ __all__ = [
     "JOINT_NLP_SOLVERS",
     "JointOCPResult",
     "plan_joint_ocp",
+    "with_own_pings",
 ]
 
 JOINT_MODES = ("relaxed", "bonmin")
@@ -196,7 +197,7 @@ def _check_int(name: str, value: Any, low: int) -> int:
     return int(value)
 
 
-def _with_own_pings(cert: PingSchedule, ev: PingEvaluator, steps: Sequence[int],
+def with_own_pings(cert: PingSchedule, ev: PingEvaluator, steps: Sequence[int],
                     ) -> PingSchedule:
     """``cert`` (the scheduler's certified pings on the final track), or the pair's own pings
     ``steps`` with ``cert``'s lower bound when they are better.
@@ -503,7 +504,7 @@ def plan_joint_ocp(scenario: Scenario, *, budget: int | None = None,
     cert = schedule_pings(scenario, budget=K, objective=pair,  # type: ignore[arg-type]
                           observer=plan.observer, belief=bel, min_spacing=min_spacing,
                           forbidden=forbidden, gap_reference="auto")
-    final = _with_own_pings(cert, PingEvaluator(scenario, plan.observer, bel, pair), steps)
+    final = with_own_pings(cert, PingEvaluator(scenario, plan.observer, bel, pair), steps)
     return JointOCPResult(
         heading=plan, pings=final, objective=float(final.objective),
         lower_bound=float(final.lower_bound), gap=float(final.gap),

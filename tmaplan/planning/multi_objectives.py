@@ -25,6 +25,11 @@ penalty of ``expected-time-to-accuracy`` (:func:`horizon_turn_penalty`):
   and minimises t subject to ``E[T_c] ≤ t`` (:meth:`ContactsObjective.epigraph_terms`).
 
 For one contact each of them is ``expected-time-to-accuracy`` (the same terms).
+
+With pings (``plan --pings K``, :mod:`tmaplan.planning.joint_contacts`), the objective is
+instead the weighted mean of a one-contact closed-form bound [m] (:class:`ContactsBoundObjective`),
+each contact's block informed by the pings in its reach (:meth:`ContactsLayout.vector` with
+per-contact ping weights).
 """
 
 from __future__ import annotations
@@ -40,11 +45,13 @@ import numpy as np
 from tmaplan.errors import ArgumentError, PlanningError, is_integer
 from tmaplan.models.target import ncv_matrices
 from tmaplan.planning.objectives import (
+    PING_OBJECTIVES,
     Objective,
     ParamLayout,
     PlanContext,
     expected_time_of,
     horizon_turn_penalty,
+    make_objective,
     not_localised_graph,
 )
 from tmaplan.scenario.contacts import weight_fractions
@@ -62,8 +69,10 @@ __all__ = [
     "DEFAULT_CONTACTS_OBJECTIVE",
     "DEFAULT_REQUIRED_ACCURACY",
     "ContactBeliefs",
+    "ContactsBoundObjective",
     "ContactsLayout",
     "ContactsObjective",
+    "contacts_bound_objective",
     "contacts_objective",
     "pairing_permutation",
 ]
@@ -168,16 +177,23 @@ class ContactsLayout:
     def vector(self, belief: ContactBeliefs, bearing: np.ndarray, ping: np.ndarray | None = None,
                weight: np.ndarray | None = None) -> np.ndarray:
         """Numeric p: each contact's :meth:`ParamLayout.vector` (the shared bearing
-        information, ping weights and step weights), its draws permuted by
-        :func:`pairing_permutation` (N > 1)."""
+        information and step weights (K+1,); the ping weights shared, shape (K+1,), or each
+        contact's, shape (N, K+1): a ping informs only the contacts in its reach), its draws
+        permuted by :func:`pairing_permutation` (N > 1)."""
         if len(belief.beliefs) != self.n_contacts:
             raise ArgumentError("beliefs", f"{self.n_contacts} contact beliefs",
                                 len(belief.beliefs))
+        pings: list[np.ndarray | None] = [ping] * self.n_contacts
+        if ping is not None and np.ndim(ping) == 2:
+            if np.shape(ping) != (self.n_contacts, self.n_steps + 1):
+                raise ArgumentError("ping", f"shape ({self.n_steps + 1},) or "
+                                    f"({self.n_contacts}, {self.n_steps + 1})", np.shape(ping))
+            pings = list(np.asarray(ping, float))
         one = self.one
         smp = one.slices()["samples"]
         out = []
-        for b, name in zip(belief.beliefs, belief.names, strict=True):
-            v = one.vector(b, bearing, ping, weight)
+        for b, name, u in zip(belief.beliefs, belief.names, pings, strict=True):
+            v = one.vector(b, bearing, u, weight)
             if self.n_contacts > 1 and self.n_samples > 1:
                 perm = pairing_permutation(name, self.n_samples)
                 v[smp] = v[smp].reshape(self.n_samples, 4)[perm].reshape(-1)
@@ -288,6 +304,71 @@ class ContactsObjective(Objective):
     def epigraph_terms(self, ctx: PlanContext) -> list[Any]:
         """``worst-contact``: the terms E[T_c] of the epigraph constraints ``E[T_c] ≤ t``."""
         return self.expected_times(ctx) if self.kind == "worst-contact" else []
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactsBoundObjective(ContactsObjective):
+    """The weighted mean over N contacts of a one-contact closed-form bound objective [m].
+
+    ``Σ_c w_c f_c / Σ_c w_c`` with f_c the objective :attr:`bound` (``mean-range-bound``,
+    ``terminal-range-bound`` or ``mean-position-bound``: the closed-form PCRB of brehard2005,
+    :func:`tmaplan.planning.objectives.range_bound` / ``position_bound``) on contact c's
+    parameter block (:meth:`ContactsObjective.contexts`: its belief, its NCV process noise,
+    the pings that reach it): the objective of the shared ping scheduler
+    (:class:`tmaplan.planning.ping_contacts.ContactsPingEvaluator`) as a heading objective.
+    No turn penalty (as the one-contact bound objectives). Build with
+    :func:`contacts_bound_objective`.
+
+    Attributes
+    ----------
+    bound : Objective or None
+        The one-contact objective f (the same for every contact).
+    """
+
+    bound: Objective | None = None
+
+    def combined(self, ctx: PlanContext) -> Any:
+        """``Σ_c w_c f(ctx_c) / Σ_c w_c`` [m] (casadi scalar)."""
+        if self.bound is None:
+            raise PlanningError(f"objective {self.name}: no one-contact bound objective")
+        f = self.bound
+        return sum(w * f.expression(cc) for w, cc in zip(weight_fractions(self.weights),
+                                                         self.contexts(ctx), strict=True))
+
+
+def contacts_bound_objective(name: str, *, q: Sequence[float],
+                             weights: Sequence[float] | None = None) -> ContactsBoundObjective:
+    """The weighted mean over contacts of the closed-form objective ``name`` [m]
+    (:class:`ContactsBoundObjective`).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`tmaplan.planning.objectives.PING_OBJECTIVES`.
+    q : sequence of float, length N
+        Each contact's NCV process noise intensity [m²/s³].
+    weights : sequence of float, length N, optional
+        Contact weights > 0 (default 1 each).
+
+    Raises
+    ------
+    ArgumentError
+        An unknown name, lengths that differ, a weight that is not finite and > 0.
+    """
+    if name not in PING_OBJECTIVES:
+        raise ArgumentError("objective", f"one of {', '.join(PING_OBJECTIVES)}", name)
+    qs = tuple(float(v) for v in q)
+    ws = tuple(1.0 for _ in qs) if weights is None else tuple(float(v) for v in weights)
+    if not qs or len(ws) != len(qs):
+        raise ArgumentError("contacts", "one q and weight per contact (>= 1)",
+                            (len(qs), len(ws)))
+    for i, w in enumerate(ws):
+        if not (math.isfinite(w) and w > 0):
+            raise ArgumentError(f"weights[{i}]", "a finite weight > 0", w)
+    return ContactsBoundObjective(name, (), None, kind=name, q=qs,
+                                  accuracies=(DEFAULT_REQUIRED_ACCURACY,) * len(qs),
+                                  weights=ws, turn_weight=0.0,
+                                  bound=make_objective(name))
 
 
 def contacts_objective(name: str, *, q: Sequence[float], accuracies: Sequence[float],

@@ -1,0 +1,160 @@
+"""Headings and shared pings planned together for several contacts (issue 40).
+
+Two contacts (``default``'s at about 16 km and ``contact-astern``'s at about 13 km) share one
+own ship on a 5-minute horizon (20 steps of 15 s, five 1-minute control intervals), so every
+schedule on the final track can be enumerated by brute force here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from tmaplan.errors import ArgumentError
+from tmaplan.planning.contacts import ContactSet
+from tmaplan.planning.heading import HeadingPlanner
+from tmaplan.planning.joint_contacts import ContactsReachPlanner, plan_contacts_joint
+from tmaplan.planning.multi_objectives import ContactsLayout, contacts_bound_objective
+from tmaplan.planning.ping_contacts import ContactsPingEvaluator
+from tmaplan.scenario import load_problem
+
+PLAN = {"horizon": 300.0, "control_interval": 60.0}
+#: Between the contacts' ranges over the horizon (astern 12.9-13.2 km, default 15.5-16.0 km)
+#: with the own ship's 0.9 km of travel to spare: a ping reaches astern only.
+ASTERN_ONLY = 14_300.0
+
+
+@pytest.fixture(scope="module")
+def pair():
+    d = load_problem("default")
+    d = d.replace(time=dataclasses.replace(d.time, horizon=300.0),
+                  planning=dataclasses.replace(d.planning, horizon=300.0,
+                                               ping_min_spacing=0.0))
+    a = load_problem("contact-astern")
+    return d, d.replace(name="astern", target=a.target, prior=a.prior)
+
+
+def _objective(planner, bel, steps, u):
+    """The heading NLP's objective [m] at the turn-rate program ``u`` with ``steps``."""
+    hd0, spd0, _ = planner.start_state(None, None, None)
+    P = np.concatenate([planner.parameter_vector(bel, steps), [hd0, spd0, 1.0, 1.0]])
+    return float(planner.plan_function(planner.decision_vector(u, hd0, spd0), P)[0].item())
+
+
+def test_heading_block_is_the_weighted_one_contact_objective_per_reach(pair):
+    """One contact listed twice (weights 1 and 3) is the one-contact closed-form objective;
+    each contact's block sees the pings in its reach only."""
+    d = pair[0]
+    cs = ContactSet(views=(d, d), names=("a", "b"), weights=(1.0, 3.0))
+    bel = cs.beliefs()
+    obj = contacts_bound_objective("mean-range-bound", q=[d.target.q] * 2, weights=cs.weights)
+    two = ContactsReachPlanner(d, objective=obj, **PLAN)
+    one = HeadingPlanner(d, objective="mean-range-bound", **PLAN)
+    u = np.random.default_rng(3).uniform(-1, 1, one.n)
+    steps = [2, 9, 15]
+    f1 = _objective(one, bel.beliefs[0], steps, u)
+    f0 = _objective(one, bel.beliefs[0], [], u)
+    assert f1 < f0  # the pings inform
+    assert _objective(two, bel, steps, u) == pytest.approx(f1, rel=1e-9)
+    # b out of reach everywhere: its block keeps the pingless value
+    reach = np.ones((2, two.K + 1), bool)
+    reach[1] = False
+    two.reach = reach.astype(float)
+    try:
+        assert _objective(two, bel, steps, u) == pytest.approx(0.25 * f1 + 0.75 * f0,
+                                                               rel=1e-9)
+        reach[1, 9:] = True  # b informed by the pings at 9 and 15 only
+        two.reach = reach.astype(float)
+        f_b = _objective(one, bel.beliefs[0], [9, 15], u)
+        assert _objective(two, bel, steps, u) == pytest.approx(0.25 * f1 + 0.75 * f_b,
+                                                               rel=1e-9)
+    finally:
+        two.reach = None
+    # the casadi heading objective and the ping scheduler's numpy engine agree
+    plan = two.solve_reach(bel, None, ping_steps=steps, raise_on_failure=False)
+    ev = ContactsPingEvaluator(cs, plan.observer, bel, "mean-range-bound", None)
+    assert plan.objective == pytest.approx(ev.value(steps), rel=1e-6)
+
+
+def test_layout_takes_shared_or_per_contact_pings(pair):
+    d = pair[0]
+    cs = ContactSet(views=(d, d), names=("a", "b"))
+    lay = ContactsLayout(n_steps=4, n_samples=1, n_contacts=2)
+    bel = cs.beliefs()
+    ping = np.array([[0, 1, 0, 0, 1], [0, 0, 0, 0, 1]], float)
+    p = lay.vector(bel, np.ones(5), ping)
+    sl = lay.one.slices()["ping"]
+    assert np.array_equal(p[lay.block(0)][sl], ping[0])
+    assert np.array_equal(p[lay.block(1)][sl], ping[1])
+    shared = lay.vector(bel, np.ones(5), ping[0])
+    assert np.array_equal(shared[lay.block(1)][sl], ping[0])
+    with pytest.raises(ArgumentError, match="ping"):
+        lay.vector(bel, np.ones(5), np.zeros((3, 5)))
+
+
+@pytest.mark.parametrize("max_range", [None, ASTERN_ONLY])
+def test_alternation_descends_and_is_certified_on_its_track(pair, max_range):
+    cs = ContactSet(views=pair, names=("d", "astern"), weights=(2.0, 1.0))
+    r = plan_contacts_joint(cs, budget=2, max_range=max_range, **PLAN)
+    s = r.pings.schedule
+    assert r.objective == s.objective and r.status == s.status
+    assert r.history[0] == r.start_objective
+    # never above the pingless start, and the best pair seen is returned
+    assert r.objective <= r.start_objective
+    assert r.objective <= min(r.history[1:]) * (1 + 1e-12)
+    # the returned objective is the scheduler's evaluation of the returned pair
+    bel = cs.beliefs()
+    ev = ContactsPingEvaluator(cs, r.heading.observer, bel, "mean-range-bound", max_range)
+    assert ev.value(s.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)
+    assert len(s.steps) <= 2 and 1 <= r.rounds <= 4
+    # the certificate: a lower bound over every schedule of 2 pings on the final track
+    # (the candidates: steps 1..K, the plan's first instant is now)
+    best = min(ev.evaluate(ev.schedules(list(itertools.combinations(range(1, ev.K + 1), 2)))))
+    assert s.lower_bound <= best * (1 + 1e-9) and s.lower_bound <= r.objective
+    assert best <= r.objective
+    if max_range is not None:  # the default contact is out of reach: pings do not inform it
+        assert r.pings.pings_in_reach["d"] == 0 and r.pings.pings_in_reach["astern"] >= 1
+        assert r.pings.objectives["d"] == r.pings.no_ping_objectives["d"]
+        assert r.pings.objectives["astern"] < r.pings.no_ping_objectives["astern"]
+
+
+def test_one_contact_starts_from_the_one_contact_plan(pair):
+    d = pair[0]
+    cs = ContactSet(views=(d,), names=("d",))
+    r = plan_contacts_joint(cs, budget=1, objective="range-bound", max_range=None, **PLAN)
+    one = HeadingPlanner(d, objective="range-bound", **PLAN).solve(cs.beliefs().beliefs[0])
+    assert r.objective_name == "terminal-range-bound"
+    assert r.start_objective == pytest.approx(one.objective, rel=1e-6)
+    assert r.objective <= r.start_objective
+
+
+@pytest.mark.parametrize(("kw", "field"), [({"objective": "worst-contact"}, "objective"),
+                                          ({"budget": -1}, "budget"),
+                                          ({"budget": 1.5}, "budget"),
+                                          ({"max_rounds": 0}, "max_rounds")])
+def test_bad_input_names_the_field(pair, kw, field):
+    cs = ContactSet(views=pair, names=("d", "astern"))
+    with pytest.raises(ArgumentError, match=f"'{field}'"):
+        plan_contacts_joint(cs, **{"budget": 1, **kw}, **PLAN)
+
+
+def test_a_heading_block_worse_with_its_own_reach_is_rejected(pair, monkeypatch):
+    """The reach changes with the track: a heading block is kept only if the objective with
+    its own track's reach did not increase (here every re-evaluation says it did)."""
+    import tmaplan.planning.joint_contacts as jc
+
+    class Worse(ContactsPingEvaluator):
+        def value(self, steps):
+            return 2.0 * super().value(steps)
+
+    cs = ContactSet(views=pair, names=("d", "astern"))
+    monkeypatch.setattr(jc, "ContactsPingEvaluator", Worse)
+    r = plan_contacts_joint(cs, budget=2, max_range=None, **PLAN)
+    assert r.rounds == 1
+    assert r.heading.objective == r.start_objective  # the pingless start kept
+    assert r.history[2] == r.history[1]  # the rejected block left the schedule's value
+    ev = ContactsPingEvaluator(cs, r.heading.observer, cs.beliefs(), "mean-range-bound", None)
+    assert ev.value(r.pings.schedule.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)

@@ -105,7 +105,8 @@ def _inputs(scenario: Scenario, **kw: Any) -> PCRBInputs:
     return prepare(scenario, **kw)
 
 
-def require_process_noise(scenario: Scenario, field: str = "target.q", who: str = "") -> None:
+def require_process_noise(scenario: Scenario, field: str = "target.q", who: str = "",
+                          purpose: str = "") -> None:
     """Refuse a target without process noise where the closed-form bound is evaluated.
 
     The LPC transition density of brehard2005 (eq. 16) is Gaussian with covariance Q(q):
@@ -121,6 +122,9 @@ def require_process_noise(scenario: Scenario, field: str = "target.q", who: str 
         The field to name (``contacts[1].target.q`` for a contact of several).
     who : str
         Appended to the message, e.g. ``" (contact 'bravo')"``.
+    purpose : str
+        What needs the bound, after the expected value, e.g. ``" for tmaplan plan"`` (the
+        command line's check of every verb that evaluates it).
 
     Raises
     ------
@@ -129,15 +133,16 @@ def require_process_noise(scenario: Scenario, field: str = "target.q", who: str 
         constant-turn target (``q = 0`` by its schema) naming its ``model`` instead.
     """
     q = float(scenario.target.q)
+    bound = f"{purpose}: {'its' if purpose else 'the'} closed-form bound (brehard2005) " \
+        "propagates the belief through the target's process noise"
     if scenario.target.model == "constant-turn":  # q = 0 by its schema: name the model
-        raise ScenarioError(field.removesuffix("q") + "model", "'ncv' or 'multi-leg': the "
-                            "closed-form bound (brehard2005) propagates the belief through "
-                            "the target's process noise, which the deterministic constant-turn "
-                            f"model has not (q = 0){who}", "constant-turn", source=scenario.name)
+        raise ScenarioError(field.removesuffix("q") + "model", f"'ncv' or 'multi-leg'{bound}, "
+                            "which the deterministic constant-turn model has not (q = 0; a "
+                            f"q > 0 is refused there){who}", "constant-turn",
+                            source=scenario.name)
     if not q > 0.0:
-        raise ScenarioError(field, "> 0: the closed-form bound (brehard2005) propagates the "
-                            "belief through the target's process noise, e.g. q = "
-                            f"\"1e-5 m^2/s^3\"{who}", q, source=scenario.name)
+        raise ScenarioError(field, f"> 0{bound}, e.g. q = \"1e-5 m^2/s^3\" in the target's "
+                            f"table{who}", q, source=scenario.name)
 
 
 def _engine(inp: PCRBInputs, q: float, backend: str = "auto") -> ClosedFormEngine:

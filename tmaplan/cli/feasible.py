@@ -20,9 +20,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from tmaplan.bounds.closed_form import require_process_noise
 from tmaplan.cli.args import DEMO_POLICIES
 from tmaplan.display import seconds_text
-from tmaplan.errors import ScenarioError
 from tmaplan.memory import check_steps
 from tmaplan.models.plausibility import warn_suspicious
 from tmaplan.planning.feasibility import check_keep_out, check_planning_horizon
@@ -127,18 +127,8 @@ def check_feasible(args: argparse.Namespace, scenario: Any, *, prior_verb: bool 
     without process noise where the closed-form bound is evaluated (it failed deep inside
     with "Singular matrix")."""
     warn_suspicious(scenario, prior=prior_verb)
-    q = float(scenario.target.q)
-    if _closed_form(args) and scenario.target.model == "constant-turn":
-        raise ScenarioError("target.model", f"'ncv' or 'multi-leg' for tmaplan {args.verb}: "
-                            "its closed-form bound (brehard2005) propagates the belief through "
-                            "the target's process noise, which the deterministic constant-turn "
-                            "model has not (q = 0; a q > 0 is refused there)", "constant-turn",
-                            source=scenario.name)
-    if _closed_form(args) and not q > 0.0:
-        raise ScenarioError("target.q", f"> 0 for tmaplan {args.verb}: its closed-form bound "
-                            "(brehard2005) propagates the belief through the target's process "
-                            "noise, e.g. q = \"1e-5 m^2/s^3\" in the target's table", q,
-                            source=scenario.name)
+    if _closed_form(args):
+        require_process_noise(scenario, purpose=f" for tmaplan {args.verb}")
     if not _plans(args):
         return
     if args.verb != "plan" or (args.horizon is None and args.control_interval is None):

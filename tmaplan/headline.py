@@ -126,12 +126,16 @@ class Comparison:
     def from_values(cls, *, command: str, seed: int, times_to_accuracy: Mapping[str, Any],
                     final_range_errors: Mapping[str, Any], censor: float, commit: str = "",
                     first_runs: int = 0, particles: int = 3000, accuracy: float = 0.1,
-                    truth: str = "prior") -> Comparison:
+                    truth: str = "prior",
+                    metrics: tuple[str, str] = ("time_to_accuracy", "final_range_error"),
+                    ) -> Comparison:
         """From per-run values: times to accuracy [s] (+inf: never) and final range errors
         [m], each an array of shape (runs,) per policy; ``censor`` [s] stands for "never" in
         the means and differences (:func:`tmaplan.evaluation.metrics.censor_time`). Keeps
         the first ``first_runs`` runs' values; ``particles``, ``accuracy`` and ``truth`` are
-        the campaign's settings, for the record."""
+        the campaign's settings, for the record; ``metrics`` names the two in the paired
+        differences (several contacts: ``time_to_accuracy_all``,
+        ``worst_final_range_error``)."""
         names = tuple(times_to_accuracy)
         tta = {p: np.asarray(times_to_accuracy[p], float) for p in names}
         fre = {p: np.asarray(final_range_errors[p], float) for p in names}
@@ -144,8 +148,8 @@ class Comparison:
         diffs = []
         for i, a in enumerate(names):
             for b in names[i + 1:]:
-                diffs.append(paired_difference(tta, a, b, "time_to_accuracy", censor=censor))
-                diffs.append(paired_difference(fre, a, b, "final_range_error"))
+                diffs.append(paired_difference(tta, a, b, metrics[0], censor=censor))
+                diffs.append(paired_difference(fre, a, b, metrics[1]))
         first: dict[str, dict[str, list[float | None]]] = {}
         for p in names if first_runs else ():
             first[p] = {"time_to_accuracy": [None if math.isinf(t) else float(t)
@@ -159,9 +163,14 @@ class Comparison:
     @classmethod
     def from_campaign(cls, result: CampaignResult, *, command: str, commit: str = "",
                       first_runs: int = 0) -> Comparison:
-        """From a campaign's result (:func:`tmaplan.experiments.run_campaign`)."""
+        """From a campaign's result (:func:`tmaplan.experiments.run_campaign`); of several
+        contacts, its aggregate values (the time until all are localised, the worst
+        contact's final error) under their metric names."""
         s, spec = result.summary, result.spec
+        several = len(spec.scenario.contacts) > 1
         return cls.from_values(
+            metrics=("time_to_accuracy_all", "worst_final_range_error") if several else
+            ("time_to_accuracy", "final_range_error"),
             command=command, seed=spec.seed, commit=commit, first_runs=first_runs,
             particles=spec.n_particles, accuracy=spec.accuracy, truth=spec.truth,
             times_to_accuracy={p: s[p]["time_to_accuracy_runs"] for p in result.policies},

@@ -20,7 +20,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import html
 import sys
 import time
@@ -56,10 +55,6 @@ CONTACTS_KEY_DIFFERENCES: tuple[tuple[str, str, str], ...] = (
 #: and their least number of paired runs.
 DECIDED_RECORD = "docs/results/several-contacts-decided.md"
 DECIDED_RUNS = 200
-
-#: A one-contact comparison's metric -> its name over several contacts.
-_AGGREGATE = {"time_to_accuracy": "time_to_accuracy_all",
-              "final_range_error": "worst_final_range_error"}
 
 
 def say(args: argparse.Namespace, msg: str) -> None:
@@ -130,7 +125,7 @@ def run_several(args: argparse.Namespace, scenario: Scenario, out: Path, rep: Pa
 
     result, cmd = demo_campaign(args, scenario, DEMO_CONTACTS_POLICIES, out, pool,
                                 per=" per contact")
-    live = _aggregate(Comparison.from_campaign(result, command=cmd))
+    live = Comparison.from_campaign(result, command=cmd)
     extra = (contacts_html(result) + _live_html(live)
              + _plan_html(res, best, sched, cs.names))
     report = write_report(result, rep, command=cmd,
@@ -187,15 +182,6 @@ def demo_campaign(args: argparse.Namespace, scenario: Scenario, policies: tuple[
     cmd = (f"tmaplan demo{problem} --runs {args.runs} --particles {args.particles} "
            f"--seed {args.seed} --workers {args.workers} --out {args.out}")
     return result, cmd
-
-
-def _aggregate(comparison: Comparison) -> Comparison:
-    """``comparison`` with its metrics named as several contacts' (:data:`_AGGREGATE`): the
-    campaign's aggregate entries hold the time until all are localised and the worst
-    contact's final error."""
-    return dataclasses.replace(comparison, differences=tuple(
-        dataclasses.replace(d, metric=_AGGREGATE.get(d.metric, d.metric))
-        for d in comparison.differences))
 
 
 def _live_html(live: Comparison) -> str:

@@ -9,6 +9,7 @@ import itertools
 import numpy as np
 import pytest
 
+import tmaplan.planning.ping_relaxation as pr
 from tmaplan.models.observer import observer_track
 from tmaplan.planning import Belief, PingEvaluator, schedule_pings
 from tmaplan.planning.ping_exact import tree_search
@@ -91,6 +92,60 @@ def test_duality_gap_allowance_covers_both_stopping_rules():
                                  10.0) == pytest.approx(2.1e-6)
     with pytest.raises(ValueError, match="ECOS"):
         duality_gap_allowance("ECOS", {}, 1.0)
+    # Clarabel's relative gap is against max(1, min(|p|, |d|)): below |p| = 1 a relative
+    # tolerance above the absolute one still allows a gap of the relative tolerance
+    assert duality_gap_allowance("CLARABEL", {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-6},
+                                 0.1) >= 1e-6
+    # "AlmostSolved": the reduced tolerances; SCS has no reduced-accuracy stopping rule
+    opts = {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8,
+            "reduced_tol_gap_abs": 1e-6, "reduced_tol_gap_rel": 1e-6}
+    assert duality_gap_allowance("CLARABEL", opts, 3.0, reduced=True) == pytest.approx(7e-6)
+    with pytest.raises(ValueError, match="reduced-accuracy stopping rule known for 'SCS'"):
+        duality_gap_allowance("SCS", {"eps_abs": 1e-7, "eps_rel": 1e-7}, 1.0, reduced=True)
+
+
+@pytest.mark.solver_sensitive
+def test_clarabel_reduced_accuracy_is_a_certificate_with_its_gap(short, short_prior,
+                                                                 monkeypatch):
+    # full tolerances of 0 cannot be met (Clarabel's test is strict), so the solve ends on
+    # the reduced test ("AlmostSolved", cvxpy optimal_inaccurate): certified with the reduced
+    # gap removed, still below the exhaustive optimum, without the SCS fallback
+    opts = {**pr.CLARABEL_OPTIONS, "tol_gap_abs": 0.0, "tol_gap_rel": 0.0, "tol_feas": 0.0,
+            "max_iter": 100}
+    monkeypatch.setattr(pr, "CLARABEL_OPTIONS", opts)
+    ev = _evaluator(short, short_prior, "mean-range-bound")
+    cand = np.arange(1, ev.K + 1)
+    rel = Relaxation(ev, cand, gap=1)
+    r = rel.solve(2)
+    assert r.status == "certified (clarabel, reduced accuracy)", r.status
+    assert str(rel.problem.status) == "optimal_inaccurate"
+    _, best = _brute(ev, cand, 2, 1)
+    assert r.lower_bound <= best * (1 + 1e-9)
+    # the bound lies below the solver's value by at least the reduced gap
+    allowance = duality_gap_allowance("CLARABEL", opts, float(rel.problem.value),
+                                      reduced=True) * rel.scale
+    assert r.lower_bound <= float(rel.problem.value) * rel.scale - allowance * (1 - 1e-12)
+    assert r.value_at_u == pytest.approx(float(rel.problem.value) * rel.scale, rel=1e-4)
+
+
+def test_scs_stopped_at_its_time_limit_is_not_a_certificate(short, short_prior, monkeypatch):
+    # Clarabel fails; SCS, given no time, stops at its time limit: no certificate, the
+    # all-candidates-pinged bound, and the reason says so
+    ev = _evaluator(short, short_prior, "mean-range-bound")
+    cand = np.arange(1, ev.K + 1)
+    rel = Relaxation(ev, cand, gap=1)
+
+    def broken(*a, **k):
+        raise RuntimeError("solver crashed")
+
+    monkeypatch.setattr(rel.problem, "solve", broken)  # Clarabel's way in
+    monkeypatch.setattr(pr, "SCS_OPTIONS", {**pr.SCS_OPTIONS, "time_limit_secs": 1e-9})
+    r = rel.solve(2)
+    assert r.status.startswith("fallback: all candidates pinged"), r.status
+    assert "scs: " in r.status and "stopped at its time limit of 1e-09 s" in r.status
+    assert not np.isfinite(r.u).any()
+    _, best = _brute(ev, cand, 2, 1)
+    assert r.lower_bound == pytest.approx(ev.value(cand.tolist())) and r.lower_bound <= best
 
 
 def test_failed_solve_is_not_a_certificate(short, short_prior, monkeypatch):

@@ -7,6 +7,18 @@ fallback), less the primal–dual gap the solver's stopping test allows
 disagreement with the batched evaluator at the relaxation's own weights) is never used: the
 weaker "every candidate pinged" bound is reported instead, and the result says which.
 
+Clarabel has two stopping tests of one form (gap below ``tol_gap_abs`` or ``tol_gap_rel``
+relative, primal and dual residuals below ``tol_feas``): full accuracy (status "Solved",
+cvxpy ``optimal``) and, when it stops short of that (step length, iteration limit), the same
+test at the ``reduced_tol_*`` tolerances ("AlmostSolved", cvxpy ``optimal_inaccurate``; no
+``accept_unknown`` option is passed, so nothing else maps there). Both tolerances are set
+here (:data:`CLARABEL_OPTIONS`), and an "AlmostSolved" solve is certified with the gap of
+the reduced test (status "certified (clarabel, reduced accuracy)"). On the several-contact
+relaxation of a planned track (``tmaplan plan three-contacts-screen --pings 4``) Clarabel
+stalled at a gap of 1.04e-8 against its 1e-8 and SCS, the fallback, then took 170 s for the
+same optimum. SCS stops at :data:`SCS_TIME_LIMIT`; an SCS solve stopped there is not a
+certificate (its stopping test was not met), so the weaker bound is reported, saying so.
+
 Mathematics (brehard2005, eq. 43–51, information form of the closed-form PCRB):
 the information recursion is
 ``J_{t+1} = D22 − D12ᵀ(J_t + D11)⁻¹D12 + B_{t+1} + u_{t+1}·p_{t+1}·e eᵀ``
@@ -57,6 +69,7 @@ import dataclasses
 import hashlib
 import signal
 import time
+import warnings
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -67,31 +80,51 @@ from tmaplan.interrupts import Interrupted, solver_call
 if TYPE_CHECKING:
     from tmaplan.planning.pings import PingEvaluator
 
-__all__ = ["InformationMatrices", "Relaxation", "RelaxationResult", "contact_program",
-           "duality_gap_allowance", "information_matrices", "objective_vectors", "relaxation_bound",
+__all__ = ["CLARABEL_OPTIONS", "SCS_OPTIONS", "SCS_TIME_LIMIT", "InformationMatrices",
+           "Relaxation", "RelaxationResult", "contact_program", "duality_gap_allowance",
+           "information_matrices", "objective_vectors", "relaxation_bound",
            "schedule_kernel_of"]
 
 #: Relative agreement required between the solver's optimum and the evaluator at the relaxed
 #: weights before the optimum is used as a certificate.
 CERTIFY_RTOL = 2e-3
 
+#: Clarabel's options: its full-accuracy stopping test ("Solved") and the reduced one of
+#: "AlmostSolved", both certificates with their own gap (:func:`duality_gap_allowance`).
+#: The reduced tolerances are Clarabel's defaults (5e-5, 1e-4) tightened to 1e-6: an
+#: allowance of about 2e-6 of the objective, far below the 1e-3 of an "optimal" schedule.
+CLARABEL_OPTIONS: dict[str, float] = {
+    "tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8, "tol_feas": 1e-8, "max_iter": 500,
+    "reduced_tol_gap_abs": 1e-6, "reduced_tol_gap_rel": 1e-6, "reduced_tol_feas": 1e-6}
+#: Wall-clock limit of the SCS fallback [s]: stopped there, it certifies nothing.
+SCS_TIME_LIMIT = 60.0
+#: SCS's options (the fallback when Clarabel's solve is not certified).
+SCS_OPTIONS: dict[str, float] = {"eps_abs": 1e-7, "eps_rel": 1e-7, "max_iters": 200_000,
+                                 "time_limit_secs": SCS_TIME_LIMIT}
 
-def duality_gap_allowance(solver: str, options: dict[str, float], value: float) -> float:
-    """The largest primal–dual gap an ``optimal`` status of ``solver`` allows at ``value``.
 
-    Clarabel stops when ``|p − d| ≤ tol_gap_abs`` or ``|p − d| ≤ tol_gap_rel·min(|p|, |d|)``;
-    SCS (version 3) when ``|p − d| ≤ eps_abs + eps_rel·max(|p|, |d|)``. Both are covered by
-    ``abs + 2·rel·|p|`` (``|d| ≤ |p| + |p − d|`` and the gap is small against ``|p|``), so
-    the relaxed optimum is at least the returned primal value ``p`` minus this.
+def duality_gap_allowance(solver: str, options: dict[str, float], value: float, *,
+                          reduced: bool = False) -> float:
+    """The largest primal–dual gap a certified status of ``solver`` allows at ``value``.
+
+    Clarabel stops when ``|p − d| < tol_gap_abs`` or ``|p − d| < tol_gap_rel·max(1,
+    min(|p|, |d|))`` (with the primal and dual residuals below ``tol_feas``): "Solved" with
+    the full tolerances, "AlmostSolved" with the ``reduced_tol_*`` ones (``reduced=True``);
+    SCS (version 3) when ``|p − d| ≤ eps_abs + eps_rel·max(|p|, |d|)``. All are covered by
+    ``abs + 2·rel·max(1, |p|)`` (``|d| ≤ |p| + |p − d|`` and the gap is small against
+    ``max(1, |p|)``), so the relaxed optimum is at least the returned primal value ``p``
+    minus this.
 
     Parameters
     ----------
     solver : {"CLARABEL", "SCS"}
     options : dict
-        The tolerances the solve was given (``tol_gap_abs``/``tol_gap_rel``,
-        ``eps_abs``/``eps_rel``).
+        The tolerances the solve was given (``tol_gap_abs``/``tol_gap_rel``, with
+        ``reduced``: ``reduced_tol_gap_abs``/``reduced_tol_gap_rel``; ``eps_abs``/``eps_rel``).
     value : float
         The primal optimal value ``p`` in the problem's (scaled) units.
+    reduced : bool
+        Clarabel's reduced-accuracy test ("AlmostSolved"); SCS has none (ValueError).
 
     Returns
     -------
@@ -99,12 +132,14 @@ def duality_gap_allowance(solver: str, options: dict[str, float], value: float) 
         The allowance, in the same units as ``value``.
     """
     if solver == "CLARABEL":
-        a, r = options["tol_gap_abs"], options["tol_gap_rel"]
-    elif solver == "SCS":
+        pre = "reduced_" if reduced else ""
+        a, r = options[pre + "tol_gap_abs"], options[pre + "tol_gap_rel"]
+    elif solver == "SCS" and not reduced:
         a, r = options["eps_abs"], options["eps_rel"]
     else:
-        raise ValueError(f"duality_gap_allowance: no stopping rule known for {solver!r}")
-    return float(a + 2.0 * r * abs(value))
+        what = "reduced-accuracy " if reduced else ""
+        raise ValueError(f"duality_gap_allowance: no {what}stopping rule known for {solver!r}")
+    return float(a + 2.0 * r * max(1.0, abs(value)))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -181,8 +216,9 @@ class RelaxationResult:
     value_at_u : float
         Evaluator's objective at ``u`` [m] (the tightness check).
     status : str
-        "certified (clarabel)", "certified (scs)", or the fallback used
-        ("fallback: all candidates pinged (...)").
+        "certified (clarabel)", "certified (clarabel, reduced accuracy)" (Clarabel's
+        "AlmostSolved", its reduced tolerances' gap removed), "certified (scs)", or the
+        fallback used ("fallback: all candidates pinged (...)", with each solver's reason).
     seconds : float
     """
 
@@ -330,18 +366,20 @@ class Relaxation:
         lo, hi = np.zeros(n), np.ones(n)
         self.budget.value = float(budget)
         notes = []
-        for solver, opts in (("CLARABEL", {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8,
-                                           "tol_feas": 1e-8, "max_iter": 500}),
-                             ("SCS", {"eps_abs": 1e-7, "eps_rel": 1e-7,
-                                      "max_iters": 200_000})):
+        for solver, opts in (("CLARABEL", CLARABEL_OPTIONS), ("SCS", SCS_OPTIONS)):
             try:
-                solve_interruptibly(self.problem, solver, opts)
+                with warnings.catch_warnings():  # the status is judged and reported below
+                    warnings.filterwarnings("ignore", "Solution may be inaccurate",
+                                            UserWarning)
+                    solve_interruptibly(self.problem, solver, opts)
             except Exception as exc:  # solver failure is reported, not used
                 notes.append(f"{solver.lower()}: {type(exc).__name__}")
                 continue
             st = str(self.problem.status)
-            if st != "optimal" or self.u.value is None:
-                notes.append(f"{solver.lower()}: {st}")
+            # Clarabel's "AlmostSolved": its stopping test met at the reduced tolerances
+            reduced = solver == "CLARABEL" and st == "optimal_inaccurate"
+            if not (st == "optimal" or reduced) or self.u.value is None:
+                notes.append(f"{solver.lower()}: {st}{self._time_limit_note(solver, opts)}")
                 continue
             u = np.clip(np.asarray(self.u.value, float), lo, hi)
             val = float(self.problem.value) * self.scale
@@ -355,14 +393,25 @@ class Relaxation:
             # returned value is primal: above the relaxed optimum by at most that gap) from
             # the bound, so that the certificate stays on the safe side
             lb = (min(val, fu) - abs(fu - val)
-                  - duality_gap_allowance(solver, opts, float(self.problem.value)) * self.scale)
+                  - duality_gap_allowance(solver, opts, float(self.problem.value),
+                                          reduced=reduced) * self.scale)
+            accuracy = ", reduced accuracy" if reduced else ""
             return RelaxationResult(lower_bound=lb, u=u, value_at_u=fu,
-                                    status=f"certified ({solver.lower()})",
+                                    status=f"certified ({solver.lower()}{accuracy})",
                                     seconds=time.perf_counter() - t0)
         lb = self.fallback_bound()
         return RelaxationResult(lower_bound=lb, u=np.full(n, np.nan), value_at_u=float("nan"),
                                 status="fallback: all candidates pinged (" + "; ".join(notes)
                                 + ")", seconds=time.perf_counter() - t0)
+
+    def _time_limit_note(self, solver: str, opts: dict[str, float]) -> str:
+        """" (stopped at its time limit of N s)" when the solve ran into ``time_limit_secs``."""
+        limit = opts.get("time_limit_secs")
+        stats = self.problem.solver_stats
+        spent = getattr(stats, "solve_time", None) if stats is not None else None
+        if limit is None or spent is None or spent < limit:
+            return ""
+        return f" (stopped at its time limit of {limit:g} s)"
 
     def _value_at(self, u: np.ndarray) -> float:
         U = np.zeros((1, self.ev.K + 1))

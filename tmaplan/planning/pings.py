@@ -89,9 +89,10 @@ class PingSchedule:
     gap : float
         Relative gap ``(objective − lower_bound)/objective`` (nan without a bound).
     gap_reference : str
-        Where ``lower_bound`` comes from: "relaxation (clarabel|scs)", "enumeration",
-        "enumeration (time limit)", "fallback: all candidates pinged (...)" (the relaxation
-        failed; its reasons), or "none".
+        Where ``lower_bound`` comes from: "relaxation (clarabel)", "relaxation (clarabel,
+        reduced accuracy)" (Clarabel's "AlmostSolved", its reduced gap removed), "relaxation
+        (scs)", "enumeration", "enumeration (time limit)", "fallback: all candidates
+        pinged (...)" (the relaxation failed; its reasons), or "none".
     bound : ndarray, shape (K + 1,)
         Range bound per step with the schedule [m].
     status : str

@@ -19,7 +19,7 @@ from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.joint_contacts import ContactsReachPlanner, plan_contacts_joint
 from tmaplan.planning.multi_objectives import ContactsLayout, contacts_bound_objective
 from tmaplan.planning.ping_contacts import ContactsPingEvaluator
-from tmaplan.scenario import load_problem
+from tmaplan.scenario import RangeSensor, load_problem
 
 PLAN = {"horizon": 300.0, "control_interval": 60.0}
 #: Between the contacts' ranges over the horizon (astern 12.9-13.2 km, default 15.5-16.0 km)
@@ -158,3 +158,65 @@ def test_a_heading_block_worse_with_its_own_reach_is_rejected(pair, monkeypatch)
     assert r.history[2] == r.history[1]  # the rejected block left the schedule's value
     ev = ContactsPingEvaluator(cs, r.heading.observer, cs.beliefs(), "mean-range-bound", None)
     assert ev.value(r.pings.schedule.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)
+
+
+def test_an_accepted_pair_is_kept_when_the_next_schedule_is_worse(pair, monkeypatch):
+    """After a heading block is kept, the scheduler on its track need not find the steps it
+    was solved with (relaxed and greedy do not see them): the pair (that track, those steps)
+    stays the best seen, returned with the certificate's bound. On a 15-minute horizon the
+    terminal bound's heading block improves on the first pair (the pings change the best
+    manoeuvre); the next schedule is forced onto steps 1 and 2, poor for a terminal bound."""
+    import tmaplan.planning.joint_contacts as jc
+
+    real = jc.schedule_contact_pings
+    calls = []
+
+    def poor_after_first(contacts, **kw):
+        calls.append(kw["gap_reference"])
+        if len(calls) > 1 and kw["gap_reference"] == "none":
+            kw = {**kw, "candidate_steps": [1, 2]}
+        return real(contacts, **kw)
+
+    monkeypatch.setattr(jc, "schedule_contact_pings", poor_after_first)
+    longer = {"time": dataclasses.replace(pair[0].time, horizon=900.0),
+              "planning": dataclasses.replace(pair[0].planning, horizon=900.0)}
+    cs = ContactSet(views=tuple(v.replace(**longer) for v in pair), names=("d", "astern"),
+                    weights=(2.0, 1.0))
+    r = plan_contacts_joint(cs, budget=2, objective="terminal-range-bound", max_range=None,
+                            horizon=900.0, control_interval=180.0)
+    # history: start, schedule, then per kept heading block its value and the next schedule,
+    # then the certificate
+    first, kept, after = r.history[1], r.history[2], r.history[3]
+    assert kept < first * (1 - 1e-6) and after > kept  # a better block, then a worse schedule
+    assert r.objective == pytest.approx(kept, rel=1e-9)  # the block's pair, not `first`
+    ev = ContactsPingEvaluator(cs, r.heading.observer, cs.beliefs(), "terminal-range-bound",
+                               None)
+    s = r.pings.schedule
+    assert ev.value(s.steps.tolist()) == pytest.approx(r.objective, rel=1e-12)
+    assert s.lower_bound <= r.objective
+
+
+def test_refusals_come_before_any_solve(pair, monkeypatch):
+    """A bad reach, more pings than fit and pings without a range sensor are refused before
+    the first NLP; a budget of 0 solves the pingless plan only."""
+    from tmaplan.errors import PlanningError
+
+    cs = ContactSet(views=pair, names=("d", "astern"))
+
+    def no_solve(*a, **k):
+        raise AssertionError("solved before the refusal")
+
+    with monkeypatch.context() as m:
+        m.setattr(ContactsReachPlanner, "solve", no_solve)
+        with pytest.raises(ArgumentError, match="'max_range'"):
+            plan_contacts_joint(cs, budget=1, max_range=-5.0, **PLAN)
+        with pytest.raises(PlanningError, match="budget K = 30 pings cannot be met"):
+            plan_contacts_joint(cs, budget=30, max_range=None, **PLAN)
+        silent = [v.replace(sensors=tuple(s for s in v.sensors if not isinstance(s, RangeSensor)))
+                  for v in pair]
+        with pytest.raises(ArgumentError, match=r"'budget'.*no range sensor"):
+            plan_contacts_joint(ContactSet(views=tuple(silent), names=("d", "astern")),
+                                budget=1, **PLAN)
+    r = plan_contacts_joint(cs, budget=0, max_range=None, **PLAN)
+    assert r.rounds == 0 and r.pings.schedule.steps.size == 0
+    assert r.objective == pytest.approx(r.start_objective, rel=1e-9)

@@ -119,6 +119,29 @@ def test_model_hessian_is_the_exact_lagrangian_hessian(small):
             hessian_columns(grad, *args, threads=bad)
 
 
+def test_qp_through_buffers_is_the_qp_called_with_arrays(small):
+    """``solve_qp`` (numpy buffers) gives the bits of the conic called with the dict, and
+    its statistics: success, and a failure on an infeasible QP."""
+    sc, prior, planner, _, model = small
+    rti = RealTimeIteration(planner, model)
+    start = _straight(sc, prior)
+    h0, s0, _ = planner.start_state(None, None, None)
+    P = np.concatenate([planner.parameter_vector(prior, ()), [h0, s0, 1.0, 1.0]])
+    _, _, qp = rti.condensed(np.asarray(start.warm["x"]), P, *planner.bounds(h0))
+    d, lam, stats = rti.solve_qp(qp)
+    ref = rti.qp(**qp)
+    assert stats["success"] and rti.qp.stats()["success"]
+    assert np.array_equal(d, np.asarray(ref["x"]).reshape(-1))
+    assert np.array_equal(lam, np.asarray(ref["lam_a"]).reshape(-1))
+    # the first row asked above what any step within the bounds reaches: infeasible
+    reach = np.abs(qp["a"][0]) @ np.maximum(np.abs(qp["lbx"]), np.abs(qp["ubx"]))
+    lba, uba = qp["lba"].copy(), qp["uba"].copy()
+    lba[0], uba[0] = 10 * reach + 1, 20 * reach + 2
+    bad = {**qp, "lba": lba, "uba": uba}
+    assert not rti.solve_qp(bad)[2]["success"]
+    assert rti.solve_qp(qp)[2]["success"]  # the buffers' next call is sound
+
+
 def test_bad_configurations_are_rejected(small):
     sc, prior, planner, plan, model = small
     with pytest.raises(ArgumentError, match="qpsol") as bad:

@@ -320,7 +320,8 @@ def _run_several_pings(args: argparse.Namespace, scenario: Scenario,
     pings = {"method": "alternating", "objective": r.objective,
              "lower_bound": sched.lower_bound, "gap": sched.gap,
              "ping_steps": sched.steps, "ping_times": sched.times, "budget": args.pings,
-             "no_ping_objective": r.start_objective,
+             "no_ping_objective": sched.no_ping_objective,
+             "start_objective": r.start_objective,
              "solver": {"status": r.status, "seconds": r.seconds, "rounds": r.rounds,
                         "gap_reference": sched.gap_reference},
              "contacts": {n: {"pings_in_reach": r.pings.pings_in_reach[n],
@@ -340,8 +341,8 @@ def _run_several_pings(args: argparse.Namespace, scenario: Scenario,
         reach = ", ".join(f"{n} {k}" for n, k in r.pings.pings_in_reach.items())
         print(f"{scenario.name}: {len(cs)} contacts, {sched.steps.size} shared ping(s) at "
               f"{minute_list(sched.times)} (alternating, in reach: {reach}): objective "
-              f"{r.objective:.4g} m (without pings {r.start_objective:.4g} m), lower bound "
-              f"{sched.lower_bound:.4g} m, gap {100 * sched.gap:.2f} %")
+              f"{r.objective:.4g} m (the plan without pings {r.start_objective:.4g} m), lower "
+              f"bound {sched.lower_bound:.4g} m, gap {100 * sched.gap:.2f} %")
         print(f"{scenario.name}: {objective_label(r.objective_name)} (the contacts' weighted "
               f"mean) = {r.objective:.4g} over {minute_list(plan.times[-1] - plan.times[0], 0)} "
               f"({plan.status}, {r.rounds} heading block(s), {r.seconds:.2f} s)")

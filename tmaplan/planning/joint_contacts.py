@@ -50,7 +50,8 @@ from tmaplan.planning.multi_objectives import (
 from tmaplan.planning.ping_contacts import (
     ContactsPingEvaluator,
     ContactsPingSchedule,
-    ping_max_range,
+    check_ping_budget,
+    ping_reach,
     schedule_contact_pings,
 )
 
@@ -96,6 +97,11 @@ class ContactsReachPlanner(HeadingPlanner):
     def solve_reach(self, belief: ContactBeliefs, reach: np.ndarray | None,
                     **kw: Any) -> HeadingPlan:
         """:meth:`HeadingPlanner.solve` with the ping reach ``reach`` (N, K+1) bool."""
+        if reach is not None:
+            n = len(belief.beliefs)
+            if np.shape(reach) != (n, self.K + 1):
+                raise ArgumentError("reach", f"shape ({n}, {self.K + 1}): contacts × plan "
+                                    "steps", np.shape(reach))
         self.reach = None if reach is None else np.asarray(reach, float)
         try:
             return self.solve(belief, **kw)  # type: ignore[arg-type]
@@ -125,11 +131,12 @@ class ContactsJointPlan:
     history : tuple of float
         Objective after each block [m] (start, schedule, heading block, ..., certificate).
     rounds : int
-        Heading blocks solved.
+        Heading blocks solved (kept or rejected).
     seconds : float
         Wall time [s].
     status : str
-        The certificate's status (``optimal``: gap ≤ 1e-3; ``feasible``; ``no bound``).
+        The certificate's status (``optimal``: gap ≤ 1e-3; ``feasible``; ``time limit``
+        with ``ping_method="exact"``; ``no bound``).
     """
 
     __repr__ = short_repr
@@ -180,8 +187,12 @@ def plan_contacts_joint(contacts: ContactSet, *, budget: int | None = None,
     Raises
     ------
     ArgumentError
-        An objective that is not a ping objective; ``budget`` not an integer >= 0;
-        ``max_rounds`` not an integer >= 1; ``max_range`` not > 0.
+        An objective that is not a ping objective; ``budget`` not an integer >= 0, or > 0
+        without a range sensor; ``max_rounds`` not an integer >= 1; ``max_range`` not > 0
+        (all before any solve).
+    PlanningError
+        More pings than fit in the plan's candidate steps with the minimum spacing (before
+        any solve).
     InfeasibleError
         The start inside a contact's keep-out range (naming the contact).
     SolverError
@@ -198,12 +209,16 @@ def plan_contacts_joint(contacts: ContactSet, *, budget: int | None = None,
     contacts.require_process_noise()
     v0 = contacts.views[0]
     budget = int(budget if budget is not None else default_ping_budget(v0))
-    reach_m = ping_max_range(v0) if isinstance(max_range, str) and max_range == "sensor" \
-        else max_range
+    reach_m = ping_reach(v0, max_range)
     name = JOINT_PING_OBJECTIVE[objective]
     bel = contacts.beliefs(beliefs)
     planner = ContactsReachPlanner(v0, objective=contacts_bound_objective(
         name, q=[v.target.q for v in contacts.views], weights=contacts.weights), **planner_kw)
+    # refused before the first solve: no range sensor, more pings than fit
+    if budget > 0 and planner.ping_scale == 0.0:
+        raise ArgumentError("budget", "0: the scenario has no range sensor to ping with",
+                            budget)
+    check_ping_budget(v0, bel.t + planner.times, budget)
     check_contacts_start(planner, bel)
 
     def schedule(plan: HeadingPlan, reference: Literal["auto", "none"]) -> ContactsPingSchedule:
@@ -214,17 +229,18 @@ def plan_contacts_joint(contacts: ContactSet, *, budget: int | None = None,
     plan = planner.solve_reach(bel, None)  # the pingless start; raises if it failed
     start = plan.objective
     history = [start]
-    best: tuple[HeadingPlan, ContactsPingSchedule] | None = None
+    # the best pair seen: (track, its ping steps, the objective with the track's own reach)
+    best: tuple[HeadingPlan, list[int], float] | None = None
     steps: list[int] | None = None
     rounds = 0
     while True:
         sched = schedule(plan, "none")
+        new = sched.schedule.steps.tolist()
         value = sched.schedule.objective
         history.append(value)
-        if best is None or value < best[1].schedule.objective:
-            best = (plan, sched)
-        new = sched.schedule.steps.tolist()
-        if new == steps or rounds >= max_rounds:
+        if best is None or value < best[2]:
+            best = (plan, new, value)
+        if new == steps or rounds >= max_rounds or budget == 0:
             break
         steps, rounds = new, rounds + 1
         reach = np.array([sched.reach[n] for n in contacts.names])
@@ -236,15 +252,17 @@ def plan_contacts_joint(contacts: ContactSet, *, budget: int | None = None,
             if exact <= value + ACCEPT_TOLERANCE * max(1.0, abs(value)):
                 plan = trial
                 history.append(exact)
+                if exact < best[2]:  # (the next schedule on it may not find these steps)
+                    best = (trial, steps, exact)
                 continue
         history.append(value)  # rejected: the next schedule would be this one again
         break
-    plan, sched = best
+    plan, own, value = best
     cert = schedule(plan, "auto")  # the certificate on the final track
-    if cert.schedule.objective > sched.schedule.objective:  # the pair's pings are better
+    if value < cert.schedule.objective:  # the pair's own pings are better: cert's bound
         ev = ContactsPingEvaluator(contacts, plan.observer, bel, name, reach_m)
-        sched = dataclasses.replace(sched, schedule=with_own_pings(
-            cert.schedule, ev, sched.schedule.steps.tolist()))  # type: ignore[arg-type]
+        sched = ContactsPingSchedule.of(ev, with_own_pings(
+            cert.schedule, ev, own))  # type: ignore[arg-type]
     else:
         sched = cert
     history.append(sched.schedule.objective)

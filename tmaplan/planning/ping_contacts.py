@@ -50,13 +50,51 @@ if TYPE_CHECKING:
     from tmaplan.scenario import Scenario
 
 __all__ = ["ContactsPingEvaluator", "ContactsPingSchedule", "PingReachWarning",
-           "ping_max_range", "schedule_contact_pings"]
+           "check_ping_budget", "ping_max_range", "ping_reach", "schedule_contact_pings"]
 
 
 class PingReachWarning(UserWarning):
     """Fewer pings are scheduled than the budget because no contact is within the range
     sensor's ``max_range`` at enough candidate steps (a ping out of every contact's reach
     informs nobody and reveals the own ship)."""
+
+
+def ping_reach(scenario: Scenario, max_range: float | Literal["sensor"] | None) -> float | None:
+    """The reach of a ping [m] asked as ``max_range`` ("sensor": :func:`ping_max_range`;
+    None: unlimited), checked.
+
+    Raises
+    ------
+    ArgumentError
+        ``max_range`` not a finite range > 0 m (nor "sensor" or None).
+    """
+    reach_m = ping_max_range(scenario) if isinstance(max_range, str) and \
+        max_range == "sensor" else max_range
+    if reach_m is not None:
+        reach_m = finite_real("max_range", reach_m, "a range > 0 m (None: unlimited)",
+                              lower=0.0)
+        if reach_m <= 0:
+            raise ArgumentError("max_range", "a range > 0 m (None: unlimited)", reach_m)
+    return reach_m
+
+
+def check_ping_budget(scenario: Scenario, times: np.ndarray, budget: int,
+                      **constraints: Any) -> tuple[np.ndarray, int]:
+    """The candidate ping steps on a track of step times ``times`` (K+1,) [s] and the gap
+    between pings [steps] (:func:`tmaplan.planning.ping_search.ping_candidates`, with its
+    ``constraints``), after checking that ``budget`` pings fit in them.
+
+    Raises
+    ------
+    PlanningError
+        More pings than fit in the candidate steps with the minimum spacing.
+    """
+    cand, gap, spacing = ping_candidates(scenario, times, **constraints)
+    if int(budget) > max_pings(cand, gap):
+        raise PlanningError(f"budget K = {budget} pings cannot be met: at most "
+                            f"{max_pings(cand, gap)} fit in the {cand.size} candidate "
+                            f"steps with min_spacing {spacing:g} s")
+    return cand, gap
 
 
 def ping_max_range(scenario: Scenario) -> float | None:
@@ -160,6 +198,23 @@ class ContactsPingSchedule:
     reach: dict[str, np.ndarray]
     pings_in_reach: dict[str, int]
 
+    @classmethod
+    def of(cls, ev: ContactsPingEvaluator, sched: PingSchedule) -> ContactsPingSchedule:
+        """``sched`` (its steps on ``ev``'s track) with each contact's values from ``ev``."""
+        U = ev.schedules([sched.steps.tolist()])
+        each = ev.evaluate_each(U)[:, 0]
+        none = ev.evaluate_each(np.zeros((1, ev.K + 1)))[:, 0]
+        names = ev.names
+        return cls(
+            schedule=sched, names=names,
+            objectives={n: float(v) for n, v in zip(names, each, strict=True)},
+            no_ping_objectives={n: float(v) for n, v in zip(names, none, strict=True)},
+            bounds={n: p[0].per_step(U * p[2][None, :])[0] for n, p in zip(names, ev.parts,
+                                                                            strict=True)},
+            reach={n: p[2].copy() for n, p in zip(names, ev.parts, strict=True)},
+            pings_in_reach={n: int(p[2][sched.steps].sum()) for n, p in zip(names, ev.parts,
+                                                                             strict=True)})
+
     def contacts_json(self) -> dict[str, dict[str, Any]]:
         """The per-contact values of ``tmaplan schedule --json`` (DESIGN.md §6, ``contacts:
         {name: {...}}``): ``objective``, ``no_ping_objective`` [m], ``bound`` per step [m],
@@ -238,13 +293,7 @@ def schedule_contact_pings(contacts: ContactSet, *, budget: int,
     """
     t_start = time.perf_counter()
     v0 = contacts.views[0]
-    reach_m = ping_max_range(v0) if isinstance(max_range, str) and max_range == "sensor" \
-        else max_range
-    if reach_m is not None:
-        reach_m = finite_real("max_range", reach_m, "a range > 0 m (None: unlimited)",
-                              lower=0.0)
-        if reach_m <= 0:
-            raise ArgumentError("max_range", "a range > 0 m (None: unlimited)", reach_m)
+    reach_m = ping_reach(v0, max_range)
     bel = contacts.beliefs(beliefs)
     obs = observer if observer is not None else observer_track(v0.observer, v0.time)
     common: dict[str, Any] = {"min_spacing": min_spacing, "forbidden": forbidden,
@@ -262,26 +311,10 @@ def schedule_contact_pings(contacts: ContactSet, *, budget: int,
             raise ArgumentError("method", "'exact', 'relaxed' or 'greedy'", method)
         if gap_reference not in ("auto", "exact", "none"):
             raise ArgumentError("gap_reference", "'auto', 'exact' or 'none'", gap_reference)
-        cand, gap, spacing = ping_candidates(v0, ev.times, **common)
-        if int(budget) > max_pings(cand, gap):
-            raise PlanningError(f"budget K = {budget} pings cannot be met: at most "
-                                f"{max_pings(cand, gap)} fit in the {cand.size} candidate "
-                                f"steps with min_spacing {spacing:g} s")
+        cand, gap = check_ping_budget(v0, ev.times, int(budget), **common)
         cand, budget = _within_reach(ev, cand, gap, int(budget), reach_m)
         sched = certified_schedule(ev, cand, gap, int(budget), method=method,
                                    objective=objective, gap_reference=gap_reference,
                                    max_enumerate=max_enumerate, time_limit=time_limit,
                                    workers=None, t_start=t_start)
-    U = ev.schedules([sched.steps.tolist()])
-    each = ev.evaluate_each(U)[:, 0]
-    none = ev.evaluate_each(np.zeros((1, ev.K + 1)))[:, 0]
-    names = contacts.names
-    return ContactsPingSchedule(
-        schedule=sched, names=names,
-        objectives={n: float(v) for n, v in zip(names, each, strict=True)},
-        no_ping_objectives={n: float(v) for n, v in zip(names, none, strict=True)},
-        bounds={n: p[0].per_step(U * p[2][None, :])[0] for n, p in zip(names, ev.parts,
-                                                                        strict=True)},
-        reach={n: p[2].copy() for n, p in zip(names, ev.parts, strict=True)},
-        pings_in_reach={n: int(p[2][sched.steps].sum()) for n, p in zip(names, ev.parts,
-                                                                         strict=True)})
+    return ContactsPingSchedule.of(ev, sched)

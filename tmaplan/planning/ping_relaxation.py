@@ -18,6 +18,11 @@ relaxation of a planned track (``tmaplan plan three-contacts-screen --pings 4``)
 stalled at a gap of 1.04e-8 against its 1e-8 and SCS, the fallback, then took 170 s for the
 same optimum. SCS stops at :data:`SCS_TIME_LIMIT`; an SCS solve stopped there is not a
 certificate (its stopping test was not met), so the weaker bound is reported, saying so.
+What either Clarabel certificate proves: the dual objective, less the gap its stopping test
+allows, bounds every schedule from below up to the residuals it accepts (1e-8 at full
+accuracy, 1e-6 at reduced accuracy, in the problem's scaling), which are not bounded
+separately; a rigorous dual bound (the dual point projected onto the cone, the primal
+variables bounded) is not built. The evaluator check (``value_at_u``) guards the rest.
 
 Mathematics (brehard2005, eq. 43–51, information form of the closed-form PCRB):
 the information recursion is

@@ -308,8 +308,8 @@ class RealTimeIteration:
 
     @property
     def qp(self) -> Any:
-        """The condensed QP's casadi ``conic`` solver (built once; ``qp.stats()`` after a
-        call), called with the dict :meth:`condensed` returns."""
+        """The condensed QP's casadi ``conic`` solver (built once), which :meth:`solve_qp`
+        calls through numpy buffers with the dict :meth:`condensed` returns."""
         return self._qp
 
     def solve_qp(self, qp: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:

@@ -19,22 +19,12 @@ from tmaplan.planning.heading import HeadingPlanner
 from tmaplan.planning.joint_contacts import ContactsReachPlanner, plan_contacts_joint
 from tmaplan.planning.multi_objectives import ContactsLayout, contacts_bound_objective
 from tmaplan.planning.ping_contacts import ContactsPingEvaluator
-from tmaplan.scenario import RangeSensor, load_problem
+from tmaplan.scenario import RangeSensor
 
 PLAN = {"horizon": 300.0, "control_interval": 60.0}
 #: Between the contacts' ranges over the horizon (astern 12.9-13.2 km, default 15.5-16.0 km)
 #: with the own ship's 0.9 km of travel to spare: a ping reaches astern only.
 ASTERN_ONLY = 14_300.0
-
-
-@pytest.fixture(scope="module")
-def pair():
-    d = load_problem("default")
-    d = d.replace(time=dataclasses.replace(d.time, horizon=300.0),
-                  planning=dataclasses.replace(d.planning, horizon=300.0,
-                                               ping_min_spacing=0.0))
-    a = load_problem("contact-astern")
-    return d, d.replace(name="astern", target=a.target, prior=a.prior)
 
 
 def _objective(planner, bel, steps, u):

@@ -32,17 +32,6 @@ SCREEN_PLAN = ((3, 0.5), (1, -0.5), (1, 0.5), (1, -0.121), (4, -0.5), (2, 0.5), 
                (2, -0.5), (4, 0.5), (2, -0.5), (3, 0.5), (5, -0.5))
 
 
-@pytest.fixture(scope="module")
-def pair():
-    d = load_problem("default")
-    d = d.replace(time=dataclasses.replace(d.time, horizon=300.0),
-                  planning=dataclasses.replace(d.planning, horizon=300.0,
-                                               ping_min_spacing=0.0))
-    a = load_problem("contact-astern")
-    astern = d.replace(name="astern", target=a.target, prior=a.prior)
-    return d, astern
-
-
 def _brute(cs, budget, max_range, gap=1):
     """Every schedule of exactly ``budget`` pings on steps 1..K (more pings never hurt)."""
     d = cs.views[0]

@@ -4,7 +4,8 @@ Per policy, seconds per run split into planning (the controller's re-plans), fil
 particle filter's init, predict and update) and the rest (simulation, metrics), for
 
 * ``old``: a full IPOPT solve per re-plan on the objective's casadi graph,
-  ``Receding(solver="ipopt", compiled=False)``: the path before issue 42 (when this benchmark
+  ``Receding(solver="ipopt", compiled=False)``, and the particle filter's numpy kernels
+  (``FilterOptions(kernel="numpy")``): the path before issue 42 (when this benchmark
   was written the first solve was cold, from 4 starts; it now starts from the offline plan);
 * ``new``: ``Receding(solver=NEW_SOLVER)``, by default the real-time iteration, one condensed
   SQP step per re-plan from the shifted previous plan (``"real-time"``,
@@ -38,6 +39,7 @@ from threadpoolctl import threadpool_limits
 
 from tmaplan.estimators.particle_filter import ParticleFilter
 from tmaplan.evaluation.closed_loop import paired_run
+from tmaplan.evaluation.filter_options import FilterOptions
 from tmaplan.evaluation.metrics import censor_time, paired_difference
 from tmaplan.planning import Belief, HeadingPlanner
 from tmaplan.planning.rti import QP_SOLVERS, RealTimeIteration, reference_model
@@ -105,7 +107,9 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
             # seconds: from the previous result (or the run's start) to its own
             _FILTER_SECONDS[0] = 0.0
             t = time.perf_counter()
-            for name, res in paired_run(sc, pols, seed=seed, run=i, n_particles=particles):
+            options = FilterOptions(kernel="numpy") if path == "old" else FilterOptions()
+            for name, res in paired_run(sc, pols, seed=seed, run=i, n_particles=particles,
+                                        options=options):
                 total = time.perf_counter() - t
                 plan = sum(e["seconds"] for e in res.replans)
                 r = rows[path][name]

@@ -305,7 +305,8 @@ def test_receding_refuses_a_bad_fallback_tolerance(tol):
 
 def test_a_degenerate_filter_says_whose_it_is():
     # with one filter per contact, "particle filter degenerate at step 24" alone did not say
-    # which contact's filter; 20 particles on 1° bearings degenerate
+    # which contact's filter; 5 particles on 1° bearings degenerate (20 did, by chance, with
+    # the numpy kernel's random numbers, not with the compiled kernel's)
     import warnings
 
     from tmaplan.estimators import DegeneracyWarning
@@ -316,7 +317,7 @@ def test_a_degenerate_filter_says_whose_it_is():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         run_contacts_loop(sc, Straight(), targets, noise_rng=np.random.default_rng(6),
-                          filter_rng=np.random.default_rng(7), n_particles=20)
+                          filter_rng=np.random.default_rng(7), n_particles=5)
     msgs = [str(w.message) for w in caught if issubclass(w.category, DegeneracyWarning)]
     assert msgs
     assert all(m.startswith(("contact 'alpha': particle filter degenerate at step",

@@ -132,7 +132,9 @@ class CampaignSpec:
         meta = {"scenario": self.scenario.name, "scenario_hash": scenario_hash(self.scenario),
                 "policies": list(self.policies), "seed": self.seed,
                 "n_particles": self.n_particles, "truth": self.truth, "accuracy": self.accuracy,
-                "format": FORMAT, "tmaplan_version": __version__, "pf_kernel": DEFAULT_KERNEL}
+                "format": FORMAT, "tmaplan_version": __version__,
+                "pf_kernel": (DEFAULT_KERNEL if self.filter_options is None
+                              else self.filter_options.kernel)}
         manoeuvres = {p.split("+")[0] for p in self.policies}
         if "receding" in manoeuvres:
             # by name alone (`tmaplan compare`), runs stored while `receding` flew the

@@ -10,16 +10,18 @@ the estimators', the answer to an alarm is the closed loop's (a policy wrapped b
 :meth:`FilterOptions.responsive` and :meth:`FilterOptions.glr` are presets the fault matrix
 compares (``benchmarks/faults.py``). A campaign's key holds ``repr(filter_options)``
 (:class:`tmaplan.experiments.CampaignSpec`): the class name and its fields keep the stored
-campaigns' keys valid.
+campaigns' keys valid (the particle filter's kernel, :attr:`FilterOptions.kernel`, is left out
+of the repr and enters the key on its own, as ``pf_kernel``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Literal
 
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.consistency import MonitorConfig, MonitoredFilter
-from tmaplan.estimators.particle_filter import ParticleFilter, PFConfig
+from tmaplan.estimators.particle_filter import DEFAULT_KERNEL, ParticleFilter, PFConfig
 from tmaplan.policies.alarms import AlarmResponse
 
 __all__ = ["FilterOptions"]
@@ -42,12 +44,22 @@ class FilterOptions:
     alarm_response : AlarmResponse, optional
         The closed loop's answer to the monitor's alarms
         (:class:`tmaplan.policies.AlarmResponse`; None: none, or no monitor).
+    kernel : {"numba", "numpy"}
+        :attr:`tmaplan.estimators.particle_filter.PFConfig.kernel` (default
+        :data:`tmaplan.estimators.particle_filter.DEFAULT_KERNEL`, the compiled kernels;
+        "numpy" flies the campaigns stored before they became the default, and is the
+        closed loop's path before issue 42 in ``benchmarks/closed_loop.py``).
     """
 
     bearing_clutter: float = 0.0
     ping_gate: float | None = None
     monitor: MonitorConfig | None = dataclasses.field(default_factory=MonitorConfig)
     alarm_response: AlarmResponse | None = None
+    kernel: Literal["numba", "numpy"] = dataclasses.field(default=DEFAULT_KERNEL, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.kernel not in ("numba", "numpy"):
+            raise ArgumentError("filter_options.kernel", "'numba' or 'numpy'", self.kernel)
 
     @classmethod
     def plain(cls) -> FilterOptions:
@@ -80,17 +92,19 @@ class FilterOptions:
 
     def label(self) -> str:
         """Short name: "plain", "monitored", "robust", "responsive", "glr" or the field
-        values."""
+        values; followed by ``,kernel=numpy`` for the kernel that is not the default."""
+        kernel = f",kernel={self.kernel}" if self.kernel != DEFAULT_KERNEL else ""
+        fields = dataclasses.replace(self, kernel=DEFAULT_KERNEL)
         for name in ("plain", "monitored", "robust", "responsive", "glr"):
-            if self == getattr(FilterOptions, name)():
-                return name
+            if fields == getattr(FilterOptions, name)():
+                return name + kernel
         return (f"clutter={self.bearing_clutter},gate={self.ping_gate},"
                 f"monitor={self.monitor is not None},"
-                f"alarm_pings={self.alarm_response is not None}")
+                f"alarm_pings={self.alarm_response is not None}{kernel}")
 
     def build(self, config: PFConfig) -> Any:
         """The filter: a :class:`ParticleFilter` with these likelihood options, monitored if
         asked."""
         pf = ParticleFilter(dataclasses.replace(config, bearing_clutter=self.bearing_clutter,
-                                                ping_gate=self.ping_gate))
+                                                ping_gate=self.ping_gate, kernel=self.kernel))
         return pf if self.monitor is None else MonitoredFilter(pf, self.monitor)

@@ -54,6 +54,7 @@ LAYERS: dict[str, int] = {
 #: module-level imports the module, its packages and what they import bring in).
 DEFERRED_MODULES: dict[str, str] = {
     "tmaplan.estimators.pf_numba": "numba",  # the compiled particle-filter kernels
+    "tmaplan.estimators.pf_moments": "numba",  # the monitor's innovation on their clouds
     "tmaplan.planning.compiled_objective": "numba",  # the re-plans' compiled objective
     "tmaplan.io": "pyproj",  # recorded data in and out (and pynmea2, gpxpy)
     "tmaplan.plotting": "matplotlib",  # the figures of a verb whose checks every verb runs

@@ -74,6 +74,7 @@ from scipy import optimize
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.manoeuvre_glr import glr_threshold, velocity_jump_glr
 from tmaplan.estimators.particle_filter import ParticleFilter
+from tmaplan.estimators.pf_kernels import particle_rows
 from tmaplan.geometry import wrap_angle, wrap_half_angle
 from tmaplan.models.target import initial_velocity
 from tmaplan.scenario import Scenario
@@ -238,7 +239,9 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
     ----------
     state : FilterState
         Predicted state; a particle state (``particles``, ``weights``) gives the moments over
-        the cloud, any other its mean and covariance by linearisation.
+        the cloud (for the compiled kernels' clouds, a bearing's in one compiled pass,
+        :func:`tmaplan.estimators.pf_moments.bearing_moments`, equal to rounding), any other
+        its mean and covariance by linearisation.
     m : Measurement
         Bearing [rad] (innovation wrapped; modulo π if π-ambiguous) or range [m].
 
@@ -251,6 +254,12 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
     wrap = wrap_half_angle if m.kind == "bearing" and m.ambiguity == "pi" else wrap_angle
     if hasattr(state, "particles"):
         X, w = state.particles, state.weights
+        if (m.kind == "bearing" and wrap is wrap_angle
+                and getattr(state, "kernel", "numpy") == "numba"):  # one compiled pass
+            from tmaplan.estimators.pf_moments import bearing_moments  # deferred: numba
+
+            nu, var = bearing_moments(particle_rows(X), w, float(m.value))
+            return nu, sigma2 + var
         if m.kind == "bearing":
             d = wrap(float(m.value) - np.arctan2(X[:, 0], X[:, 1]))
         else:

@@ -33,9 +33,8 @@ bearings-only benchmarks with small q), "bootstrap", and "resample-move" (exact
 Metropolis–Hastings moves given each particle's ancestor; suited to ring-shaped range-only
 posteriors, where the global-covariance kernel throws particles off the ring: on
 ``sharma2024-range-only`` it ends at ≈ 1050 m against ≈ 1900–2100 m for the default, 100 runs).
-Speed: the cloud is stored column-major; the compiled kernels (the default,
-:mod:`tmaplan.estimators.pf_numba`) and the batched numpy reference
-(:mod:`tmaplan.estimators.pf_kernels`: O(N) systematic resampling, float32 Box–Muller noise).
+Speed: the cloud is stored column-major; compiled kernels (the default, ``pf_numba``) and the
+numpy reference (``pf_kernels``: O(N) systematic resampling, float32 Box–Muller noise).
 
 Degeneracy: when the effective sample size (ESS) falls below ``degeneracy_ess`` particles, or
 every weight becomes non-finite, a :class:`DegeneracyWarning` is issued and the filter recovers
@@ -137,15 +136,13 @@ class PFConfig:
     kernel : {"numba", "numpy"}
         Default :data:`DEFAULT_KERNEL`. "numba": the compiled kernels of
         :mod:`tmaplan.estimators.pf_numba`
-        (the default since issue 42's campaign throughput: multi-threaded over fixed blocks
-        of particles, bit-identical for any thread count; process and jitter noise from
-        Philox4x32-10 keyed by the injected Generator, Box–Muller in float32; large arrays
-        recycled, :mod:`tmaplan.estimators.pf_buffers`; compiled once per machine, ~8 s, at
-        its first use). "numpy": the batched numpy kernels (the default before; campaigns
-        stored with them keep their key, :attr:`tmaplan.evaluation.filter_options.
-        FilterOptions.kernel` flies them again), kept as the reference the compiled kernels
-        are tested against (same model, same resampling; other random numbers, so the same
-        results in distribution, not bit for bit). ``noise`` applies to "numpy" only.
+        (the default: multi-threaded over fixed blocks of particles, bit-identical for any
+        thread count; Philox4x32-10 noise keyed by the injected Generator; arrays recycled,
+        :mod:`tmaplan.estimators.pf_buffers`; compiled once per machine, ~8 s). "numpy": the
+        batched numpy kernels (the default before issue 42's campaign throughput; they fly
+        the campaigns stored with them again), the reference the compiled kernels are tested
+        against (other random numbers: the same results in distribution, not bit for bit).
+        ``noise`` applies to "numpy" only.
     noise : {"float32", "float64"}
         Generator of the process-noise normals of :func:`predict`. "float64": numpy's
         ziggurat ``standard_normal``. "float32" (default, ≈ 3.5× faster, the largest single

@@ -13,15 +13,20 @@ particle filter's init, predict and update) and the rest (simulation, metrics), 
   ``receding`` (IPOPT on the compiled objective, :mod:`tmaplan.planning.compiled_objective`);
   ``--new-solver sqp``: the converged SQP on it (``receding-sqp``).
 
-Both paths run on the same truths and noise (common random numbers, the campaign's seeds), so
-the script also reports the paired difference new − old of the time to accuracy and of the final
-range error, with 95 % t intervals, and the ratio new/old of the seconds per run, measured in
-the same process. ``--step`` profiles one re-plan step (objective/gradient/Jacobian, exact
-Hessian, condensing, QP per solver) against the IPOPT re-solve.
+Both paths run on the same truths and measurement noise (common random numbers, the
+campaign's seeds), so the script also reports the paired difference new − old of the time to
+accuracy and of the final range error, with 95 % t intervals, and the ratio new/old of the
+seconds per run, measured in the same process. The old path's filter kernel is
+``--old-kernel`` (default ``numpy``, the path before issue 42): its filters then draw other
+random numbers than the new path's compiled kernels, and the paired differences include that
+noise; ``--old-kernel numba`` gives both paths the same filter noise, isolating the re-plans.
+``--step`` profiles one re-plan step (objective/gradient/Jacobian, exact Hessian, condensing,
+QP per solver) against the IPOPT re-solve.
 
 Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-run 0]
      [--new-solver real-time|ipopt|sqp]
      [--particles 3000] [--policies straight,planned,receding] [--step] [--json OUT]
+     [--old-kernel numpy|numba]
      python benchmarks/closed_loop.py --pair OLD_JSON NEW_JSON
      python benchmarks/closed_loop.py --gaps --runs 3   (seed 1000 unless --seed)
 """
@@ -92,7 +97,7 @@ def _policies(scenario, names, path, new_solver="real-time"):
 
 
 def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_run=0,
-                json_out=None, new_solver="real-time"):
+                json_out=None, new_solver="real-time", old_kernel="numpy"):
     sc = load_problem(problem)
     records = []
     rows = defaultdict(lambda: defaultdict(list))
@@ -107,7 +112,7 @@ def closed_loop(paths, names, runs, particles, seed=0, problem="default", first_
             # seconds: from the previous result (or the run's start) to its own
             _FILTER_SECONDS[0] = 0.0
             t = time.perf_counter()
-            options = FilterOptions(kernel="numpy") if path == "old" else FilterOptions()
+            options = FilterOptions(kernel=old_kernel) if path == "old" else FilterOptions()
             for name, res in paired_run(sc, pols, seed=seed, run=i, n_particles=particles,
                                         options=options):
                 total = time.perf_counter() - t
@@ -285,6 +290,9 @@ def main():
                     help="how the new path's receding re-plans (the old: IPOPT, casadi graph)")
     ap.add_argument("--problem", default="default")
     ap.add_argument("--particles", type=int, default=3000)
+    ap.add_argument("--old-kernel", choices=("numpy", "numba"), default="numpy",
+                    help="the old path's particle-filter kernel (numpy: the path before "
+                         "issue 42; numba: the same filter noise as the new path)")
     ap.add_argument("--seed", type=int, default=None,
                     help="root seed of the runs (default 0; with --gaps 1000, tuning seeds)")
     ap.add_argument("--first-run", type=int, default=0, help="index of the first Monte Carlo run")
@@ -308,7 +316,8 @@ def main():
     paths = ("old", "new") if a.path == "both" else (a.path,)
     closed_loop(paths, a.policies.split(","), a.runs, a.particles,
                 seed=0 if a.seed is None else a.seed, problem=a.problem,
-                first_run=a.first_run, json_out=a.json, new_solver=a.new_solver)
+                first_run=a.first_run, json_out=a.json, new_solver=a.new_solver,
+                old_kernel=a.old_kernel)
 
 
 if __name__ == "__main__":

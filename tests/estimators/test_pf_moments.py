@@ -82,3 +82,26 @@ def test_innovation_uses_them_for_compiled_clouds_only(monkeypatch):
               Measurement(kind="range", value=9e3, sigma=50.0)):
         assert innovation(numba_state, m) == innovation(numpy_state, m)
     assert len(calls) == 1
+
+
+def test_edge_clouds_as_numpys():
+    """A particle exactly at the own ship (numpy: ``arctan2(0, 0) = 0``, residual ``wrap(z)``)
+    and one at an infinite distance (numpy: a finite residual) give numpy's moments."""
+    z = 2.9
+    for bad in ([0.0, 0.0], [np.inf, 3e3], [-2e3, -np.inf]):
+        X = np.array([[*bad, 0.0, 0.0], [1e3, 2e3, 0.0, 0.0], [-4e3, 1e3, 0.0, 0.0]])
+        w = np.array([0.5, 0.3, 0.2])
+        nu, var = bearing_moments(particle_rows(X), w, z)
+        ref = _numpy_moments(X, w, z)
+        assert abs(nu - ref[0]) <= 1e-12 and abs(var - ref[1]) <= 1e-12, (bad, nu, ref)
+
+
+@pytest.mark.parametrize(("A", "w"), [(np.zeros((1, 3)), np.ones(3)),
+                                      (np.zeros((4, 3)), np.ones(2)),
+                                      (np.zeros(3), np.ones(3)),
+                                      (np.zeros((4, 3)), np.ones((3, 1)))])
+def test_shapes_are_checked(A, w):
+    from tmaplan.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match="bearing_moments"):
+        bearing_moments(A, w, 0.1)

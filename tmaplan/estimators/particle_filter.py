@@ -93,7 +93,7 @@ class DegeneracyWarning(RuntimeWarning):
     """The particle weights collapsed; the filter recovered by roughening."""
 
 
-#: The particle filter's default kernel (:attr:`PFConfig.kernel`); part of a campaign's key.
+#: The default :attr:`PFConfig.kernel` (a campaign's key holds the kernel its filters ran).
 DEFAULT_KERNEL: Literal["numba", "numpy"] = "numba"
 
 
@@ -139,12 +139,12 @@ class PFConfig:
         (the default: multi-threaded over fixed blocks of particles, bit-identical for any
         thread count; Philox4x32-10 noise keyed by the injected Generator; arrays recycled,
         :mod:`tmaplan.estimators.pf_buffers`; compiled once per machine, ~8 s). "numpy": the
-        batched numpy kernels (the default before issue 42's campaign throughput; they fly
-        the campaigns stored with them again), the reference the compiled kernels are tested
+        batched numpy kernels (the default before issue 42's campaign throughput; they give
+        the runs flown before again), the reference the compiled kernels are tested
         against (other random numbers: the same results in distribution, not bit for bit).
         ``noise`` applies to "numpy" only.
     noise : {"float32", "float64"}
-        Generator of the process-noise normals of :func:`predict`. "float64": numpy's
+        The numpy kernel's process-noise normals (the compiled kernels': Philox). "float64": numpy's
         ziggurat ``standard_normal``. "float32" (default, ≈ 3.5× faster, the largest single
         cost of a step): Box–Muller on float32 uniforms, returned in float64. Its draws are
         exact normals up to float32 rounding (relative 6e-8) with the tail truncated at

@@ -21,20 +21,24 @@ import math
 
 import numpy as np
 
+from tmaplan.errors import ArgumentError
 from tmaplan.estimators.pf_math import abs_atan2, njit
+from tmaplan.geometry import wrap_angle
 
 __all__ = ["bearing_moments"]
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
-def _bearing_moments(A: np.ndarray, w: np.ndarray, sz: float, cz: float) -> tuple[float, float]:
+def _bearing_moments(A: np.ndarray, w: np.ndarray, sz: float, cz: float,
+                     at_origin: float) -> tuple[float, float]:
     n = A.shape[1]
     d = np.empty(n)
     nu = 0.0
     for j in range(n):
         s = sz * A[1, j] - cz * A[0, j]
-        a = abs_atan2(s, cz * A[1, j] + sz * A[0, j])
-        d[j] = -a if s < 0.0 else a
+        c = cz * A[1, j] + sz * A[0, j]
+        a = abs_atan2(s, c)
+        d[j] = at_origin if s == 0.0 and c == 0.0 else (-a if s < 0.0 else a)
         nu += w[j] * d[j]
     var = 0.0
     for j in range(n):
@@ -60,8 +64,24 @@ def bearing_moments(A: np.ndarray, w: np.ndarray, z: float) -> tuple[float, floa
     -------
     nu, var : float
         ``Σ w_i d_i`` [rad] and ``Σ w_i (d_i − ν)²`` [rad²], ``d_i = wrap(z − atan2(x_i,
-        y_i))`` ∈ [−π, π].
+        y_i))`` ∈ [−π, π] (``wrap(z)`` for a particle at the own ship, as numpy's
+        ``arctan2(0, 0) = 0``). A cloud with a non-finite coordinate gets numpy's formula
+        (its residuals are those of ``arctan2``, which the rotation would turn into NaN).
+
+    Raises
+    ------
+    ArgumentError
+        ``A`` not of shape (≥ 2, N) or ``w`` not of shape (N,).
     """
-    nu, var = _bearing_moments(A, np.ascontiguousarray(w, dtype=float), math.sin(z),
-                               math.cos(z))
+    A = np.asarray(A, dtype=float)
+    w = np.ascontiguousarray(w, dtype=float)
+    if A.ndim != 2 or A.shape[0] < 2 or w.shape != (A.shape[1],):
+        raise ArgumentError("bearing_moments cloud and weights",
+                            "rows (>= 2, N) and weights (N,)", (A.shape, w.shape))
+    zw = float(wrap_angle(z))
+    nu, var = _bearing_moments(np.ascontiguousarray(A), w, math.sin(z), math.cos(z), zw)
+    if not (math.isfinite(nu) and math.isfinite(var)):  # an infinite coordinate (or NaN)
+        d = wrap_angle(z - np.arctan2(A[0], A[1]))
+        nu = float(w @ d)
+        var = float(w @ (d - nu) ** 2)
     return float(nu), float(var)

@@ -47,8 +47,9 @@ class FilterOptions:
     kernel : {"numba", "numpy"}
         :attr:`tmaplan.estimators.particle_filter.PFConfig.kernel` (default
         :data:`tmaplan.estimators.particle_filter.DEFAULT_KERNEL`, the compiled kernels;
-        "numpy" flies the campaigns stored before they became the default, and is the
-        closed loop's path before issue 42 in ``benchmarks/closed_loop.py``).
+        "numpy" gives the runs flown before they became the default again — runs stored
+        without filter options are recomputed, not reused, their key being another — and is
+        the closed loop's path before issue 42 in ``benchmarks/closed_loop.py``).
     """
 
     bearing_clutter: float = 0.0
@@ -103,8 +104,8 @@ class FilterOptions:
                 f"alarm_pings={self.alarm_response is not None}{kernel}")
 
     def build(self, config: PFConfig) -> Any:
-        """The filter: a :class:`ParticleFilter` with these likelihood options, monitored if
-        asked."""
+        """The filter: a :class:`ParticleFilter` with these likelihood options and
+        :attr:`kernel` (they replace ``config``'s), monitored if asked."""
         pf = ParticleFilter(dataclasses.replace(config, bearing_clutter=self.bearing_clutter,
                                                 ping_gate=self.ping_gate, kernel=self.kernel))
         return pf if self.monitor is None else MonitoredFilter(pf, self.monitor)

@@ -86,14 +86,19 @@ def test_innovation_uses_them_for_compiled_clouds_only(monkeypatch):
 
 def test_edge_clouds_as_numpys():
     """A particle exactly at the own ship (numpy: ``arctan2(0, 0) = 0``, residual ``wrap(z)``)
-    and one at an infinite distance (numpy: a finite residual) give numpy's moments."""
+    and one at an infinite distance (numpy: a finite residual) give numpy's moments in the
+    monitor's innovation (the compiled pass: NaN for the latter, numpy's formula then)."""
     z = 2.9
+    bearing = Measurement(kind="bearing", value=z, sigma=0.02)
     for bad in ([0.0, 0.0], [np.inf, 3e3], [-2e3, -np.inf]):
-        X = np.array([[*bad, 0.0, 0.0], [1e3, 2e3, 0.0, 0.0], [-4e3, 1e3, 0.0, 0.0]])
+        X = np.asfortranarray([[*bad, 0.0, 0.0], [1e3, 2e3, 0.0, 0.0], [-4e3, 1e3, 0.0, 0.0]])
         w = np.array([0.5, 0.3, 0.2])
-        nu, var = bearing_moments(particle_rows(X), w, z)
-        ref = _numpy_moments(X, w, z)
-        assert abs(nu - ref[0]) <= 1e-12 and abs(var - ref[1]) <= 1e-12, (bad, nu, ref)
+        state = PFState(step=0, particles=X, log_weights=np.log(w), ess=1.0, kernel="numba")
+        nu, S = innovation(state, bearing)
+        ref = _numpy_moments(X, state.weights, z)
+        assert abs(nu - ref[0]) <= 1e-12 and abs(S - 0.02**2 - ref[1]) <= 1e-12, (bad, nu, ref)
+        finite = np.isfinite(X).all()
+        assert np.isfinite(bearing_moments(particle_rows(X), w, z)).all() == finite
 
 
 @pytest.mark.parametrize(("A", "w"), [(np.zeros((1, 3)), np.ones(3)),

@@ -259,7 +259,8 @@ def innovation(state: Any, m: Measurement) -> tuple[float, float]:
             from tmaplan.estimators.pf_moments import bearing_moments  # deferred: numba
 
             nu, var = bearing_moments(particle_rows(X), w, float(m.value))
-            return nu, sigma2 + var
+            if math.isfinite(nu) and math.isfinite(var):  # else numpy's formula (below)
+                return nu, sigma2 + var
         if m.kind == "bearing":
             d = wrap(float(m.value) - np.arctan2(X[:, 0], X[:, 1]))
         else:

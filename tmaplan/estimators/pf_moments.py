@@ -65,8 +65,9 @@ def bearing_moments(A: np.ndarray, w: np.ndarray, z: float) -> tuple[float, floa
     nu, var : float
         ``Σ w_i d_i`` [rad] and ``Σ w_i (d_i − ν)²`` [rad²], ``d_i = wrap(z − atan2(x_i,
         y_i))`` ∈ [−π, π] (``wrap(z)`` for a particle at the own ship, as numpy's
-        ``arctan2(0, 0) = 0``). A cloud with a non-finite coordinate gets numpy's formula
-        (its residuals are those of ``arctan2``, which the rotation would turn into NaN).
+        ``arctan2(0, 0) = 0``). NaN for a cloud with a non-finite coordinate (where
+        ``arctan2`` would still give a residual): the caller's numpy formula then,
+        :func:`tmaplan.estimators.consistency.innovation`.
 
     Raises
     ------
@@ -80,8 +81,4 @@ def bearing_moments(A: np.ndarray, w: np.ndarray, z: float) -> tuple[float, floa
                             "rows (>= 2, N) and weights (N,)", (A.shape, w.shape))
     zw = float(wrap_angle(z))
     nu, var = _bearing_moments(np.ascontiguousarray(A), w, math.sin(z), math.cos(z), zw)
-    if not (math.isfinite(nu) and math.isfinite(var)):  # an infinite coordinate (or NaN)
-        d = wrap_angle(z - np.arctan2(A[0], A[1]))
-        nu = float(w @ d)
-        var = float(w @ (d - nu) ** 2)
     return float(nu), float(var)

@@ -399,6 +399,54 @@ def _interrupt_after(delay: float, fn):
         return None, exc if isinstance(exc, Interrupted) and exc.resumable else None
 
 
+def _reported(exc: BaseException) -> SystemError:
+    """What C code that ran the signal handler raises (numba's compiled code on its way out,
+    numpy reading a casadi matrix): a SystemError, the interrupt its cause."""
+    try:
+        raise exc
+    except BaseException as cause:
+        try:
+            raise SystemError("<function f> returned a result with an exception set") \
+                from cause
+        except SystemError as err:
+            return err
+
+
+def test_an_interrupt_reported_as_a_system_error_is_one(reference, tiny_file, tmp_path,
+                                                        monkeypatch, capsys):
+    """The campaign and the command line take a SystemError that reports an interrupt for
+    the interrupt: the runs kept and said, exit 130 with the one line (CI of stop 51: a
+    SIGINT inside the particle filter's compiled code came out as a traceback)."""
+    import tmaplan.evaluation.campaigns as campaigns
+    from tmaplan.cli import main
+    from tmaplan.experiments import run_campaign
+    from tmaplan.scenario import load
+
+    src = next(reference[1].glob("campaign-*"))
+    shutil.copytree(src, tmp_path / src.name)
+    real = RunRecord.load
+    raised = [_reported(KeyboardInterrupt())]
+
+    def load_then_interrupt(path, policies):
+        if path.name == "run_00002.npz":
+            raise raised[0]
+        return real(path, policies)
+
+    monkeypatch.setattr(campaigns.RunRecord, "load", load_then_interrupt)
+    with pytest.raises(Interrupted, match=r"^interrupted by SIGINT; 3 of 3 runs kept in "):
+        run_campaign(_spec(load(str(tiny_file))), out_dir=tmp_path)
+    raised[0] = _reported(Interrupted(signal.SIGTERM))
+    assert main(_cli_args(tiny_file, tmp_path)) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(
+        "tmaplan compare: interrupted by SIGTERM; 3 of 3 runs kept in "), err
+    raised[0] = _reported(ValueError("not an interrupt"))  # another SystemError is an error
+    with pytest.raises(SystemError):
+        run_campaign(_spec(load(str(tiny_file))), out_dir=tmp_path)
+    assert main(_cli_args(tiny_file, tmp_path)) == 1
+    assert "returned a result with an exception set" in capsys.readouterr().err
+
+
 def test_campaign_interrupted_at_random_points_resumes_identically(reference, tiny_file,
                                                                    tmp_path):
     """Interrupts at seeded random times (inside solves or not) keep every completed run

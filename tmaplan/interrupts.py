@@ -23,15 +23,18 @@ Worker processes ignore SIGINT, from their start (:func:`ignoring_sigint`,
 from __future__ import annotations
 
 import contextlib
+import functools
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import Any, TextIO
+from typing import Any, TextIO, TypeVar
 
-__all__ = ["Interrupted", "checkpoint", "defer", "ignoring_sigint", "interruptible",
-           "signals_interrupt", "solver_call"]
+__all__ = ["Interrupted", "as_interrupt", "checkpoint", "compiled_entry", "defer",
+           "ignoring_sigint", "interruptible", "signals_interrupt", "solver_call"]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 #: What :func:`signals_interrupt` turns into :class:`Interrupted`.
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -148,6 +151,66 @@ def defer(exc: KeyboardInterrupt) -> None:
         The interrupt caught in the callback (an :class:`Interrupted` keeps its signal).
     """
     _Received.swallowed = getattr(exc, "signum", signal.SIGINT)
+
+
+def as_interrupt(exc: BaseException) -> KeyboardInterrupt | None:
+    """The interrupt that ``exc`` is, or that it reports, or None.
+
+    A signal handler that runs in Python code called back from C (numba's compiled code on
+    its way out, numpy asking a casadi matrix for its array) raises the interrupt there, and
+    the C code returns with it set: Python reports ``SystemError: ... returned a result with
+    an exception set``, the interrupt chained as its cause (through further such
+    ``SystemError`` errors). That error is the interrupt.
+
+    Parameters
+    ----------
+    exc : BaseException
+        An exception caught.
+
+    Returns
+    -------
+    KeyboardInterrupt or None
+        ``exc`` itself if it is one; the interrupt at the end of a chain of ``SystemError``
+        causes; else None.
+    """
+    while isinstance(exc, SystemError) and exc.__cause__ is not None:
+        exc = exc.__cause__
+    return exc if isinstance(exc, KeyboardInterrupt) else None
+
+
+def compiled_entry(fn: _F) -> _F:
+    """``fn``, a compiled (numba) function called from Python, with an interrupt raised as
+    itself.
+
+    A compiled function that returns an array (or raises) calls back into Python on its way
+    out (numba's ``_numba_unpickle`` fetches numpy's array type); Python runs a pending signal
+    handler there, and numba reports the :class:`KeyboardInterrupt` the handler raises as
+    ``SystemError: CPUDispatcher(...) returned a result with an exception set``, the interrupt
+    chained as its cause. A Ctrl-C during the particle filter's compiled kernels came out as
+    that ``SystemError`` (every one of 3508 SIGINTs sent during calls of one kernel, measured),
+    and a campaign stopped with its traceback (:func:`as_interrupt`). The wrapper raises the
+    interrupt itself (an :class:`Interrupted` keeps
+    its signal); any other error passes unchanged. Every Python call of a compiled function
+    of tmaplan goes through it (compiled functions calling each other do not: no Python runs
+    between them).
+
+    Parameters
+    ----------
+    fn : callable
+        A numba dispatcher (or any callable).
+    """
+
+    @functools.wraps(fn)
+    def call(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return fn(*args, **kwargs)
+        except SystemError as exc:
+            interrupt = as_interrupt(exc)
+            if interrupt is None:
+                raise
+            raise interrupt from None
+
+    return call  # type: ignore[return-value]
 
 
 def _in_main_thread() -> bool:

@@ -204,3 +204,40 @@ def test_an_interrupt_in_the_callback_is_raised_once_by_the_evaluation(setup, mo
     checkpoint()  # raised once: nothing left over
     after = compiled.plan_function(x, P)  # and the next evaluation is sound
     assert float(after[0].item()) == float(before[0].item())
+
+
+@pytest.mark.parametrize("reported", [False, True])
+def test_an_interrupt_in_the_callback_is_raised_by_the_solver_call(setup, monkeypatch,
+                                                                   reported):
+    """An interrupt inside the callback (raised there, or reported by C code as a
+    SystemError: numpy reading a casadi matrix while the handler ran) gives NaN to casadi and
+    is raised as an interrupt when the solver call ends; before, the SystemError became
+    casadi's RuntimeError (and its dump on stderr). Another SystemError stays an error."""
+    import tmaplan.planning.compiled_objective as co
+    from tmaplan.interrupts import Interrupted, solver_call
+
+    sc, planner, ctx, _ = setup
+    ctx2 = PlanContext(**{**{f: getattr(ctx, f) for f in ("dt", "times", "A", "Q", "v_obs",
+                                                           "disp", "turn_rate", "p", "layout",
+                                                           "ping_scale", "turn_rate_max")}})
+    f = co.compiled_expected_time(ctx2, 0.1, 0.25)
+    fn = ca.Function("c", [ctx.disp, ctx.v_obs, ctx.p], [f])
+    _, disp, v, P = _inputs(sc, planner, 7)
+    error: list[BaseException] = []
+
+    def interrupted(*args):
+        try:
+            raise error[0]
+        except BaseException as exc:
+            if not reported:
+                raise
+            raise SystemError("<function DM.__array__> returned a result with an exception "
+                              "set") from exc
+
+    monkeypatch.setattr(co, "_value_grad", interrupted)
+    error.append(Interrupted())
+    with pytest.raises(Interrupted), solver_call():
+        assert np.isnan(float(fn(disp, v, P)))
+    error[0] = ValueError("not an interrupt")
+    with pytest.raises(RuntimeError, match="Error in Function"), solver_call():
+        fn(disp, v, P)

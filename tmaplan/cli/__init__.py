@@ -37,7 +37,7 @@ from tmaplan.cli.finite import require_finite
 from tmaplan.cli.paths import check_outputs
 from tmaplan.cli.preflight import preflight
 from tmaplan.errors import ArgumentError
-from tmaplan.interrupts import Interrupted, checkpoint, signals_interrupt
+from tmaplan.interrupts import Interrupted, as_interrupt, checkpoint, signals_interrupt
 from tmaplan.models.checks import check_scenario
 from tmaplan.scenario import load, load_problem
 from tmaplan.version import __version__
@@ -234,12 +234,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 payload.setdefault("problem", problem)
             if args.json is not None and payload is not None:
                 write_json(payload, args.json)
-    except KeyboardInterrupt as exc:
-        print(_interrupted(args.verb, exc, sys.argv[1:] if argv is None else argv),
-              file=sys.stderr)
-        return exc.exit_status if isinstance(exc, Interrupted) else 130
-    except Exception as exc:
-        if args.debug:
+    except BaseException as exc:
+        interrupt = as_interrupt(exc)  # (a SystemError reporting one is one)
+        if interrupt is not None:
+            print(_interrupted(args.verb, interrupt, sys.argv[1:] if argv is None else argv),
+                  file=sys.stderr)
+            return interrupt.exit_status if isinstance(interrupt, Interrupted) else 130
+        if args.debug or not isinstance(exc, Exception):
             raise
         text = str(exc)
         # every error but a flag's says which problem it is about: a field error with its

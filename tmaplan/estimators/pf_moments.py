@@ -24,10 +24,12 @@ import numpy as np
 from tmaplan.errors import ArgumentError
 from tmaplan.estimators.pf_math import abs_atan2, njit
 from tmaplan.geometry import wrap_angle
+from tmaplan.interrupts import compiled_entry
 
 __all__ = ["bearing_moments"]
 
 
+@compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _bearing_moments(A: np.ndarray, w: np.ndarray, sz: float, cz: float,
                      at_origin: float) -> tuple[float, float]:

@@ -79,6 +79,7 @@ from tmaplan.estimators.pf_math import (
     philox,
     prange,
 )
+from tmaplan.interrupts import compiled_entry
 
 __all__ = ["BLOCK"]
 
@@ -109,6 +110,7 @@ class _Kernel:
         """Whether a call for ``n`` particles runs the parallel build."""
         return n >= PARALLEL_MIN * self.grain and numba.get_num_threads() > 1
 
+    @compiled_entry
     def __call__(self, n: int, *args: Any) -> None:
         (self.par if self.parallel(n) else self.ser)(*args)
 
@@ -187,6 +189,7 @@ def _scale_kernel(lw: np.ndarray, w: np.ndarray, shift: float, scale: np.ndarray
             o[j] = o[j] * f
 
 
+@compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _cumsum_kernel(w: np.ndarray, c: np.ndarray) -> None:
     """``c = cumsum(w)`` in numpy's order (sequential): the resampling CDF bit for bit."""
@@ -506,6 +509,7 @@ def normalise(lw: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
     return w, ess
 
 
+@compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _weights_finish(part: np.ndarray) -> tuple[float, np.ndarray, float]:
     """From the per-block (m_b, #bad, Σw, Σw²) of :func:`_loglik_kernel`: the log-weight shift
@@ -576,6 +580,7 @@ def moments(A: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return _moments_finish(part, A[:, 0].copy())
 
 
+@compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _moments_finish(part: np.ndarray, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Mean and covariance from the per-block sums of :func:`_moments_kernel` (block order)."""

@@ -2,11 +2,10 @@
 
 A campaign runs every policy on the same ``runs`` truths and noise sequences: run ``i`` derives
 its generators from ``SeedSequence(seed, spawn_key=(i,))`` (truth, measurement noise, filter:
-:func:`tmaplan.evaluation.seeding.run_streams`),
-and every policy re-creates them from the same seeds, so differences between policies are
-paired. A run's result depends only on ``(spec, i)``: BLAS is limited to one thread inside a
-run, so serial, process-pool and Dask backends with any worker count give bit-identical
-results.
+:func:`tmaplan.evaluation.seeding.run_streams`), and every policy re-creates them from the
+same seeds, so differences between policies are paired. A run's result depends only on
+``(spec, i)``: BLAS is limited to one thread inside a run, so serial, process-pool and Dask
+backends with any worker count give bit-identical results.
 
 Runs (:class:`tmaplan.evaluation.records.RunRecord`) are written to
 ``<out>/campaign-<key>/runs/run_XXXXX.npz`` as they finish (atomically); re-running the same
@@ -58,7 +57,7 @@ from tmaplan.evaluation.records import (
     scenario_hash,
 )
 from tmaplan.evaluation.replans import ReplanCounts, replan_flags, warn_not_converged
-from tmaplan.interrupts import Interrupted, checkpoint, interruptible
+from tmaplan.interrupts import Interrupted, as_interrupt, checkpoint, interruptible
 from tmaplan.parallel import SharedPayload, call_with_payload, close_pool, process_pool
 from tmaplan.policies import Planned, Policy, Receding, parse_policy
 from tmaplan.policies.manoeuvres import offline_plan
@@ -502,8 +501,7 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     workers : int
         Worker processes (backend "processes" or a local Dask cluster).
     backend : {"serial", "processes", "dask"}, optional
-        Default: "dask" if ``scheduler`` is given, "processes" if ``workers > 1``, else
-        "serial".
+        Default: "dask" with ``scheduler``, "processes" if ``workers > 1``, else "serial".
     scheduler : str, optional
         Address of a Dask scheduler.
     progress : bool
@@ -515,8 +513,8 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
     pool : concurrent.futures.Executor, optional
         With backend "processes": worker processes to use (:func:`tmaplan.parallel.
         process_pool`, e.g. shared with an offline plan solved before); default: a pool of
-        ``workers`` started at once, so that its workers import while the policies are
-        resolved, and used for the offline plans' multi-starts too.
+        ``workers`` started at once (they import while the policies are resolved), used for
+        the offline plans' multi-starts too.
 
     Returns
     -------
@@ -560,7 +558,9 @@ def run_campaign(spec: CampaignSpec, *, out_dir: str | Path | None = None, worke
                                 pool if backend == "processes" else None)
             _compute(backend, workers, scheduler, spec, pols, todo, pool, progress, results,
                      directory, computed)
-        except KeyboardInterrupt as exc:  # the workers stopped at once; what is stored is kept
+        except (KeyboardInterrupt, SystemError) as caught:  # the workers stopped at once;
+            if (exc := as_interrupt(caught)) is None:  # what is stored is kept
+                raise
             close_pool(own_pool, interrupted=True)
             own_pool = None
             kept = 0 if directory is None else sum(  # (loaded, computed, or not yet loaded)

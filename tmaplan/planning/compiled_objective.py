@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from tmaplan.interrupts import defer
+from tmaplan.interrupts import as_interrupt, compiled_entry, defer
 
 __all__ = ["compiled_expected_time", "expected_time_value_grad"]
 
@@ -44,6 +44,7 @@ _T = 100.0  # time scale [s]
 _MIN_RANGE = 100.0  # floor of the range [m]
 
 
+@compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, info: Any,
                 weight: Any, ic: Any, tau: float, width: float, span: float, m2: float,
@@ -331,8 +332,11 @@ def _callback_class() -> Any:
         def eval(self, arg: Any) -> list[Any]:
             try:
                 return self.fn(arg)
-            except KeyboardInterrupt as exc:  # NaN out; the solver call raises it after
-                defer(exc)
+            except (KeyboardInterrupt, SystemError) as exc:  # (numpy reading a DM: SystemError)
+                interrupt = as_interrupt(exc)
+                if interrupt is None:
+                    raise
+                defer(interrupt)  # NaN out; the solver call raises it after
                 return [ca.DM.nan(*shape) for shape in self.outs]
 
         def has_reverse(self, nadj: int) -> bool:

@@ -447,6 +447,36 @@ def test_an_interrupt_reported_as_a_system_error_is_one(reference, tiny_file, tm
     assert "returned a result with an exception set" in capsys.readouterr().err
 
 
+def test_the_command_line_takes_a_reported_interrupt_for_one(monkeypatch, capsys):
+    """Outside a campaign too (a verb's own computation): exit 130 with the one line, also
+    with ``--debug``; another SystemError is an error (a traceback with ``--debug``);
+    SystemExit passes through."""
+    import tmaplan.cli.crlb as verb
+    from tmaplan.cli import main
+
+    raised: list[BaseException] = []
+
+    def run(args):
+        raise raised[0]
+
+    monkeypatch.setattr(verb, "run", run)
+    for debug in ([], ["--debug"]):
+        raised[:] = [_reported(Interrupted(signal.SIGTERM))]
+        assert main([*debug, "crlb", "default"]) == 130
+        assert capsys.readouterr().err.splitlines() == ["tmaplan crlb: interrupted by SIGTERM"]
+        raised[:] = [_reported(KeyboardInterrupt())]
+        assert main([*debug, "crlb", "default"]) == 130
+        assert capsys.readouterr().err.splitlines() == ["tmaplan crlb: interrupted by SIGINT"]
+    raised[:] = [_reported(ValueError("not an interrupt"))]
+    assert main(["crlb", "default"]) == 1
+    assert "returned a result with an exception set" in capsys.readouterr().err
+    with pytest.raises(SystemError):
+        main(["--debug", "crlb", "default"])
+    raised[:] = [SystemExit(3)]
+    with pytest.raises(SystemExit):
+        main(["crlb", "default"])
+
+
 def test_campaign_interrupted_at_random_points_resumes_identically(reference, tiny_file,
                                                                    tmp_path):
     """Interrupts at seeded random times (inside solves or not) keep every completed run

@@ -72,7 +72,8 @@ def _inlined(fn: ast.FunctionDef) -> bool:
 
 def unwrapped_compiled_calls(package: Path) -> list[str]:
     """Python calls of a module-level ``@njit`` function (not inlined) that is not decorated
-    with ``@compiled_entry``: ``"module.py:line name"``. A call from inside another compiled
+    with ``@compiled_entry``, and calls of a kernel's builds (``.par(``, ``.ser(``) outside a
+    function decorated so: ``"module.py:line name"``. A call from inside another compiled
     function (``@njit`` or a ``@_kernel``) runs no Python and is allowed."""
     trees = {p: ast.parse(p.read_text(encoding="utf-8")) for p in package.rglob("*.py")}
     bare = set()
@@ -87,10 +88,17 @@ def unwrapped_compiled_calls(package: Path) -> list[str]:
         compiled_bodies = [fn for fn in ast.walk(tree) if isinstance(fn, ast.FunctionDef)
                            and {"njit", "_kernel"} & set(_decorator_names(fn))]
         inside = {id(n) for fn in compiled_bodies for n in ast.walk(fn)}
+        entries = [fn for fn in ast.walk(tree) if isinstance(fn, ast.FunctionDef)
+                   and "compiled_entry" in _decorator_names(fn)]
+        wrapped = {id(n) for fn in entries for n in ast.walk(fn)}
         for node in ast.walk(tree):
-            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-                    and node.func.id in bare and id(node) not in inside):
+            if not isinstance(node, ast.Call) or id(node) in inside:
+                continue
+            if isinstance(node.func, ast.Name) and node.func.id in bare:
                 found.append(f"{path.relative_to(package)}:{node.lineno} {node.func.id}")
+            elif (isinstance(node.func, ast.Attribute) and node.func.attr in ("par", "ser")
+                  and id(node) not in wrapped):
+                found.append(f"{path.relative_to(package)}:{node.lineno} .{node.func.attr}")
     return sorted(found)
 
 
@@ -102,8 +110,10 @@ def test_every_compiled_function_called_from_python_is_a_compiled_entry(tmp_path
         "@njit(cache=True)\ndef f(x):\n    return x\n\n"
         "@njit(inline='always')\ndef g(x):\n    return x\n\n"
         "@compiled_entry\n@njit\ndef h(x):\n    return f(x)\n\n"
-        "def py(x):\n    return f(x) + g(x) + h(x)\n", encoding="utf-8")
-    assert unwrapped_compiled_calls(tmp_path) == ["m.py:15 f"]
+        "def py(x):\n    return f(x) + g(x) + h(x)\n\n"
+        "def launch(k):\n    k.par(1)\n\n"
+        "@compiled_entry\ndef launch_wrapped(k):\n    k.ser(1)\n", encoding="utf-8")
+    assert unwrapped_compiled_calls(tmp_path) == ["m.py:15 f", "m.py:18 .par"]
 
 
 def _bombarded(fn: Callable[[], object], seconds: float = 1.0) -> dict[str, int]:
@@ -117,28 +127,36 @@ def _bombarded(fn: Callable[[], object], seconds: float = 1.0) -> dict[str, int]
     gc.collect()
     gc.disable()
     counts = {"interrupt": 0, "other": 0}
-    stop = threading.Event()
+    go, stop = threading.Event(), threading.Event()
 
     def sender() -> None:
+        go.wait()  # (no signal before the counting block)
         while not stop.wait(0.0007):
             os.kill(os.getpid(), signal.SIGINT)
 
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     thread = threading.Thread(target=sender, daemon=True)
+    thread.start()
     end = time.monotonic() + seconds
+    done = False
     try:
-        thread.start()
-        while time.monotonic() < end:
-            try:
+        while not done:
+            try:  # every statement while signals may come is in here
+                go.set()
                 while time.monotonic() < end:
                     fn()
+                stop.set()
+                thread.join()  # no signal is sent after this
+                time.sleep(0.01)  # one in flight is handled here
+                done = True
             except KeyboardInterrupt:
                 counts["interrupt"] += 1
             except SystemError:
                 counts["other"] += 1
     finally:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)  # the last SIGINTs in flight
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # (fn failed: the last SIGINTs)
         stop.set()
+        go.set()
         thread.join()
         time.sleep(0.01)
         signal.signal(signal.SIGINT, old)

@@ -191,8 +191,8 @@ def compiled_entry(fn: _F) -> _F:
     and a campaign stopped with its traceback (:func:`as_interrupt`). The wrapper raises the
     interrupt itself (an :class:`Interrupted` keeps
     its signal); any other error passes unchanged. Every Python call of a compiled function
-    of tmaplan goes through it (compiled functions calling each other do not: no Python runs
-    between them).
+    of tmaplan goes through one (the function itself, or the Python function that calls its
+    builds); compiled functions calling each other do not (no Python runs between them).
 
     Parameters
     ----------

@@ -452,6 +452,7 @@ def log_weights(state: Any, measurements: Sequence[Any], config: Any, move: bool
     return lw, mx, fm, fv, ll, parts
 
 
+@compiled_entry
 def _predict_and_weigh(pending: Prediction, lw: np.ndarray, bear: np.ndarray,
                        ranges: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:

@@ -27,6 +27,8 @@ Run: python benchmarks/closed_loop.py [--path old|new|both] [--runs 4] [--first-
      [--new-solver real-time|ipopt|sqp]
      [--particles 3000] [--policies straight,planned,receding] [--step] [--json OUT]
      [--old-kernel numpy|numba]
+     python benchmarks/closed_loop.py --campaign --runs 200 --workers 2 --rounds 2
+         --policies straight,single-turn,planned,receding   (issue 42's 200-run compare)
      python benchmarks/closed_loop.py --pair OLD_JSON NEW_JSON
      python benchmarks/closed_loop.py --gaps --runs 3   (seed 1000 unless --seed)
 """
@@ -282,6 +284,45 @@ def step_profile(problem="default"):
               f"{whole['daqp'] / t_ip:.4f}")
 
 
+def campaign(names, runs, workers, particles, seed=0, problem="default", rounds=1):
+    """The 200-run compare of issue 42's done-when, both paths, in one run: per round, the
+    old path (``receding`` by IPOPT on the casadi graph, the numpy filter kernel; its
+    policies resolved in this process, timed with the campaign) and then the new one, exactly
+    ``tmaplan compare PROBLEM --policies NAMES --runs RUNS --workers WORKERS --out DIR`` (the
+    policies resolved by the campaign on its worker pool), each into a new directory, on the
+    same seeds. Wall-clock seconds of each, and the ratio old/new of each round."""
+    import tempfile
+
+    from tmaplan.experiments import CampaignSpec, run_campaign
+
+    sc = load_problem(problem)
+    out = []
+    for r in range(rounds):
+        row = {}
+        for path in ("old", "new"):
+            manoeuvres._PLAN_CACHE.clear()  # no offline plan of the other path reused
+            t = time.perf_counter()
+            with tempfile.TemporaryDirectory() as d:
+                if path == "old":
+                    pols, _ = _policies(sc, names, "old")
+                    spec = CampaignSpec(scenario=sc, policies=tuple(names), runs=runs,
+                                        seed=seed, n_particles=particles,
+                                        filter_options=FilterOptions(kernel="numpy"))
+                    res = run_campaign(spec, out_dir=d, workers=workers, policies=pols)
+                else:
+                    spec = CampaignSpec(scenario=sc, policies=tuple(names), runs=runs,
+                                        seed=seed, n_particles=particles)
+                    res = run_campaign(spec, out_dir=d, workers=workers)
+                row[path] = time.perf_counter() - t
+            medians = {n: res.summary[n]["time_to_accuracy"] for n in names}
+            print(f"round {r} {path}: {row[path]:.1f} s; median time to accuracy "
+                  + ", ".join(f"{n} {v / 60:.2f} min" for n, v in medians.items()), flush=True)
+        print(f"round {r}: old {row['old']:.1f} s, new {row['new']:.1f} s, "
+              f"old/new {row['old'] / row['new']:.2f}", flush=True)
+        out.append(row)
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--path", choices=("old", "new", "both"), default="both")
@@ -303,7 +344,15 @@ def main():
     ap.add_argument("--json", help="write per-run metrics (with seeds and run indices) here")
     ap.add_argument("--pair", nargs=2, metavar=("OLD_JSON", "NEW_JSON"),
                     help="paired new - old intervals from two --json files")
+    ap.add_argument("--campaign", action="store_true",
+                    help="the compare campaign of both paths on --workers (--rounds times)")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--rounds", type=int, default=1)
     a = ap.parse_args()
+    if a.campaign:
+        campaign(a.policies.split(","), a.runs, a.workers, a.particles,
+                 seed=0 if a.seed is None else a.seed, problem=a.problem, rounds=a.rounds)
+        return
     if a.pair:
         pair(*a.pair)
         return

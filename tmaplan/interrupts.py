@@ -189,10 +189,10 @@ def compiled_entry(fn: _F) -> _F:
     chained as its cause. A Ctrl-C during the particle filter's compiled kernels came out as
     that ``SystemError`` (every one of 3508 SIGINTs sent during calls of one kernel, measured),
     and a campaign stopped with its traceback (:func:`as_interrupt`). The wrapper raises the
-    interrupt itself (an :class:`Interrupted` keeps
-    its signal); any other error passes unchanged. Every Python call of a compiled function
-    of tmaplan goes through one (the function itself, or the Python function that calls its
-    builds); compiled functions calling each other do not (no Python runs between them).
+    interrupt itself (an :class:`Interrupted` keeps its signal); any other error passes
+    unchanged. Every Python call of a compiled function of tmaplan goes through one (the
+    function itself, or the Python function that calls its builds); compiled functions
+    calling each other do not (no Python runs between them).
 
     Parameters
     ----------

@@ -163,6 +163,20 @@ def test_wrap_angle_examples() -> None:
     assert g.wrap_angle(np.zeros((2, 3))).shape == (2, 3)
 
 
+def test_one_angle_wraps_as_in_an_array() -> None:
+    # one angle (a closed loop's bearing) takes a shorter path: the same bits and types
+    a = np.concatenate([np.linspace(-7.0, 7.0, 2001), [np.pi, -np.pi, -0.0, 0.0, 1e-300]])
+    whole = g.wrap_angle(a)
+    for i, x in enumerate(a):
+        for one in (g.wrap_angle(float(x)), g.wrap_angle(np.array([x]))[0],
+                    g.wrap_angle(np.array(x))):
+            assert np.array_equal(one, whole[i]) and np.signbit(one) == np.signbit(whole[i])
+    x = np.array([0.5])
+    y = g.wrap_angle(x)
+    assert y is not x and y.shape == (1,)  # a new array, never the caller's
+    assert isinstance(g.wrap_angle(np.array(0.5)), np.floating)
+
+
 def test_wrap_half_angle_at_half_pi() -> None:
     h = np.pi / 2
     assert g.wrap_half_angle(h) == h

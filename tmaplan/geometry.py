@@ -124,6 +124,8 @@ def wrap_angle(a: ArrayLike) -> FloatArray:
         (−π, π] are returned unchanged (bit for bit); ``−π`` maps to ``π``.
     """
     arr = np.asarray(a, dtype=np.float64)
+    if arr.size == 1 and -_PI < arr.item() <= _PI:  # one angle, inside (a closed loop's)
+        return _scalar_or_array(arr.copy())
     inside = (arr > -_PI) & (arr <= _PI)
     out = np.array(arr)  # a new array, never the caller's
     outside = ~inside

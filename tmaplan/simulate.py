@@ -36,6 +36,7 @@ __all__ = [
     "Measurement",
     "MeasurementSet",
     "Simulation",
+    "StepSensors",
     "check_truth_source",
     "draw_common_noise",
     "draw_truth",
@@ -501,8 +502,23 @@ def _reaches(sensor: RangeSensor, X: np.ndarray) -> bool:
     return sensor.max_range is None or float(range_of(X)[0]) <= sensor.max_range
 
 
+class StepSensors:
+    """What :func:`measure_step` reads of a scenario, made once for a closed-loop run: the
+    bearing, passive range and ping sensors, the steps at which each measures (sets of int),
+    the grid times [s] and the faults."""
+
+    __slots__ = ("bearing", "faults", "passive", "pings", "times")
+
+    def __init__(self, scenario: Scenario) -> None:
+        bs, rs, self.pings = _closed_loop_sensors(scenario)
+        self.bearing, self.passive = (
+            [(j, s, frozenset(measurement_steps(s, scenario.time).tolist()))
+             for j, s in enumerate(group)] for group in (bs, rs))
+        self.times, self.faults = scenario.times, scenario.faults
+
+
 def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, *,
-                 ping: bool = False) -> list[Measurement]:
+                 ping: bool = False, sensors: StepSensors | None = None) -> list[Measurement]:
     """Measurements of step ``k`` in a closed loop: bearings, passive ranges and, if ``ping``,
     an active ping (first active range sensor; ``Measurement.ping`` set); a range only within
     its sensor's ``max_range`` (the true range at ``k``). Frequency sensors
@@ -518,25 +534,27 @@ def measure_step(scenario: Scenario, k: int, X: np.ndarray, noise: CommonNoise, 
         True relative state with the observer's instantaneous velocity [m, m/s].
     noise : CommonNoise
     ping : bool
+    sensors : StepSensors, optional
+        ``StepSensors(scenario)``, made once by a loop that measures every step.
     """
-    bs, rs, ps = _closed_loop_sensors(scenario)
+    sen = StepSensors(scenario) if sensors is None else sensors
     X = np.asarray(X, float)[None]
-    faults, t = scenario.faults, float(scenario.times[k])
+    faults, t = sen.faults, float(sen.times[k])
     out = []
-    for j, s in enumerate(bs):
-        if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "bearing"):
+    for j, s, steps in sen.bearing:
+        if k in steps and not (faults is not None and dropped(faults, t, "bearing")):
             truth, value = reading(s, X, noise.bearing[k, j:j + 1])
             if faults is not None and noise.fault is not None:
                 value = corrupt_bearings(faults, value, truth, noise.fault[k, j],
                                          ambiguity=s.ambiguity)
             out.append(_measurement(s, value[0]))
     out += [_measurement(s, reading(s, X, noise.range[k, j:j + 1])[1][0])
-            for j, s in enumerate(rs)
-            if k in measurement_steps(s, scenario.time) and not dropped(faults, t, "range")
+            for j, s, steps in sen.passive
+            if k in steps and not (faults is not None and dropped(faults, t, "range"))
             and _reaches(s, X)]
-    echo = not dropped(faults, t, "range") and not (
-        faults is not None and noise.fault is not None
-        and noise.fault[k, -1, 0] < faults.missed_ping_probability)
+    ps = sen.pings
+    echo = faults is None or (not dropped(faults, t, "range") and not (
+        noise.fault is not None and noise.fault[k, -1, 0] < faults.missed_ping_probability))
     if ping and ps and echo and _reaches(ps[0], X):
         out.append(_measurement(ps[0], reading(ps[0], X, noise.ping[k:k + 1])[1][0], ping=True))
     return out

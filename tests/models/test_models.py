@@ -11,7 +11,7 @@ from tmaplan.errors import ScenarioError
 from tmaplan.geometry import bearing_of as bearing
 from tmaplan.models.checks import check_scenario
 from tmaplan.models.faults import dropped
-from tmaplan.models.observer import observer_track, turn_rate_track
+from tmaplan.models.observer import arc_displacement, observer_track, turn_rate_track
 from tmaplan.models.prior import sample_prior
 from tmaplan.models.sensors import bearing_loglik, doppler_frequency, range_rate
 from tmaplan.models.target import constant_turn_state, ncv_matrices
@@ -94,6 +94,22 @@ def test_pi_ambiguous_likelihood_keeps_both_modes():
     for z_alt in (np.radians(225.0), np.radians(-135.0), np.radians(405.0)):
         np.testing.assert_allclose(bearing_loglik(z_alt, np.stack([front, back]), 0.01, "pi"),
                                    ll, rtol=1e-9)
+
+
+def test_one_steps_arc_on_floats_has_the_bits_of_the_array_formula():
+    # the closed loop flies one step at a time on floats (its fast path); a whole track
+    # goes through the array formula: both must give the same bits, straight legs included
+    rng = np.random.default_rng(7)
+    h = rng.uniform(-20.0, 20.0, 4000)
+    u = np.concatenate([rng.uniform(-0.02, 0.02, 3000), np.zeros(500), [-0.0] * 500])
+    v = rng.uniform(0.5, 15.0, 4000)
+    whole = arc_displacement(h, u, v, 10.0)
+    for i in range(h.size):
+        one = arc_displacement(float(h[i]), float(u[i]), float(v[i]), 10.0)
+        assert one.shape == (2,)
+        assert np.array_equal(one, whole[i]), (h[i], u[i], v[i])
+    assert np.array_equal(arc_displacement(0.3, 0.01, 5.0, 10.0),
+                          arc_displacement(np.array(0.3), np.array(0.01), np.array(5.0), 10.0))
 
 
 def test_turn_rate_track_is_exact_circle():

@@ -326,6 +326,13 @@ class MonitoredState:
     quiet: int = 0
     prior: Any = None
 
+    def evolve(self, **changes: Any) -> MonitoredState:
+        """``dataclasses.replace(self, **changes)`` for the filter's own fields, at a tenth of
+        its cost (every step makes two): the fields copied, then ``changes``."""
+        new = object.__new__(MonitoredState)
+        new.__dict__.update(self.__dict__, **changes)
+        return new
+
     @property
     def step(self) -> int:
         """Grid step of the inner state."""
@@ -394,7 +401,7 @@ class MonitoredFilter:
         """Inner prediction (boosted process noise during a hold-off)."""
         d = np.zeros(2) if dv is None else np.asarray(dv, float).reshape(2)
         filt = self._boosted if state.quiet > 0 else self.inner
-        return dataclasses.replace(state, inner=filt.predict(state.inner, d, rng),
+        return state.evolve(inner=filt.predict(state.inner, d, rng),
                                    pending=(state.inner, d, state.velocity),
                                    velocity=state.velocity + d)
 
@@ -445,7 +452,7 @@ class MonitoredFilter:
         if alarm is None and cfg.glr_window and state.quiet == 0:
             alarm = self._glr(history)
         filt = self._boosted if state.quiet > 0 else self.inner
-        new = dataclasses.replace(state, inner=filt.update(state.inner, kept, rng),
+        new = state.evolve(inner=filt.update(state.inner, kept, rng),
                                   nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
                                   outliers=n_out, history=history,
                                   pending=None, quiet=max(state.quiet - 1, 0))

@@ -278,10 +278,10 @@ def read_only(a: np.ndarray) -> np.ndarray:
     return a
 
 
+@functools.cache
 def _fast() -> Any:
     """The numba kernels (imported on first use: numba loads in about a second)."""
     from tmaplan.estimators import pf_numba  # deferred: numba takes about a second to import
-
     return pf_numba
 
 

@@ -9,6 +9,7 @@ particles.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -51,15 +52,19 @@ def check_measurement(m: Any) -> None:
     finite std > 0 per line, ping only on a range)."""
     if m.kind not in ("bearing", "range", "frequency"):
         raise ArgumentError("measurement.kind", "'bearing', 'range' or 'frequency'", m.kind)
-    sigma = np.asarray(m.sigma, dtype=float)
-    if sigma.size == 0 or not (np.isfinite(sigma).all() and (sigma > 0).all()):
+    scalars = (m.kind != "frequency" and type(m.value) is float
+               and type(m.sigma) is float)  # a bearing or range as a closed loop makes them
+    sigma = m.sigma if scalars else np.asarray(m.sigma, dtype=float)
+    if (not (math.isfinite(sigma) and sigma > 0) if scalars else
+            sigma.size == 0 or not (np.isfinite(sigma).all() and (sigma > 0).all())):
         # σ = 0 or NaN would reset the weights
         raise ArgumentError("measurement.sigma",
                             f"a finite std > 0 (per line) of the {m.kind} measurement", m.sigma)
-    value = np.asarray(m.value, dtype=float)
-    if value.size == 0 or not np.isfinite(value).all():
+    value = m.value if scalars else np.asarray(m.value, dtype=float)
+    if (not math.isfinite(value) if scalars else
+            value.size == 0 or not np.isfinite(value).all()):
         raise ArgumentError("measurement.value", f"a finite {m.kind} value", m.value)
-    if m.kind != "frequency" and (value.size != 1 or sigma.size != 1):
+    if m.kind != "frequency" and not scalars and (value.size != 1 or sigma.size != 1):
         raise ArgumentError("measurement.value", f"a scalar {m.kind} value and std",
                             (m.value, m.sigma))
     if m.kind == "bearing" and m.ambiguity not in ("none", "pi"):

@@ -13,6 +13,7 @@ truth and the same noise* (common random numbers, :class:`tmaplan.simulate.Commo
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Iterator, Mapping
 from typing import Any
@@ -31,7 +32,13 @@ from tmaplan.models.observer import ObserverTrack, arc_displacement
 from tmaplan.models.target import initial_velocity
 from tmaplan.policies import BeliefView, Policy
 from tmaplan.scenario import Scenario
-from tmaplan.simulate import Measurement, draw_common_noise, draw_truth, measure_step
+from tmaplan.simulate import (
+    Measurement,
+    StepSensors,
+    draw_common_noise,
+    draw_truth,
+    measure_step,
+)
 
 __all__ = ["ClosedLoopRun", "OwnShipFlight", "fly", "paired_run", "run_closed_loop"]
 
@@ -157,16 +164,16 @@ class OwnShipFlight:
             Commanded turn rate [rad/s].
         """
         u = float(turn_rate)
-        if self.u_max is not None:
-            u = float(np.clip(u, -self.u_max, self.u_max))
+        if self.u_max is not None:  # as np.clip (NaN stays NaN)
+            u = float(min(max(u, -self.u_max), self.u_max))
         self.turn_rate[k] = u
         dt = self.dt
-        disp = arc_displacement(np.array(self.heading), np.array(u), np.array(self.speed), dt)
+        disp = arc_displacement(self.heading, u, self.speed, dt)
         self.position = self.position + disp
-        self.heading = self.heading + u * dt
+        self.heading = h = self.heading + u * dt
         self.mean_velocity[k + 1] = disp / dt
-        self.velocity[k + 1] = self.speed * np.array([np.sin(self.heading), np.cos(self.heading)])
-        self.positions[k + 1], self.headings[k + 1] = self.position, self.heading
+        self.velocity[k + 1] = (self.speed * math.sin(h), self.speed * math.cos(h))
+        self.positions[k + 1], self.headings[k + 1] = self.position, h
 
     def state(self, k: int) -> np.ndarray:
         """The own ship's state ``[x, y, v_x, v_y]`` [m, m/s] at step ``k`` (flown), shape (4,)."""
@@ -228,6 +235,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         finite_real("filter_q", filter_q, "a finite intensity >= 0 [m²/s³]", lower=0.0)
     noise = draw_common_noise(scenario, noise_rng)
     own = OwnShipFlight(scenario)
+    sensors = StepSensors(scenario)
 
     q = scenario.target.q if filter_q is None else filter_q
     opts = FilterOptions.monitored() if options is None else options
@@ -247,7 +255,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
         act = ctrl.act(belief, float(times[k]))
         own.advance(k, act.turn_rate)
         meas = measure_step(scenario, k + 1, target[k + 1] - own.state(k + 1), noise,
-                            ping=bool(act.ping))
+                            ping=bool(act.ping), sensors=sensors)
         # a ping counts when transmitted, echo or not (a missed echo, tmaplan.models.faults)
         pings.extend([k + 1] if act.ping and active else [])
         return own.mean_velocity[k + 1] - own.mean_velocity[k], meas
@@ -255,7 +263,7 @@ def run_closed_loop(scenario: Scenario, policy: Policy, target: np.ndarray, *,
     state0 = pf.init(scenario, filter_rng)
     # the sensors that measure at step 0 (e.g. a first bearing at t0) are assimilated before
     # the controller's first action; with none there, nothing is drawn or changed
-    if meas0 := measure_step(scenario, 0, target[0] - own.state(0), noise):
+    if meas0 := measure_step(scenario, 0, target[0] - own.state(0), noise, sensors=sensors):
         state0 = pf.update(state0, meas0, filter_rng)
     fr = drive(pf, state0, K, step, filter_rng)
     obs = own.track(times)

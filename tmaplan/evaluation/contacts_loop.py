@@ -36,7 +36,7 @@ from tmaplan.evaluation.seeding import run_streams
 from tmaplan.policies import BeliefView, Policy
 from tmaplan.policies.contacts import ContactsBeliefView
 from tmaplan.scenario import Scenario
-from tmaplan.simulate import draw_common_noise, draw_truth, measure_step
+from tmaplan.simulate import StepSensors, draw_common_noise, draw_truth, measure_step
 
 __all__ = ["paired_contacts_run", "run_contacts_loop"]
 
@@ -110,6 +110,7 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
                             "alarms are flown for one contact only)", opts.alarm_response)
     views = scenario.contact_views()
     noises = {n: draw_common_noise(views[n], noise_rng) for n in names}
+    sensors = {n: StepSensors(views[n]) for n in names}
     own = OwnShipFlight(scenario)
     filters = {n: opts.build(PFConfig(n_particles=n_particles, dt=dt,
                                       q=max(views[n].target.q, 1e-8))) for n in names}
@@ -123,7 +124,8 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
     for n in names:
         with _whose_warnings(n, seen):
             st = filters[n].init(views[n], filter_rng)
-            if meas0 := measure_step(views[n], 0, tracks[n][0] - own.state(0), noises[n]):
+            if meas0 := measure_step(views[n], 0, tracks[n][0] - own.state(0), noises[n],
+                                     sensors=sensors[n]):
                 st = filters[n].update(st, meas0, filter_rng)
         states[n] = st
         est[n][0], cov[n][0] = st.mean, st.cov
@@ -141,7 +143,7 @@ def run_contacts_loop(scenario: Scenario, policy: Policy, targets: Mapping[str, 
         vbar = own.mean_velocity
         for n in names:
             meas = measure_step(views[n], k + 1, tracks[n][k + 1] - own_state, noises[n],
-                                ping=bool(act.ping))
+                                ping=bool(act.ping), sensors=sensors[n])
             with _whose_warnings(n, seen):
                 st = filters[n].predict(states[n], vbar[k + 1] - vbar[k], filter_rng)
                 states[n] = st = filters[n].update(st, meas, filter_rng)

@@ -11,6 +11,7 @@ and heading are kept too (for Doppler and plots).
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,6 +21,8 @@ from tmaplan.errors import ScenarioError
 from tmaplan.geometry import course_speed, velocity_from_course, wrap_angle
 from tmaplan.models.target import initial_velocity
 from tmaplan.scenario import Observer, TimeGrid
+
+_EPS = float(np.finfo(np.float64).eps)  # np.sinc's value of πa at a = 0
 
 __all__ = ["ObserverTrack", "arc_displacement", "observer_track", "turn_rate_track"]
 
@@ -87,6 +90,13 @@ def arc_displacement(heading: ArrayLike, turn_rate: ArrayLike, speed: ArrayLike,
     ndarray, shape (..., 2)
         [m].
     """
+    if type(heading) is type(turn_rate) is type(speed) is float:  # one step (a closed loop)
+        half = turn_rate * dt / 2.0  # the same operations as below, on floats: the same bits
+        x = math.pi * (half / math.pi)  # np.sinc(a) = sin(πa)/(πa), π·0 replaced by eps
+        y = x if x else _EPS
+        scale = speed * dt * (math.sin(y) / y)
+        mid = heading + half
+        return np.array([scale * math.sin(mid), scale * math.cos(mid)])
     half = np.asarray(turn_rate) * dt / 2.0
     mid = np.asarray(heading) + half
     scale = np.asarray(speed) * dt * np.sinc(half / np.pi)

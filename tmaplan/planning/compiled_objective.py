@@ -306,7 +306,12 @@ def expected_time_value_grad(ctx: Any, d: np.ndarray, p: np.ndarray, *, accuracy
 def _callback_class() -> Any:
     """A ``casadi.Callback`` of dense inputs and outputs evaluated by a Python function, with
     an optional reverse derivative (a callback of the inputs, the outputs and one adjoint
-    seed per output, returning one adjoint per input)."""
+    seed per output, returning one adjoint per input).
+
+    The function receives one numpy array per input, of the input's shape, reading casadi's
+    own buffer (valid during the call: copy what is kept), and returns one array-like per
+    output (its values written into casadi's buffer): casadi's copy-free ``eval_buffer``, no
+    ``DM`` made or read (that conversion was a tenth of a converged re-plan)."""
     import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
     class Callback(ca.Callback):
@@ -329,15 +334,25 @@ def _callback_class() -> Any:
         def get_sparsity_out(self, i: int) -> Any:
             return ca.Sparsity.dense(*self.outs[i])
 
-        def eval(self, arg: Any) -> list[Any]:
+        def has_eval_buffer(self) -> bool:
+            return True
+
+        def eval_buffer(self, arg: Any, res: Any) -> int:
+            # nonzeros in column-major order: (rows, cols) is the transpose of (cols, rows)
+            ins = [np.frombuffer(a, dtype=np.float64).reshape(c, r).T
+                   for a, (r, c) in zip(arg, self.ins)]
             try:
-                return self.fn(arg)
-            except (KeyboardInterrupt, SystemError) as exc:  # (numpy reading a DM: SystemError)
+                outs = self.fn(ins)
+            except (KeyboardInterrupt, SystemError) as exc:  # (compiled code: SystemError)
                 interrupt = as_interrupt(exc)
                 if interrupt is None:
                     raise
                 defer(interrupt)  # NaN out; the solver call raises it after
-                return [ca.DM.nan(*shape) for shape in self.outs]
+                outs = [np.full(shape, np.nan) for shape in self.outs]
+            for buf, out, (r, c) in zip(res, outs, self.outs):
+                np.frombuffer(buf, dtype=np.float64)[:] = np.reshape(
+                    np.asarray(out, dtype=np.float64), (r, c)).T.ravel()
+            return 0
 
         def has_reverse(self, nadj: int) -> bool:
             return self.adjoint is not None and nadj == 1
@@ -365,14 +380,13 @@ def compiled_expected_time(ctx: Any, accuracy: float, width: float) -> Any:
     K1, n_p = kernel.K1, ctx.layout.size
     Callback = _callback_class()
 
-    def reverse_eval(arg: Any) -> list[Any]:
-        kernel(np.asarray(arg[0], float), np.asarray(arg[1], float).ravel(), True)
+    def reverse_eval(arg: list[np.ndarray]) -> list[Any]:
+        kernel(arg[0], arg[1].ravel(), True)
         # no derivative with respect to the parameters: NaN, so a use shows
-        return [ca.DM(float(arg[3]) * kernel.grad.T), ca.DM.nan(n_p, 1)]
+        return [float(arg[3][0, 0]) * kernel.grad.T, np.full(n_p, np.nan)]
 
-    def value_eval(arg: Any) -> list[Any]:
-        return [ca.DM(kernel(np.asarray(arg[0], float), np.asarray(arg[1], float).ravel(),
-                             False))]
+    def value_eval(arg: list[np.ndarray]) -> list[Any]:
+        return [kernel(arg[0], arg[1].ravel(), False)]
 
     reverse = Callback("expected_time_reverse", ((K1, 2), (n_p, 1), (1, 1), (1, 1)),
                        ((K1, 2), (n_p, 1)), reverse_eval)

@@ -19,7 +19,9 @@ The gradient with respect to ``d`` is the hand-written reverse sweep of that rec
 (``dρ² = 2 aᵀ dq − aᵀ dF a`` with ``a = F⁻¹ q``, the adjoints of the cumulative sums summed
 backwards over the steps): one pass forward, one back, the draws innermost, no
 allocation. On ``default`` (121 steps, 128 draws) the value and gradient take about a seventh
-of the casadi graph's time, with the same values to ~1e-13 (docs/findings.md).
+of the casadi graph's time, with the same values to ~1e-13 (docs/findings.md). Each step's
+loop over the draws is split in a few, each touching few arrays, which LLVM vectorises (the
+same bits; twice as fast as one loop a step, benchmarks/compiled_objective.py).
 
 :func:`compiled_expected_time` wraps it as a ``casadi.Callback`` with a reverse derivative, so
 IPOPT and the converged SQP use it unchanged; the callback has no derivative with respect to
@@ -44,12 +46,23 @@ _T = 100.0  # time scale [s]
 _MIN_RANGE = 100.0  # floor of the range [m]
 
 
+@njit(inline="always")
+def _copy_row(dst: Any, i: int, src: Any, j: int) -> None:  # pragma: no cover - compiled
+    for s in range(dst.shape[1]):
+        dst[i, s] = src[j, s]
+
+
 @compiled_entry
 @njit(cache=True, fastmath=False, error_model="numpy", nogil=True)
 def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, info: Any,
                 weight: Any, ic: Any, tau: float, width: float, span: float, m2: float,
                 grad: Any, A: Any, V: Any, c: Any, G: Any, Z: Any, store: bool,
                 forward: bool, reverse: bool) -> float:  # pragma: no cover - compiled
+    # Each loop over the draws reads few arrays and writes rows of arrays that do not depend
+    # on the step k (c, G, Z): LLVM then vectorises it (AVX2) behind runtime overlap checks
+    # that pass. A loop that wrote one row of A[k] or V[k] and touched another would have
+    # its checks hoisted out of the loop over k, over all of A or V, fail, and run scalar.
+    # Same operations in the same order as one loop per step: the same bits.
     ns = sx.shape[0]
     K1 = t.shape[0]
     for i in range(10):
@@ -57,52 +70,49 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
             c[i, s] = 0.0
     total = 0.0
     inv_wt = 1.0 / (width * tau)
+    ic0, ic1, ic2, ic3, ic4 = ic[0], ic[1], ic[2], ic[3], ic[4]
+    ic5, ic6, ic7, ic8, ic9 = ic[5], ic[6], ic[7], ic[8], ic[9]
+    W = G  # the forward pass's rows, V[k]'s then A[k]'s: var r rx ry z a0 a1 a2 a3
     for k in range(K1 if forward else 0):
         tk = t[k]
         ik = info[k]
         dxk = dx[k]
         dyk = dy[k]
-        a_k = A[k]
-        v_k = V[k]
         for s in range(ns):
             rx = sx[s] + svx[s] * tk - dxk
             ry = sy[s] + svy[s] * tk - dyk
             r2 = max(rx * rx + ry * ry, m2)
-            w = ik / (r2 * r2)
-            g0 = ry
-            g1 = -rx
-            g2 = tk * ry
-            g3 = -tk * rx
-            c0 = c[0, s] + g0 * g0 * w
-            c1 = c[1, s] + g0 * g1 * w
-            c2 = c[2, s] + g0 * g2 * w
-            c3 = c[3, s] + g0 * g3 * w
-            c4 = c[4, s] + g1 * g1 * w
-            c5 = c[5, s] + g1 * g2 * w
-            c6 = c[6, s] + g1 * g3 * w
-            c7 = c[7, s] + g2 * g2 * w
-            c8 = c[8, s] + g2 * g3 * w
-            c9 = c[9, s] + g3 * g3 * w
-            c[0, s] = c0
-            c[1, s] = c1
-            c[2, s] = c2
-            c[3, s] = c3
-            c[4, s] = c4
-            c[5, s] = c5
-            c[6, s] = c6
-            c[7, s] = c7
-            c[8, s] = c8
-            c[9, s] = c9
-            f00 = c0 + ic[0]
-            f01 = c1 + ic[1]
-            f02 = c2 + ic[2]
-            f03 = c3 + ic[3]
-            f11 = c4 + ic[4]
-            f12 = c5 + ic[5]
-            f13 = c6 + ic[6]
-            f22 = c7 + ic[7]
-            f23 = c8 + ic[8]
-            f33 = c9 + ic[9]
+            W[0, s] = ik / (r2 * r2)  # w until the next loop writes var
+            W[1, s] = np.sqrt(r2)
+            W[2, s] = rx
+            W[3, s] = ry
+        for s in range(ns):
+            w = W[0, s]
+            g0 = W[3, s]
+            g1 = -W[2, s]
+            g2 = tk * W[3, s]
+            g3 = -tk * W[2, s]
+            c[0, s] = c[0, s] + g0 * g0 * w
+            c[1, s] = c[1, s] + g0 * g1 * w
+            c[2, s] = c[2, s] + g0 * g2 * w
+            c[3, s] = c[3, s] + g0 * g3 * w
+            c[4, s] = c[4, s] + g1 * g1 * w
+            c[5, s] = c[5, s] + g1 * g2 * w
+            c[6, s] = c[6, s] + g1 * g3 * w
+            c[7, s] = c[7, s] + g2 * g2 * w
+            c[8, s] = c[8, s] + g2 * g3 * w
+            c[9, s] = c[9, s] + g3 * g3 * w
+        for s in range(ns):
+            f00 = c[0, s] + ic0
+            f01 = c[1, s] + ic1
+            f02 = c[2, s] + ic2
+            f03 = c[3, s] + ic3
+            f11 = c[4, s] + ic4
+            f12 = c[5, s] + ic5
+            f13 = c[6, s] + ic6
+            f22 = c[7, s] + ic7
+            f23 = c[8, s] + ic8
+            f33 = c[9, s] + ic9
             # LDLᵀ, as tmaplan.bounds.lpc_terms.ldl
             d0 = f00
             l10 = f01 / d0
@@ -117,43 +127,42 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
             ld32 = f23 - l30 * f02 - l31 * ld21
             l32 = ld32 / d2
             d3 = f33 - l30 * f03 - l31 * ld31 - l32 * ld32
-            r = np.sqrt(r2)
-            ux = rx / r
-            uy = ry / r
+            r = W[1, s]
+            ux = W[2, s] / r
+            uy = W[3, s] / r
             y0 = ux
             y1 = uy - l10 * y0
             y2 = tk * ux - l20 * y0 - l21 * y1
             y3 = tk * uy - l30 * y0 - l31 * y1 - l32 * y2
             var = y0 * y0 / d0 + y1 * y1 / d1 + y2 * y2 / d2 + y3 * y3 / d3
             rel = np.sqrt(max(var, 0.0)) / r
-            Z[s] = 0.5 * ((rel - tau) * inv_wt)
-            if store:
-                a3 = y3 / d3
-                a2 = y2 / d2 - l32 * a3
-                a1 = y1 / d1 - l21 * a2 - l31 * a3
-                a0 = y0 / d0 - l10 * a1 - l20 * a2 - l30 * a3
-                a_k[0, s] = a0
-                a_k[1, s] = a1
-                a_k[2, s] = a2
-                a_k[3, s] = a3
-                v_k[0, s] = var
-                v_k[1, s] = r
-                v_k[2, s] = rx
-                v_k[3, s] = ry
+            a3 = y3 / d3
+            a2 = y2 / d2 - l32 * a3
+            a1 = y1 / d1 - l21 * a2 - l31 * a3
+            W[0, s] = var
+            W[4, s] = 0.5 * ((rel - tau) * inv_wt)
+            W[5, s] = y0 / d0 - l10 * a1 - l20 * a2 - l30 * a3
+            W[6, s] = a1
+            W[7, s] = a2
+            W[8, s] = a3
         acc = 0.0
-        for s in range(ns):
-            th = np.tanh(Z[s])
-            Z[s] = th
+        for s in range(ns):  # scalar: libm's tanh, and the sum in order
+            th = np.tanh(W[4, s])
+            W[4, s] = th
             acc += 0.5 * (1.0 + th)
-        if store:
-            for s in range(ns):
-                v_k[4, s] = Z[s]
         total += weight[k] * acc
+        if store:
+            for i in range(5):
+                _copy_row(V[k], i, W, i)
+            for i in range(4):
+                _copy_row(A[k], i, W, 5 + i)
     scale = span / (K1 * ns)
     value = scale * total
     if not reverse:
         return value
-    # reverse sweep: G holds Σ_{k' ≥ k} ∂value/∂F_k' (symmetric, packed)
+    # reverse sweep: G holds Σ_{k' ≥ k} ∂value/∂F_k' (symmetric, packed); c's rows are free:
+    # 1-4 hold -∂value/∂var, the adjoints of rx and ry by u and that of r, row 0 (and Z) the
+    # draws' terms of ∂value/∂d_k, which end in V[k]'s row 0 (as before the loops were split)
     for i in range(10):
         for s in range(ns):
             G[i, s] = 0.0
@@ -166,43 +175,36 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
         for s in range(ns):
             var = v_k[0, s]
             r = v_k[1, s]
-            rx = v_k[2, s]
-            ry = v_k[3, s]
             th = v_k[4, s]
-            a0 = a_k[0, s]
-            a1 = a_k[1, s]
-            a2 = a_k[2, s]
-            a3 = a_k[3, s]
             adj_rel = ck * 0.25 * (1.0 - th * th) * inv_wt
             sq = np.sqrt(max(var, 0.0))
             adj_var = adj_rel / (2.0 * sq * r) if var > 0.0 else 0.0
             adj_r = -adj_rel * (sq / r) / r
-            adj_ux = 2.0 * adj_var * (a0 + tk * a2)
-            adj_uy = 2.0 * adj_var * (a1 + tk * a3)
-            adj_rx = adj_ux / r
-            adj_ry = adj_uy / r
-            adj_r -= (adj_ux * rx + adj_uy * ry) / (r * r)
-            m = -adj_var
-            G0 = G[0, s] + m * a0 * a0
-            G1 = G[1, s] + m * a0 * a1
-            G2 = G[2, s] + m * a0 * a2
-            G3 = G[3, s] + m * a0 * a3
-            G4 = G[4, s] + m * a1 * a1
-            G5 = G[5, s] + m * a1 * a2
-            G6 = G[6, s] + m * a1 * a3
-            G7 = G[7, s] + m * a2 * a2
-            G8 = G[8, s] + m * a2 * a3
-            G9 = G[9, s] + m * a3 * a3
-            G[0, s] = G0
-            G[1, s] = G1
-            G[2, s] = G2
-            G[3, s] = G3
-            G[4, s] = G4
-            G[5, s] = G5
-            G[6, s] = G6
-            G[7, s] = G7
-            G[8, s] = G8
-            G[9, s] = G9
+            adj_ux = 2.0 * adj_var * (a_k[0, s] + tk * a_k[2, s])
+            adj_uy = 2.0 * adj_var * (a_k[1, s] + tk * a_k[3, s])
+            c[1, s] = -adj_var
+            c[2, s] = adj_ux / r
+            c[3, s] = adj_uy / r
+            c[4, s] = adj_r - (adj_ux * v_k[2, s] + adj_uy * v_k[3, s]) / (r * r)
+        for s in range(ns):
+            m = c[1, s]
+            a0 = a_k[0, s]
+            a1 = a_k[1, s]
+            a2 = a_k[2, s]
+            a3 = a_k[3, s]
+            G[0, s] = G[0, s] + m * a0 * a0
+            G[1, s] = G[1, s] + m * a0 * a1
+            G[2, s] = G[2, s] + m * a0 * a2
+            G[3, s] = G[3, s] + m * a0 * a3
+            G[4, s] = G[4, s] + m * a1 * a1
+            G[5, s] = G[5, s] + m * a1 * a2
+            G[6, s] = G[6, s] + m * a1 * a3
+            G[7, s] = G[7, s] + m * a2 * a2
+            G[8, s] = G[8, s] + m * a2 * a3
+            G[9, s] = G[9, s] + m * a3 * a3
+        for s in range(ns):
+            rx = v_k[2, s]
+            ry = v_k[3, s]
             r2raw = rx * rx + ry * ry
             r2 = max(r2raw, m2)
             w = ik / (r2 * r2)
@@ -210,23 +212,24 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
             g1 = -rx
             g2 = tk * ry
             g3 = -tk * rx
-            Gg0 = G0 * g0 + G1 * g1 + G2 * g2 + G3 * g3
-            Gg1 = G1 * g0 + G4 * g1 + G5 * g2 + G6 * g3
-            Gg2 = G2 * g0 + G5 * g1 + G7 * g2 + G8 * g3
-            Gg3 = G3 * g0 + G6 * g1 + G8 * g2 + G9 * g3
+            Gg0 = G[0, s] * g0 + G[1, s] * g1 + G[2, s] * g2 + G[3, s] * g3
+            Gg1 = G[1, s] * g0 + G[4, s] * g1 + G[5, s] * g2 + G[6, s] * g3
+            Gg2 = G[2, s] * g0 + G[5, s] * g1 + G[7, s] * g2 + G[8, s] * g3
+            Gg3 = G[3, s] * g0 + G[6, s] * g1 + G[8, s] * g2 + G[9, s] * g3
             adj_w = g0 * Gg0 + g1 * Gg1 + g2 * Gg2 + g3 * Gg3
-            adj_ry += 2.0 * w * (Gg0 + tk * Gg2)
-            adj_rx -= 2.0 * w * (Gg1 + tk * Gg3)
-            adj_r2 = adj_r / (2.0 * r) - adj_w * 2.0 * ik / (r2 * r2 * r2)
+            adj_ry = c[3, s] + 2.0 * w * (Gg0 + tk * Gg2)
+            adj_rx = c[2, s] - 2.0 * w * (Gg1 + tk * Gg3)
+            adj_r2 = c[4, s] / (2.0 * v_k[1, s]) - adj_w * 2.0 * ik / (r2 * r2 * r2)
             if r2raw <= m2:  # the floored range does not move with r
                 adj_r2 = 0.0
             Z[s] = -(adj_rx + 2.0 * rx * adj_r2)
-            v_k[0, s] = -(adj_ry + 2.0 * ry * adj_r2)
+            c[0, s] = -(adj_ry + 2.0 * ry * adj_r2)
         gx = 0.0
         gy = 0.0
         for s in range(ns):
             gx += Z[s]
-            gy += v_k[0, s]
+            gy += c[0, s]
+        _copy_row(v_k, 0, c, 0)
         grad[0, k] = gx
         grad[1, k] = gy
     return value

@@ -229,7 +229,6 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
         for s in range(ns):
             gx += Z[s]
             gy += c[0, s]
-        _copy_row(v_k, 0, c, 0)
         grad[0, k] = gx
         grad[1, k] = gy
     return value

@@ -163,3 +163,31 @@ def test_controller_cannot_write_the_filters_particles(scenario):
     run_closed_loop(scenario, Peek(), target, noise_rng=np.random.default_rng(1),
                     filter_rng=np.random.default_rng(2), n_particles=200)
     assert seen == {"particles": True, "weights": True}
+
+
+def test_the_own_ship_flies_a_step_as_the_whole_track_formula(default):
+    """One step at a time on floats (OwnShipFlight.advance) is the track the array formula
+    flies, bit for bit (positions, velocities, mean velocities), and a turn rate no ship
+    flies (inf, 1e308 overflowing u·dt) gives NaN as the array formula does, not an error
+    (the filter then refuses the increment, naming ``dv``)."""
+    from tmaplan.evaluation.closed_loop import OwnShipFlight
+    from tmaplan.models.observer import arc_displacement
+
+    own = OwnShipFlight(default)
+    rng = np.random.default_rng(5)
+    u = np.clip(rng.normal(0.0, own.u_max, default.n_steps), -own.u_max, own.u_max)
+    u[::7] = 0.0
+    for k, uk in enumerate(u):
+        own.advance(k, uk)
+    hd = own.headings
+    disp = arc_displacement(hd[:-1], u, np.full(u.size, own.speed), own.dt)
+    assert np.array_equal(own.mean_velocity[1:], disp / own.dt)
+    assert np.array_equal(own.positions[1:], own.positions[:-1] + disp)
+    assert np.array_equal(own.velocity[1:], own.speed * np.stack([np.sin(hd[1:]),
+                                                                  np.cos(hd[1:])], axis=-1))
+    for wild in (math.inf, 1e308):
+        free = OwnShipFlight(default)
+        free.u_max = None  # no limit: the rate is flown as given
+        with np.errstate(invalid="ignore", over="ignore"):
+            free.advance(0, wild)
+        assert np.isnan(free.mean_velocity[1]).all() and np.isnan(free.velocity[1]).all()

@@ -241,3 +241,27 @@ def test_an_interrupt_in_the_callback_is_raised_by_the_solver_call(setup, monkey
     error[0] = ValueError("not an interrupt")
     with pytest.raises(RuntimeError, match="Error in Function"), solver_call():
         fn(disp, v, P)
+
+
+def test_the_callback_reads_and_writes_casadi_buffers_in_column_major_order():
+    """A dense callback on casadi's buffers (``eval_buffer``): inputs of shapes (3, 2) and
+    (1, 1) arrive as those matrices, outputs (2, 3) and (1, 1) leave as given, and an output
+    the caller does not need (casadi passes no buffer for it) is skipped."""
+    from tmaplan.planning.compiled_objective import _callback_class
+
+    seen = []
+
+    def fn(arg):
+        seen.append([a.copy() for a in arg])
+        return [arg[0].T * arg[1][0, 0], float(arg[0].sum())]
+
+    cb = _callback_class()("probe", ((3, 2), (1, 1)), ((2, 3), (1, 1)), fn)
+    x = np.arange(6.0).reshape(3, 2)
+    both = cb(ca.DM(x), ca.DM(2.0))
+    assert np.array_equal(seen[-1][0], x) and seen[-1][1].shape == (1, 1)
+    assert np.array_equal(np.asarray(both[0]), 2.0 * x.T) and float(both[1]) == 15.0
+    X, s = ca.MX.sym("X", 3, 2), ca.MX.sym("s")
+    first = ca.Function("first", [X, s], [cb(X, s)[0]])  # the second output unused
+    assert np.array_equal(np.asarray(first(x, 3.0)), 3.0 * x.T)
+    cb_alive = cb  # casadi does not keep the callback alive
+    assert cb_alive is cb

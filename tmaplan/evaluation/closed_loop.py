@@ -13,7 +13,6 @@ truth and the same noise* (common random numbers, :class:`tmaplan.simulate.Commo
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Iterator, Mapping
 from typing import Any
@@ -172,7 +171,7 @@ class OwnShipFlight:
         self.position = self.position + disp
         self.heading = h = self.heading + u * dt
         self.mean_velocity[k + 1] = disp / dt
-        self.velocity[k + 1] = (self.speed * math.sin(h), self.speed * math.cos(h))
+        self.velocity[k + 1] = (self.speed * np.sin(h), self.speed * np.cos(h))
         self.positions[k + 1], self.headings[k + 1] = self.position, h
 
     def state(self, k: int) -> np.ndarray:

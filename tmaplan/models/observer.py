@@ -11,7 +11,6 @@ and heading are kept too (for Doppler and plots).
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -91,12 +90,14 @@ def arc_displacement(heading: ArrayLike, turn_rate: ArrayLike, speed: ArrayLike,
         [m].
     """
     if type(heading) is type(turn_rate) is type(speed) is float:  # one step (a closed loop)
-        half = turn_rate * dt / 2.0  # the same operations as below, on floats: the same bits
-        x = math.pi * (half / math.pi)  # np.sinc(a) = sin(πa)/(πa), π·0 replaced by eps
+        # the same operations as below on floats, numpy's sin and cos (libm's may differ in
+        # the last bit where numpy has its own): the same bits, without 0-d arrays
+        half = turn_rate * dt / 2.0
+        x = np.pi * (half / np.pi)  # np.sinc(a) = sin(πa)/(πa), π·0 replaced by eps
         y = x if x else _EPS
-        scale = speed * dt * (math.sin(y) / y)
+        scale = speed * dt * (np.sin(y) / y)
         mid = heading + half
-        return np.array([scale * math.sin(mid), scale * math.cos(mid)])
+        return np.array([scale * np.sin(mid), scale * np.cos(mid)])
     half = np.asarray(turn_rate) * dt / 2.0
     mid = np.asarray(heading) + half
     scale = np.asarray(speed) * dt * np.sinc(half / np.pi)

@@ -162,7 +162,7 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
         return value
     # reverse sweep: G holds Σ_{k' ≥ k} ∂value/∂F_k' (symmetric, packed); c's rows are free:
     # 1-4 hold -∂value/∂var, the adjoints of rx and ry by u and that of r, row 0 (and Z) the
-    # draws' terms of ∂value/∂d_k, which end in V[k]'s row 0 (as before the loops were split)
+    # draws' terms of ∂value/∂d_k; A and V are only read, so a second sweep gives the same
     for i in range(10):
         for s in range(ns):
             G[i, s] = 0.0
@@ -352,6 +352,8 @@ def _callback_class() -> Any:
                 defer(interrupt)  # NaN out; the solver call raises it after
                 outs = [np.full(shape, np.nan) for shape in self.outs]
             for buf, out, (r, c) in zip(res, outs, self.outs):
+                if buf is None:  # an output the caller does not need
+                    continue
                 np.frombuffer(buf, dtype=np.float64)[:] = np.reshape(
                     np.asarray(out, dtype=np.float64), (r, c)).T.ravel()
             return 0

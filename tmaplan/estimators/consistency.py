@@ -402,8 +402,8 @@ class MonitoredFilter:
         d = np.zeros(2) if dv is None else np.asarray(dv, float).reshape(2)
         filt = self._boosted if state.quiet > 0 else self.inner
         return state.evolve(inner=filt.predict(state.inner, d, rng),
-                                   pending=(state.inner, d, state.velocity),
-                                   velocity=state.velocity + d)
+                            pending=(state.inner, d, state.velocity),
+                            velocity=state.velocity + d)
 
     def update(self, state: MonitoredState, measurements: Sequence[Measurement],
                rng: np.random.Generator) -> MonitoredState:
@@ -453,9 +453,9 @@ class MonitoredFilter:
             alarm = self._glr(history)
         filt = self._boosted if state.quiet > 0 else self.inner
         new = state.evolve(inner=filt.update(state.inner, kept, rng),
-                                  nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
-                                  outliers=n_out, history=history,
-                                  pending=None, quiet=max(state.quiet - 1, 0))
+                           nis=tuple(nis), cusum=(gp, gm), age=(ap, am), streak=streak,
+                           outliers=n_out, history=history,
+                           pending=None, quiet=max(state.quiet - 1, 0))
         if state.quiet > 0 or alarm is None:
             return new
         alarm["step"] = new.step

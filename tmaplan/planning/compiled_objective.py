@@ -39,7 +39,7 @@ from numba import njit
 
 from tmaplan.interrupts import as_interrupt, compiled_entry, defer
 
-__all__ = ["compiled_expected_time", "expected_time_value_grad"]
+__all__ = ["compiled_all_contacts_time", "compiled_expected_time", "expected_time_value_grad"]
 
 _L = 1000.0  # length scale [m] (as tmaplan.planning.objective_graphs)
 _T = 100.0  # time scale [s]
@@ -57,7 +57,8 @@ def _copy_row(dst: Any, i: int, src: Any, j: int) -> None:  # pragma: no cover -
 def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, info: Any,
                 weight: Any, ic: Any, tau: float, width: float, span: float, m2: float,
                 grad: Any, A: Any, V: Any, c: Any, G: Any, Z: Any, store: bool,
-                forward: bool, reverse: bool) -> float:  # pragma: no cover - compiled
+                forward: bool, reverse: bool,
+                seed: Any = None) -> float:  # pragma: no cover - compiled
     # Each loop over the draws reads few arrays and writes rows of arrays that do not depend
     # on the step k (c, G, Z): LLVM then vectorises it (AVX2) behind runtime overlap checks
     # that pass. A loop that wrote one row of A[k] or V[k] and touched another would have
@@ -176,7 +177,11 @@ def _value_grad(sx: Any, sy: Any, svx: Any, svy: Any, t: Any, dx: Any, dy: Any, 
             var = v_k[0, s]
             r = v_k[1, s]
             th = v_k[4, s]
-            adj_rel = ck * 0.25 * (1.0 - th * th) * inv_wt
+            if seed is None:  # (pruned when compiled: one kernel each way)
+                adj_sig = ck
+            else:  # ∂(the caller's value)/∂σ_ks given (several contacts' product form)
+                adj_sig = seed[k, s]
+            adj_rel = adj_sig * 0.25 * (1.0 - th * th) * inv_wt
             sq = np.sqrt(max(var, 0.0))
             adj_var = adj_rel / (2.0 * sq * r) if var > 0.0 else 0.0
             adj_r = -adj_rel * (sq / r) / r
@@ -271,7 +276,8 @@ class _Kernel:
         self._stored = (d.copy(), p.copy(), value)
         return value
 
-    def _run(self, d: np.ndarray, p: np.ndarray, *, forward: bool, reverse: bool) -> float:
+    def _run(self, d: np.ndarray, p: np.ndarray, *, forward: bool, reverse: bool,
+             seed: np.ndarray | None = None) -> float:
         sl = self.slices
         smp = p[sl["samples"]].reshape(self.ns, 4)
         return float(_value_grad(
@@ -280,7 +286,62 @@ class _Kernel:
             np.ascontiguousarray(p[sl["bearing"]]), np.ascontiguousarray(p[sl["weight"]]),
             p[sl["icart"]] * self.ic_scale, self.tau, self.width, self.span,
             (_MIN_RANGE / _L) ** 2, self.grad, self.A, self.V, self.c, self.G, self.Z,
-            forward, forward, reverse))
+            forward, forward, reverse, seed))
+
+    def not_localised(self) -> np.ndarray:
+        """σ_ks (K+1, n_samples) of the last stored forward pass (a view of the workspace)."""
+        return 0.5 * (1.0 + self.V[:, 4, :])
+
+
+class _ContactsKernel:
+    """``all-contacts-time-to-accuracy``'s main term over N contacts: one :class:`_Kernel`
+    per contact on the same own-ship displacement, combined as
+    ``span · Σ_k w_k mean_s [1 − Π_c (1 − σ_cks)] / (K+1)``; its gradient by each contact's
+    reverse sweep seeded with ``∂value/∂σ_cks = span w_k Π_{c'≠c} (1 − σ_c'ks) / ((K+1) n)``."""
+
+    def __init__(self, ctxs: list[Any], blocks: list[slice], accuracies: list[float],
+                 width: float) -> None:
+        self.kernels = [_Kernel(c, a, width) for c, a in zip(ctxs, accuracies, strict=True)]
+        self.blocks = list(blocks)
+        first = self.kernels[0]
+        self.K1, self.ns, self.span = first.K1, first.ns, first.span
+        self.weight_slice = first.slices["weight"]
+        self.grad = np.zeros((2, self.K1))
+        self.seed = np.empty((self.K1, self.ns))
+        self._stored: tuple[np.ndarray, np.ndarray, float] | None = None
+
+    def __call__(self, d: np.ndarray, p: np.ndarray, need_grad: bool) -> float:
+        """The value at (d, p), and with ``need_grad`` its gradient in :attr:`grad` (the
+        reverse sweeps alone at the point of the last value, as :class:`_Kernel`)."""
+        last = self._stored
+        if not (need_grad and last is not None and np.array_equal(d, last[0])
+                and np.array_equal(p, last[1])):
+            for k, b in zip(self.kernels, self.blocks, strict=True):
+                k._run(d, p[b], forward=True, reverse=False)
+            last = self._stored = (d.copy(), p.copy(), self._value(p))
+        if need_grad:
+            self._gradient(d, p)
+        return last[2]
+
+    def _value(self, p: np.ndarray) -> float:
+        localised = 1.0 - self.kernels[0].not_localised()
+        for k in self.kernels[1:]:
+            localised = localised * (1.0 - k.not_localised())
+        w = p[self.blocks[0]][self.weight_slice]
+        return float(self.span * np.sum(w * np.sum(1.0 - localised, axis=1))
+                     / (self.K1 * self.ns))
+
+    def _gradient(self, d: np.ndarray, p: np.ndarray) -> None:
+        ck = (self.span / (self.K1 * self.ns)) * p[self.blocks[0]][self.weight_slice]
+        free = [1.0 - k.not_localised() for k in self.kernels]
+        self.grad[:] = 0.0
+        for c, (k, b) in enumerate(zip(self.kernels, self.blocks, strict=True)):
+            np.multiply(ck[:, None], np.ones_like(self.seed), out=self.seed)
+            for j, f in enumerate(free):
+                if j != c:
+                    self.seed *= f
+            k._run(d, p[b], forward=False, reverse=True, seed=self.seed)
+            self.grad += k.grad
 
 
 def expected_time_value_grad(ctx: Any, d: np.ndarray, p: np.ndarray, *, accuracy: float,
@@ -378,9 +439,41 @@ def compiled_expected_time(ctx: Any, accuracy: float, width: float) -> Any:
     rounding). The callbacks are kept in ``ctx.cache["callbacks"]``: whoever builds a solver
     from the expression keeps them alive as long as the solver (casadi does not).
     """
+    return _as_casadi(ctx, "expected_time", _Kernel(ctx, accuracy, width))
+
+
+def compiled_all_contacts_time(ctx: Any, contexts: list[Any], blocks: list[slice],
+                               accuracies: list[float], width: float) -> Any:
+    """The main term of ``all-contacts-time-to-accuracy`` [s]
+    (:class:`tmaplan.planning.multi_objectives.ContactsObjective`: the expected time until
+    every contact is localised) as a casadi expression of ``ctx``'s plan, evaluated by one
+    compiled kernel per contact.
+
+    Parameters
+    ----------
+    ctx : PlanContext
+        The joint plan's context (own ship, the whole parameter vector).
+    contexts : list of PlanContext
+        Each contact's one-contact context (its block of the parameter vector, ``blocks``).
+    blocks : list of slice
+        Each contact's block of ``ctx.p``.
+    accuracies : list of float
+        Each contact's τ_c [-].
+    width : float
+        The logistic's relative width [-].
+
+    Same value as the casadi graph of :meth:`ContactsObjective.combined` (to rounding);
+    callbacks kept as :func:`compiled_expected_time`'s.
+    """
+    return _as_casadi(ctx, "all_contacts_time",
+                      _ContactsKernel(contexts, blocks, accuracies, width))
+
+
+def _as_casadi(ctx: Any, name: str, kernel: _Kernel | _ContactsKernel) -> Any:
+    """``kernel``'s value of ``ctx``'s own-ship displacement and parameters as a casadi
+    expression, with the kernel's gradient as its reverse derivative."""
     import casadi as ca  # deferred: casadi is slow to import (the CLI's start-up)
 
-    kernel = _Kernel(ctx, accuracy, width)
     K1, n_p = kernel.K1, ctx.layout.size
     Callback = _callback_class()
 
@@ -392,10 +485,9 @@ def compiled_expected_time(ctx: Any, accuracy: float, width: float) -> Any:
     def value_eval(arg: list[np.ndarray]) -> list[Any]:
         return [kernel(arg[0], arg[1].ravel(), False)]
 
-    reverse = Callback("expected_time_reverse", ((K1, 2), (n_p, 1), (1, 1), (1, 1)),
+    reverse = Callback(f"{name}_reverse", ((K1, 2), (n_p, 1), (1, 1), (1, 1)),
                        ((K1, 2), (n_p, 1)), reverse_eval)
-    value = Callback("expected_time", ((K1, 2), (n_p, 1)), ((1, 1),), value_eval,
-                     reverse=reverse)
+    value = Callback(name, ((K1, 2), (n_p, 1)), ((1, 1),), value_eval, reverse=reverse)
     ctx.cache.setdefault("callbacks", []).extend([reverse, value])
     v0 = ctx.v_obs[0, :]
     d = (ctx.disp - ca.mtimes(ca.DM(ctx.times.reshape(-1, 1)), v0)) / _L

@@ -237,8 +237,10 @@ class HeadingPlanner:
         ctx = PlanContext(dt=dt, times=self.times, A=A, Q=Q, v_obs=vbar, disp=pos,
                           turn_rate=urate, p=p_obj, layout=self.layout, compiled=compiled,
                           ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
-        f = self.objective.expression(ctx)  # a compiled one's callbacks live as the solvers:
-        self._callbacks = ctx.cache.get("callbacks", [])
+        # a compiled objective's callbacks live as the solvers (the list the objective's
+        # expression and its epigraph terms add theirs to)
+        self._callbacks = ctx.cache.setdefault("callbacks", [])
+        f = self.objective.expression(ctx)
         self._n_w = w.shape[0]
         w, f, lbw, ubw, g, lbg, ubg, self._epi_guess = with_epigraph(
             self.objective.epigraph_terms(ctx), scale, w, P, f, lbw, ubw, g, lbg, ubg)

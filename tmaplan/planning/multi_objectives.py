@@ -38,7 +38,7 @@ import dataclasses
 import math
 import zlib
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -275,9 +275,24 @@ class ContactsObjective(Objective):
         return list(ctx.cache[key])
 
     def expected_times(self, ctx: PlanContext) -> list[Any]:
-        """Each contact's expected time to accuracy E[T_c] [s] (casadi scalars)."""
+        """Each contact's expected time to accuracy E[T_c] [s] (casadi scalars; by the
+        compiled kernel where ``ctx.compiled``)."""
+        if ctx.compiled:
+            from tmaplan.planning.compiled_objective import (  # deferred: numba is slow to import
+                compiled_expected_time,
+            )
+
+            return [self._keep(ctx, cc, compiled_expected_time(cc, tau, self.width))
+                    for cc, tau in zip(self.contexts(ctx), self.accuracies, strict=True)]
         return [expected_time_of(cc, s) for cc, s in
                 zip(self.contexts(ctx), self.indicators(ctx), strict=True)]
+
+    @staticmethod
+    def _keep(ctx: PlanContext, cc: PlanContext, expr: Any) -> Any:
+        """``expr``, its compiled callbacks (in the one-contact context ``cc``) kept in
+        ``ctx``'s, which the planner keeps alive as long as its solvers."""
+        ctx.cache.setdefault("callbacks", []).extend(cc.cache.pop("callbacks", []))
+        return expr
 
     def combined(self, ctx: PlanContext) -> Any:
         """The contacts' term [s] (casadi scalar; 0 for ``worst-contact``, whose value the
@@ -289,9 +304,18 @@ class ContactsObjective(Objective):
         if self.kind == "weighted-time-to-accuracy":
             return sum(f * e for f, e in zip(weight_fractions(self.weights),
                                              self.expected_times(ctx), strict=True))
+        if len(self.q) == 1:  # exactly the terms of expected-time-to-accuracy
+            return self.expected_times(ctx)[0]
+        if ctx.compiled:
+            from tmaplan.planning.compiled_objective import (  # deferred: numba is slow to import
+                compiled_all_contacts_time,
+            )
+
+            lay = cast(ContactsLayout, ctx.layout)  # (contexts() checked it)
+            return compiled_all_contacts_time(
+                ctx, self.contexts(ctx), [lay.block(c) for c in range(self.n_contacts)],
+                list(self.accuracies), self.width)
         sigs = self.indicators(ctx)
-        if len(sigs) == 1:  # exactly the terms of expected-time-to-accuracy
-            return expected_time_of(self.contexts(ctx)[0], sigs[0])
         localised = 1 - sigs[0]
         for s in sigs[1:]:
             localised = localised * (1 - s)

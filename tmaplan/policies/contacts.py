@@ -157,19 +157,23 @@ def _first_of_equals(policy: str, what: str, names: list[str], value: str) -> st
 
 
 #: Joint planners by scenario (their NLP built once), the 8 most recently used.
-_PLANNERS: LRUCache[Scenario, ContactsPlanner] = LRUCache(8)
+_PLANNERS: LRUCache[tuple[Scenario, bool], ContactsPlanner] = LRUCache(8)
 #: Their solutions from the contacts' priors (deterministic), the 8 most recently used.
 _PRIOR_PLANS: LRUCache[Scenario, ContactsPlan] = LRUCache(8)
 #: The best baseline of each family on the joint objective (deterministic), likewise.
 _BASELINES: LRUCache[Scenario, dict[str, Baseline]] = LRUCache(8)
 
 
-def contacts_planner(scenario: Scenario) -> ContactsPlanner:
+def contacts_planner(scenario: Scenario, *, compiled: bool = False) -> ContactsPlanner:
     """The joint planner of ``scenario``'s contacts (``all-contacts-time-to-accuracy``), its
-    NLP built once per scenario (cached, the 8 most recently used)."""
-    if scenario not in _PLANNERS:
-        _PLANNERS[scenario] = ContactsPlanner(ContactSet.from_scenario(scenario))
-    return _PLANNERS[scenario]
+    NLP built once per scenario (cached, the 8 most recently used); ``compiled``: its
+    objective evaluated by the compiled kernels (``HeadingPlanner(compiled=True)``: the same
+    values and gradients to rounding; the re-plans of :class:`ContactsReceding`)."""
+    key = (scenario, bool(compiled))
+    if key not in _PLANNERS:
+        _PLANNERS[key] = ContactsPlanner(ContactSet.from_scenario(scenario),
+                                         compiled=bool(compiled))
+    return _PLANNERS[key]
 
 
 def joint_contacts_plan(scenario: Scenario) -> ContactsPlan:
@@ -426,6 +430,13 @@ class ContactsReceding:
         :class:`tmaplan.policies.Receding`'s ``full_tol``; None: the planner's 1e-7, which
         the warm-started solve uses). The stalled joint re-plans of ``three-contacts-screen``
         hit IPOPT's iteration limit at 1e-7 from every start.
+    compiled : bool
+        Evaluate the re-plans' objective by its compiled kernels
+        (:func:`tmaplan.planning.compiled_objective.compiled_all_contacts_time`; the same
+        values and gradients as the casadi graph to rounding, so IPOPT takes the same steps
+        but for the last bits); False: the casadi graph, the path before (kept for the
+        paired checks and the speed ratio, ``benchmarks/contacts_replans.py``). The plan
+        from the priors is the graph's either way (``planned`` flies the same).
     """
 
     first_plan: Any = None
@@ -433,6 +444,7 @@ class ContactsReceding:
     max_particles: int = 2000
     fallback_starts: bool = True
     fallback_tol: float | None = 1e-4
+    compiled: bool = True
     name: str = "receding"
 
     def _interval(self, scenario: Scenario) -> float:
@@ -461,7 +473,9 @@ class _ContactsRecedingController:
         self.policy, self.scenario = policy, scenario
         HeadingPlanner.check_tolerance(policy.fallback_tol, "receding.fallback_tol")
         self.interval = policy._interval(scenario)
-        self.planner = contacts_planner(scenario)
+        if not isinstance(policy.compiled, bool):
+            raise ArgumentError("receding.compiled", "True or False", policy.compiled)
+        self.planner = contacts_planner(scenario, compiled=policy.compiled)
         self.plan = policy.first_plan
         self.playback = None if self.plan is None else TurnRatePlayback(self.plan.plan, scenario)
         self.next_replan = scenario.time.t0 + self.interval  # the first plan is the priors'

@@ -14,19 +14,28 @@ warm one), each re-plan's wall time, and the time until all contacts are localis
 ``--store DIR`` (a campaign's ``campaign-*`` directory) the stored run's counts are printed
 next to the new ones.
 
+``--graph``: each run flown again with the re-plans' objective on the casadi graph
+(``ContactsReceding(compiled=False)``, the path before the compiled kernels), the two in turn
+run by run in one process; the median re-plan wall time of each and their ratio (the speed
+goal's measurement: a ratio in one run), and how many runs gave the same time until all
+contacts are localised (IPOPT takes the same steps on both but for the last bits, which can
+lead a later re-plan elsewhere).
+
 Run: python benchmarks/contacts_replans.py three-contacts-screen --seed 40 --runs 7,14,23
-     [--store out/campaign-...] [--particles 3000]
+     [--store out/campaign-...] [--particles 3000] [--graph]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
 import numpy as np
 
 from tmaplan.evaluation.campaigns import CampaignSpec, resolve_policies, run_one
+from tmaplan.policies.combine import Combined
 from tmaplan.scenario import load_problem
 
 
@@ -44,6 +53,8 @@ def main() -> None:
     ap.add_argument("--runs", required=True, help="comma-separated run indices")
     ap.add_argument("--store", type=Path, default=None)
     ap.add_argument("--particles", type=int, default=3000)
+    ap.add_argument("--graph", action="store_true",
+                    help="also fly each run with the re-plans on the casadi graph; the ratio")
     a = ap.parse_args()
     runs = [int(x) for x in a.runs.split(",")]
     sc = load_problem(a.problem)
@@ -70,6 +81,34 @@ def main() -> None:
               f"{time.process_time() - t0:.0f}", flush=True)
     print(f"total | {'/'.join(map(str, tot_old)) if a.store else '-'} | "
           f"{'/'.join(map(str, tot_new))} |  |  |")
+    if a.graph:
+        compare_graph(spec, pols, runs)
+
+
+def compare_graph(spec: CampaignSpec, pols: dict, runs: list[int]) -> None:
+    """Each run with the compiled re-plans and with the graph's, in turn: median re-plan
+    seconds, their ratio, the runs with the same time until all localised."""
+    rec = pols["receding"]
+    if not isinstance(rec, Combined):  # (resolve_policies wraps every policy)
+        raise TypeError(f"expected a combined policy, got {rec!r}")
+    paths = {name: {"receding": dataclasses.replace(
+        rec, manoeuvre=dataclasses.replace(rec.manoeuvre, compiled=flag))}
+        for name, flag in (("compiled", True), ("graph", False))}
+    secs: dict[str, list[float]] = {name: [] for name in paths}
+    times: dict[str, list[float]] = {name: [] for name in paths}
+    for r in runs:
+        for name, p in paths.items():
+            pr = run_one(spec, p, r).policies["receding"]
+            secs[name].extend(pr.replan_seconds)
+            times[name].append(pr.metrics.time_to_accuracy)
+    med = {name: float(np.median(v)) for name, v in secs.items()}
+    print(f"re-plan wall time, median of {len(secs['compiled'])}: compiled "
+          f"{med['compiled'] * 1e3:.0f} ms, graph {med['graph'] * 1e3:.0f} ms, graph/compiled "
+          f"{med['graph'] / med['compiled']:.2f}")
+    same = sum(a == b for a, b in zip(times["compiled"], times["graph"], strict=True))
+    diff = float(np.mean(np.subtract(times["compiled"], times["graph"]))) / 60
+    print(f"runs with the same time until all localised: {same} of {len(runs)}; "
+          f"mean compiled − graph {diff:+.2f} min")
 
 
 if __name__ == "__main__":

@@ -237,10 +237,8 @@ class HeadingPlanner:
         ctx = PlanContext(dt=dt, times=self.times, A=A, Q=Q, v_obs=vbar, disp=pos,
                           turn_rate=urate, p=p_obj, layout=self.layout, compiled=compiled,
                           ping_scale=self.ping_scale, turn_rate_max=max(self.u_max, 1e-9))
-        # a compiled objective's callbacks live as the solvers (the list the objective's
-        # expression and its epigraph terms add theirs to)
-        self._callbacks = ctx.cache.setdefault("callbacks", [])
-        f = self.objective.expression(ctx)
+        self._callbacks = ctx.cache.setdefault("callbacks", [])  # live as long as the solvers
+        f = self.objective.expression(ctx)  # (a compiled one's, and its epigraph terms', too)
         self._n_w = w.shape[0]
         w, f, lbw, ubw, g, lbg, ubg, self._epi_guess = with_epigraph(
             self.objective.epigraph_terms(ctx), scale, w, P, f, lbw, ubw, g, lbg, ubg)

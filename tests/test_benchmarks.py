@@ -18,7 +18,8 @@ from tmaplan.errors import ArgumentError
 from tmaplan.evaluation.metrics import paired_difference
 
 SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
-           "particle_filter", "interrupts", "contacts_general", "multi_contact_plan")
+           "particle_filter", "interrupts", "contacts_general", "multi_contact_plan",
+           "contacts_replans")
 
 
 class _Parsed(Exception):

@@ -11,12 +11,18 @@ import numpy as np
 import pytest
 
 from tmaplan.errors import ArgumentError
+from tmaplan.evaluation.campaigns import CampaignSpec
 from tmaplan.planning.compiled_objective import _ContactsKernel, _Kernel
 from tmaplan.planning.contacts import ContactSet, ContactsPlanner
 from tmaplan.policies.contacts import ContactsReceding
 from tmaplan.scenario import load_problem
 
 KINDS = ("all-contacts-time-to-accuracy", "weighted-time-to-accuracy", "worst-contact")
+#: The casadi callbacks each objective's compiled NLP holds (value and reverse derivative).
+KERNEL_NAMES = {"all-contacts-time-to-accuracy": {"all_contacts_time",
+                                                  "all_contacts_time_reverse"},
+                "weighted-time-to-accuracy": {"expected_time", "expected_time_reverse"},
+                "worst-contact": {"expected_time", "expected_time_reverse"}}
 HORIZON = 1200.0  # 20 min: the tests' NLPs stay small
 
 
@@ -52,6 +58,9 @@ def test_objective_gradient_and_constraints_equal_the_graph(problem, kind):
     sweep that ignored its seed (∂value/∂σ of the product form) would give another
     gradient."""
     planners, fns, P, start = _functions(problem, kind)
+    # the graph's planner has no kernel; the compiled one's NLP calls the kernels it names
+    assert planners[0]._callbacks == []
+    assert {c.name() for c in planners[1]._callbacks} == KERNEL_NAMES[kind]
     rng = np.random.default_rng(4)
     for _ in range(3):
         x = _point(planners[0], rng, start)
@@ -109,7 +118,12 @@ def test_a_second_gradient_at_the_same_point_is_the_first_and_values_do_not_depe
     first = kernel.grad.copy()
     kernel(d, P, True)
     np.testing.assert_array_equal(kernel.grad, first)
+    kernel(d, P, False)  # a value here, then the gradient elsewhere: that point's
     kernel(d + 0.1, P, True)
+    fresh = _ContactsKernel(ctxs, blocks, list(obj.accuracies), obj.width)
+    fresh(d + 0.1, P, True)
+    np.testing.assert_array_equal(kernel.grad, fresh.grad)
+    assert not np.array_equal(fresh.grad, first)
     kernel(d, P, True)
     np.testing.assert_array_equal(kernel.grad, first)
     rev = _ContactsKernel(ctxs[::-1], blocks[::-1], list(obj.accuracies[::-1]), obj.width)
@@ -136,6 +150,25 @@ def test_ipopt_finds_the_same_joint_plan_on_the_kernels():
     assert plans[1].objective == pytest.approx(plans[0].objective, rel=1e-6)
     umax = max(abs(plans[0].turn_rate).max(), 1e-12)
     np.testing.assert_allclose(plans[1].turn_rate, plans[0].turn_rate, atol=1e-3 * umax)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_receding_re_plans_on_the_planner_its_field_names(compiled):
+    sc = load_problem("two-contacts-crossing")
+    joint = ContactsReceding(compiled=compiled).controller(sc).planner.joint
+    names = {c.name() for c in joint._callbacks}
+    assert names == (KERNEL_NAMES["all-contacts-time-to-accuracy"] if compiled else set())
+
+
+def test_receding_runs_re_planned_on_the_graph_are_not_reused_for_the_kernels():
+    """A campaign stored by name keys several contacts' `receding` apart from the runs stored
+    while its re-plans ran on the graph (their key said "sqp", as one contact's does)."""
+    one, two = load_problem("default"), load_problem("two-contacts-crossing")
+    meta = {sc.name: CampaignSpec(scenario=sc, policies=("straight", "receding"), runs=2)._meta()
+            for sc in (one, two)}
+    assert meta["default"]["replan"] == "sqp"
+    assert meta["two-contacts-crossing"]["replan"] == "compiled-joint"
+    assert "replan" not in CampaignSpec(scenario=two, policies=("planned",), runs=2)._meta()
 
 
 @pytest.mark.parametrize("bad", [None, 1, "yes"])

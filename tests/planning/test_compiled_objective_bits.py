@@ -19,7 +19,12 @@ from oracles.compiled_objective_reference import random_inputs, workspace
 
 from tmaplan.planning.compiled_objective import _value_grad
 
-KERNELS = (reference, _value_grad)
+
+def _explicit_none(*args):
+    """The kernel as the closed loop calls it: ``seed=None`` given (another specialisation
+    than the argument omitted)."""
+    return _value_grad(*args, None)
+
 
 
 def _outputs(kernel, args, K1, ns, calls):
@@ -46,13 +51,15 @@ def test_the_same_bits_as_before_the_loops_were_split(ns, K1, case):
         args = random_inputs(K1, ns, seed, floor=case == "floor",
                              indefinite=case == "indefinite")
         for name, calls in CALLS.items():
-            (v0, g0, A0, V0), (v1, g1, A1, V1) = (_outputs(k, args, K1, ns, calls)
-                                                  for k in KERNELS)
-            assert v0 == v1, name
-            if any(flags[2] for flags in calls):  # the old kernel's sweep wrote over V[:, 0]
-                V0, V1 = V0[:, 1:], V1[:, 1:]
-            for a, b in ((g0, g1), (A0, A1), (V0, V1)):
-                assert np.array_equal(a, b, equal_nan=True), (name, seed)
+            old = _outputs(reference, args, K1, ns, calls)
+            for kernel in (_value_grad, _explicit_none):
+                (v0, g0, A0, V0), (v1, g1, A1, V1) = old, _outputs(kernel, args, K1, ns,
+                                                                   calls)
+                assert v0 == v1, name
+                if any(flags[2] for flags in calls):  # the old sweep wrote over V[:, 0]
+                    V0, V1 = V0[:, 1:], V1[:, 1:]
+                for a, b in ((g0, g1), (A0, A1), (V0, V1)):
+                    assert np.array_equal(a, b, equal_nan=True), (name, seed)
 
 
 @pytest.mark.parametrize("case", ["plain", "floor"])

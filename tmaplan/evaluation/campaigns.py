@@ -137,11 +137,11 @@ class CampaignSpec:
         manoeuvres = {p.split("+")[0] for p in self.policies}
         if "receding" in manoeuvres:
             # by name alone (`tmaplan compare`), runs stored while `receding` flew the
-            # real-time iteration (key "rti") or IPOPT ("ipopt") are not reused for its SQP
-            meta["replan"] = "sqp"
+            # real-time iteration ("rti") or IPOPT ("ipopt") are not reused for its SQP, nor
+            # several contacts' runs re-planned on the graph (ContactsReceding.compiled)
+            meta["replan"] = "compiled-joint" if len(self.scenario.contacts) > 1 else "sqp"
         elif any(m.startswith("receding") for m in manoeuvres):
-            # runs stored before re-plans became real-time iterations are not reused
-            meta["replan"] = "rti"
+            meta["replan"] = "rti"  # (not the runs stored before re-plans were real-time)
         if self.filter_options is not None:
             meta["filter"] = repr(self.filter_options)
         if policies is not None:

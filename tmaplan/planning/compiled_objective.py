@@ -272,6 +272,7 @@ class _Kernel:
                 and np.array_equal(p, last[1])):
             self._run(d, p, forward=False, reverse=True)
             return last[2]
+        self._stored = None  # (until the forward pass is done: an interrupt may stop it)
         value = self._run(d, p, forward=True, reverse=need_grad)
         self._stored = (d.copy(), p.copy(), value)
         return value
@@ -289,7 +290,7 @@ class _Kernel:
             forward, forward, reverse, seed))
 
     def not_localised(self) -> np.ndarray:
-        """σ_ks (K+1, n_samples) of the last stored forward pass (a view of the workspace)."""
+        """σ_ks (K+1, n_samples) of the last stored forward pass (a new array)."""
         return 0.5 * (1.0 + self.V[:, 4, :])
 
 
@@ -316,6 +317,7 @@ class _ContactsKernel:
         last = self._stored
         if not (need_grad and last is not None and np.array_equal(d, last[0])
                 and np.array_equal(p, last[1])):
+            self._stored = None  # (until every forward pass is done: an interrupt may stop one)
             for k, b in zip(self.kernels, self.blocks, strict=True):
                 k._run(d, p[b], forward=True, reverse=False)
             last = self._stored = (d.copy(), p.copy(), self._value(p))
@@ -336,7 +338,7 @@ class _ContactsKernel:
         free = [1.0 - k.not_localised() for k in self.kernels]
         self.grad[:] = 0.0
         for c, (k, b) in enumerate(zip(self.kernels, self.blocks, strict=True)):
-            np.multiply(ck[:, None], np.ones_like(self.seed), out=self.seed)
+            self.seed[:] = ck[:, None]
             for j, f in enumerate(free):
                 if j != c:
                     self.seed *= f
@@ -449,6 +451,9 @@ def compiled_all_contacts_time(ctx: Any, contexts: list[Any], blocks: list[slice
     every contact is localised) as a casadi expression of ``ctx``'s plan, evaluated by one
     compiled kernel per contact.
 
+    Same value as the casadi graph of ``ContactsObjective.combined`` (to rounding);
+    callbacks kept as :func:`compiled_expected_time`'s.
+
     Parameters
     ----------
     ctx : PlanContext
@@ -462,8 +467,10 @@ def compiled_all_contacts_time(ctx: Any, contexts: list[Any], blocks: list[slice
     width : float
         The logistic's relative width [-].
 
-    Same value as the casadi graph of :meth:`ContactsObjective.combined` (to rounding);
-    callbacks kept as :func:`compiled_expected_time`'s.
+    Returns
+    -------
+    casadi.MX
+        Scalar [s].
     """
     return _as_casadi(ctx, "all_contacts_time",
                       _ContactsKernel(contexts, blocks, accuracies, width))

@@ -166,13 +166,21 @@ _BASELINES: LRUCache[Scenario, dict[str, Baseline]] = LRUCache(8)
 
 def contacts_planner(scenario: Scenario, *, compiled: bool = False) -> ContactsPlanner:
     """The joint planner of ``scenario``'s contacts (``all-contacts-time-to-accuracy``), its
-    NLP built once per scenario (cached, the 8 most recently used); ``compiled``: its
-    objective evaluated by the compiled kernels (``HeadingPlanner(compiled=True)``: the same
-    values and gradients to rounding; the re-plans of :class:`ContactsReceding`)."""
-    key = (scenario, bool(compiled))
+    NLP built once per scenario (cached, the 8 most recently used).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    compiled : bool
+        Its objective evaluated by the compiled kernels (``HeadingPlanner(compiled=True)``:
+        the same values and gradients to rounding; the re-plans of :class:`ContactsReceding`).
+    """
+    if not isinstance(compiled, bool):
+        raise ArgumentError("compiled", "True or False", compiled)
+    key = (scenario, compiled)
     if key not in _PLANNERS:
         _PLANNERS[key] = ContactsPlanner(ContactSet.from_scenario(scenario),
-                                         compiled=bool(compiled))
+                                         compiled=compiled)
     return _PLANNERS[key]
 
 

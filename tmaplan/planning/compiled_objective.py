@@ -309,6 +309,7 @@ class _ContactsKernel:
         self.weight_slice = first.slices["weight"]
         self.grad = np.zeros((2, self.K1))
         self.seed = np.empty((self.K1, self.ns))
+        self._free: list[np.ndarray] = []  # each contact's 1 − σ_c at the stored point
         self._stored: tuple[np.ndarray, np.ndarray, float] | None = None
 
     def __call__(self, d: np.ndarray, p: np.ndarray, need_grad: bool) -> float:
@@ -320,26 +321,26 @@ class _ContactsKernel:
             self._stored = None  # (until every forward pass is done: an interrupt may stop one)
             for k, b in zip(self.kernels, self.blocks, strict=True):
                 k._run(d, p[b], forward=True, reverse=False)
+            self._free = [1.0 - k.not_localised() for k in self.kernels]
             last = self._stored = (d.copy(), p.copy(), self._value(p))
         if need_grad:
             self._gradient(d, p)
         return last[2]
 
     def _value(self, p: np.ndarray) -> float:
-        localised = 1.0 - self.kernels[0].not_localised()
-        for k in self.kernels[1:]:
-            localised = localised * (1.0 - k.not_localised())
+        localised = self._free[0]
+        for f in self._free[1:]:
+            localised = localised * f
         w = p[self.blocks[0]][self.weight_slice]
         return float(self.span * np.sum(w * np.sum(1.0 - localised, axis=1))
                      / (self.K1 * self.ns))
 
     def _gradient(self, d: np.ndarray, p: np.ndarray) -> None:
         ck = (self.span / (self.K1 * self.ns)) * p[self.blocks[0]][self.weight_slice]
-        free = [1.0 - k.not_localised() for k in self.kernels]
         self.grad[:] = 0.0
         for c, (k, b) in enumerate(zip(self.kernels, self.blocks, strict=True)):
             self.seed[:] = ck[:, None]
-            for j, f in enumerate(free):
+            for j, f in enumerate(self._free):
                 if j != c:
                     self.seed *= f
             k._run(d, p[b], forward=False, reverse=True, seed=self.seed)

@@ -19,7 +19,7 @@ from tmaplan.evaluation.metrics import paired_difference
 
 SCRIPTS = ("planning_pays", "planning_general", "value_of_information", "closed_loop",
            "particle_filter", "interrupts", "contacts_general", "multi_contact_plan",
-           "contacts_replans")
+           "contacts_replans", "contacts_open_loop")
 
 
 class _Parsed(Exception):
@@ -172,12 +172,13 @@ def test_planning_pays_refuses_an_unknown_baseline_before_the_tuning(benchmark_s
     ("planning_general", ["--seed", "9", "--problems", "1"]),
     ("contacts_general", ["--seed", "9", "--runs", "1"]),
     ("contacts_general", ["--seed", "9", "--problems", "1"]),
+    ("contacts_open_loop", ["two-contacts-crossing", "--runs", "1"]),
     ("value_of_information", ["--runs", "1"]), ("particle_filter", ["--runs", "1"])])
 def test_benchmarks_refuse_too_few_runs_before_work(benchmark_script, monkeypatch, capsys,
                                                     script, argv):
     # one run (or one problem) gave NaN standard deviations and intervals after the work
     bench = benchmark_script(script)
-    for name in ("load_problem", "random_problems", "random_contacts_problems",
+    for name in ("load_problem", "load", "random_problems", "random_contacts_problems",
                  "ProcessPoolExecutor"):
         if hasattr(bench, name):
             monkeypatch.setattr(bench, name, lambda *a, **k: pytest.fail("work started"))
@@ -208,3 +209,30 @@ def test_multi_contact_benchmarks_build_their_contacts(benchmark_script):
     assert plan.names == ("north-east", "astern", "west")
     pings = benchmark_script("multi_contact_pings").contacts(20)
     assert len(pings) == 2 and pings.views[0].time.n_steps == 20
+
+
+@pytest.mark.slow  # two joint plans, each contact's own plan and the grid: ~35 s
+@pytest.mark.solver_sensitive
+def test_contacts_open_loop_flies_the_families_it_names(benchmark_script):
+    # the campaign's plans are the ones the script's table names: the policies `compare`
+    # flies under those names, the next turns of the joint objective's ranking, a joint plan
+    # of a stricter threshold that differs from the joint plan, and the predicted objectives
+    # are the joint planner's (its plan no worse than any plan of the grid)
+    from tmaplan.policies.contacts import joint_contacts_plan, parse_contacts_policy
+    from tmaplan.scenario import load_problem
+
+    bench = benchmark_script("contacts_open_loop")
+    sc = load_problem("two-contacts-crossing")
+    pols, pred = bench.candidates(sc, 2)
+    assert list(pols) == ["planned", "planned-half-accuracy", "single-turn", "turn2", "turn3",
+                          "zigzag", "planned:alpha", "planned:bravo", "alternate"]
+    for name in ("planned", "single-turn", "planned:alpha", "alternate"):
+        assert pols[name] == parse_contacts_policy(name, sc)
+    assert pred["planned"] == pytest.approx(joint_contacts_plan(sc).objective, rel=1e-9)
+    assert pred["planned"] < min(pred[k] for k in ("single-turn", "turn2", "turn3", "zigzag"))
+    assert pred["single-turn"] <= pred["turn2"] <= pred["turn3"]
+    turns = {(p.manoeuvre.angle, p.manoeuvre.time) for k, p in pols.items()
+             if k.startswith("turn") or k == "single-turn"}
+    assert len(turns) == 3
+    half = pols["planned-half-accuracy"].manoeuvre.plan.heading
+    assert not np.allclose(half, pols["planned"].manoeuvre.plan.heading, atol=1e-3)

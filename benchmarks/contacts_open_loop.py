@@ -68,9 +68,11 @@ def candidates(sc: Scenario, turns: int) -> tuple[dict[str, Any], dict[str, floa
             ping=NoPing())
     if "zigzag" in grid:
         z = grid["zigzag"][0]
+        # the grid's angle is the whole swing, Zigzag's the first leg's offset (as
+        # tmaplan.policies.combine.best_zigzag flies it)
         pols["zigzag"] = Combined(manoeuvre=Zigzag(
-            leg_duration=float(z.params["leg_duration"]), angle=float(z.params["angle"])),
-            ping=NoPing())
+            leg_duration=float(z.params["leg_duration"]), angle=0.5 * float(z.params["angle"]),
+            start=sc.time.t0), ping=NoPing())
     for n in sc.contact_names:
         pols[f"planned:{n}"] = pc.parse_contacts_policy(f"planned:{n}", sc)
     pols["alternate"] = pc.parse_contacts_policy("alternate", sc)
@@ -79,21 +81,30 @@ def candidates(sc: Scenario, turns: int) -> tuple[dict[str, Any], dict[str, floa
 
 
 def describe(sc: Scenario, pols: dict[str, Any]) -> dict[str, str]:
-    """A few words on each plan's shape (turn angle and time, leg length)."""
+    """A few words on each plan's shape: a turn's angle and time, a zig-zag's legs, a plan's
+    first and last heading and the total it turns, ``alternate``'s leg courses [°, min]."""
     out = {}
     for n, p in pols.items():
         m = p.manoeuvre
         if isinstance(m, SingleTurn):
-            out[n] = (f"{np.degrees(m.angle):+.0f}° at {(m.time - sc.time.t0) / 60:.1f} min")
+            out[n] = (f"{_deg(np.degrees(m.angle), '+')}° at "
+                      f"{(m.time - sc.time.t0) / 60:.1f} min")
         elif isinstance(m, Zigzag):
-            out[n] = f"±{np.degrees(abs(m.angle)):.0f}°, legs {m.leg_duration / 60:.1f} min"
+            out[n] = (f"first leg {_deg(np.degrees(m.angle), '+')}°, then "
+                      f"{_deg(-np.degrees(m.angle), '+')}°…, legs {m.leg_duration / 60:.1f} min")
         elif isinstance(m, Planned):
             h = np.degrees(np.unwrap(m.plan.heading))
             turned = float(np.sum(np.abs(np.diff(h))))
-            out[n] = f"heading {h[0]:.0f}° → {h[-1]:.0f}° (turned {turned:.0f}°)"
-        else:
-            out[n] = type(m).__name__.lower()
+            out[n] = (f"heading {_deg(h[0])}° → {_deg(h[-1])}° (turned {_deg(turned)}°)")
+        else:  # alternate: its legs' courses from the initial course
+            out[n] = ("legs " + ", ".join(f"{_deg(np.degrees(a), '+')}°" for a in m.angles)
+                      + f"…, from {(m.start - sc.time.t0) / 60:.1f} min")
     return out
+
+
+def _deg(x: float, sign: str = "") -> str:
+    """``x`` [°] rounded to a whole degree, never "-0"."""
+    return f"{round(float(x)) + 0:{sign}d}"
 
 
 def main() -> None:

@@ -215,10 +215,12 @@ def test_multi_contact_benchmarks_build_their_contacts(benchmark_script):
 @pytest.mark.solver_sensitive
 def test_contacts_open_loop_flies_the_families_it_names(benchmark_script):
     # the campaign's plans are the ones the script's table names: the policies `compare`
-    # flies under those names, the next turns of the joint objective's ranking, a joint plan
-    # of a stricter threshold that differs from the joint plan, and the predicted objectives
-    # are the joint planner's (its plan no worse than any plan of the grid)
-    from tmaplan.policies.contacts import joint_contacts_plan, parse_contacts_policy
+    # flies under those names, the grid's best zig-zag as `compare` flies it (the grid's
+    # angle is the whole swing), the next turns of the joint objective's ranking, a joint
+    # plan of a stricter threshold that differs from the joint plan; the predicted
+    # objectives are the joint planner's and the grid's, and the shapes are described
+    from tmaplan.planning.baselines import evaluate_baselines
+    from tmaplan.policies import contacts as pc
     from tmaplan.scenario import load_problem
 
     bench = benchmark_script("contacts_open_loop")
@@ -226,13 +228,26 @@ def test_contacts_open_loop_flies_the_families_it_names(benchmark_script):
     pols, pred = bench.candidates(sc, 2)
     assert list(pols) == ["planned", "planned-half-accuracy", "single-turn", "turn2", "turn3",
                           "zigzag", "planned:alpha", "planned:bravo", "alternate"]
-    for name in ("planned", "single-turn", "planned:alpha", "alternate"):
-        assert pols[name] == parse_contacts_policy(name, sc)
-    assert pred["planned"] == pytest.approx(joint_contacts_plan(sc).objective, rel=1e-9)
+    for name in ("planned", "single-turn", "planned:alpha", "planned:bravo", "alternate"):
+        assert pols[name] == pc.parse_contacts_policy(name, sc)
+    pl = pc.contacts_planner(sc)
+    grid = evaluate_baselines(pl.contacts.views[0],
+                              evaluator=pl.joint.evaluator(pl.contacts.beliefs()))
+    assert pred["planned"] == pytest.approx(pc.joint_contacts_plan(sc).objective, rel=1e-9)
+    z = grid["zigzag"][0]
+    assert pred["zigzag"] == pytest.approx(z.objective, rel=1e-9)
+    assert pols["zigzag"].manoeuvre.angle == pytest.approx(0.5 * z.params["angle"])
+    np.testing.assert_allclose(pols["zigzag"].manoeuvre.nominal_track(sc).position,
+                               z.track.position, atol=1e-6)
+    for name, b in zip(("single-turn", "turn2", "turn3"), grid["single-turn"][:3], strict=True):
+        m = pols[name].manoeuvre
+        assert (m.angle, m.time - sc.time.t0) == pytest.approx((b.params["angle"],
+                                                                 b.params["time"]))
+        assert pred[name] == pytest.approx(b.objective, rel=1e-9)
     assert pred["planned"] < min(pred[k] for k in ("single-turn", "turn2", "turn3", "zigzag"))
-    assert pred["single-turn"] <= pred["turn2"] <= pred["turn3"]
-    turns = {(p.manoeuvre.angle, p.manoeuvre.time) for k, p in pols.items()
-             if k.startswith("turn") or k == "single-turn"}
-    assert len(turns) == 3
     half = pols["planned-half-accuracy"].manoeuvre.plan.heading
     assert not np.allclose(half, pols["planned"].manoeuvre.plan.heading, atol=1e-3)
+    shape = bench.describe(sc, pols)
+    assert shape["single-turn"] == "+180° at 16.9 min"
+    assert "-0°" not in " ".join(shape.values())
+    assert shape["zigzag"].startswith("first leg ") and shape["alternate"].startswith("legs ")

@@ -63,16 +63,11 @@ def candidates(sc: Scenario, turns: int) -> tuple[dict[str, Any], dict[str, floa
         ping=NoPing())
     pols["single-turn"] = pc.parse_contacts_policy("single-turn", sc)
     for i, b in enumerate(grid["single-turn"][1:turns + 1], 2):
-        pols[f"turn{i}"] = Combined(manoeuvre=SingleTurn(
-            angle=float(b.params["angle"]), time=sc.time.t0 + float(b.params["time"])),
-            ping=NoPing())
+        pols[f"turn{i}"] = Combined(manoeuvre=SingleTurn.from_baseline(b.params, sc),
+                                    ping=NoPing())
     if "zigzag" in grid:
-        z = grid["zigzag"][0]
-        # the grid's angle is the whole swing, Zigzag's the first leg's offset (as
-        # tmaplan.policies.combine.best_zigzag flies it)
-        pols["zigzag"] = Combined(manoeuvre=Zigzag(
-            leg_duration=float(z.params["leg_duration"]), angle=0.5 * float(z.params["angle"]),
-            start=sc.time.t0), ping=NoPing())
+        pols["zigzag"] = Combined(manoeuvre=Zigzag.from_baseline(grid["zigzag"][0].params, sc),
+                                  ping=NoPing())
     for n in sc.contact_names:
         pols[f"planned:{n}"] = pc.parse_contacts_policy(f"planned:{n}", sc)
     pols["alternate"] = pc.parse_contacts_policy("alternate", sc)

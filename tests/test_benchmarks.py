@@ -248,6 +248,8 @@ def test_contacts_open_loop_flies_the_families_it_names(benchmark_script):
     half = pols["planned-half-accuracy"].manoeuvre.plan.heading
     assert not np.allclose(half, pols["planned"].manoeuvre.plan.heading, atol=1e-3)
     shape = bench.describe(sc, pols)
-    assert shape["single-turn"] == "+180° at 16.9 min"
+    b = grid["single-turn"][0].params
+    assert shape["single-turn"] == (f"{round(np.degrees(b['angle'])):+d}° at "
+                                    f"{b['time'] / 60:.1f} min")
     assert "-0°" not in " ".join(shape.values())
     assert shape["zigzag"].startswith("first leg ") and shape["alternate"].startswith("legs ")

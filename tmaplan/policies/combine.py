@@ -117,8 +117,7 @@ def best_single_turn(scenario: Scenario) -> SingleTurn:
     """The single course change with the best :data:`CLOSED_LOOP_OBJECTIVE` from the prior,
     over the grid of :func:`tmaplan.planning.baselines.evaluate_baselines` (angles 30°…180°
     both ways, start times ¼…¾ of the horizon)."""
-    p = _best_baselines(scenario)["single-turn"]
-    return SingleTurn(angle=float(p["angle"]), time=scenario.time.t0 + float(p["time"]))
+    return SingleTurn.from_baseline(_best_baselines(scenario)["single-turn"], scenario)
 
 
 def best_zigzag(scenario: Scenario) -> Zigzag:
@@ -128,9 +127,7 @@ def best_zigzag(scenario: Scenario) -> Zigzag:
         raise PlanningError(f"{scenario.name}: no zig-zag of the baseline grid (legs ⅛…⅓ of the "
                             f"horizon) lasts one time step of {scenario.time.dt:g} s; a horizon "
                             "of at least 3 steps is needed")
-    p = best["zigzag"]
-    return Zigzag(leg_duration=float(p["leg_duration"]), angle=0.5 * float(p["angle"]),
-                  start=scenario.time.t0)
+    return Zigzag.from_baseline(best["zigzag"], scenario)
 
 
 #: The manoeuvre policies by CLI name (``compare --policies MANOEUVRE[+PING]``): a new

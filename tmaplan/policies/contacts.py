@@ -247,9 +247,7 @@ def joint_baselines(scenario: Scenario) -> dict[str, Baseline]:
 def single_turn_all(scenario: Scenario) -> SingleTurn:
     """The single turn of the baseline grid of lowest joint objective
     (:func:`joint_baselines`)."""
-    best = joint_baselines(scenario)["single-turn"]
-    return SingleTurn(angle=float(best.params["angle"]),
-                      time=scenario.time.t0 + float(best.params["time"]))
+    return SingleTurn.from_baseline(joint_baselines(scenario)["single-turn"].params, scenario)
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

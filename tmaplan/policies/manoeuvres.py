@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from concurrent.futures import Executor
 from typing import TYPE_CHECKING, Any
 
@@ -80,6 +81,12 @@ class SingleTurn:
     time: float
     name: str = "single-turn"
 
+    @classmethod
+    def from_baseline(cls, params: Mapping[str, float], scenario: Scenario) -> SingleTurn:
+        """The turn of a baseline grid's single turn (its ``params``: ``angle`` [rad],
+        ``time`` [s] from the start; :func:`tmaplan.planning.baselines.evaluate_baselines`)."""
+        return cls(angle=float(params["angle"]), time=scenario.time.t0 + float(params["time"]))
+
     def _checked(self, scenario: Scenario) -> tuple[float, float]:
         """(angle [rad], time [s]), or ArgumentError naming the field."""
         a, t = as_real(self.angle), as_real(self.time)
@@ -127,6 +134,14 @@ class Zigzag:
     angle: float
     start: float | None = None
     name: str = "zigzag"
+
+    @classmethod
+    def from_baseline(cls, params: Mapping[str, float], scenario: Scenario) -> Zigzag:
+        """The zig-zag of a baseline grid's (its ``params``: ``leg_duration`` [s] and
+        ``angle`` [rad], the *whole* swing between the legs' courses, so the first leg flies
+        half of it; :func:`tmaplan.planning.baselines.evaluate_baselines`), from t0."""
+        return cls(leg_duration=float(params["leg_duration"]),
+                   angle=0.5 * float(params["angle"]), start=scenario.time.t0)
 
     def _check(self, scenario: Scenario) -> float:
         """The start [s] of the first leg, or ArgumentError naming the first invalid field."""
